@@ -1,0 +1,1 @@
+//! Force-sensor factor, static stiffness, log decrement, inertia; the thesis audit.

@@ -1,0 +1,1 @@
+//! Thesis tables (data/thesis/*.csv) to typed data. Not written yet.

@@ -1,0 +1,144 @@
+//! The context a stage runs in: where its inputs are, its parameters, and a
+//! staging area for its outputs.
+
+use anyhow::{Context, Result, anyhow};
+use rig_types::{Campaign, FigureSpec, Table};
+use serde::{Serialize, de::DeserializeOwned};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// A stage body: reads through the context, writes through the context.
+pub type StageFn = fn(&mut StageCtx) -> Result<()>;
+
+pub struct StageCtx {
+    /// The stage's name in pipeline.toml.
+    pub name: String,
+    /// The campaign folder (`{campaign}`).
+    pub campaign_dir: PathBuf,
+    /// The thesis tables folder (`{thesis}`).
+    pub thesis_dir: PathBuf,
+    /// `../shared` when present (`{shared}`), else `None`.
+    pub shared_dir: Option<PathBuf>,
+    /// The output root; upstream stages' outputs are read from here.
+    pub out_dir: PathBuf,
+    /// `[stage.params]` of pipeline.toml.
+    pub params: toml::Table,
+    /// Relative path -> bytes, committed by the runner after success.
+    staged: BTreeMap<String, Vec<u8>>,
+    campaign: Option<Campaign>,
+}
+
+impl StageCtx {
+    pub fn new(
+        name: &str,
+        campaign_dir: &Path,
+        thesis_dir: &Path,
+        shared_dir: Option<&Path>,
+        out_dir: &Path,
+        params: toml::Table,
+    ) -> Self {
+        StageCtx {
+            name: name.to_string(),
+            campaign_dir: campaign_dir.to_path_buf(),
+            thesis_dir: thesis_dir.to_path_buf(),
+            shared_dir: shared_dir.map(Path::to_path_buf),
+            out_dir: out_dir.to_path_buf(),
+            params,
+            staged: BTreeMap::new(),
+            campaign: None,
+        }
+    }
+
+    /// A numeric parameter from `[stage.params]` (integers are accepted as floats).
+    pub fn param_f64(&self, key: &str) -> Result<f64> {
+        match self.params.get(key) {
+            Some(toml::Value::Float(x)) => Ok(*x),
+            Some(toml::Value::Integer(i)) => Ok(*i as f64),
+            Some(v) => Err(anyhow!("pipeline.toml: stage {}: param {key} = {v} is not a number", self.name)),
+            None => Err(anyhow!("pipeline.toml: stage {}: param {key} is missing", self.name)),
+        }
+    }
+
+    pub fn param_usize(&self, key: &str) -> Result<usize> {
+        match self.params.get(key) {
+            Some(toml::Value::Integer(i)) if *i >= 0 => Ok(*i as usize),
+            Some(v) => {
+                Err(anyhow!("pipeline.toml: stage {}: param {key} = {v} is not a non-negative integer", self.name))
+            }
+            None => Err(anyhow!("pipeline.toml: stage {}: param {key} is missing", self.name)),
+        }
+    }
+
+    pub fn param_str(&self, key: &str) -> Result<String> {
+        match self.params.get(key) {
+            Some(toml::Value::String(s)) => Ok(s.clone()),
+            Some(v) => Err(anyhow!("pipeline.toml: stage {}: param {key} = {v} is not a string", self.name)),
+            None => Err(anyhow!("pipeline.toml: stage {}: param {key} is missing", self.name)),
+        }
+    }
+
+    /// The campaign, loaded and validated once per stage by `rig-ingest`.
+    pub fn campaign(&mut self) -> Result<&Campaign> {
+        if self.campaign.is_none() {
+            let c = rig_ingest::read_campaign(&self.campaign_dir)
+                .with_context(|| format!("stage {}: reading campaign", self.name))?;
+            self.campaign = Some(c);
+        }
+        Ok(self.campaign.as_ref().expect("just loaded"))
+    }
+
+    /// An upstream stage's JSON output, by path relative to the out dir.
+    pub fn read_json<T: DeserializeOwned>(&self, rel: &str) -> Result<T> {
+        let path = self.out_dir.join(rel);
+        let text = std::fs::read_to_string(&path)
+            .with_context(|| format!("stage {}: reading {}", self.name, path.display()))?;
+        serde_json::from_str(&text).with_context(|| format!("stage {}: parsing {}", self.name, path.display()))
+    }
+
+    /// Stages raw bytes for `rel` (relative to the out dir).
+    pub fn write_bytes(&mut self, rel: &str, bytes: Vec<u8>) -> Result<()> {
+        if rel.starts_with('/') || rel.split('/').any(|p| p == ".." || p.is_empty()) {
+            return Err(anyhow!("stage {}: output path {rel} must be relative and stay inside the out dir", self.name));
+        }
+        if self.staged.insert(rel.to_string(), bytes).is_some() {
+            return Err(anyhow!("stage {}: output {rel} written twice", self.name));
+        }
+        Ok(())
+    }
+
+    pub fn write_text(&mut self, rel: &str, text: &str) -> Result<()> {
+        self.write_bytes(rel, text.as_bytes().to_vec())
+    }
+
+    /// `tables/<name>.csv` (pass the full relative path, e.g. `tables/thesis-table-4-2.csv`).
+    pub fn write_table(&mut self, rel: &str, table: &Table) -> Result<()> {
+        self.write_text(rel, &table.to_csv())
+    }
+
+    /// Pretty JSON with a trailing newline.
+    pub fn write_json<T: Serialize>(&mut self, rel: &str, value: &T) -> Result<()> {
+        let mut s = serde_json::to_string_pretty(value)?;
+        s.push('\n');
+        self.write_text(rel, &s)
+    }
+
+    /// `figures/<id>.svg`, `.png`, `.txt` (caption) and `.csv` (data series).
+    pub fn write_figure(&mut self, spec: &FigureSpec) -> Result<()> {
+        let svg = rig_figures::render_svg(spec).with_context(|| format!("figure {}", spec.id))?;
+        let png = rig_figures::render_png(spec).with_context(|| format!("figure {}", spec.id))?;
+        self.write_text(&format!("figures/{}.svg", spec.id), &svg)?;
+        self.write_bytes(&format!("figures/{}.png", spec.id), png)?;
+        self.write_text(&format!("figures/{}.txt", spec.id), &format!("{}\n\n{}\n", spec.title, spec.caption))?;
+        self.write_text(&format!("figures/{}.csv", spec.id), &rig_figures::series_csv(spec))?;
+        Ok(())
+    }
+
+    /// Everything staged so far (the runner commits these).
+    pub fn into_staged(self) -> BTreeMap<String, Vec<u8>> {
+        self.staged
+    }
+
+    pub fn staged(&self) -> &BTreeMap<String, Vec<u8>> {
+        &self.staged
+    }
+}

@@ -1,0 +1,1 @@
+//! Test helpers: run stages into a temporary out dir and snapshot their outputs. Not written yet.

@@ -1,0 +1,1 @@
+//! Windows, FFT, Welch PSD, peaks, FRF with coherence, harmonic/combination line analysis.

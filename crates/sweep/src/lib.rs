@@ -1,0 +1,1 @@
+//! Severity maps and bifurcation diagrams over the rig model, up and down, rayon, deterministic order.

@@ -1,0 +1,16 @@
+//! Plain data shared by every rig-lab crate; serde only, no behaviour beyond
+//! trivial accessors. Units are in field names (`_rad_s`, `_nm`, `_v`).
+
+mod campaign;
+mod figure;
+mod params;
+mod table;
+mod trajectory;
+
+pub use campaign::{Campaign, RigInfo, Run, RunData, RunKind};
+pub use figure::{FigureSpec, Heatmap, Series, SeriesStyle};
+pub use params::{
+    DriveParams, Effect, FrictionLaw, HarmonicFriction, ModelKind, MotorParams, RigParams, RunInput, ThesisFriction,
+};
+pub use table::{Table, fmt_fixed};
+pub use trajectory::Trajectory;

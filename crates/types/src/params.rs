@@ -1,0 +1,119 @@
+//! Parameters of the rig models (thesis Eqs. 4-6 to 4-11) and the inputs of one run.
+//! Owned by the `rig-model` crate's author: fields may be added, never renamed
+//! silently. Units are in the names.
+
+use serde::{Deserialize, Serialize};
+
+/// DC motor constants (Eq. 4-6, Tables 4.4/4.5). Electrical constants refer
+/// to the armature; `gear_ratio` n maps them to the shaft: armature speed =
+/// n · Ω2, torque at the shaft = n · (k_T i − losses). n = 1 is the thesis
+/// model as published (the chapter says the 8:1 gearbox "was not considered").
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MotorParams {
+    pub inertia_kgm2: f64,
+    pub inductance_h: f64,
+    pub resistance_ohm: f64,
+    pub torque_constant_nm_a: f64,
+    pub voltage_constant_v_s_rad: f64,
+    pub friction_torque_nm: f64,
+    pub speed_regulation_nm_s_rad: f64,
+    pub gear_ratio: f64,
+}
+
+/// PI speed loop on the motor-side shaft speed Ω2 (the spec's "PI loop on
+/// motor speed"): V = clamp(kp·e + ki·∫e, −limit_v, +limit_v), e = Ω_ref − Ω2.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DriveParams {
+    pub kp_v_s_rad: f64,
+    pub ki_v_rad: f64,
+    /// Saturation of the drive; `supply_voltage_v` of campaign.toml unless an
+    /// effect lowers it.
+    pub limit_v: f64,
+}
+
+/// Eq. 4-10 / Table 4.7 as published: a lookup over rotor speed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ThesisFriction {
+    pub mu_static: f64,
+    pub mu_dynamic: f64,
+    pub mu_negative: f64,
+    /// Tol of Eq. 4-10 (the chapter gives 0.001 without a unit).
+    pub tolerance: f64,
+    /// Set-points of Table 4.7, rpm.
+    pub static_setpoint_rpm: f64,
+    pub dynamic_setpoint_rpm: f64,
+}
+
+/// Friction coefficient law μ(Ω1) of the brake; friction torque = μ · N · r.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "law", rename_all = "snake_case")]
+pub enum FrictionLaw {
+    /// The chapter's modified Coulomb lookup (thesis model only).
+    Thesis(ThesisFriction),
+    /// Static break-away μs, constant slip coefficient μk, symmetric in sign.
+    Coulomb { mu_static: f64, mu_kinetic: f64 },
+    /// μ(Ω) = μk + (μs − μk) exp(−(Ω/vs)²) in slip (vocabulary `velocity_weakening_friction`).
+    Stribeck { mu_static: f64, mu_kinetic: f64, stribeck_speed_rad_s: f64 },
+    /// μ(Ω) = μk + c |Ω| in slip (vocabulary `viscous_brake_friction`).
+    Viscous { mu_static: f64, mu_kinetic: f64, viscous_per_rad_s: f64 },
+}
+
+/// Effects added to the baseline (../shared/spec/diagnosis.md), plus effects
+/// outside the vocabulary that the virtual rig may hide in test campaigns.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "effect", rename_all = "snake_case")]
+pub enum Effect {
+    /// N(t) = N0 (1 + a sin(2π f t + θ)).
+    NormalForceModulation { amplitude_ratio: f64, frequency_hz: f64, phase_rad: f64 },
+    /// N(φ1) = N0 (1 + a sin(n φ1 + θ)).
+    AnglePeriodicFriction { amplitude_ratio: f64, order: u32, phase_rad: f64 },
+    /// Not in the vocabulary: motor-side cogging torque τ sin(n φ2 + θ) at the shaft.
+    MotorCogging { amplitude_nm: f64, order: u32, phase_rad: f64 },
+}
+
+/// Eq. 4-11 and its physically consistent alternative (issue 4).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "variant", rename_all = "snake_case")]
+pub enum HarmonicFriction {
+    /// Eq. 4-11 as published: T1 · sin(ω_p t).
+    MultiplyTorque { omega_p_rad_s: f64 },
+    /// N(t) = N0 (1 + a sin(ω_p t)).
+    NormalForce { omega_p_rad_s: f64, amplitude_ratio: f64 },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ModelKind {
+    /// Eqs. 4-6 to 4-10 as published, made consistent (see rig-model docs).
+    Thesis,
+    /// Same physics done properly: stick phase, symmetric friction, gear, PI with anti-windup.
+    Rig,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RigParams {
+    pub kind: ModelKind,
+    /// J1 (Eq. 4-4/4-5, Table 4.5).
+    pub rotor_inertia_kgm2: f64,
+    /// K_s (Eq. 4-1, Table 4.3/4.5).
+    pub shaft_stiffness_nm_rad: f64,
+    /// C of Eq. 4-7 (C = 2 ξ √(J1 K)).
+    pub shaft_damping_nm_s_rad: f64,
+    pub motor: MotorParams,
+    pub drive: DriveParams,
+    pub friction: FrictionLaw,
+    /// r of Eq. 4-10.
+    pub brake_disc_radius_m: f64,
+    pub effects: Vec<Effect>,
+    pub harmonic: Option<HarmonicFriction>,
+}
+
+/// What is imposed in one run, mirroring `RunKind` (the spec's protocol).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "input", rename_all = "snake_case")]
+pub enum RunInput {
+    /// Constant armature voltage from rest at t = 0, brake open.
+    VoltageStep { voltage_v: f64 },
+    /// PI speed loop following a ramp 0 → setpoint over ramp_s, brake pressed with N0.
+    OperatingPoint { motor_rpm_setpoint: f64, normal_force_n: f64, ramp_s: f64 },
+}

@@ -1,0 +1,2 @@
+//! cargo xtask entry point (see README).
+fn main() {}
