@@ -8,10 +8,118 @@
 //!   (sweeps: each point starts from the previous point's end state);
 //! - [`friction_coefficient`] μ(Ω1) of a law (Fig. 4.15);
 //! - [`SimOptions`], [`State`], [`ModelError`].
+//!
+//! # The equations and how the chapter's were read
+//!
+//! State q = [φ1, φ2, Ω1, Ω2, i, ∫e] (Eq. 4-9's five states plus the PI
+//! integral). Angles and speeds are at the shaft: φ2, Ω2 are the motor-side
+//! end of the string (the motor encoder after the gearbox), never the armature.
+//!
+//! - **Eq. 4-6a** L di/dt + R i + k_e·(n Ω2) = V: the back-EMF is that of the
+//!   armature speed n·Ω2.
+//! - **Eq. 4-6b / 4-7 second row** n²J_m Ω̇2 = n·(k_T i − T_f − C_m·n·Ω2) − T_s
+//!   (+ cogging), T_s the torque the shaft transmits: the armature torque
+//!   reaches the shaft multiplied by n and the armature inertia reflected by
+//!   n². With n = 1 this is Eq. 4-7's second row exactly.
+//! - **Eq. 4-7 first row** J1 Ω̇1 = T_s − C_abs·Ω1 − T1.
+//! - **Eq. 4-9 is not consistent as printed** and is not used as a matrix:
+//!   its third block row puts −J⁻¹K and −J⁻¹C side by side in one row of a
+//!   5-column matrix (they are the 2×2 blocks of *two* rows, Ω̇1 and Ω̇2); the
+//!   Ω̇2 row has no k_T/J_m coupling from i although Eq. 4-7 has k_T i on the
+//!   right-hand side; the di/dt row reads −k_e/L in the Ω2 column only by
+//!   position and −R/L on i, while F carries −T_f/J_m in the Ω2 row and V/L in
+//!   the i row. We implement what Eqs. 4-6 and 4-7 say, which is what the
+//!   matrix must have meant: rows φ̇ = Ω; Ω̇1 and Ω̇2 from the two rows of 4-7
+//!   (with +k_T i/J_m in Ω̇2); di/dt = (V − R i − k_e Ω2)/L.
+//! - **Thesis model** ([`rig_types::ModelKind::Thesis`]): Table 4.5 parameters,
+//!   gear n = 1 (the chapter ignores the gearbox), T_s = K(φ2 − φ1),
+//!   C_abs = C = 2ξ√(J1 K) on Ω1 (absolute, as Eq. 4-7's diagonal C), T_f a
+//!   constant torque (as Eq. 4-6b writes it), T1 from the Eq. 4-10 lookup
+//!   with no stick phase, PI drive from `params.drive`.
+//! - **Rig model** ([`rig_types::ModelKind::Rig`]): explicit gear n;
+//!   T_s = K(φ2 − φ1) + C(Ω2 − Ω1) — string material damping acts on the twist
+//!   rate, not on absolute speed, so that a rotor turning with the motor at
+//!   constant speed feels no drag (with C on Ω1 the open-brake steady state
+//!   would need a permanent twist C·Ω1/K ≈ 1 rad at 16 rad/s, which the
+//!   voltage steps do not show); T_f·tanh(n Ω2 / 1 rad/s) so motor friction
+//!   opposes motion (see [`MOTOR_FRICTION_SPEED_RAD_S`]); a stick
+//!   phase for rotor 1 (below).
+//!
+//! The chapter's "8 V ≈ 16 rad/s" fixes n: the open-brake steady speed under
+//! constant V solves V = R i + k_e n Ω, k_T i = T_f + C_m n Ω (no load at the
+//! shaft in steady rotation), Ω = (V − R T_f/k_T) / (n (k_e + R C_m / k_T)).
+//! With Table 4.5 and n = 1 that is 127 rad/s at 8 V; with the 8:1 gearbox
+//! n = 8 it is 15.9 rad/s — the chapter's 16 rad/s. The gearbox was in the rig
+//! even though it was "not considered" in the equations.
+//!
+//! # Friction
+//!
+//! **As published (Eq. 4-10, Table 4.7).** The three cases overlap (Ω1 < Tol
+//! and Ω1 < 0), Tol = 0.001 has no unit and Table 4.7 gives set-points of
+//! 0.05 and 0.5 rpm that Eq. 4-10 does not mention. We read the table the way
+//! a Simulink lookup block would use it: breakpoints in rotor rpm
+//! (0 → μneg, 0.05 → μst, 0.5 → μdyn), linear in between, constant outside,
+//! μneg for all Ω1 ≤ 0 (the "≤ 0" set-point; the more specific case wins).
+//! Tol is then inside the first segment whatever its unit (0.001 rpm or
+//! 0.001 rad/s = 0.0095 rpm are both below the 0.05 rpm set-point) and is not
+//! used. Without a stick phase this law makes the rotor *creep* instead of
+//! stick: the lookup rises by 1.8 over 0.05 rpm, a slope of ≈ 344 per rad/s,
+//! so near Ω1 = 0 the rotor equation has an eigenvalue of order
+//! −344·N·r/J1 (≈ −1.8·10⁴ 1/s at 25 N). An explicit method steps at
+//! ≈ 10⁻⁴ s through every "stick" phase (that is the chatter a fixed-step
+//! Simulink run shows as a rattling T1); the adaptive steps keep it stable and
+//! accurate, at the price of ~10⁴ steps per stuck second. Negative speeds see
+//! only 0.2·N·r (μneg = −0.2 gives T1 = −0.2 N r, i.e. opposing the motion
+//! with a sixth of the forward friction): the published law is not symmetric.
+//!
+//! **Rig model.** Friction torque T1 = sign·μ(|Ω1|)·N·r in slip (symmetric in
+//! the sign of Ω1; μ from [`rig_types::FrictionLaw`]). Stick phase: rotor 1 is
+//! held (Ω1 = 0 exactly, φ1 frozen, T1 = T_s) while |T_s| ≤ μs·N·r; the
+//! transitions are *events* located on the dense output by root finding:
+//! stick → slip where |T_s| − μs N r crosses zero upwards (slip starts in the
+//! direction of T_s), slip → stick where Ω1 crosses zero (the rotor sticks if
+//! |T_s| ≤ μs N r there, otherwise it reverses). The integrator restarts at
+//! each event. With N0 = 0 (brake open) there is no friction and no event.
+//!
+//! **Effects.** N(t, φ1) = N0·Π(1 + a sin(2πft + θ))·Π(1 + a sin(nφ1 + θ)) for
+//! `NormalForceModulation` and `AnglePeriodicFriction`; the stick threshold
+//! follows N. `MotorCogging` adds τ sin(nφ2 + θ) to the motor side at the
+//! shaft. Harmonic friction (Eq. 4-11): `MultiplyTorque` multiplies T1 by
+//! sin(ω_p t) as published (in the rig model the stick threshold by
+//! |sin(ω_p t)|); `NormalForce` multiplies N by 1 + a sin(ω_p t).
+//!
+//! # Drive
+//!
+//! Operating points: a PI loop on Ω2 (rad/s at the shaft), reference ramping
+//! linearly 0 → `motor_rpm_setpoint` (rpm at the shaft, the motor encoder
+//! side) over `ramp_s`, V = clamp(kp e + ki ∫e, ±limit_v). Anti-windup by
+//! conditional integration: ∫e is frozen while the output is saturated and e
+//! would push it further into saturation. Voltage steps: V constant, drive
+//! bypassed, brake open (N = 0).
+//!
+//! # Integrator
+//!
+//! Dormand–Prince 5(4) with Hairer's PI step control and 4th-order dense
+//! output (module `dopri`). The current i is kept as a state: L/R ≈ 1.6 ms is
+//! resolved by the adaptive step (stability needs h ≲ 3.3·L/R ≈ 5 ms, above
+//! which the step control alone keeps it stable); the bench shows the cost.
+//! Samples are interpolated on the dense output, so the sample rate does not
+//! constrain the step. The end of the reference ramp is a breakpoint.
+//! Failures (non-finite state, step below round-off, more than
+//! [`MAX_STEPS`] steps, events that do not advance time) are
+//! [`ModelError::IntegratorFailed`], never a hang or a panic.
 
+mod dopri;
+pub mod friction;
 pub mod one_dof;
+mod sim;
+mod system;
 
-use rig_types::{FrictionLaw, RigParams, RunInput, Trajectory};
+pub use sim::{MAX_STEPS, SimStats};
+pub use system::MOTOR_FRICTION_SPEED_RAD_S;
+
+use rig_types::{Effect, FrictionLaw, HarmonicFriction, RigParams, RunInput, Trajectory};
+use system::{Drive, System};
 
 /// Integrator settings. Tolerances are explicit arguments, never globals.
 #[derive(Debug, Clone, PartialEq)]
@@ -60,8 +168,36 @@ pub fn simulate(
     sample_times_s: &[f64],
     opts: &SimOptions,
 ) -> Result<Trajectory, ModelError> {
-    let _ = (params, input, sample_times_s, opts);
-    todo!("rig-model: simulate")
+    simulate_with_stats(params, input, sample_times_s, opts).map(|(traj, _)| traj)
+}
+
+/// [`simulate`] that also returns the integrator's counters (benches, tests).
+pub fn simulate_with_stats(
+    params: &RigParams,
+    input: &RunInput,
+    sample_times_s: &[f64],
+    opts: &SimOptions,
+) -> Result<(Trajectory, SimStats), ModelError> {
+    validate(params, opts)?;
+    check_samples(sample_times_s, 0.0)?;
+    let (drive, n0, breakpoints) = match *input {
+        RunInput::VoltageStep { voltage_v } => {
+            finite("voltage_v", voltage_v)?;
+            (Drive::Voltage { voltage_v }, 0.0, vec![])
+        }
+        RunInput::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s } => {
+            finite("motor_rpm_setpoint", motor_rpm_setpoint)?;
+            non_negative("normal_force_n", normal_force_n)?;
+            non_negative("ramp_s", ramp_s)?;
+            let drive = Drive::Pi { setpoint_rad_s: rpm_to_rad_s(motor_rpm_setpoint), ramp_s, t_start_s: 0.0 };
+            (drive, normal_force_n, vec![ramp_s])
+        }
+    };
+    let sys = System::new(params, drive, n0);
+    let y0 = [0.0; 6];
+    let mode0 = sys.mode_at_rest(0.0, &y0);
+    let (traj, _, stats) = sim::run(&sys, 0.0, y0, mode0, sample_times_s, &breakpoints, opts)?;
+    Ok((traj, stats))
 }
 
 /// Continues from `state` with the drive holding a constant motor-speed set-point
@@ -75,12 +211,177 @@ pub fn simulate_from(
     sample_times_s: &[f64],
     opts: &SimOptions,
 ) -> Result<(Trajectory, State), ModelError> {
-    let _ = (params, state, motor_rpm_setpoint, normal_force_n, sample_times_s, opts);
-    todo!("rig-model: simulate_from")
+    validate(params, opts)?;
+    finite("motor_rpm_setpoint", motor_rpm_setpoint)?;
+    non_negative("normal_force_n", normal_force_n)?;
+    let y0 = [
+        state.rotor_angle_rad,
+        state.motor_angle_rad,
+        if state.stuck { 0.0 } else { state.rotor_speed_rad_s },
+        state.motor_speed_rad_s,
+        state.current_a,
+        state.pi_integral_rad,
+    ];
+    for (name, v) in [("state.time_s", state.time_s)].into_iter().chain(
+        [
+            "state.rotor_angle_rad",
+            "state.motor_angle_rad",
+            "state.rotor_speed_rad_s",
+            "state.motor_speed_rad_s",
+            "state.current_a",
+            "state.pi_integral_rad",
+        ]
+        .into_iter()
+        .zip([y0[0], y0[1], y0[2], y0[3], y0[4], y0[5]]),
+    ) {
+        finite(name, v)?;
+    }
+    check_samples(sample_times_s, state.time_s)?;
+    let drive = Drive::Pi { setpoint_rad_s: rpm_to_rad_s(motor_rpm_setpoint), ramp_s: 0.0, t_start_s: state.time_s };
+    let sys = System::new(params, drive, normal_force_n);
+    let mode0 = sys.mode_of(state.time_s, &y0, state.stuck);
+    let (traj, end, _) = sim::run(&sys, state.time_s, y0, mode0, sample_times_s, &[], opts)?;
+    Ok((traj, end))
 }
 
 /// Friction coefficient μ of `law` at rotor speed `omega_rad_s` in slip (Fig. 4.15).
+/// The thesis law is the signed lookup of Eq. 4-10 / Table 4.7; the vocabulary
+/// laws are symmetric and return μ(|Ω1|) (at Ω1 = 0 the slip limit, not μs).
 pub fn friction_coefficient(law: &FrictionLaw, omega_rad_s: f64) -> f64 {
-    let _ = (law, omega_rad_s);
-    todo!("rig-model: friction_coefficient")
+    match law {
+        FrictionLaw::Thesis(f) => friction::thesis_lookup(f, omega_rad_s),
+        other => friction::slip_mu(other, omega_rad_s),
+    }
+}
+
+fn rpm_to_rad_s(rpm: f64) -> f64 {
+    rpm * 2.0 * std::f64::consts::PI / 60.0
+}
+
+fn finite(name: &'static str, value: f64) -> Result<(), ModelError> {
+    if value.is_finite() { Ok(()) } else { Err(ModelError::InvalidParameter { name, value, rule: "must be finite" }) }
+}
+
+fn non_negative(name: &'static str, value: f64) -> Result<(), ModelError> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(())
+    } else {
+        Err(ModelError::InvalidParameter { name, value, rule: "must be finite and >= 0" })
+    }
+}
+
+fn positive(name: &'static str, value: f64) -> Result<(), ModelError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(ModelError::InvalidParameter { name, value, rule: "must be finite and > 0" })
+    }
+}
+
+fn check_samples(times: &[f64], t0: f64) -> Result<(), ModelError> {
+    let mut prev = t0;
+    for (index, &t) in times.iter().enumerate() {
+        let ok = t.is_finite() && t >= t0 && (index == 0 || t > prev);
+        if !ok {
+            return Err(ModelError::BadSampleTimes { index });
+        }
+        prev = t;
+    }
+    Ok(())
+}
+
+/// Rejects parameters the equations cannot use (division by zero, negative
+/// friction, a static coefficient below the slip one in the rig model).
+fn validate(p: &RigParams, o: &SimOptions) -> Result<(), ModelError> {
+    positive("rotor_inertia_kgm2", p.rotor_inertia_kgm2)?;
+    positive("shaft_stiffness_nm_rad", p.shaft_stiffness_nm_rad)?;
+    non_negative("shaft_damping_nm_s_rad", p.shaft_damping_nm_s_rad)?;
+    let m = &p.motor;
+    positive("motor.inertia_kgm2", m.inertia_kgm2)?;
+    positive("motor.inductance_h", m.inductance_h)?;
+    positive("motor.resistance_ohm", m.resistance_ohm)?;
+    finite("motor.torque_constant_nm_a", m.torque_constant_nm_a)?;
+    finite("motor.voltage_constant_v_s_rad", m.voltage_constant_v_s_rad)?;
+    non_negative("motor.friction_torque_nm", m.friction_torque_nm)?;
+    non_negative("motor.speed_regulation_nm_s_rad", m.speed_regulation_nm_s_rad)?;
+    positive("motor.gear_ratio", m.gear_ratio)?;
+    finite("drive.kp_v_s_rad", p.drive.kp_v_s_rad)?;
+    finite("drive.ki_v_rad", p.drive.ki_v_rad)?;
+    positive("drive.limit_v", p.drive.limit_v)?;
+    non_negative("brake_disc_radius_m", p.brake_disc_radius_m)?;
+    positive("opts.rtol", o.rtol)?;
+    positive("opts.atol", o.atol)?;
+    positive("opts.max_step_s", o.max_step_s)?;
+    match &p.friction {
+        FrictionLaw::Thesis(f) => {
+            finite("friction.mu_static", f.mu_static)?;
+            finite("friction.mu_dynamic", f.mu_dynamic)?;
+            finite("friction.mu_negative", f.mu_negative)?;
+            positive("friction.static_setpoint_rpm", f.static_setpoint_rpm)?;
+            if f.dynamic_setpoint_rpm.partial_cmp(&f.static_setpoint_rpm) != Some(std::cmp::Ordering::Greater) {
+                return Err(ModelError::InvalidParameter {
+                    name: "friction.dynamic_setpoint_rpm",
+                    value: f.dynamic_setpoint_rpm,
+                    rule: "must exceed static_setpoint_rpm (Table 4.7)",
+                });
+            }
+        }
+        FrictionLaw::Coulomb { mu_static, mu_kinetic }
+        | FrictionLaw::Stribeck { mu_static, mu_kinetic, .. }
+        | FrictionLaw::Viscous { mu_static, mu_kinetic, .. } => {
+            non_negative("friction.mu_static", *mu_static)?;
+            non_negative("friction.mu_kinetic", *mu_kinetic)?;
+            if mu_kinetic > mu_static {
+                return Err(ModelError::InvalidParameter {
+                    name: "friction.mu_kinetic",
+                    value: *mu_kinetic,
+                    rule: "must not exceed mu_static (break-away needs μs >= μk)",
+                });
+            }
+            match &p.friction {
+                FrictionLaw::Stribeck { stribeck_speed_rad_s, .. } => {
+                    positive("friction.stribeck_speed_rad_s", *stribeck_speed_rad_s)?
+                }
+                FrictionLaw::Viscous { viscous_per_rad_s, .. } => {
+                    non_negative("friction.viscous_per_rad_s", *viscous_per_rad_s)?
+                }
+                _ => {}
+            }
+        }
+    }
+    for e in &p.effects {
+        match e {
+            Effect::NormalForceModulation { amplitude_ratio, frequency_hz, phase_rad } => {
+                ratio("effects.amplitude_ratio", *amplitude_ratio)?;
+                finite("effects.frequency_hz", *frequency_hz)?;
+                finite("effects.phase_rad", *phase_rad)?;
+            }
+            Effect::AnglePeriodicFriction { amplitude_ratio, phase_rad, .. } => {
+                ratio("effects.amplitude_ratio", *amplitude_ratio)?;
+                finite("effects.phase_rad", *phase_rad)?;
+            }
+            Effect::MotorCogging { amplitude_nm, phase_rad, .. } => {
+                finite("effects.amplitude_nm", *amplitude_nm)?;
+                finite("effects.phase_rad", *phase_rad)?;
+            }
+        }
+    }
+    match &p.harmonic {
+        Some(HarmonicFriction::MultiplyTorque { omega_p_rad_s }) => finite("harmonic.omega_p_rad_s", *omega_p_rad_s)?,
+        Some(HarmonicFriction::NormalForce { omega_p_rad_s, amplitude_ratio }) => {
+            finite("harmonic.omega_p_rad_s", *omega_p_rad_s)?;
+            ratio("harmonic.amplitude_ratio", *amplitude_ratio)?;
+        }
+        None => {}
+    }
+    Ok(())
+}
+
+/// A modulation depth a in N0(1 + a sin ·): 0 <= a <= 1 keeps N >= 0.
+fn ratio(name: &'static str, value: f64) -> Result<(), ModelError> {
+    if value.is_finite() && (0.0..=1.0).contains(&value) {
+        Ok(())
+    } else {
+        Err(ModelError::InvalidParameter { name, value, rule: "must be in [0, 1] so that N stays >= 0" })
+    }
 }

@@ -1,0 +1,130 @@
+//! Brake friction laws μ(Ω1) (Eq. 4-10, Table 4.7 and the vocabulary laws of
+//! ../shared/spec/diagnosis.md) and the normal force with its effects.
+
+use rig_types::{Effect, FrictionLaw, HarmonicFriction, ThesisFriction};
+use std::f64::consts::PI;
+
+const RAD_S_TO_RPM: f64 = 60.0 / (2.0 * PI);
+
+/// Eq. 4-10 with Table 4.7, read as a piecewise-linear lookup over rotor rpm
+/// (the reading is argued in the crate docs, "Friction as published"):
+/// μneg for rpm ≤ 0, linear μneg → μst on (0, static set-point], linear
+/// μst → μdyn on (static, dynamic set-point], μdyn above. Signed: the
+/// published table is not symmetric in the sign of Ω1.
+pub fn thesis_lookup(f: &ThesisFriction, omega_rad_s: f64) -> f64 {
+    let rpm = omega_rad_s * RAD_S_TO_RPM;
+    let (s, d) = (f.static_setpoint_rpm, f.dynamic_setpoint_rpm);
+    if rpm <= 0.0 {
+        f.mu_negative
+    } else if rpm <= s {
+        f.mu_negative + (f.mu_static - f.mu_negative) * rpm / s
+    } else if rpm <= d {
+        f.mu_static + (f.mu_dynamic - f.mu_static) * (rpm - s) / (d - s)
+    } else {
+        f.mu_dynamic
+    }
+}
+
+/// Slip coefficient at slip speed |Ω1| (vocabulary laws; symmetric in sign).
+/// For the thesis law used inside the rig model, the lookup at |Ω1|.
+pub fn slip_mu(law: &FrictionLaw, speed_abs_rad_s: f64) -> f64 {
+    let w = speed_abs_rad_s.abs();
+    match law {
+        FrictionLaw::Thesis(f) => thesis_lookup(f, w),
+        FrictionLaw::Coulomb { mu_kinetic, .. } => *mu_kinetic,
+        FrictionLaw::Stribeck { mu_static, mu_kinetic, stribeck_speed_rad_s } => {
+            mu_kinetic + (mu_static - mu_kinetic) * (-(w / stribeck_speed_rad_s).powi(2)).exp()
+        }
+        FrictionLaw::Viscous { mu_kinetic, viscous_per_rad_s, .. } => mu_kinetic + viscous_per_rad_s * w,
+    }
+}
+
+/// Static (break-away) coefficient μs of the stick phase.
+pub fn static_mu(law: &FrictionLaw) -> f64 {
+    match law {
+        FrictionLaw::Thesis(f) => f.mu_static,
+        FrictionLaw::Coulomb { mu_static, .. }
+        | FrictionLaw::Stribeck { mu_static, .. }
+        | FrictionLaw::Viscous { mu_static, .. } => *mu_static,
+    }
+}
+
+/// The normal force N(t, φ1) = N0 · Π (effect factors), vocabulary effects
+/// `normal_force_modulation` and `angle_periodic_friction` and the
+/// normal-force variant of the harmonic friction (issue 4).
+pub fn normal_force_n(n0: f64, effects: &[Effect], harmonic: Option<&HarmonicFriction>, t: f64, phi1: f64) -> f64 {
+    let mut n = n0;
+    for e in effects {
+        match e {
+            Effect::NormalForceModulation { amplitude_ratio, frequency_hz, phase_rad } => {
+                n *= 1.0 + amplitude_ratio * (2.0 * PI * frequency_hz * t + phase_rad).sin();
+            }
+            Effect::AnglePeriodicFriction { amplitude_ratio, order, phase_rad } => {
+                n *= 1.0 + amplitude_ratio * (f64::from(*order) * phi1 + phase_rad).sin();
+            }
+            Effect::MotorCogging { .. } => {}
+        }
+    }
+    if let Some(HarmonicFriction::NormalForce { omega_p_rad_s, amplitude_ratio }) = harmonic {
+        n *= 1.0 + amplitude_ratio * (omega_p_rad_s * t).sin();
+    }
+    n
+}
+
+/// Eq. 4-11 as published multiplies the whole friction torque by sin(ω_p t).
+pub fn torque_factor(harmonic: Option<&HarmonicFriction>, t: f64) -> f64 {
+    match harmonic {
+        Some(HarmonicFriction::MultiplyTorque { omega_p_rad_s }) => (omega_p_rad_s * t).sin(),
+        _ => 1.0,
+    }
+}
+
+/// Motor cogging torque at the shaft, Σ τ sin(n φ2 + θ) (outside the vocabulary).
+pub fn cogging_nm(effects: &[Effect], phi2: f64) -> f64 {
+    effects
+        .iter()
+        .map(|e| match e {
+            Effect::MotorCogging { amplitude_nm, order, phase_rad } => {
+                amplitude_nm * (f64::from(*order) * phi2 + phase_rad).sin()
+            }
+            _ => 0.0,
+        })
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn table_4_7() -> ThesisFriction {
+        ThesisFriction {
+            mu_static: 1.6,
+            mu_dynamic: 1.2,
+            mu_negative: -0.2,
+            tolerance: 0.001,
+            static_setpoint_rpm: 0.05,
+            dynamic_setpoint_rpm: 0.5,
+        }
+    }
+
+    #[test]
+    fn thesis_lookup_hits_the_table_4_7_set_points() {
+        let f = table_4_7();
+        let rpm = |x: f64| x / RAD_S_TO_RPM;
+        assert_eq!(thesis_lookup(&f, -1.0), -0.2);
+        assert_eq!(thesis_lookup(&f, 0.0), -0.2);
+        assert!((thesis_lookup(&f, rpm(0.05)) - 1.6).abs() < 1e-12);
+        assert!((thesis_lookup(&f, rpm(0.5)) - 1.2).abs() < 1e-12);
+        assert!((thesis_lookup(&f, rpm(0.275)) - 1.4).abs() < 1e-12);
+        assert_eq!(thesis_lookup(&f, 10.0), 1.2);
+    }
+
+    #[test]
+    fn stribeck_starts_at_static_and_decays_to_kinetic() {
+        let law = FrictionLaw::Stribeck { mu_static: 0.5, mu_kinetic: 0.3, stribeck_speed_rad_s: 2.0 };
+        assert_eq!(slip_mu(&law, 0.0), 0.5);
+        assert!((slip_mu(&law, 2.0) - (0.3 + 0.2 * (-1.0f64).exp())).abs() < 1e-15);
+        assert!((slip_mu(&law, 100.0) - 0.3).abs() < 1e-15);
+        assert_eq!(slip_mu(&law, -2.0), slip_mu(&law, 2.0));
+    }
+}

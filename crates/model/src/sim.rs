@@ -1,0 +1,164 @@
+//! The integration loop: Dormand–Prince steps, stick/slip events located on
+//! the dense output with a restart after each, and sampling of every
+//! trajectory channel at the requested times.
+
+use crate::dopri::{Dopri, StepFailure, Vector, locate_root};
+use crate::system::{CUR, INT, Mode, PHI1, PHI2, System, W1, W2};
+use crate::{ModelError, SimOptions, State};
+use rig_types::{FrictionLaw, ModelKind, Trajectory};
+use std::f64::consts::PI;
+
+/// Accepted plus rejected steps allowed in one call: a run that needs more is
+/// reported as an error instead of hanging (the stiffest case, the thesis
+/// model creeping on its steep lookup, needs ~10⁴ steps per simulated second).
+pub const MAX_STEPS: u64 = 20_000_000;
+/// Consecutive events that may happen without time advancing by more than
+/// [`ZENO_DT_S`] before the run is declared stuck in an event loop.
+const MAX_ZENO_EVENTS: u32 = 100;
+const ZENO_DT_S: f64 = 1e-9;
+
+/// Counters of one run, for benches and tests.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SimStats {
+    pub accepted_steps: u64,
+    pub rejected_steps: u64,
+    pub rhs_evaluations: u64,
+    /// Stick→slip and slip→stick (or reversal) transitions located.
+    pub events: u64,
+}
+
+fn failed(t: f64, reason: impl Into<String>) -> ModelError {
+    ModelError::IntegratorFailed { time_s: t, reason: reason.into() }
+}
+
+/// Where the thesis model counts as "stuck": inside the static branch of its
+/// lookup, |Ω1| below the static set-point (it has no stick phase of its own).
+fn thesis_stuck(sys: &System, y: &Vector) -> bool {
+    match &sys.p.friction {
+        FrictionLaw::Thesis(f) => (y[W1] * 60.0 / (2.0 * PI)).abs() < f.static_setpoint_rpm,
+        _ => y[W1] == 0.0,
+    }
+}
+
+fn push_sample(out: &mut Trajectory, sys: &System, mode: Mode, t: f64, y: &Vector) {
+    out.time_s.push(t);
+    out.rotor_angle_rad.push(y[PHI1]);
+    out.rotor_speed_rad_s.push(y[W1]);
+    out.motor_angle_rad.push(y[PHI2]);
+    out.motor_speed_rad_s.push(y[W2]);
+    out.current_a.push(y[CUR]);
+    out.voltage_v.push(sys.voltage(t, y).0);
+    out.friction_torque_nm.push(sys.friction_torque_nm(mode, t, y));
+    out.stuck.push(match (sys.kind, mode) {
+        (ModelKind::Thesis, _) => sys.brake_closed() && thesis_stuck(sys, y),
+        (_, Mode::Stick) => true,
+        _ => false,
+    });
+}
+
+/// Integrates from (t0, y0) in `mode0` to the last sample time, stopping
+/// exactly at each `breakpoints` time (kinks of the input, e.g. the end of the
+/// ramp). Samples must be sorted and >= t0 (checked by the caller).
+pub(crate) fn run(
+    sys: &System,
+    t0: f64,
+    y0: Vector,
+    mode0: Mode,
+    samples: &[f64],
+    breakpoints: &[f64],
+    opts: &SimOptions,
+) -> Result<(Trajectory, State, SimStats), ModelError> {
+    let n = samples.len();
+    let mut out = Trajectory {
+        time_s: Vec::with_capacity(n),
+        rotor_angle_rad: Vec::with_capacity(n),
+        rotor_speed_rad_s: Vec::with_capacity(n),
+        motor_angle_rad: Vec::with_capacity(n),
+        motor_speed_rad_s: Vec::with_capacity(n),
+        current_a: Vec::with_capacity(n),
+        voltage_v: Vec::with_capacity(n),
+        friction_torque_nm: Vec::with_capacity(n),
+        stuck: Vec::with_capacity(n),
+    };
+    let t_end = samples.last().copied().unwrap_or(t0).max(t0);
+    let (mut t, mut y, mut mode) = (t0, y0, mode0);
+    if mode == Mode::Stick {
+        y[W1] = 0.0;
+    }
+    let mut idx = 0;
+    while idx < n && samples[idx] <= t0 {
+        push_sample(&mut out, sys, mode, samples[idx], &y);
+        idx += 1;
+    }
+    let mut dp = Dopri::new(opts.rtol, opts.atol, opts.max_step_s);
+    let mut stats = SimStats::default();
+    let mut zeno = 0u32;
+    while t < t_end {
+        let t_stop = breakpoints.iter().copied().filter(|&b| b > t && b < t_end).fold(t_end, f64::min);
+        let step = dp.step(t, &y, t_stop, &mut |tt, yy| sys.rhs(mode, tt, yy)).map_err(|e| match e {
+            StepFailure::StepTooSmall { h } => failed(t, format!("step size {h:e} s fell below round-off")),
+            StepFailure::NonFinite => failed(t, "the right-hand side is not finite"),
+        })?;
+        if dp.n_accept + dp.n_reject > MAX_STEPS {
+            return Err(failed(t, format!("more than {MAX_STEPS} steps (tolerances too tight for this run?)")));
+        }
+        let (mut t_next, mut y_next, mut switch) = (step.t1(), step.y1, None);
+        if let Some(g0) = sys.event(mode, t, &y) {
+            let g1 = sys.event(mode, step.t1(), &step.y1).unwrap_or(0.0);
+            let crossed = match mode {
+                Mode::Stick => g0 <= 0.0 && g1 > 0.0,
+                Mode::Slip { .. } => g0 >= 0.0 && g1 < 0.0,
+                Mode::Continuous => false,
+            };
+            if crossed {
+                let te = locate_root(t, g0, step.t1(), g1, |tt| sys.event(mode, tt, &step.dense(tt)).unwrap_or(0.0));
+                t_next = te;
+                y_next = step.dense(te);
+                switch = Some(mode);
+            }
+        }
+        while idx < n && samples[idx] <= t_next {
+            push_sample(&mut out, sys, mode, samples[idx], &step.dense(samples[idx]));
+            idx += 1;
+        }
+        let advanced = t_next - t;
+        t = t_next;
+        y = y_next;
+        if let Some(old) = switch {
+            stats.events += 1;
+            mode = match old {
+                // Break-away: slip in the direction the shaft pulls.
+                Mode::Stick => Mode::Slip { sign: sys.shaft_torque_nm(&y).signum() },
+                // Ω1 reached zero: stick if static friction can hold the shaft, else reverse.
+                _ => {
+                    y[W1] = 0.0;
+                    sys.mode_at_rest(t, &y)
+                }
+            };
+            dp.reset();
+            zeno = if advanced < ZENO_DT_S { zeno + 1 } else { 0 };
+            if zeno > MAX_ZENO_EVENTS {
+                return Err(failed(t, "stick/slip events do not advance time (Zeno loop)"));
+            }
+        }
+    }
+    // Samples at exactly t_end when the loop ended on an event or never ran.
+    while idx < n {
+        push_sample(&mut out, sys, mode, samples[idx], &y);
+        idx += 1;
+    }
+    stats.accepted_steps = dp.n_accept;
+    stats.rejected_steps = dp.n_reject;
+    stats.rhs_evaluations = dp.n_eval;
+    let end = State {
+        time_s: t,
+        rotor_angle_rad: y[PHI1],
+        rotor_speed_rad_s: y[W1],
+        motor_angle_rad: y[PHI2],
+        motor_speed_rad_s: y[W2],
+        current_a: y[CUR],
+        pi_integral_rad: y[INT],
+        stuck: mode == Mode::Stick,
+    };
+    Ok((out, end, stats))
+}

@@ -1,0 +1,224 @@
+//! The right-hand side of the rig equations for both model kinds (Eqs. 4-6,
+//! 4-7 and 4-9 made consistent; see the crate docs for every interpretation),
+//! the drive, and the stick/slip modes with their event functions.
+
+use crate::dopri::{DIM, Vector};
+use crate::friction::{cogging_nm, normal_force_n, slip_mu, static_mu, thesis_lookup, torque_factor};
+use rig_types::{FrictionLaw, ModelKind, RigParams};
+
+// State layout.
+pub(crate) const PHI1: usize = 0;
+pub(crate) const PHI2: usize = 1;
+pub(crate) const W1: usize = 2;
+pub(crate) const W2: usize = 3;
+pub(crate) const CUR: usize = 4;
+pub(crate) const INT: usize = 5;
+
+/// Armature speed scale of the rig model's motor friction, rad/s: T_f acts as
+/// T_f·tanh(n Ω2 / this). The chapter's T_f is a constant torque (Eq. 4-6b),
+/// which would spin a motor at rest backwards; a Coulomb term with its own
+/// stick phase is not worth a second event type because the drive never lets
+/// the motor stop in an operating point. 1 rad/s at the armature is 0.125 rad/s
+/// (1.2 rpm) at the shaft for n = 8, well below the 5 rpm lowest set-point, and
+/// keeps the term's eigenvalue (n² T_f / (n² J_m · 1 rad/s) ≈ 210 1/s) below
+/// the electrical one (R/L ≈ 620 1/s).
+pub const MOTOR_FRICTION_SPEED_RAD_S: f64 = 1.0;
+
+/// What drives the motor.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Drive {
+    /// Constant armature voltage (voltage step, drive bypassed).
+    Voltage { voltage_v: f64 },
+    /// PI speed loop on Ω2 following 0 → setpoint over `ramp_s` starting at `t_start_s`.
+    Pi { setpoint_rad_s: f64, ramp_s: f64, t_start_s: f64 },
+}
+
+/// Mode of rotor 1.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Mode {
+    /// No brake contact (N0 = 0) or the thesis model (no stick phase): one
+    /// smooth-ish right-hand side, no events.
+    Continuous,
+    /// Rig model, rotor 1 held by static friction: Ω1 = 0, φ1 constant.
+    Stick,
+    /// Rig model, slipping in direction `sign` (±1): T1 = sign·μ(|Ω1|)·N·r.
+    Slip { sign: f64 },
+}
+
+/// Everything the right-hand side needs, precomputed once per run.
+#[derive(Debug, Clone)]
+pub(crate) struct System<'a> {
+    pub p: &'a RigParams,
+    pub kind: ModelKind,
+    pub drive: Drive,
+    pub n0: f64,
+    /// Gear ratio n.
+    gear: f64,
+    /// Reflected motor inertia n² J_m at the shaft.
+    j_motor: f64,
+}
+
+impl<'a> System<'a> {
+    pub fn new(p: &'a RigParams, drive: Drive, n0: f64) -> Self {
+        let gear = p.motor.gear_ratio;
+        System { p, kind: p.kind, drive, n0, gear, j_motor: gear * gear * p.motor.inertia_kgm2 }
+    }
+
+    /// Whether friction can act at all (brake closed).
+    pub fn brake_closed(&self) -> bool {
+        self.n0 > 0.0
+    }
+
+    /// Speed reference at time t, rad/s at the shaft (motor side).
+    pub fn reference_rad_s(&self, t: f64) -> f64 {
+        match self.drive {
+            Drive::Voltage { .. } => 0.0,
+            Drive::Pi { setpoint_rad_s, ramp_s, t_start_s } => {
+                let elapsed = t - t_start_s;
+                if ramp_s <= 0.0 || elapsed >= ramp_s {
+                    setpoint_rad_s
+                } else {
+                    setpoint_rad_s * (elapsed / ramp_s).max(0.0)
+                }
+            }
+        }
+    }
+
+    /// Armature voltage and the integrator rate ∫e. PI with saturation and
+    /// conditional-integration anti-windup: the integral stops while the
+    /// output is saturated and the error would drive it further out.
+    pub fn voltage(&self, t: f64, y: &Vector) -> (f64, f64) {
+        match self.drive {
+            Drive::Voltage { voltage_v } => (voltage_v, 0.0),
+            Drive::Pi { .. } => {
+                let d = &self.p.drive;
+                let e = self.reference_rad_s(t) - y[W2];
+                let raw = d.kp_v_s_rad * e + d.ki_v_rad * y[INT];
+                let v = raw.clamp(-d.limit_v, d.limit_v);
+                let winding_up = (raw > d.limit_v && e > 0.0) || (raw < -d.limit_v && e < 0.0);
+                (v, if winding_up { 0.0 } else { e })
+            }
+        }
+    }
+
+    /// Torque the shaft applies to rotor 1 (and, reacted, to the motor side).
+    /// Thesis (Eq. 4-7): k(φ2 − φ1); its damping C acts on Ω1 alone.
+    /// Rig: k(φ2 − φ1) + C(Ω2 − Ω1): material damping of the twist rate.
+    pub fn shaft_torque_nm(&self, y: &Vector) -> f64 {
+        let twist = self.p.shaft_stiffness_nm_rad * (y[PHI2] - y[PHI1]);
+        match self.kind {
+            ModelKind::Thesis => twist,
+            ModelKind::Rig => twist + self.p.shaft_damping_nm_s_rad * (y[W2] - y[W1]),
+        }
+    }
+
+    pub fn normal_force_n(&self, t: f64, y: &Vector) -> f64 {
+        normal_force_n(self.n0, &self.p.effects, self.p.harmonic.as_ref(), t, y[PHI1])
+    }
+
+    /// Stick threshold μs·N·r (× |sin ω_p t| under Eq. 4-11 as published).
+    pub fn stick_limit_nm(&self, t: f64, y: &Vector) -> f64 {
+        let factor = torque_factor(self.p.harmonic.as_ref(), t).abs();
+        static_mu(&self.p.friction) * self.normal_force_n(t, y) * self.p.brake_disc_radius_m * factor
+    }
+
+    /// Friction torque T1 on rotor 1 (positive opposes positive Ω1) in `mode`.
+    pub fn friction_torque_nm(&self, mode: Mode, t: f64, y: &Vector) -> f64 {
+        if !self.brake_closed() {
+            return 0.0;
+        }
+        let nr = self.normal_force_n(t, y) * self.p.brake_disc_radius_m * torque_factor(self.p.harmonic.as_ref(), t);
+        match (self.kind, mode) {
+            // Eq. 4-10 (or 4-11) as published: a signed lookup, no stick phase.
+            (ModelKind::Thesis, _) => match &self.p.friction {
+                FrictionLaw::Thesis(f) => thesis_lookup(f, y[W1]) * nr,
+                // A vocabulary law in the thesis model: symmetric slip law, no stick phase.
+                law => slip_mu(law, y[W1]) * nr * sign_or_zero(y[W1]),
+            },
+            // Static friction balances the shaft exactly (Ω̇1 = 0).
+            (ModelKind::Rig, Mode::Stick) => self.shaft_torque_nm(y),
+            (ModelKind::Rig, Mode::Slip { sign }) => sign * slip_mu(&self.p.friction, y[W1]) * nr,
+            (ModelKind::Rig, Mode::Continuous) => 0.0,
+        }
+    }
+
+    /// Motor-side internal friction at the armature: Eq. 4-6b's constant T_f
+    /// for the thesis model; signed (regularised) for the rig model.
+    fn motor_friction_nm(&self, w2: f64) -> f64 {
+        let tf = self.p.motor.friction_torque_nm;
+        match self.kind {
+            ModelKind::Thesis => tf,
+            ModelKind::Rig => tf * (self.gear * w2 / MOTOR_FRICTION_SPEED_RAD_S).tanh(),
+        }
+    }
+
+    /// Net motor torque delivered to the shaft end, before the shaft reaction:
+    /// n·(k_T i − T_f − C_m·n·Ω2) + cogging (Eq. 4-6b with the gear made explicit).
+    pub fn motor_drive_torque_nm(&self, y: &Vector) -> f64 {
+        let m = &self.p.motor;
+        let armature = m.torque_constant_nm_a * y[CUR]
+            - self.motor_friction_nm(y[W2])
+            - m.speed_regulation_nm_s_rad * self.gear * y[W2];
+        self.gear * armature + cogging_nm(&self.p.effects, y[PHI2])
+    }
+
+    /// dq/dt (Eq. 4-9 made consistent, q = [φ1 φ2 Ω1 Ω2 i ∫e]).
+    pub fn rhs(&self, mode: Mode, t: f64, y: &Vector) -> Vector {
+        let p = self.p;
+        let m = &p.motor;
+        let (v, int_rate) = self.voltage(t, y);
+        let ts = self.shaft_torque_nm(y);
+        let mut dy = [0.0; DIM];
+        // Eq. 4-6a with the back-EMF of the armature speed n·Ω2.
+        dy[CUR] = (v - m.resistance_ohm * y[CUR] - m.voltage_constant_v_s_rad * self.gear * y[W2]) / m.inductance_h;
+        dy[INT] = int_rate;
+        // Eq. 4-7, second row, at the shaft: n² J_m Ω̇2 = n(k_T i − T_f − C_m n Ω2) − T_shaft.
+        dy[PHI2] = y[W2];
+        dy[W2] = (self.motor_drive_torque_nm(y) - ts) / self.j_motor;
+        if mode == Mode::Stick {
+            return dy;
+        }
+        // Eq. 4-7, first row: J1 Ω̇1 = T_shaft − C Ω1 (thesis only) − T1.
+        let absolute_damping = match self.kind {
+            ModelKind::Thesis => p.shaft_damping_nm_s_rad * y[W1],
+            ModelKind::Rig => 0.0,
+        };
+        dy[PHI1] = y[W1];
+        dy[W1] = (ts - absolute_damping - self.friction_torque_nm(mode, t, y)) / p.rotor_inertia_kgm2;
+        dy
+    }
+
+    /// Event function of `mode`: the mode ends where it crosses from ≤ 0 to > 0
+    /// (stick) or from ≥ 0 to < 0 (slip). `None` for modes without events.
+    pub fn event(&self, mode: Mode, t: f64, y: &Vector) -> Option<f64> {
+        match mode {
+            Mode::Continuous => None,
+            Mode::Stick => Some(self.shaft_torque_nm(y).abs() - self.stick_limit_nm(t, y)),
+            Mode::Slip { sign } => Some(sign * y[W1]),
+        }
+    }
+
+    /// The mode the rotor takes at rest (Ω1 = 0) under the current shaft torque.
+    pub fn mode_at_rest(&self, t: f64, y: &Vector) -> Mode {
+        if self.kind == ModelKind::Thesis || !self.brake_closed() {
+            return Mode::Continuous;
+        }
+        let ts = self.shaft_torque_nm(y);
+        if ts.abs() <= self.stick_limit_nm(t, y) { Mode::Stick } else { Mode::Slip { sign: ts.signum() } }
+    }
+
+    /// The mode of an arbitrary state (start of a continuation).
+    pub fn mode_of(&self, t: f64, y: &Vector, stuck: bool) -> Mode {
+        if self.kind == ModelKind::Thesis || !self.brake_closed() {
+            Mode::Continuous
+        } else if stuck || y[W1] == 0.0 {
+            self.mode_at_rest(t, y)
+        } else {
+            Mode::Slip { sign: y[W1].signum() }
+        }
+    }
+}
+
+fn sign_or_zero(x: f64) -> f64 {
+    if x == 0.0 { 0.0 } else { x.signum() }
+}

@@ -1,0 +1,71 @@
+//! Parameter sets shared by the rig-model proof tests: Table 4.5 with the
+//! chapter's damping, as the thesis model and as the rig model (n = 8).
+#![allow(dead_code)]
+
+use rig_model::SimOptions;
+use rig_types::{DriveParams, FrictionLaw, ModelKind, MotorParams, RigParams, ThesisFriction};
+
+/// C = 2 ξ √(J1 K) with the chapter's mean ξ = 0.098 (Table 4.2) and Table 4.5.
+pub fn thesis_damping() -> f64 {
+    2.0 * 0.098 * (0.0298f64 * 0.2710).sqrt()
+}
+
+pub fn table_4_5_motor(gear_ratio: f64) -> MotorParams {
+    MotorParams {
+        inertia_kgm2: 4.698e-4,
+        inductance_h: 8.437e-4,
+        resistance_ohm: 0.526,
+        torque_constant_nm_a: 0.126,
+        voltage_constant_v_s_rad: 0.0588,
+        friction_torque_nm: 0.1,
+        speed_regulation_nm_s_rad: 1.784e-4,
+        gear_ratio,
+    }
+}
+
+pub fn table_4_7() -> ThesisFriction {
+    ThesisFriction {
+        mu_static: 1.6,
+        mu_dynamic: 1.2,
+        mu_negative: -0.2,
+        tolerance: 0.001,
+        static_setpoint_rpm: 0.05,
+        dynamic_setpoint_rpm: 0.5,
+    }
+}
+
+/// The thesis model as published (PI gains are not published: ours).
+pub fn thesis_params() -> RigParams {
+    RigParams {
+        kind: ModelKind::Thesis,
+        rotor_inertia_kgm2: 0.0298,
+        shaft_stiffness_nm_rad: 0.2710,
+        shaft_damping_nm_s_rad: thesis_damping(),
+        motor: table_4_5_motor(1.0),
+        drive: DriveParams { kp_v_s_rad: 1.0, ki_v_rad: 5.0, limit_v: 24.0 },
+        friction: FrictionLaw::Thesis(table_4_7()),
+        brake_disc_radius_m: 0.062,
+        effects: vec![],
+        harmonic: None,
+    }
+}
+
+/// The rig model: Table 4.5, n = 8, Coulomb brake μs 0.5 / μk 0.35.
+pub fn rig_params() -> RigParams {
+    RigParams {
+        kind: ModelKind::Rig,
+        motor: table_4_5_motor(8.0),
+        drive: DriveParams { kp_v_s_rad: 2.0, ki_v_rad: 10.0, limit_v: 24.0 },
+        friction: FrictionLaw::Coulomb { mu_static: 0.5, mu_kinetic: 0.35 },
+        ..thesis_params()
+    }
+}
+
+pub fn grid(t_end_s: f64, rate_hz: f64) -> Vec<f64> {
+    let n = (t_end_s * rate_hz).round() as usize;
+    (0..=n).map(|k| k as f64 / rate_hz).collect()
+}
+
+pub fn opts(tol: f64) -> SimOptions {
+    SimOptions { rtol: tol, atol: tol * 1e-2, max_step_s: 0.01 }
+}
