@@ -93,8 +93,10 @@
 //! Operating points: a PI loop on Ω2 (rad/s at the shaft), reference ramping
 //! linearly 0 → `motor_rpm_setpoint` (rpm at the shaft, the motor encoder
 //! side) over `ramp_s`, V = clamp(kp e + ki ∫e, ±limit_v). Anti-windup by
-//! conditional integration: ∫e is frozen while the output is saturated and e
-//! would push it further into saturation. Voltage steps: V constant, drive
+//! back-calculation, d(ki∫e)/dt = ki e + (V − V_raw)/T_t with
+//! T_t = [`ANTI_WINDUP_TRACKING_S`]; conditional integration was tried and
+//! rejected because its switching right-hand side makes the integral slide
+//! on the saturation boundary and the adaptive step collapse. Voltage steps: V constant, drive
 //! bypassed, brake open (N = 0).
 //!
 //! # Integrator
@@ -116,7 +118,7 @@ mod sim;
 mod system;
 
 pub use sim::{MAX_STEPS, SimStats};
-pub use system::MOTOR_FRICTION_SPEED_RAD_S;
+pub use system::{ANTI_WINDUP_TRACKING_S, MOTOR_FRICTION_SPEED_RAD_S};
 
 use rig_types::{Effect, FrictionLaw, HarmonicFriction, RigParams, RunInput, Trajectory};
 use system::{Drive, System};

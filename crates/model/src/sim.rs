@@ -11,7 +11,7 @@ use std::f64::consts::PI;
 /// Accepted plus rejected steps allowed in one call: a run that needs more is
 /// reported as an error instead of hanging (the stiffest case, the thesis
 /// model creeping on its steep lookup, needs ~10⁴ steps per simulated second).
-pub const MAX_STEPS: u64 = 20_000_000;
+pub const MAX_STEPS: u64 = 5_000_000;
 /// Consecutive events that may happen without time advancing by more than
 /// [`ZENO_DT_S`] before the run is declared stuck in an event loop.
 const MAX_ZENO_EVENTS: u32 = 100;
