@@ -280,3 +280,54 @@ pub(crate) fn locate_root(mut a: f64, mut ga: f64, mut b: f64, mut gb: f64, mut 
     }
     b
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// y'' = −y in three copies with different phases: exact solution known.
+    fn rhs(_t: f64, y: &Vector) -> Vector {
+        [y[1], -y[0], y[3], -y[2], y[5], -y[4]]
+    }
+
+    fn exact(t: f64) -> Vector {
+        [t.cos(), -t.sin(), t.sin(), t.cos(), (t + 1.0).cos(), -(t + 1.0).sin()]
+    }
+
+    /// Steps of fixed size h (tolerance so loose no step is rejected, max_step = h):
+    /// the step error falls as h^5 and the dense output's as h^5 too (4th-order
+    /// interpolant, local error O(h^5)), which checks every tableau coefficient.
+    #[test]
+    fn step_and_dense_output_have_the_expected_order() {
+        let errs = |h: f64| {
+            let mut dp = Dopri::new(1.0, 1.0, h);
+            dp.h = h;
+            let mut f = rhs;
+            let s = dp.step(0.0, &exact(0.0), 1.0, &mut f).unwrap();
+            assert_eq!(s.h, h);
+            let e_end = (0..DIM).map(|j| (s.y1[j] - exact(h)[j]).abs()).fold(0.0, f64::max);
+            let e_mid = [0.3, 0.5, 0.8]
+                .iter()
+                .map(|th| {
+                    let y = s.dense(th * h);
+                    (0..DIM).map(|j| (y[j] - exact(th * h)[j]).abs()).fold(0.0, f64::max)
+                })
+                .fold(0.0, f64::max);
+            (e_end, e_mid)
+        };
+        let (a_end, a_mid) = errs(0.2);
+        let (b_end, b_mid) = errs(0.1);
+        // Local error of a 5th-order step is O(h^6): ratio 2^6 = 64 per halving.
+        let order_end = (a_end / b_end).log2();
+        let order_mid = (a_mid / b_mid).log2();
+        assert!(order_end > 5.5, "step order {order_end}");
+        assert!(order_mid > 4.5, "dense order {order_mid}");
+    }
+
+    #[test]
+    fn locate_root_finds_a_simple_crossing() {
+        let g = |t: f64| t * t - 2.0;
+        let r = locate_root(1.0, g(1.0), 2.0, g(2.0), g);
+        assert!((r - 2f64.sqrt()).abs() < 1e-14 && g(r) >= 0.0);
+    }
+}
