@@ -1,0 +1,1 @@
+//! Stick-slip measures on recordings. (being written)
