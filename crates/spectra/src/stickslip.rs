@@ -1,1 +1,212 @@
-//! Stick-slip measures on recordings. (being written)
+//! Stick-slip measures on recordings: glitch repair, severity, friction torque
+//! binned against speed, and the velocity-weakening fit μ(v) = a + b·exp(−v/vs).
+
+use crate::error::{SpectraError, check_finite};
+use serde::{Deserialize, Serialize};
+
+/// Running median over an odd window (shrunk at the ends), O(n·w log w).
+pub fn running_median(x: &[f64], window: usize) -> Vec<f64> {
+    let h = window / 2;
+    let mut buf = Vec::with_capacity(window);
+    (0..x.len())
+        .map(|i| {
+            buf.clear();
+            buf.extend_from_slice(&x[i.saturating_sub(h)..(i + h + 1).min(x.len())]);
+            buf.sort_by(f64::total_cmp);
+            buf[buf.len() / 2]
+        })
+        .collect()
+}
+
+/// How isolated sensor glitches are found and bridged.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GlitchOptions {
+    /// Running-median window, samples (must exceed the longest glitch ×2).
+    pub median_window: usize,
+    /// A sample is a glitch when it is this far from the running median.
+    pub threshold: f64,
+    /// Samples below this are glitches too (a drive that never reverses).
+    pub floor: f64,
+    /// Flagged runs are widened by this many samples each side (the slopes
+    /// into and out of a dip are below the threshold but still corrupted).
+    pub dilate: usize,
+}
+
+/// What the repair did.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GlitchReport {
+    pub runs: usize,
+    pub samples: usize,
+    pub longest_run: usize,
+}
+
+/// Replaces glitch runs by the straight line between the good samples around
+/// them (held constant at the record's ends).
+pub fn repair_glitches(x: &[f64], o: &GlitchOptions) -> Result<(Vec<f64>, GlitchReport), SpectraError> {
+    check_finite("x", x)?;
+    if o.median_window < 3 || o.median_window % 2 == 0 {
+        return Err(SpectraError::InvalidParameter {
+            name: "median_window",
+            value: o.median_window as f64,
+            rule: "an odd number >= 3",
+        });
+    }
+    let med = running_median(x, o.median_window);
+    let n = x.len();
+    let mut bad = vec![false; n];
+    for i in 0..n {
+        if (x[i] - med[i]).abs() > o.threshold || x[i] < o.floor {
+            for b in &mut bad[i.saturating_sub(o.dilate)..(i + o.dilate + 1).min(n)] {
+                *b = true;
+            }
+        }
+    }
+    let mut y = x.to_vec();
+    let mut rep = GlitchReport { runs: 0, samples: 0, longest_run: 0 };
+    let mut i = 0;
+    while i < n {
+        if !bad[i] {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while i < n && bad[i] {
+            i += 1;
+        }
+        let (left, right) = (start.checked_sub(1), (i < n).then_some(i));
+        for (j, yj) in y.iter_mut().enumerate().take(i).skip(start) {
+            *yj = match (left, right) {
+                (Some(l), Some(r)) => x[l] + (x[r] - x[l]) * (j - l) as f64 / (r - l) as f64,
+                (Some(l), None) => x[l],
+                (None, Some(r)) => x[r],
+                (None, None) => 0.0,
+            };
+        }
+        rep.runs += 1;
+        rep.samples += i - start;
+        rep.longest_run = rep.longest_run.max(i - start);
+    }
+    Ok((y, rep))
+}
+
+/// Severity of a speed record: the two conventions in use.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Severity {
+    pub min: f64,
+    pub max: f64,
+    pub mean: f64,
+    /// (max − min) / (2 · mean): 1 when the minimum touches zero symmetrically.
+    pub half_range_over_mean: f64,
+    /// (max − min) / mean.
+    pub range_over_mean: f64,
+}
+
+pub fn severity(x: &[f64]) -> Severity {
+    let min = x.iter().cloned().fold(f64::INFINITY, f64::min);
+    let max = x.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    let mean = x.iter().sum::<f64>() / x.len().max(1) as f64;
+    Severity { min, max, mean, half_range_over_mean: (max - min) / (2.0 * mean), range_over_mean: (max - min) / mean }
+}
+
+/// One speed bin of y against x.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Bin {
+    pub x_lo: f64,
+    pub x_hi: f64,
+    pub count: usize,
+    pub mean: f64,
+    pub std: f64,
+}
+
+/// Means of `y` in equal-width bins of `x` over [lo, hi) (empty bins are kept with count 0).
+pub fn bin_means(x: &[f64], y: &[f64], lo: f64, hi: f64, bins: usize) -> Vec<Bin> {
+    let w = (hi - lo) / bins as f64;
+    let mut acc = vec![(0usize, 0.0f64, 0.0f64); bins];
+    for (xi, yi) in x.iter().zip(y) {
+        if *xi >= lo && *xi < hi {
+            let b = (((xi - lo) / w) as usize).min(bins - 1);
+            acc[b].0 += 1;
+            acc[b].1 += yi;
+            acc[b].2 += yi * yi;
+        }
+    }
+    acc.iter()
+        .enumerate()
+        .map(|(b, (c, s, s2))| {
+            let mean = if *c > 0 { s / *c as f64 } else { f64::NAN };
+            let var = if *c > 1 { ((s2 - s * s / *c as f64) / (*c - 1) as f64).max(0.0) } else { 0.0 };
+            Bin { x_lo: lo + b as f64 * w, x_hi: lo + (b + 1) as f64 * w, count: *c, mean, std: var.sqrt() }
+        })
+        .collect()
+}
+
+/// y(v) = a + b·exp(−v / vs), fitted in slip (v > 0).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct WeakeningFit {
+    pub a: f64,
+    pub b: f64,
+    pub vs: f64,
+    pub rmse: f64,
+    /// rmse of the best constant (Coulomb) fit, for comparison.
+    pub rmse_constant: f64,
+    pub points: usize,
+    /// False when the best vs sits on the edge of the scanned range (no interior optimum).
+    pub converged: bool,
+}
+
+impl WeakeningFit {
+    /// y at v → 0⁺ over y at v → ∞: (a + b) / a.
+    pub fn static_over_kinetic(&self) -> f64 {
+        (self.a + self.b) / self.a
+    }
+}
+
+/// For fixed vs the model is linear in (a, b): least squares in closed form;
+/// vs is scanned on a log grid over [vs_min, vs_max] and refined by golden section.
+pub fn fit_weakening(v: &[f64], y: &[f64], vs_min: f64, vs_max: f64) -> Result<WeakeningFit, SpectraError> {
+    if v.len() != y.len() {
+        return Err(SpectraError::LengthMismatch { a: "v", len_a: v.len(), b: "y", len_b: y.len() });
+    }
+    if v.len() < 4 {
+        return Err(SpectraError::TooShort { name: "v", len: v.len(), min: 4, rule: "a 3-parameter fit" });
+    }
+    if !(vs_min > 0.0 && vs_max > vs_min) {
+        return Err(SpectraError::InvalidParameter { name: "vs_min", value: vs_min, rule: "0 < vs_min < vs_max" });
+    }
+    check_finite("v", v)?;
+    check_finite("y", y)?;
+    let linear = |vs: f64| -> (f64, f64, f64) {
+        let n = v.len() as f64;
+        let e: Vec<f64> = v.iter().map(|vi| (-vi / vs).exp()).collect();
+        let (se, see) = (e.iter().sum::<f64>(), e.iter().map(|x| x * x).sum::<f64>());
+        let (sy, sey) = (y.iter().sum::<f64>(), e.iter().zip(y).map(|(a, b)| a * b).sum::<f64>());
+        let det = n * see - se * se;
+        let (a, b) =
+            if det.abs() > 1e-300 { ((see * sy - se * sey) / det, (n * sey - se * sy) / det) } else { (sy / n, 0.0) };
+        let sse: f64 = e.iter().zip(y).map(|(ei, yi)| (yi - a - b * ei).powi(2)).sum();
+        (a, b, (sse / n).sqrt())
+    };
+    let grid = 60;
+    let ratio = (vs_max / vs_min).ln();
+    let at = |i: usize| vs_min * (ratio * i as f64 / grid as f64).exp();
+    let (mut ib, mut best) = (0, f64::INFINITY);
+    for i in 0..=grid {
+        let r = linear(at(i)).2;
+        if r < best {
+            best = r;
+            ib = i;
+        }
+    }
+    // Golden section on ln vs between the grid neighbours.
+    let (mut lo, mut hi) = (at(ib.saturating_sub(1)).ln(), at((ib + 1).min(grid)).ln());
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    for _ in 0..60 {
+        let (m1, m2) = (hi - g * (hi - lo), lo + g * (hi - lo));
+        if linear(m1.exp()).2 < linear(m2.exp()).2 { hi = m2 } else { lo = m1 }
+    }
+    let vs = (0.5 * (lo + hi)).exp();
+    let (a, b, rmse) = linear(vs);
+    let mean = y.iter().sum::<f64>() / y.len() as f64;
+    let rmse_constant = (y.iter().map(|yi| (yi - mean).powi(2)).sum::<f64>() / y.len() as f64).sqrt();
+    Ok(WeakeningFit { a, b, vs, rmse, rmse_constant, points: v.len(), converged: ib > 0 && ib < grid })
+}

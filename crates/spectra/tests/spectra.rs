@@ -165,3 +165,36 @@ fn thin_indices_keeps_ends_and_limits_count() {
     assert!(i.len() <= 2001 && i[0] == 0 && *i.last().unwrap() == 20000);
     assert_eq!(thin_indices(5, 2000), vec![0, 1, 2, 3, 4]);
 }
+
+#[test]
+fn glitches_are_found_and_bridged() {
+    use rig_spectra::stickslip::*;
+    // A slow oscillation with two 15-sample dips to −260 and a negative blip.
+    let clean: Vec<f64> = (0..5000).map(|i| 80.0 + 40.0 * (2.0 * PI * i as f64 / 700.0).sin()).collect();
+    let mut x = clean.clone();
+    for i in 1000..1015 {
+        x[i] = -260.0 * ((i - 1000) as f64 / 14.0 * PI).sin();
+    }
+    for v in &mut x[3000..3015] {
+        *v = -100.0;
+    }
+    let o = GlitchOptions { median_window: 101, threshold: 30.0, floor: 0.0, dilate: 5 };
+    let (y, rep) = repair_glitches(&x, &o).unwrap();
+    assert_eq!(rep.runs, 2, "{rep:?}");
+    let err = y.iter().zip(&clean).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    assert!(err < 0.5, "bridge error {err} rpm");
+}
+
+#[test]
+fn weakening_fit_recovers_known_law_and_severity_conventions() {
+    use rig_spectra::stickslip::*;
+    let v: Vec<f64> = (1..400).map(|i| i as f64 * 0.5).collect();
+    let y: Vec<f64> = v.iter().map(|vi| 1.2 + 0.9 * (-vi / 17.0).exp()).collect();
+    let f = fit_weakening(&v, &y, 0.5, 500.0).unwrap();
+    assert!((f.a - 1.2).abs() < 1e-6 && (f.b - 0.9).abs() < 1e-6 && (f.vs - 17.0).abs() < 1e-4, "{f:?}");
+    assert!(f.converged && (f.static_over_kinetic() - 1.75).abs() < 1e-6);
+    let s = severity(&[0.0, 100.0, 200.0]);
+    assert_eq!((s.half_range_over_mean, s.range_over_mean), (1.0, 2.0));
+    let b = bin_means(&[0.5, 1.5, 1.6], &[1.0, 2.0, 4.0], 0.0, 3.0, 3);
+    assert_eq!((b[0].count, b[1].count, b[2].count, b[1].mean), (1, 2, 0, 3.0));
+}
