@@ -1,1 +1,119 @@
 //! Model vs measurement, candidate effects, selection by held-out misfit and information criterion.
+//!
+//! # What the diagnosis does (issue 5, ../shared/spec/diagnosis.md)
+//!
+//! 1. **Signals** ([`prepare`]): every `operating_point` run becomes angles and
+//!    zero-lag speeds from the encoders, the calibrated friction force, the
+//!    PI reference, the samples where rotor 1 certainly slips, and the
+//!    sensor noise of the force and voltage channels measured in the data.
+//! 2. **Channels** the vocabulary acts on, predicted *teacher-forced* (driven by
+//!    the measured Ω1, φ1, Ω2 and t, so a right model with a small period error
+//!    is not punished): the friction coefficient in slip, μ_obs = F/N0
+//!    ([`friction`], Eq. 4-10), and the armature voltage of the PI drive
+//!    ([`drive`]).
+//! 3. **Candidates**: the baseline (Coulomb μk, drive saturating at
+//!    `supply_voltage_v`) and each vocabulary effect in turn, fitted on the
+//!    training runs (shared parameters, one phase per run where the vocabulary
+//!    frees it), compared by BIC on the same data and by the misfit on held-out
+//!    runs (every `heldout_every`-th operating point, campaign order).
+//! 4. **Verdict**: the candidate with the lowest BIC among those that beat the
+//!    baseline by ΔBIC < −`bic_threshold` AND reduce the held-out misfit by at
+//!    least `min_relative_gain`; else `unexplained` when an order line locked
+//!    to a shaft angle is significant in most runs ([`lines`]); else `none`.
+//!
+//! # The misfit (defined once; every table and JSON field uses it)
+//!
+//! For a model m and one run r:
+//!
+//! `M_r = sqrt( (e_μ² + e_V²) / 2 )`, with
+//! `e_μ = RMS_slip(μ̂ − μ_obs) / mean_slip(μ_obs)` (relative error of the
+//! friction coefficient over the run's slip samples) and
+//! `e_V = RMS(V̂ − V) / supply_voltage_v` (relative error of the drive voltage
+//! over the whole run). A run without slip samples (or with N0 = 0) uses
+//! `M_r = e_V`. Over a set of runs, `M = sqrt(mean_r M_r²)`. It is
+//! dimensionless; its noise floor is the same expression with the RMS errors
+//! replaced by the measured sensor noise (σ_F/N0 and σ_V).
+//!
+//! # Information criterion
+//!
+//! Per channel, Gaussian errors with one unknown variance after weighting
+//! each run by its measured noise: `BIC = n ln(RSS_w/n) + k ln n`.
+//! `criterion` in diagnosis.json is `BIC(candidate) − BIC(baseline)` on the
+//! training runs (negative favours the candidate).
+
+pub mod drive;
+pub mod friction;
+mod linalg;
+pub mod lines;
+pub mod prepare;
+mod report;
+mod select;
+
+pub use prepare::{ForceCal, RunSignals};
+pub use report::{CandidateScore, Diagnosis, Finding, RunRow, round_sig};
+pub use select::diagnose_signals;
+
+/// Knobs of the diagnosis (explicit, from pipeline.toml or the caller).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DiagnoseOptions {
+    /// Every `heldout_every`-th operating point (campaign order, 1-based
+    /// multiples) is held out of all fits. 3 ⇒ the 3rd, 6th, 9th, … op runs.
+    pub heldout_every: usize,
+    /// Rotor speed: centred difference over ±this many samples.
+    pub rotor_speed_half_window: usize,
+    /// Motor speed (for the PI error): centred difference over ±this many samples.
+    pub motor_speed_half_window: usize,
+    /// |Ω1| above which (and away from stuck samples) rotor 1 counts as slipping, rad/s.
+    pub slip_speed_rad_s: f64,
+    /// Slip samples before this time are not used (start-up), s.
+    pub skip_start_s: f64,
+    /// Steady state starts at ramp_s + settle_s.
+    pub settle_s: f64,
+    /// A candidate must lower the BIC by more than this (10 ≈ "very strong").
+    pub bic_threshold: f64,
+    /// … and lower the held-out misfit by at least this fraction.
+    pub min_relative_gain: f64,
+    /// Frequency grid of the normal-force modulation scan, Hz.
+    pub freq_min_hz: f64,
+    pub freq_max_hz: f64,
+    pub freq_step_hz: f64,
+    /// Highest order per revolution scanned (angle-periodic friction, order lines).
+    pub max_order: u32,
+    /// Order-line power over its local floor that counts as a line.
+    pub line_ratio: f64,
+}
+
+impl Default for DiagnoseOptions {
+    fn default() -> Self {
+        DiagnoseOptions {
+            heldout_every: 3,
+            rotor_speed_half_window: 8,
+            motor_speed_half_window: 15,
+            slip_speed_rad_s: 0.5,
+            skip_start_s: 0.0,
+            settle_s: 3.0,
+            bic_threshold: 10.0,
+            min_relative_gain: 0.05,
+            freq_min_hz: 0.05,
+            freq_max_hz: 10.0,
+            freq_step_hz: 0.01,
+            max_order: 8,
+            line_ratio: 25.0,
+        }
+    }
+}
+
+/// Why a diagnosis could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum DiagnoseError {
+    #[error("campaign {campaign}: needs at least {needed} operating_point runs (has {found}) to fit and hold out")]
+    TooFewRuns { campaign: String, needed: usize, found: usize },
+    #[error("run {run}: column {column} is missing (operating_point runs need it, recording-format.md)")]
+    MissingColumn { run: String, column: &'static str },
+    #[error("campaign calibration failed: {0}")]
+    Calibration(String),
+    #[error("baseline estimation failed: {0}")]
+    Estimation(String),
+    #[error("the baseline fit is singular: {0}")]
+    Singular(&'static str),
+}

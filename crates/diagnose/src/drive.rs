@@ -1,0 +1,117 @@
+//! Teacher-forced drive channel: the PI speed loop of the rig model
+//! (DriveParams: V = clamp(kp·e + ki·∫e, ±Vmax), e = Ω_ref − Ω2) driven by the
+//! MEASURED motor speed predicts the recorded armature voltage. The baseline
+//! saturates at the campaign's supply voltage; the `drive_voltage_limit`
+//! candidate at a fitted Vmax. The PI gains are nuisance parameters fitted
+//! here on the same data for both, so the comparison isolates the limit.
+
+use crate::friction::golden;
+use crate::linalg::Normal;
+use crate::prepare::RunSignals;
+
+/// PI gains and limit of the teacher-forced drive.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pi {
+    pub kp_v_s_rad: f64,
+    pub ki_v_rad: f64,
+    pub limit_v: f64,
+}
+
+/// Predicted voltage and whether the clamp was active, sample by sample.
+/// Anti-windup by conditional integration: the integral is frozen while the
+/// output is clamped and the error would push it further into the clamp.
+pub fn predict_voltage(pi: &Pi, s: &RunSignals) -> (Vec<f64>, Vec<f64>, Vec<bool>) {
+    let n = s.time_s.len();
+    let mut v = Vec::with_capacity(n);
+    let mut integ = Vec::with_capacity(n);
+    let mut sat = Vec::with_capacity(n);
+    let mut i_acc = 0.0;
+    for k in 0..n {
+        let e = s.reference_rad_s(s.time_s[k]) - s.motor_speed_rad_s[k];
+        let u = pi.kp_v_s_rad * e + pi.ki_v_rad * i_acc;
+        let clamped = u.clamp(-pi.limit_v, pi.limit_v);
+        let is_sat = clamped != u;
+        v.push(clamped);
+        integ.push(i_acc);
+        sat.push(is_sat);
+        if k + 1 < n {
+            let dt = s.time_s[k + 1] - s.time_s[k];
+            if !(is_sat && e.signum() == u.signum()) {
+                i_acc += e * dt;
+            }
+        }
+    }
+    (v, integ, sat)
+}
+
+/// Voltage RSS in noise units (each run weighted by 1/σ_V²) and sample count.
+pub fn voltage_rss(pi: &Pi, runs: &[&RunSignals]) -> (f64, usize) {
+    let mut rss = 0.0;
+    let mut n = 0;
+    for s in runs {
+        let (v, _, _) = predict_voltage(pi, s);
+        let w = 1.0 / s.voltage_noise_v.max(1e-6).powi(2);
+        rss += w * v.iter().zip(&s.voltage_v).map(|(a, b)| (a - b).powi(2)).sum::<f64>();
+        n += v.len();
+    }
+    (rss, n)
+}
+
+/// Fits kp, ki for a fixed limit: alternate (clamp pattern and integral from
+/// the current gains) → (linear least squares on the unclamped samples).
+pub fn fit_gains(runs: &[&RunSignals], limit_v: f64) -> Option<Pi> {
+    let mut pi = Pi { kp_v_s_rad: 0.0, ki_v_rad: 0.0, limit_v: f64::INFINITY };
+    for it in 0..8 {
+        let mut ne = Normal::new(2);
+        for s in runs {
+            let (_, integ, sat) = predict_voltage(&pi, s);
+            let w = 1.0 / s.voltage_noise_v.max(1e-6);
+            for k in 0..s.time_s.len() {
+                if sat[k] || s.voltage_v[k].abs() >= 0.999 * limit_v {
+                    continue;
+                }
+                let e = s.reference_rad_s(s.time_s[k]) - s.motor_speed_rad_s[k];
+                ne.add_sparse(&[(0, w * e), (1, w * integ[k])], w * s.voltage_v[k]);
+            }
+        }
+        let p = ne.solve()?;
+        let next = Pi { kp_v_s_rad: p[0], ki_v_rad: p[1], limit_v };
+        let done = it > 0 && (next.kp_v_s_rad - pi.kp_v_s_rad).abs() < 1e-9 * (1.0 + pi.kp_v_s_rad.abs());
+        pi = next;
+        if done {
+            break;
+        }
+    }
+    Some(pi)
+}
+
+/// The drive-limit candidate: Vmax minimising the voltage RSS (gains refitted
+/// at every trial limit), searched between 30 % of the supply and the supply.
+/// Returns (Pi, rss, n, stderr of Vmax from the RSS curvature).
+pub fn fit_limit(runs: &[&RunSignals], supply_v: f64) -> Option<(Pi, f64, usize, f64)> {
+    let eval = |l: f64| fit_gains(runs, l).map(|p| voltage_rss(&p, runs).0).unwrap_or(f64::INFINITY);
+    // Coarse grid first (the RSS is not unimodal far from the optimum), then golden section.
+    let grid: Vec<f64> = (0..=28).map(|j| supply_v * (0.3 + 0.025 * j as f64)).collect();
+    let scores: Vec<f64> = {
+        use rayon::prelude::*;
+        grid.par_iter().map(|&l| eval(l)).collect()
+    };
+    let best = (0..grid.len()).min_by(|&a, &b| scores[a].total_cmp(&scores[b]))?;
+    let lo = grid[best.saturating_sub(1)];
+    let hi = grid[(best + 1).min(grid.len() - 1)];
+    let l = golden(lo, hi, 30, eval);
+    let pi = fit_gains(runs, l)?;
+    let (rss, n) = voltage_rss(&pi, runs);
+    // Profile-likelihood curvature: Var(Vmax) ≈ 2σ²/RSS''; RSS is in noise units (σ² = rss/n).
+    let h = (1e-3 * supply_v).max(1e-4);
+    let d2 = (eval(l + h) - 2.0 * rss + eval(l - h)) / (h * h);
+    let se = if d2 > 0.0 { (2.0 * (rss / n as f64) / d2).sqrt() } else { f64::NAN };
+    Some((pi, rss, n, se))
+}
+
+/// Relative RMS voltage error of one run: sqrt(mean((V̂ − V)²)) / V_supply.
+pub fn relative_voltage_error(pi: &Pi, s: &RunSignals, supply_v: f64) -> f64 {
+    let (v, _, _) = predict_voltage(pi, s);
+    let ms = v.iter().zip(&s.voltage_v).map(|(a, b)| (a - b).powi(2)).sum::<f64>() / v.len().max(1) as f64;
+    ms.sqrt() / supply_v
+}

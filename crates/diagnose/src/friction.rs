@@ -1,0 +1,446 @@
+//! Teacher-forced friction candidates: during slip the force sensor gives the
+//! friction coefficient μ_obs = sign(Ω1)·F/N0 directly (Eq. 4-10: T1 = μ·N·r,
+//! so F = T1/r = μ·N), and each vocabulary law is a regression of μ_obs on the
+//! MEASURED time, rotor angle and rotor speed. Shared parameters across runs,
+//! one phase per run where the vocabulary frees it (diagnosis.md table).
+
+use crate::linalg::Normal;
+use crate::prepare::RunSignals;
+use std::f64::consts::PI;
+
+/// A friction law in slip, with its shared parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub enum FrictionModel {
+    /// Baseline: μ = μk in slip (Eq. 4-10 with a single kinetic coefficient).
+    Coulomb { mu_k: f64 },
+    /// μ = μk + c|Ω| (vocabulary `viscous_brake_friction`).
+    Viscous { mu_k: f64, c: f64 },
+    /// μ = μk + (μs − μk) exp(−(Ω/vs)²) (vocabulary `velocity_weakening_friction`).
+    Stribeck { mu_k: f64, mu_s: f64, vs: f64 },
+    /// μ = μk (1 + a sin(2π f t + θ_r)) (vocabulary `normal_force_modulation`).
+    TimeSine { mu_k: f64, a: f64, f_hz: f64 },
+    /// μ = μk (1 + a sin(n φ1 + θ_r)) (vocabulary `angle_periodic_friction`).
+    AngleSine { mu_k: f64, a: f64, order: u32 },
+}
+
+/// Slip samples of a set of runs, flattened, with per-run weights.
+#[derive(Debug, Clone, Default)]
+pub struct SlipData {
+    pub run: Vec<usize>,
+    pub t: Vec<f64>,
+    pub phi: Vec<f64>,
+    pub omega: Vec<f64>,
+    pub mu: Vec<f64>,
+    /// Weight of each run: (N0/σ_F)², so weighted residuals are in noise units.
+    pub run_weight: Vec<f64>,
+    pub n_runs: usize,
+}
+
+impl SlipData {
+    pub fn from_runs(runs: &[&RunSignals]) -> Self {
+        let mut d = SlipData { n_runs: runs.len(), ..Default::default() };
+        for (r, s) in runs.iter().enumerate() {
+            let sd = (s.force_noise_n / s.normal_force_n.max(1e-9)).max(1e-6);
+            d.run_weight.push(1.0 / (sd * sd));
+            for (j, &k) in s.slip_idx.iter().enumerate() {
+                d.run.push(r);
+                d.t.push(s.time_s[k]);
+                d.phi.push(s.rotor_angle_rad[k]);
+                d.omega.push(s.rotor_speed_rad_s[k].abs());
+                d.mu.push(s.mu_obs[j]);
+            }
+        }
+        d
+    }
+    pub fn len(&self) -> usize {
+        self.mu.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.mu.is_empty()
+    }
+    fn w(&self, i: usize) -> f64 {
+        self.run_weight[self.run[i]]
+    }
+}
+
+/// A fitted friction candidate on the training runs.
+#[derive(Debug, Clone)]
+pub struct FrictionFit {
+    pub model: FrictionModel,
+    /// Per training run phase θ_r (sine models only).
+    pub phases: Vec<f64>,
+    /// (JSON key, value, standard error), in the vocabulary's order.
+    pub params: Vec<(&'static str, f64, f64)>,
+    /// Weighted residual sum of squares (noise units) and sample count.
+    pub rss_w: f64,
+    pub n: usize,
+    /// Free parameters counted by the information criterion (shared + per-run).
+    pub k: usize,
+    pub converged: bool,
+    /// Scan of the sine models: (frequency Hz or order, weighted RSS of the linear per-run fit).
+    pub scan: Vec<(f64, f64)>,
+}
+
+impl FrictionModel {
+    /// μ̂ at one sample with the run's phase θ (ignored by speed laws).
+    pub fn mu(&self, t: f64, phi: f64, omega: f64, theta: f64) -> f64 {
+        match *self {
+            FrictionModel::Coulomb { mu_k } => mu_k,
+            FrictionModel::Viscous { mu_k, c } => mu_k + c * omega,
+            FrictionModel::Stribeck { mu_k, mu_s, vs } => mu_k + (mu_s - mu_k) * (-(omega / vs).powi(2)).exp(),
+            FrictionModel::TimeSine { mu_k, a, f_hz } => mu_k * (1.0 + a * (2.0 * PI * f_hz * t + theta).sin()),
+            FrictionModel::AngleSine { mu_k, a, order } => mu_k * (1.0 + a * (order as f64 * phi + theta).sin()),
+        }
+    }
+    /// Regressor x of the sine models (the argument without the phase).
+    fn sine_arg(&self, t: f64, phi: f64) -> Option<(f64, f64, f64)> {
+        match *self {
+            FrictionModel::TimeSine { mu_k, a, f_hz } => Some((2.0 * PI * f_hz * t, mu_k, a)),
+            FrictionModel::AngleSine { mu_k, a, order } => Some((order as f64 * phi, mu_k, a)),
+            _ => None,
+        }
+    }
+}
+
+fn weighted_rss(d: &SlipData, m: &FrictionModel, phases: &[f64]) -> f64 {
+    (0..d.len())
+        .map(|i| {
+            let th = phases.get(d.run[i]).copied().unwrap_or(0.0);
+            let e = d.mu[i] - m.mu(d.t[i], d.phi[i], d.omega[i], th);
+            d.w(i) * e * e
+        })
+        .sum()
+}
+
+/// Baseline: weighted mean coefficient.
+pub fn fit_coulomb(d: &SlipData) -> FrictionFit {
+    let (mut sw, mut swy) = (0.0, 0.0);
+    for i in 0..d.len() {
+        sw += d.w(i);
+        swy += d.w(i) * d.mu[i];
+    }
+    let mu_k = swy / sw.max(f64::MIN_POSITIVE);
+    let m = FrictionModel::Coulomb { mu_k };
+    let rss = weighted_rss(d, &m, &[]);
+    let var = rss / (d.len().max(2) - 1) as f64;
+    FrictionFit {
+        params: vec![("mu_kinetic", mu_k, (var / sw).sqrt())],
+        model: m,
+        phases: vec![],
+        rss_w: rss,
+        n: d.len(),
+        k: 1,
+        converged: sw > 0.0,
+        scan: vec![],
+    }
+}
+
+/// Linear least squares of μ on fixed columns; returns (solution, covariance, rss).
+fn linear_fit(d: &SlipData, ncol: usize, cols: impl Fn(usize, &mut [f64])) -> Option<(Vec<f64>, Vec<f64>, f64)> {
+    let mut ne = Normal::new(ncol);
+    let mut row = vec![0.0; ncol];
+    for i in 0..d.len() {
+        cols(i, &mut row);
+        let sw = d.w(i).sqrt();
+        let sparse: Vec<(usize, f64)> = row.iter().enumerate().map(|(j, &v)| (j, v * sw)).collect();
+        ne.add_sparse(&sparse, d.mu[i] * sw);
+    }
+    let p = ne.solve()?;
+    let mut rss = 0.0;
+    for i in 0..d.len() {
+        cols(i, &mut row);
+        let e = d.mu[i] - row.iter().zip(&p).map(|(a, b)| a * b).sum::<f64>();
+        rss += d.w(i) * e * e;
+    }
+    let var = rss / (d.len().saturating_sub(ncol).max(1)) as f64;
+    let cov = ne.inverse()?.into_iter().map(|x| x * var).collect();
+    Some((p, cov, rss))
+}
+
+/// μ = μk + c|Ω|: linear.
+pub fn fit_viscous(d: &SlipData) -> Option<FrictionFit> {
+    let (p, cov, rss) = linear_fit(d, 2, |i, r| {
+        r[0] = 1.0;
+        r[1] = d.omega[i];
+    })?;
+    Some(FrictionFit {
+        model: FrictionModel::Viscous { mu_k: p[0], c: p[1] },
+        phases: vec![],
+        params: vec![("mu_kinetic", p[0], cov[0].sqrt()), ("viscous_per_rad_s", p[1], cov[3].sqrt())],
+        rss_w: rss,
+        n: d.len(),
+        k: 2,
+        converged: true,
+        scan: vec![],
+    })
+}
+
+/// μ = μk + Δ exp(−(Ω/vs)²): linear in (μk, Δ) for fixed vs; vs by a log
+/// grid then golden-section refinement; covariance from the numerical Jacobian.
+pub fn fit_stribeck(d: &SlipData) -> Option<FrictionFit> {
+    let lin = |vs: f64| {
+        linear_fit(d, 2, |i, r| {
+            r[0] = 1.0;
+            r[1] = (-(d.omega[i] / vs).powi(2)).exp();
+        })
+    };
+    let grid: Vec<f64> = (0..41).map(|j| 0.05 * 10f64.powf(j as f64 * 3.0 / 40.0)).collect();
+    let rss_at = |lv: f64| lin(lv.exp()).map(|x| x.2).unwrap_or(f64::INFINITY);
+    let (best, _) = grid
+        .iter()
+        .enumerate()
+        .map(|(j, &v)| (j, rss_at(v.ln())))
+        .min_by(|a, b| a.1.total_cmp(&b.1))?;
+    let lo = grid[best.saturating_sub(1)].ln();
+    let hi = grid[(best + 1).min(grid.len() - 1)].ln();
+    let lv = golden(lo, hi, 40, rss_at);
+    let vs = lv.exp();
+    let (p, _, rss) = lin(vs)?;
+    let (mu_k, dmu) = (p[0], p[1]);
+    // Gauss–Newton covariance over (μk, Δ, vs).
+    let mut ne = Normal::new(3);
+    for i in 0..d.len() {
+        let g = (-(d.omega[i] / vs).powi(2)).exp();
+        let dg_dvs = g * 2.0 * d.omega[i].powi(2) / vs.powi(3);
+        let sw = d.w(i).sqrt();
+        ne.add_sparse(&[(0, sw), (1, sw * g), (2, sw * dmu * dg_dvs)], 0.0);
+    }
+    let var = rss / (d.len().saturating_sub(3).max(1)) as f64;
+    let inv = ne.inverse();
+    let se = |a: usize, b: usize| inv.as_ref().map(|m| m[a * 3 + b] * var).unwrap_or(f64::NAN);
+    let se_mu_s = (se(0, 0) + se(1, 1) + 2.0 * se(0, 1)).max(0.0).sqrt();
+    Some(FrictionFit {
+        model: FrictionModel::Stribeck { mu_k, mu_s: mu_k + dmu, vs },
+        phases: vec![],
+        params: vec![
+            ("mu_static", mu_k + dmu, se_mu_s),
+            ("mu_kinetic", mu_k, se(0, 0).max(0.0).sqrt()),
+            ("stribeck_speed_rad_s", vs, se(2, 2).max(0.0).sqrt()),
+        ],
+        rss_w: rss,
+        n: d.len(),
+        k: 3,
+        converged: inv.is_some(),
+        scan: vec![],
+    })
+}
+
+/// Golden-section minimum of `f` on [lo, hi].
+pub(crate) fn golden(mut lo: f64, mut hi: f64, iters: usize, f: impl Fn(f64) -> f64) -> f64 {
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    let mut x1 = hi - g * (hi - lo);
+    let mut x2 = lo + g * (hi - lo);
+    let (mut f1, mut f2) = (f(x1), f(x2));
+    for _ in 0..iters {
+        if f1 <= f2 {
+            hi = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = hi - g * (hi - lo);
+            f1 = f(x1);
+        } else {
+            lo = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = lo + g * (hi - lo);
+            f2 = f(x2);
+        }
+    }
+    if f1 <= f2 { x1 } else { x2 }
+}
+
+/// Scan of the per-run sine regression μ = μk + A_r sin x + B_r cos x (shared μk),
+/// returning the weighted RSS. Linear, so the scan is exact for each x.
+fn sine_scan_rss(d: &SlipData, arg: impl Fn(usize) -> f64) -> Option<(f64, Vec<f64>)> {
+    let n = 1 + 2 * d.n_runs;
+    let mut ne = Normal::new(n);
+    let mut sc = Vec::with_capacity(d.len());
+    for i in 0..d.len() {
+        let (s, c) = arg(i).sin_cos();
+        sc.push((s, c));
+        let r = d.run[i];
+        let sw = d.w(i).sqrt();
+        ne.add_sparse(&[(0, sw), (1 + 2 * r, sw * s), (2 + 2 * r, sw * c)], sw * d.mu[i]);
+    }
+    let p = ne.solve()?;
+    let rss = (0..d.len())
+        .map(|i| {
+            let r = d.run[i];
+            let e = d.mu[i] - p[0] - p[1 + 2 * r] * sc[i].0 - p[2 + 2 * r] * sc[i].1;
+            d.w(i) * e * e
+        })
+        .sum();
+    Some((rss, p))
+}
+
+/// Sine models: scan the frequency (time kind, grid of `freqs_hz`) or the
+/// order (angle kind, 1..=max_order), then Gauss–Newton on the shared
+/// (μk, a[, f]) and per-run θ_r. Returns the best fit.
+pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], max_order: u32) -> Option<FrictionFit> {
+    if d.is_empty() {
+        return None;
+    }
+    let cands: Vec<f64> = if time_kind { freqs_hz.to_vec() } else { (1..=max_order).map(f64::from).collect() };
+    let xarg = |psi: f64, i: usize| if time_kind { 2.0 * PI * psi * d.t[i] } else { psi * d.phi[i] };
+    let scored: Vec<(f64, f64)> = {
+        use rayon::prelude::*;
+        cands.par_iter().map(|&psi| (psi, sine_scan_rss(d, |i| xarg(psi, i)).map(|x| x.0).unwrap_or(f64::INFINITY))).collect()
+    };
+    let (psi0, _) = scored.iter().copied().min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.total_cmp(&b.0)))?;
+    let (_, p) = sine_scan_rss(d, |i| xarg(psi0, i))?;
+    let mu_k0 = p[0];
+    // Shared amplitude: weighted mean of per-run amplitudes (start of GN).
+    let mut amp_sum = 0.0;
+    let mut phases = vec![0.0; d.n_runs];
+    for r in 0..d.n_runs {
+        let (a, b) = (p[1 + 2 * r], p[2 + 2 * r]);
+        amp_sum += (a * a + b * b).sqrt();
+        phases[r] = b.atan2(a);
+    }
+    let a0 = amp_sum / d.n_runs as f64 / mu_k0.abs().max(1e-9);
+    // Gauss–Newton: params [μk, a, (f), θ_0..θ_{R−1}].
+    let nf = if time_kind { 1 } else { 0 };
+    let np = 2 + nf + d.n_runs;
+    let mut theta = vec![mu_k0, a0];
+    if time_kind {
+        theta.push(psi0);
+    }
+    theta.extend(phases);
+    let model_of = |th: &[f64]| {
+        if time_kind {
+            FrictionModel::TimeSine { mu_k: th[0], a: th[1], f_hz: th[2] }
+        } else {
+            FrictionModel::AngleSine { mu_k: th[0], a: th[1], order: psi0 as u32 }
+        }
+    };
+    let rss_of = |th: &[f64]| weighted_rss(d, &model_of(th), &th[2 + nf..]);
+    let mut rss = rss_of(&theta);
+    let mut converged = false;
+    let mut ne_last = None;
+    for _ in 0..30 {
+        let mut ne = Normal::new(np);
+        for i in 0..d.len() {
+            let r = d.run[i];
+            let x = xarg(if time_kind { theta[2] } else { psi0 }, i) + theta[2 + nf + r];
+            let (s, c) = x.sin_cos();
+            let (mk, a) = (theta[0], theta[1]);
+            let sw = d.w(i).sqrt();
+            let e = d.mu[i] - mk * (1.0 + a * s);
+            let mut row = vec![(0, sw * (1.0 + a * s)), (1, sw * mk * s), (2 + nf + r, sw * mk * a * c)];
+            if time_kind {
+                row.push((2, sw * mk * a * c * 2.0 * PI * d.t[i]));
+            }
+            ne.add_sparse(&row, sw * e);
+        }
+        let Some(step) = ne.solve() else { break };
+        let mut lambda = 1.0;
+        let mut improved = false;
+        for _ in 0..12 {
+            let cand: Vec<f64> = theta.iter().zip(&step).map(|(t, s)| t + lambda * s).collect();
+            let r2 = rss_of(&cand);
+            if r2 <= rss {
+                let rel = (rss - r2) / rss.max(f64::MIN_POSITIVE);
+                theta = cand;
+                rss = r2;
+                improved = true;
+                if rel < 1e-10 {
+                    converged = true;
+                }
+                break;
+            }
+            lambda *= 0.5;
+        }
+        ne_last = Some(ne);
+        if !improved {
+            converged = true;
+        }
+        if converged {
+            break;
+        }
+    }
+    // Canonical sign: a ≥ 0 (a negative amplitude is a phase shift of π).
+    if theta[1] < 0.0 {
+        theta[1] = -theta[1];
+        for th in theta[2 + nf..].iter_mut() {
+            *th += PI;
+        }
+    }
+    for th in theta[2 + nf..].iter_mut() {
+        *th = th.rem_euclid(2.0 * PI);
+    }
+    let var = rss / (d.len().saturating_sub(np).max(1)) as f64;
+    let inv = ne_last.as_ref().and_then(Normal::inverse);
+    let se = |j: usize| inv.as_ref().map(|m| (m[j * np + j] * var).max(0.0).sqrt()).unwrap_or(f64::NAN);
+    let model = model_of(&theta);
+    let params = if time_kind {
+        vec![("amplitude_ratio", theta[1], se(1)), ("frequency_hz", theta[2], se(2))]
+    } else {
+        vec![("amplitude_ratio", theta[1], se(1)), ("order", psi0, 0.0)]
+    };
+    Some(FrictionFit {
+        model,
+        phases: theta[2 + nf..].to_vec(),
+        params,
+        rss_w: rss,
+        n: d.len(),
+        // μk, a, and f (time) or the scanned integer order (angle), plus one phase per run.
+        k: 3 + d.n_runs,
+        converged,
+        scan: scored,
+    })
+}
+
+/// Per-run fit of the nuisance phase with the shared parameters fixed, for a
+/// held-out run: the phase is free per run in the vocabulary, the rest is not.
+pub fn heldout_phase(m: &FrictionModel, d: &SlipData) -> f64 {
+    if m.sine_arg(0.0, 0.0).is_none() || d.is_empty() {
+        return 0.0;
+    }
+    let (mut ss, mut sc, mut cc, mut ys, mut yc) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for i in 0..d.len() {
+        let (x, mk, _) = m.sine_arg(d.t[i], d.phi[i]).expect("sine");
+        let (s, c) = x.sin_cos();
+        let y = d.mu[i] - mk;
+        ss += s * s;
+        sc += s * c;
+        cc += c * c;
+        ys += y * s;
+        yc += y * c;
+    }
+    let det = ss * cc - sc * sc;
+    if det.abs() < 1e-12 {
+        return 0.0;
+    }
+    let a = (ys * cc - yc * sc) / det;
+    let b = (yc * ss - ys * sc) / det;
+    let mut th = b.atan2(a);
+    // A few Newton steps on the exact fixed-amplitude problem.
+    for _ in 0..5 {
+        let (mut g, mut h) = (0.0, 0.0);
+        for i in 0..d.len() {
+            let (x, mk, amp) = m.sine_arg(d.t[i], d.phi[i]).expect("sine");
+            let (s, c) = (x + th).sin_cos();
+            let e = d.mu[i] - mk * (1.0 + amp * s);
+            let j = mk * amp * c;
+            g += j * e;
+            h += j * j;
+        }
+        if h <= 0.0 {
+            break;
+        }
+        th += g / h;
+    }
+    th.rem_euclid(2.0 * PI)
+}
+
+/// Relative RMS error of μ̂ against μ_obs on one run's slip samples:
+/// sqrt(mean((μ̂ − μ_obs)²)) / mean(μ_obs). Dimensionless.
+pub fn relative_mu_error(m: &FrictionModel, d: &SlipData, theta: f64) -> Option<f64> {
+    if d.is_empty() {
+        return None;
+    }
+    let mean = d.mu.iter().sum::<f64>() / d.len() as f64;
+    let ms = (0..d.len()).map(|i| (d.mu[i] - m.mu(d.t[i], d.phi[i], d.omega[i], theta)).powi(2)).sum::<f64>()
+        / d.len() as f64;
+    Some(ms.sqrt() / mean.abs().max(1e-9))
+}

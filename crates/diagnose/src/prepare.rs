@@ -1,0 +1,195 @@
+//! From one `operating_point` recording to the signals the diagnosis compares:
+//! encoder angles and zero-lag speeds, calibrated friction force, the PI
+//! reference, the usable slip samples and the sensor noise measured in the data.
+
+use crate::{DiagnoseError, DiagnoseOptions};
+use rig_types::{Campaign, Run, RunKind};
+use std::f64::consts::PI;
+
+/// Force-sensor calibration used to turn mV into N (Table 4.6 style: mV = factor · N + offset).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ForceCal {
+    pub factor_mv_per_n: f64,
+    pub offset_mv: f64,
+}
+
+/// One operating-point run as the diagnosis sees it. All vectors have `time_s.len()` entries.
+#[derive(Debug, Clone)]
+pub struct RunSignals {
+    pub id: String,
+    /// True for the runs held out of every fit (every `heldout_every`-th op run).
+    pub heldout: bool,
+    pub setpoint_rad_s: f64,
+    pub normal_force_n: f64,
+    pub ramp_s: f64,
+    pub time_s: Vec<f64>,
+    pub rotor_angle_rad: Vec<f64>,
+    pub rotor_speed_rad_s: Vec<f64>,
+    pub motor_angle_rad: Vec<f64>,
+    pub motor_speed_rad_s: Vec<f64>,
+    pub voltage_v: Vec<f64>,
+    /// Calibrated friction force on the pads, N (positive opposes positive Ω1).
+    pub friction_force_n: Vec<f64>,
+    /// Samples where rotor 1 certainly slips (speed above threshold, no stuck
+    /// sample within the speed window): the friction there is μ·N, not a reaction.
+    pub slip_idx: Vec<usize>,
+    /// Observed friction coefficient sign(Ω1)·F/N0 at `slip_idx` (empty when N0 = 0).
+    pub mu_obs: Vec<f64>,
+    /// White sensor noise (standard deviation) of the force and voltage channels,
+    /// from first differences: σ² = var(x[k+1] − x[k]) / 2 (smooth signal at 500 Hz).
+    pub force_noise_n: f64,
+    pub voltage_noise_v: f64,
+    /// First sample of the steady state (after ramp + settle time).
+    pub steady_from: usize,
+}
+
+impl RunSignals {
+    /// PI reference: linear ramp 0 → set-point over `ramp_s` (recording-format.md protocol).
+    pub fn reference_rad_s(&self, t_s: f64) -> f64 {
+        if self.ramp_s <= 0.0 { self.setpoint_rad_s } else { self.setpoint_rad_s * (t_s / self.ramp_s).min(1.0) }
+    }
+}
+
+/// Zero-lag speed from cumulative angle: centred difference over ±`half` samples
+/// (one-sided at the ends). Quantisation of one encoder tick gives a speed
+/// resolution of 2π/(ticks · 2·half·dt).
+pub fn centred_speed(time_s: &[f64], angle_rad: &[f64], half: usize) -> Vec<f64> {
+    let n = time_s.len();
+    (0..n)
+        .map(|k| {
+            let lo = k.saturating_sub(half);
+            let hi = (k + half).min(n - 1);
+            if hi == lo { 0.0 } else { (angle_rad[hi] - angle_rad[lo]) / (time_s[hi] - time_s[lo]) }
+        })
+        .collect()
+}
+
+/// Noise standard deviation of a smooth signal plus white noise, from first differences.
+/// The median absolute difference (scaled for a Gaussian) keeps rare jumps
+/// (stick/slip transitions) from inflating it.
+pub fn diff_noise(x: &[f64]) -> f64 {
+    if x.len() < 3 {
+        return 0.0;
+    }
+    let mut d: Vec<f64> = x.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
+    d.sort_by(|a, b| a.total_cmp(b));
+    let med = d[d.len() / 2];
+    // For d ~ N(0, 2σ²): median |d| = 0.6745·√2·σ.
+    med / (0.6745 * std::f64::consts::SQRT_2)
+}
+
+/// Builds the signals of every operating-point run (campaign order). Runs
+/// with index `i % heldout_every == heldout_every − 1` are held out.
+pub fn prepare_runs(c: &Campaign, cal: ForceCal, opts: &DiagnoseOptions) -> Result<Vec<RunSignals>, DiagnoseError> {
+    let ops: Vec<&Run> = c.runs_of("operating_point").collect();
+    let mut out = Vec::with_capacity(ops.len());
+    for (i, run) in ops.iter().enumerate() {
+        let heldout = opts.heldout_every > 0 && i % opts.heldout_every == opts.heldout_every - 1;
+        out.push(prepare_run(c, run, cal, heldout, opts)?);
+    }
+    Ok(out)
+}
+
+fn column<'a, T>(run: &'a Run, col: &'static str, v: &'a Option<Vec<T>>) -> Result<&'a Vec<T>, DiagnoseError> {
+    v.as_ref().ok_or_else(|| DiagnoseError::MissingColumn { run: run.id.clone(), column: col })
+}
+
+fn prepare_run(
+    c: &Campaign,
+    run: &Run,
+    cal: ForceCal,
+    heldout: bool,
+    opts: &DiagnoseOptions,
+) -> Result<RunSignals, DiagnoseError> {
+    let RunKind::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s } = run.kind else {
+        unreachable!("prepare_run is only called on operating points")
+    };
+    let d = &run.data;
+    let t = d.time_s.clone();
+    let rad_per_tick = 2.0 * PI / c.rig.encoder_ticks_per_rev as f64;
+    let phi1: Vec<f64> = column(run, "rotor_ticks", &d.rotor_ticks)?.iter().map(|&k| k as f64 * rad_per_tick).collect();
+    let phi2: Vec<f64> = column(run, "motor_ticks", &d.motor_ticks)?.iter().map(|&k| k as f64 * rad_per_tick).collect();
+    let volt = column(run, "motor_voltage_v", &d.motor_voltage_v)?.clone();
+    let mv = column(run, "brake_force_mv", &d.brake_force_mv)?;
+    let force: Vec<f64> = mv.iter().map(|m| (m - cal.offset_mv) / cal.factor_mv_per_n).collect();
+    let w1 = centred_speed(&t, &phi1, opts.rotor_speed_half_window);
+    let w2 = centred_speed(&t, &phi2, opts.motor_speed_half_window);
+
+    // Stuck detection on the raw encoder: no tick change across ±half samples.
+    let n = t.len();
+    let h = opts.rotor_speed_half_window;
+    let ticks = d.rotor_ticks.as_ref().expect("checked above");
+    let moved: Vec<bool> = (0..n).map(|k| ticks[(k + h).min(n - 1)] != ticks[k.saturating_sub(h)]).collect();
+    let mut slip_idx = Vec::new();
+    let mut mu_obs = Vec::new();
+    let guard = 2 * h;
+    let start = opts.skip_start_s;
+    let mut last_stuck: Option<usize> = None;
+    let mut next_stuck = vec![usize::MAX; n];
+    for k in (0..n).rev() {
+        next_stuck[k] = if !moved[k] { k } else if k + 1 < n { next_stuck[k + 1] } else { usize::MAX };
+    }
+    for k in 0..n {
+        if !moved[k] {
+            last_stuck = Some(k);
+            continue;
+        }
+        let far_prev = last_stuck.is_none_or(|s| k - s > guard);
+        let far_next = next_stuck[k] == usize::MAX || next_stuck[k] - k > guard;
+        if t[k] >= start && far_prev && far_next && w1[k].abs() >= opts.slip_speed_rad_s && normal_force_n > 0.0 {
+            slip_idx.push(k);
+            mu_obs.push(w1[k].signum() * force[k] / normal_force_n);
+        }
+    }
+    let steady_from = t.partition_point(|&x| x < ramp_s + opts.settle_s);
+    Ok(RunSignals {
+        id: run.id.clone(),
+        heldout,
+        setpoint_rad_s: motor_rpm_setpoint * 2.0 * PI / 60.0,
+        normal_force_n,
+        ramp_s,
+        force_noise_n: diff_noise(&force),
+        voltage_noise_v: diff_noise(&volt),
+        time_s: t,
+        rotor_angle_rad: phi1,
+        rotor_speed_rad_s: w1,
+        motor_angle_rad: phi2,
+        motor_speed_rad_s: w2,
+        voltage_v: volt,
+        friction_force_n: force,
+        slip_idx,
+        mu_obs,
+        steady_from,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn centred_speed_is_exact_on_a_ramp() {
+        let t: Vec<f64> = (0..100).map(|k| k as f64 * 0.002).collect();
+        let a: Vec<f64> = t.iter().map(|x| 3.0 * x).collect();
+        let w = centred_speed(&t, &a, 5);
+        assert!(w.iter().all(|v| (v - 3.0).abs() < 1e-9));
+    }
+
+    #[test]
+    fn diff_noise_recovers_sigma_on_a_smooth_signal() {
+        // Deterministic pseudo-noise (LCG) with known σ on a slow sine.
+        let mut s: u64 = 12345;
+        let mut g = || {
+            // Sum of 12 uniforms − 6 ≈ N(0,1).
+            let mut acc = 0.0;
+            for _ in 0..12 {
+                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                acc += (s >> 11) as f64 / (1u64 << 53) as f64;
+            }
+            acc - 6.0
+        };
+        let x: Vec<f64> = (0..20000).map(|k| (k as f64 * 0.001).sin() + 0.05 * g()).collect();
+        let sd = diff_noise(&x);
+        assert!((sd - 0.05).abs() < 0.003, "σ = {sd}");
+    }
+}
