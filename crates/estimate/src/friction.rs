@@ -1,0 +1,171 @@
+//! Baseline Coulomb friction of the brake (μs, μk) from the operating points:
+//! the force sensor measures the tangential pad force F directly, so
+//! μ = T1/(N0·r) = F/N0 (Eq. 4-10 with T1 = μ·N·r).
+//!
+//! μk: mean μ over slip samples (Ω1 above a threshold), per run, pooled.
+//! μs: the peak μ of each stick episode up to break-away (while stuck, the
+//! pad force is whatever holds the rotor; it peaks at μs·N0 when it lets go),
+//! median over episodes (robust to a missed or truncated episode).
+
+use crate::EstimateError;
+use crate::signals::{central_speed, mean_sd, median, speed_resolution_rad_s, ticks_to_rad};
+use rig_types::{Campaign, RunKind};
+use serde::{Deserialize, Serialize};
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrictionOptions {
+    /// Half-width (samples) of the centred difference for Ω1.
+    pub speed_half_window: usize,
+    /// Ω1 above this is slip. Must sit well above the speed resolution of the
+    /// difference (one count over 2·half samples) so no stuck sample passes.
+    pub slip_threshold_rad_s: f64,
+    /// Stick episodes shorter than this are not counted (a chatter blip is no break-away).
+    pub min_stick_s: f64,
+    /// Runs with N0 below this are skipped (μ = F/N0 ill-conditioned, brake barely closed).
+    pub min_normal_force_n: f64,
+}
+
+impl Default for FrictionOptions {
+    fn default() -> Self {
+        FrictionOptions { speed_half_window: 10, slip_threshold_rad_s: 0.5, min_stick_s: 0.05, min_normal_force_n: 0.5 }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrictionEstimate {
+    pub mu_static: f64,
+    /// None when fewer than 2 episodes (no scatter to estimate it from).
+    pub mu_static_stderr: Option<f64>,
+    pub mu_kinetic: f64,
+    /// None when fewer than 2 runs slip.
+    pub mu_kinetic_stderr: Option<f64>,
+    pub n_stick_episodes: usize,
+    pub n_slip_samples: usize,
+    /// Runs that contributed a μk value.
+    pub n_slip_runs: usize,
+}
+
+/// μ samples and stick/slip analysis of one run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunFriction {
+    /// Mean μ over slip samples, with the count.
+    pub mu_slip: Option<(f64, usize)>,
+    /// Peak μ of each stick episode that ended in break-away.
+    pub breakaway_peaks: Vec<f64>,
+}
+
+/// Analyses one trace: times, rotor angle (rad), pad force (N), normal force N0.
+pub fn analyse_trace(
+    time_s: &[f64],
+    rotor_angle_rad: &[f64],
+    force_n: &[f64],
+    normal_force_n: f64,
+    opts: &FrictionOptions,
+) -> RunFriction {
+    let h = opts.speed_half_window.max(1);
+    let omega = central_speed(time_s, rotor_angle_rad, h);
+    let mu: Vec<f64> = force_n.iter().map(|f| f / normal_force_n).collect();
+    let slip: Vec<usize> = (0..omega.len()).filter(|&i| omega[i].abs() > opts.slip_threshold_rad_s).collect();
+    let mu_slip =
+        (!slip.is_empty()).then(|| (slip.iter().map(|&i| mu[i].abs()).sum::<f64>() / slip.len() as f64, slip.len()));
+
+    // Stuck: the encoder did not move over ±h samples (speed estimate exactly 0).
+    let stuck: Vec<bool> = omega.iter().map(|w| *w == 0.0).collect();
+    let mut peaks = Vec::new();
+    let mut i = 0;
+    let n = stuck.len();
+    while i < n {
+        if !stuck[i] {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while i < n && stuck[i] {
+            i += 1;
+        }
+        let end = i; // first non-stuck sample (or n)
+        let long_enough = time_s[end - 1] - time_s[start] >= opts.min_stick_s;
+        // Break-away: the rotor reaches slip soon after the episode.
+        let horizon = (end + 4 * h).min(n);
+        let breaks_away = end < n && (end..horizon).any(|j| omega[j].abs() > opts.slip_threshold_rad_s);
+        if long_enough && breaks_away {
+            // The centred difference flags motion up to h samples early and
+            // late; the true break-away lies in [end − h, end + h].
+            let hi = (end + h).min(n);
+            let peak = (start..hi).map(|j| mu[j].abs()).fold(0.0_f64, f64::max);
+            peaks.push(peak);
+        }
+    }
+    RunFriction { mu_slip, breakaway_peaks: peaks }
+}
+
+/// μs and μk from every operating point; force calibration force_n = (mv − offset)/factor.
+pub fn estimate_friction(
+    c: &Campaign,
+    force_offset_mv: f64,
+    force_factor_mv_per_n: f64,
+    opts: &FrictionOptions,
+) -> Result<FrictionEstimate, EstimateError> {
+    let dt = c.rig.sample_rate_hz.recip();
+    let resolution = speed_resolution_rad_s(c.rig.encoder_ticks_per_rev, 2 * opts.speed_half_window.max(1), dt);
+    if opts.slip_threshold_rad_s < 2.0 * resolution {
+        return Err(EstimateError::InvalidOption {
+            name: "slip_threshold_rad_s".into(),
+            value: opts.slip_threshold_rad_s,
+            rule: "must be at least twice the speed resolution of the difference window",
+        });
+    }
+    let mut slip_means = Vec::new();
+    let mut n_slip = 0;
+    let mut peaks = Vec::new();
+    for run in c.runs_of("operating_point") {
+        let RunKind::OperatingPoint { normal_force_n, .. } = run.kind else { continue };
+        if normal_force_n < opts.min_normal_force_n {
+            continue;
+        }
+        let d = &run.data;
+        let missing = |column| EstimateError::MissingColumn { run: run.id.clone(), column, kind: "operating_point" };
+        let ticks = d.rotor_ticks.as_ref().ok_or_else(|| missing("rotor_ticks"))?;
+        let mv = d.brake_force_mv.as_ref().ok_or_else(|| missing("brake_force_mv"))?;
+        let phi1 = ticks_to_rad(ticks, c.rig.encoder_ticks_per_rev);
+        let force: Vec<f64> = mv.iter().map(|m| (m - force_offset_mv) / force_factor_mv_per_n).collect();
+        let rf = analyse_trace(&d.time_s, &phi1, &force, normal_force_n, opts);
+        if let Some((m, k)) = rf.mu_slip {
+            slip_means.push((m, k));
+            n_slip += k;
+        }
+        peaks.extend(rf.breakaway_peaks);
+    }
+    if slip_means.is_empty() {
+        return Err(EstimateError::TooFewSamples {
+            context: format!("campaign {}: kinetic friction", c.name),
+            got: 0,
+            need: 1,
+            rule: "no operating point has rotor-1 slip above slip_threshold_rad_s",
+        });
+    }
+    // μk: sample-weighted mean of run means; the standard error from the
+    // between-run scatter (samples within a run are strongly autocorrelated).
+    let mu_k = slip_means.iter().map(|(m, k)| m * *k as f64).sum::<f64>() / n_slip as f64;
+    let run_values: Vec<f64> = slip_means.iter().map(|(m, _)| *m).collect();
+    let mu_k_se = (run_values.len() >= 2).then(|| mean_sd(&run_values).1 / (run_values.len() as f64).sqrt());
+    // μs: median of peaks; se = 1.2533·σ/√n with σ = 1.4826·MAD (normal efficiency of the median).
+    // Without any break-away there is no evidence that μs exceeds μk: the
+    // Coulomb law then degenerates to μs = μk (stated in the report).
+    let (mu_s, mu_s_se) = if peaks.is_empty() {
+        (mu_k, None)
+    } else {
+        let med = median(&peaks);
+        let mad = median(&peaks.iter().map(|p| (p - med).abs()).collect::<Vec<_>>());
+        (med, (peaks.len() >= 2).then(|| 1.2533 * 1.4826 * mad / (peaks.len() as f64).sqrt()))
+    };
+    Ok(FrictionEstimate {
+        mu_static: mu_s,
+        mu_static_stderr: mu_s_se,
+        mu_kinetic: mu_k,
+        mu_kinetic_stderr: mu_k_se,
+        n_stick_episodes: peaks.len(),
+        n_slip_samples: n_slip,
+        n_slip_runs: run_values.len(),
+    })
+}

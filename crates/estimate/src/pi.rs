@@ -1,0 +1,155 @@
+//! Drive PI gains from operating-point runs by linear least squares,
+//! V = kp·e + ki·∫e with e = Ω_ref − Ω2 (the drive law of rig_types::DriveParams).
+//!
+//! Why window averages: averaging both sides over a window [a, b] keeps the
+//! law exact, and the mean error needs no derivative:
+//! ē = (I(b) − I(a))/(b − a) with I(t) = ∫e = ∫Ω_ref dt − φ2(t) (φ2 from the
+//! encoder, zero at t = 0). Longer windows shrink the encoder quantisation in
+//! ē (errors-in-variables bias on kp) without smoothing bias.
+//! Anti-windup of unknown form: after each saturation episode the drive's
+//! integrator differs from ∫e by an unknown constant, so every unsaturated
+//! segment after a saturation gets its own offset c_k (the first segment of a
+//! run starts from rest, offset 0, which anchors ki).
+
+use crate::signals::ticks_to_rad;
+use crate::{EstimateError, linreg};
+use rig_types::{Campaign, RunKind};
+use serde::{Deserialize, Serialize};
+use std::f64::consts::TAU;
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PiOptions {
+    /// Samples per averaging window.
+    pub window_samples: usize,
+    /// A sample is saturated when |V| ≥ limit − margin.
+    pub saturation_margin_v: f64,
+    /// Unsaturated segments (after a saturation) shorter than this many windows are dropped.
+    pub min_segment_windows: usize,
+}
+
+impl Default for PiOptions {
+    fn default() -> Self {
+        PiOptions { window_samples: 25, saturation_margin_v: 0.5, min_segment_windows: 4 }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PiEstimate {
+    pub kp_v_s_rad: f64,
+    pub kp_stderr: f64,
+    pub ki_v_rad: f64,
+    pub ki_stderr: f64,
+    /// Fraction of all operating-point samples at or beyond the saturation threshold.
+    pub saturated_fraction: f64,
+    /// Windows used in the regression.
+    pub n_windows: usize,
+    /// Per-segment offsets estimated (anti-windup resets).
+    pub n_offsets: usize,
+    /// RMS of the regression residual, V.
+    pub residual_rms_v: f64,
+}
+
+/// ∫₀ᵗ Ω_ref dt of the ramp 0 → ω_sp over ramp_s, then constant (rad).
+pub fn reference_angle_rad(t: f64, setpoint_rad_s: f64, ramp_s: f64) -> f64 {
+    if ramp_s <= 0.0 {
+        setpoint_rad_s * t
+    } else if t < ramp_s {
+        setpoint_rad_s * t * t / (2.0 * ramp_s)
+    } else {
+        setpoint_rad_s * (ramp_s / 2.0 + (t - ramp_s))
+    }
+}
+
+/// Trapezoidal ∫ₐᵇ y dt over samples a..=b.
+fn trapz(t: &[f64], y: &[f64], a: usize, b: usize) -> f64 {
+    (a..b).map(|i| 0.5 * (y[i] + y[i + 1]) * (t[i + 1] - t[i])).sum()
+}
+
+/// Estimates kp, ki from every operating-point run of `c`, drive limit `limit_v`.
+pub fn estimate_pi(c: &Campaign, limit_v: f64, opts: &PiOptions) -> Result<PiEstimate, EstimateError> {
+    let w = opts.window_samples.max(1);
+    // Rows: (ē, Ī, offset index or None, V̄).
+    let mut rows: Vec<(f64, f64, Option<usize>, f64)> = Vec::new();
+    let mut n_offsets = 0usize;
+    let (mut total, mut saturated) = (0usize, 0usize);
+    for run in c.runs_of("operating_point") {
+        let RunKind::OperatingPoint { motor_rpm_setpoint, ramp_s, .. } = run.kind else { continue };
+        let d = &run.data;
+        let missing = |column| EstimateError::MissingColumn { run: run.id.clone(), column, kind: "operating_point" };
+        let v = d.motor_voltage_v.as_ref().ok_or_else(|| missing("motor_voltage_v"))?;
+        let ticks = d.motor_ticks.as_ref().ok_or_else(|| missing("motor_ticks"))?;
+        let t = &d.time_s;
+        let phi2 = ticks_to_rad(ticks, c.rig.encoder_ticks_per_rev);
+        let sp = motor_rpm_setpoint * TAU / 60.0;
+        let integral: Vec<f64> = t.iter().zip(&phi2).map(|(&ti, &p)| reference_angle_rad(ti, sp, ramp_s) - p).collect();
+        let sat: Vec<bool> = v.iter().map(|x| x.abs() >= limit_v - opts.saturation_margin_v).collect();
+        total += v.len();
+        saturated += sat.iter().filter(|s| **s).count();
+        // Segment of a sample = number of saturation episodes that began before it.
+        let mut episodes_before = Vec::with_capacity(sat.len());
+        let mut count = 0usize;
+        for (j, &s) in sat.iter().enumerate() {
+            if s && (j == 0 || !sat[j - 1]) {
+                count += 1;
+            }
+            episodes_before.push(count);
+        }
+        let mut seg_rows: Vec<(f64, f64, usize, f64)> = Vec::new();
+        let mut i = 0;
+        while i + w < t.len() {
+            if let Some(off) = (i..=i + w).rev().find(|&j| sat[j]) {
+                i = off + 1;
+                continue;
+            }
+            let dt = t[i + w] - t[i];
+            let e_mean = (integral[i + w] - integral[i]) / dt;
+            let i_mean = trapz(t, &integral, i, i + w) / dt;
+            let v_mean = trapz(t, v, i, i + w) / dt;
+            seg_rows.push((e_mean, i_mean, episodes_before[i], v_mean));
+            i += w;
+        }
+        let max_seg = seg_rows.iter().map(|r| r.2).max().unwrap_or(0);
+        for s in 0..=max_seg {
+            let these: Vec<_> = seg_rows.iter().filter(|r| r.2 == s).collect();
+            if s == 0 {
+                rows.extend(these.iter().map(|r| (r.0, r.1, None, r.3)));
+            } else if these.len() >= opts.min_segment_windows {
+                rows.extend(these.iter().map(|r| (r.0, r.1, Some(n_offsets), r.3)));
+                n_offsets += 1;
+            }
+        }
+    }
+    let p = 2 + n_offsets;
+    if rows.len() < p + 2 {
+        return Err(EstimateError::TooFewSamples {
+            context: format!("campaign {}: PI gains from operating_point runs", c.name),
+            got: rows.len(),
+            need: p + 2,
+            rule: "need unsaturated windows (|V| < supply − margin) in the operating points",
+        });
+    }
+    let x: Vec<Vec<f64>> = rows
+        .iter()
+        .map(|r| {
+            let mut row = vec![0.0; p];
+            row[0] = r.0;
+            row[1] = r.1;
+            if let Some(k) = r.2 {
+                row[2 + k] = 1.0;
+            }
+            row
+        })
+        .collect();
+    let y: Vec<f64> = rows.iter().map(|r| r.3).collect();
+    let fit = linreg::ols(&x, &y, "PI gains: V = kp·e + ki·∫e + offsets")?;
+    Ok(PiEstimate {
+        kp_v_s_rad: fit.beta[0],
+        kp_stderr: fit.stderr[0],
+        ki_v_rad: fit.beta[1],
+        ki_stderr: fit.stderr[1],
+        saturated_fraction: if total > 0 { saturated as f64 / total as f64 } else { 0.0 },
+        n_windows: rows.len(),
+        n_offsets,
+        residual_rms_v: (fit.ssr / rows.len() as f64).sqrt(),
+    })
+}
