@@ -1,0 +1,27 @@
+//! One 40 s operating-point run (40 rpm, 15 N) of the rig model, sampled at
+//! the campaign's 500 Hz, at the default tolerances. Target: < 3 ms on one core.
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use rig_model::{SimOptions, simulate_with_stats};
+use rig_types::RunInput;
+use std::hint::black_box;
+
+fn bench(c: &mut Criterion) {
+    let p = common::rig_params();
+    let input = RunInput::OperatingPoint { motor_rpm_setpoint: 40.0, normal_force_n: 15.0, ramp_s: 2.0 };
+    let t = common::grid(40.0, 500.0);
+    let o = SimOptions::default();
+    c.bench_function("rig model 40 s, 40 rpm, 15 N, default tol", |b| {
+        b.iter(|| simulate_with_stats(black_box(&p), black_box(&input), black_box(&t), &o).unwrap())
+    });
+    let thesis = common::thesis_params();
+    c.bench_function("thesis model 40 s, 40 rpm, 15 N, default tol", |b| {
+        b.iter(|| simulate_with_stats(black_box(&thesis), black_box(&input), black_box(&t), &o).unwrap())
+    });
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
