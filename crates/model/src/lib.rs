@@ -120,7 +120,10 @@ mod system;
 pub use sim::{MAX_STEPS, SimStats};
 pub use system::{ANTI_WINDUP_TRACKING_S, MOTOR_FRICTION_SPEED_RAD_S};
 
-use rig_types::{Effect, FrictionLaw, HarmonicFriction, RigParams, RunInput, Trajectory};
+use rig_types::{
+    DriveParams, Effect, FrictionLaw, HarmonicFriction, ModelKind, MotorParams, RigParams, RunInput, ThesisFriction,
+    Trajectory,
+};
 use system::{Drive, System};
 
 /// Integrator settings. Tolerances are explicit arguments, never globals.
@@ -244,6 +247,44 @@ pub fn simulate_from(
     let mode0 = sys.mode_of(state.time_s, &y0, state.stuck);
     let (traj, end, _) = sim::run(&sys, state.time_s, y0, mode0, sample_times_s, &[], opts)?;
     Ok((traj, end))
+}
+
+/// The chapter's published values the thesis model needs (Table 4.5, the
+/// mean ξ of Table 4.2, Table 4.7, r of Eq. 4-10) plus the PI gains the
+/// chapter does not publish.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ThesisModelInputs {
+    /// Table 4.5 motor constants; `gear_ratio` is ignored (set to 1).
+    pub motor: MotorParams,
+    /// J1 of Table 4.5.
+    pub rotor_inertia_kgm2: f64,
+    /// K_s of Table 4.5.
+    pub shaft_stiffness_nm_rad: f64,
+    /// The chapter's ξ (Table 4.2 mean), for C = 2ξ√(J1 K).
+    pub damping_ratio: f64,
+    /// Table 4.7 and Eq. 4-10's Tol.
+    pub friction: ThesisFriction,
+    pub brake_disc_radius_m: f64,
+    /// Not published: take the PI gains identified for the rig (estimation stage).
+    pub drive: DriveParams,
+}
+
+/// [`RigParams`] of the thesis model as published (ModelKind::Thesis):
+/// n = 1 (the chapter ignores the gearbox), C = 2ξ√(J1 K) acting on Ω1
+/// (Eq. 4-7), the Table 4.7 lookup, no effects.
+pub fn thesis_model_params(inp: &ThesisModelInputs) -> RigParams {
+    RigParams {
+        kind: ModelKind::Thesis,
+        rotor_inertia_kgm2: inp.rotor_inertia_kgm2,
+        shaft_stiffness_nm_rad: inp.shaft_stiffness_nm_rad,
+        shaft_damping_nm_s_rad: 2.0 * inp.damping_ratio * (inp.rotor_inertia_kgm2 * inp.shaft_stiffness_nm_rad).sqrt(),
+        motor: MotorParams { gear_ratio: 1.0, ..inp.motor.clone() },
+        drive: inp.drive.clone(),
+        friction: FrictionLaw::Thesis(inp.friction.clone()),
+        brake_disc_radius_m: inp.brake_disc_radius_m,
+        effects: vec![],
+        harmonic: None,
+    }
 }
 
 /// Friction coefficient μ of `law` at rotor speed `omega_rad_s` in slip (Fig. 4.15).

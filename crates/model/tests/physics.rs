@@ -109,6 +109,7 @@ fn rotor_is_held_until_shaft_torque_reaches_static_limit() {
     let k_break = tr.stuck.iter().position(|s| !s).expect("the rotor must break away within 20 s");
     // Expected break-away near φ2 = limit/K at ~1 rpm: 11 s.
     assert!(t[k_break] > 9.0 && t[k_break] < 13.0, "break-away at {}", t[k_break]);
+    #[allow(clippy::needless_range_loop)] // j indexes five channels of one trajectory
     for j in 0..k_break {
         assert_eq!(tr.rotor_angle_rad[j], 0.0);
         assert_eq!(tr.rotor_speed_rad_s[j], 0.0);
@@ -172,7 +173,7 @@ fn drive_saturates_at_limit() {
     let t = grid(20.0, 200.0);
     let tr = simulate(&p, &op(130.0, 10.0, 0.5), &t, &opts(1e-8)).unwrap();
     assert!(tr.voltage_v.iter().all(|v| v.abs() <= 3.0));
-    assert!(tr.voltage_v.iter().any(|&v| v == 3.0));
+    assert!(tr.voltage_v.contains(&3.0));
 }
 
 /// Anti-windup: after a long saturation the speed overshoot stays small

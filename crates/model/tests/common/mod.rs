@@ -36,24 +36,22 @@ pub fn table_4_7() -> ThesisFriction {
 
 /// The thesis model as published (PI gains are not published: ours).
 pub fn thesis_params() -> RigParams {
-    RigParams {
-        kind: ModelKind::Thesis,
+    rig_model::thesis_model_params(&rig_model::ThesisModelInputs {
+        motor: table_4_5_motor(8.0),
         rotor_inertia_kgm2: 0.0298,
         shaft_stiffness_nm_rad: 0.2710,
-        shaft_damping_nm_s_rad: thesis_damping(),
-        motor: table_4_5_motor(1.0),
-        drive: DriveParams { kp_v_s_rad: 1.0, ki_v_rad: 5.0, limit_v: 24.0 },
-        friction: FrictionLaw::Thesis(table_4_7()),
+        damping_ratio: 0.098,
+        friction: table_4_7(),
         brake_disc_radius_m: 0.062,
-        effects: vec![],
-        harmonic: None,
-    }
+        drive: DriveParams { kp_v_s_rad: 1.0, ki_v_rad: 5.0, limit_v: 24.0 },
+    })
 }
 
 /// The rig model: Table 4.5, n = 8, Coulomb brake μs 0.5 / μk 0.35.
 pub fn rig_params() -> RigParams {
     RigParams {
         kind: ModelKind::Rig,
+        shaft_damping_nm_s_rad: thesis_damping(),
         motor: table_4_5_motor(8.0),
         drive: DriveParams { kp_v_s_rad: 2.0, ki_v_rad: 10.0, limit_v: 24.0 },
         friction: FrictionLaw::Coulomb { mu_static: 0.5, mu_kinetic: 0.35 },
