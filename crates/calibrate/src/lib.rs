@@ -2,14 +2,22 @@
 //! §4.3–4.4) for the published tables and for a recorded campaign; the audit
 //! of the chapter's published numbers. Pure functions, no IO.
 
+pub mod audit;
 pub mod campaign;
+pub mod campaign_tables;
+pub mod figures;
 pub mod formulas;
+pub mod published;
 pub mod signal;
 pub mod stats;
+pub mod thesis;
 
+pub use audit::{AuditRow, Status};
 pub use campaign::{CampaignCalibration, ForceRun, StepDecay, TwistRun, calibrate_campaign, friction_torque_nm};
+pub use published::ThesisTables;
 pub use signal::{DecayAnalysis, DecayPair, DecaySettings, rotor_speed_rad_s};
 pub use stats::LineFit;
+pub use thesis::{ThesisData, ThesisOutputs, thesis_data, thesis_outputs};
 
 /// Why a calibration could not be computed. Each variant names what a person
 /// must fix: the run (by id), the column, or the table row.

@@ -1,0 +1,191 @@
+//! The campaign calibration as tables (the `campaign-calibration` stage's CSVs),
+//! at the decimals the data support.
+
+use crate::campaign::CampaignCalibration;
+use crate::stats::LineFit;
+use rig_types::{Table, fmt_fixed};
+
+/// Force runs (mean and spread of each run's mV, Table 4.6's ratio) and the
+/// least-squares line mV = offset + factor·N with its 95 % CI and standard errors.
+pub fn force_table(c: &CampaignCalibration) -> Table {
+    let mut t = Table::new([
+        "run",
+        "load_n",
+        "mean_mv",
+        "std_mv",
+        "samples",
+        "ratio_mv_per_n",
+        "factor_mv_per_n",
+        "factor_stderr_mv_per_n",
+        "factor_ci95_low_mv_per_n",
+        "factor_ci95_high_mv_per_n",
+        "offset_mv",
+        "offset_stderr_mv",
+    ]);
+    for r in &c.force_runs {
+        t.push([
+            r.id.clone(),
+            fmt_fixed(r.load_n, 3),
+            fmt_fixed(r.mean_mv, 3),
+            fmt_fixed(r.std_mv, 3),
+            r.samples.to_string(),
+            r.ratio_mv_per_n.map(|x| fmt_fixed(x, 3)).unwrap_or_default(),
+            String::new(),
+            String::new(),
+            String::new(),
+            String::new(),
+            String::new(),
+            String::new(),
+        ]);
+    }
+    t.push([
+        "mean_of_ratios".to_string(),
+        String::new(),
+        String::new(),
+        String::new(),
+        String::new(),
+        fmt_fixed(c.force_ratio_mean_mv_per_n, 3),
+        String::new(),
+        String::new(),
+        String::new(),
+        String::new(),
+        String::new(),
+        String::new(),
+    ]);
+    t.push([
+        "least_squares_with_offset".to_string(),
+        String::new(),
+        String::new(),
+        String::new(),
+        String::new(),
+        String::new(),
+        fmt_fixed(c.force_factor_mv_per_n, 3),
+        fmt_fixed(c.force_factor_mv_per_n_stderr, 3),
+        fmt_fixed(c.force_factor_mv_per_n_ci[0], 3),
+        fmt_fixed(c.force_factor_mv_per_n_ci[1], 3),
+        fmt_fixed(c.force_offset_mv, 3),
+        fmt_fixed(c.force_offset_mv_stderr, 3),
+    ]);
+    t
+}
+
+fn fit_cells(f: &LineFit) -> [String; 6] {
+    let icpt = |x: f64| if f.through_origin { String::new() } else { fmt_fixed(x, 5) };
+    [
+        fmt_fixed(f.slope, 5),
+        fmt_fixed(f.slope_stderr, 5),
+        fmt_fixed(f.slope_ci[0], 5),
+        fmt_fixed(f.slope_ci[1], 5),
+        icpt(f.intercept),
+        icpt(f.intercept_stderr),
+    ]
+}
+
+/// Static twist runs (Table 4.3's procedure) and the stiffness fits.
+pub fn stiffness_table(c: &CampaignCalibration) -> Table {
+    let mut t = Table::new([
+        "run",
+        "torque_nm",
+        "angle_rad",
+        "angle_std_rad",
+        "k_nm_rad",
+        "k_stderr_nm_rad",
+        "k_ci95_low_nm_rad",
+        "k_ci95_high_nm_rad",
+        "offset_nm",
+        "offset_stderr_nm",
+    ]);
+    for r in &c.twist_runs {
+        let mut row = vec![
+            r.id.clone(),
+            fmt_fixed(r.torque_nm, 4),
+            fmt_fixed(r.angle_rad, 4),
+            fmt_fixed(r.angle_std_rad, 4),
+            r.stiffness_nm_rad.map(|x| fmt_fixed(x, 4)).unwrap_or_default(),
+        ];
+        row.extend(std::iter::repeat_n(String::new(), 5));
+        t.push(row);
+    }
+    let origin = LineFit {
+        slope: c.stiffness_nm_rad,
+        slope_stderr: c.stiffness_nm_rad_stderr,
+        slope_ci: c.stiffness_nm_rad_ci,
+        intercept: 0.0,
+        intercept_stderr: 0.0,
+        intercept_ci: [0.0, 0.0],
+        residual_std: 0.0,
+        dof: 0,
+        confidence: 0.95,
+        through_origin: true,
+    };
+    for (name, f) in
+        [("least_squares_through_origin", &origin), ("least_squares_with_offset", &c.stiffness_with_offset)]
+    {
+        let mut row = vec![name.to_string(), String::new(), String::new(), String::new()];
+        let cells = fit_cells(f);
+        row.push(cells[0].clone());
+        row.extend(cells[1..].iter().cloned());
+        t.push(row);
+    }
+    t
+}
+
+/// Per voltage step: pairs used, δ, ξ, ω_d, ω_n (mean ± std over pairs), J1,
+/// and the rotor-speed cross-check δ; then the campaign values (mean ± stderr over steps).
+pub fn log_decrement_table(c: &CampaignCalibration) -> Table {
+    let mut t = Table::new([
+        "run",
+        "voltage_v",
+        "pairs",
+        "log_decrement",
+        "log_decrement_spread",
+        "damping_ratio",
+        "damping_ratio_spread",
+        "damped_rad_s",
+        "damped_rad_s_spread",
+        "natural_rad_s",
+        "natural_rad_s_spread",
+        "rotor_inertia_kgm2",
+        "rotor_inertia_kgm2_spread",
+        "speed_log_decrement",
+        "speed_pairs",
+    ]);
+    for s in &c.steps {
+        let a = &s.twist;
+        t.push([
+            s.id.clone(),
+            fmt_fixed(s.voltage_v, 1),
+            a.pairs.len().to_string(),
+            fmt_fixed(a.log_decrement_mean, 4),
+            fmt_fixed(a.log_decrement_std, 4),
+            fmt_fixed(a.damping_ratio_mean, 5),
+            fmt_fixed(a.damping_ratio_std, 5),
+            fmt_fixed(a.damped_rad_s_mean, 4),
+            fmt_fixed(a.damped_rad_s_std, 4),
+            fmt_fixed(a.natural_rad_s_mean, 4),
+            fmt_fixed(a.natural_rad_s_std, 4),
+            fmt_fixed(s.rotor_inertia_kgm2, 5),
+            String::new(),
+            s.rotor_speed.as_ref().map(|r| fmt_fixed(r.log_decrement_mean, 4)).unwrap_or_default(),
+            s.rotor_speed.as_ref().map(|r| r.pairs.len().to_string()).unwrap_or_default(),
+        ]);
+    }
+    t.push([
+        "campaign (mean, stderr over steps)".to_string(),
+        String::new(),
+        c.steps.iter().map(|s| s.twist.pairs.len()).sum::<usize>().to_string(),
+        fmt_fixed(c.log_decrement, 4),
+        fmt_fixed(c.log_decrement_stderr, 4),
+        fmt_fixed(c.damping_ratio, 5),
+        fmt_fixed(c.damping_ratio_stderr, 5),
+        fmt_fixed(c.damped_frequency_rad_s, 4),
+        fmt_fixed(c.damped_frequency_rad_s_stderr, 4),
+        fmt_fixed(c.natural_frequency_rad_s, 4),
+        fmt_fixed(c.natural_frequency_rad_s_stderr, 4),
+        fmt_fixed(c.rotor_inertia_kgm2, 5),
+        fmt_fixed(c.rotor_inertia_kgm2_stderr, 5),
+        String::new(),
+        String::new(),
+    ]);
+    t
+}
