@@ -1,22 +1,27 @@
 //! Least-squares identification on the rig model (argmin, faer) with covariance and a fit report.
 //!
-//! Front door: [`estimate_rig`] (voltage steps → motor/shaft parameters,
+//! Front door: [`estimate_rig`] (voltage steps → motor/string parameters,
 //! operating points → PI gains and Coulomb friction) returning a
 //! [`RigEstimate`] with its [`FitReport`]. The pieces are public for tests
 //! and for the diagnosis: [`lsq`] (the solver core), [`report`], [`pi`],
-//! [`friction`].
+//! [`friction`], [`steps`].
 
 pub mod argmin_adapter;
 mod error;
 pub mod friction;
 pub mod linreg;
 pub mod lsq;
+mod options;
 pub mod pi;
 pub mod report;
+mod rig;
 pub mod signals;
+pub mod steps;
 
 pub use error::EstimateError;
 pub use friction::{FrictionEstimate, FrictionOptions, estimate_friction};
 pub use lsq::{IterationRecord, LsqProblem, LsqSolution, SolverOptions, Transform, levenberg_marquardt};
+pub use options::{EstimateOptions, InitialValues, SolverKind};
 pub use pi::{PiEstimate, PiOptions, estimate_pi};
 pub use report::{FitReport, Identifiability, ParamEstimate};
+pub use rig::{ModeComparison, RigEstimate, StepFit, estimate_rig};

@@ -1,0 +1,116 @@
+//! What an estimation is told: initial values (Table 4.4), the gear ratio,
+//! solver settings, which voltage steps are held out, and the settings of
+//! the PI and friction estimators. Plain data; the stage fills it from
+//! pipeline.toml and data/thesis.json.
+
+use crate::EstimateError;
+use crate::friction::FrictionOptions;
+use crate::lsq::SolverOptions;
+use crate::pi::PiOptions;
+use crate::steps::StepResidual;
+use serde::{Deserialize, Serialize};
+
+/// Table 4.4: initial values of the least-squares identification.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct InitialValues {
+    pub motor_inertia_kgm2: f64,
+    pub inductance_h: f64,
+    pub resistance_ohm: f64,
+    pub torque_constant_nm_a: f64,
+    pub voltage_constant_v_s_rad: f64,
+    pub friction_torque_nm: f64,
+    pub speed_regulation_nm_s_rad: f64,
+    pub rotor_inertia_kgm2: f64,
+    pub shaft_stiffness_nm_rad: f64,
+}
+
+impl InitialValues {
+    /// From Table 4.4 by the symbols of data/thesis/table-4-4.csv
+    /// (J_m, L_DC, R_DC, k_T, k_e, T_f, C_m, J_1, K_s).
+    pub fn from_table_4_4(value_of: impl Fn(&str) -> Option<f64>) -> Result<Self, EstimateError> {
+        let get = |s: &str| {
+            value_of(s).ok_or_else(|| EstimateError::InvalidOption {
+                name: format!("Table 4.4 symbol {s}"),
+                value: f64::NAN,
+                rule: "data/thesis/table-4-4.csv must have a row for every motor and rotor parameter",
+            })
+        };
+        Ok(InitialValues {
+            motor_inertia_kgm2: get("J_m")?,
+            inductance_h: get("L_DC")?,
+            resistance_ohm: get("R_DC")?,
+            torque_constant_nm_a: get("k_T")?,
+            voltage_constant_v_s_rad: get("k_e")?,
+            friction_torque_nm: get("T_f")?,
+            speed_regulation_nm_s_rad: get("C_m")?,
+            rotor_inertia_kgm2: get("J_1")?,
+            shaft_stiffness_nm_rad: get("K_s")?,
+        })
+    }
+}
+
+/// Which solver minimises the voltage-step misfit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SolverKind {
+    /// Own Levenberg–Marquardt (default; robust from far starts).
+    LevenbergMarquardt,
+    /// argmin's Gauss–Newton with Armijo backtracking (c = 1e-4).
+    GaussNewtonLineSearch,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EstimateOptions {
+    pub initial: InitialValues,
+    /// Gear ratio n (thesis §4.2: 8:1). Not identifiable from shaft-side data:
+    /// any n fits equally with rescaled motor constants, so it is fixed.
+    pub gear_ratio: f64,
+    /// Start J1 and K_s from the campaign calibration (static twist, Eq. 4-4)
+    /// instead of Table 4.4's analytical values.
+    pub initial_from_calibration: bool,
+    pub solver: SolverOptions,
+    pub solver_kind: SolverKind,
+    /// Voltage-step run ids held out for validation. `None`: estimate on the
+    /// lowest and the highest voltage, hold out the ones in between
+    /// (validation by interpolation); with two or fewer steps none is held out.
+    pub holdout: Option<Vec<String>>,
+    /// Samples per window of the voltage-step residuals (angles are compared
+    /// every this many samples; speeds are means over such windows).
+    pub speed_window_samples: usize,
+    pub step_residual: StepResidual,
+    /// Integrator tolerances for the fits.
+    pub sim_rtol: f64,
+    pub sim_atol: f64,
+    pub sim_max_step_s: f64,
+    /// Lags of the residual whiteness test (in speed windows).
+    pub whiteness_max_lag: usize,
+    pub pi: PiOptions,
+    pub friction: FrictionOptions,
+}
+
+impl EstimateOptions {
+    /// Defaults around the given Table 4.4 values.
+    pub fn new(initial: InitialValues) -> Self {
+        EstimateOptions {
+            initial,
+            gear_ratio: 8.0,
+            initial_from_calibration: true,
+            solver: SolverOptions::default(),
+            solver_kind: SolverKind::LevenbergMarquardt,
+            holdout: None,
+            speed_window_samples: 25,
+            step_residual: StepResidual::Angle,
+            sim_rtol: 1e-7,
+            sim_atol: 1e-9,
+            sim_max_step_s: 0.01,
+            whiteness_max_lag: 25,
+            pi: PiOptions::default(),
+            friction: FrictionOptions::default(),
+        }
+    }
+
+    /// [`EstimateOptions::new`] from Table 4.4 symbols (see [`InitialValues::from_table_4_4`]).
+    pub fn from_thesis_table_4_4(value_of: impl Fn(&str) -> Option<f64>) -> Result<Self, EstimateError> {
+        Ok(Self::new(InitialValues::from_table_4_4(value_of)?))
+    }
+}
