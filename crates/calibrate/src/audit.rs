@@ -256,14 +256,20 @@ fn eq_4_1_to_4_5(a: &mut Audit, t: &ThesisTables) -> Result<(), CalibrateError> 
         &j_disc,
         &|v| {
             let implied_r_mm = (2.0 * j1a.value / m.value).sqrt() * 1e3;
+            let ratio = implied_r_mm / r.value;
+            // A ratio of ½ means the printed "radius" is a diameter; say so only when the numbers show it.
+            let diameter = if (ratio - 0.5).abs() < 0.01 {
+                format!(" ({} mm behaves as a diameter)", fmt_printed(r))
+            } else {
+                String::new()
+            };
             format!(
                 "½·{}·({} mm)² = {v:.4} kg·m², {:.2} times the printed {}; the printed value needs R = {implied_r_mm:.1} mm, \
-                 i.e. {:.2} × the printed R_r1 (Table 4.1's 188 mm behaves as a diameter)",
+                 i.e. {ratio:.2} × the printed R_r1{diameter}",
                 fmt_printed(m),
                 fmt_printed(r),
                 v / j1a.value,
                 fmt_printed(j1a),
-                implied_r_mm / r.value
             )
         },
     );
