@@ -6,10 +6,26 @@
 //! output through it. Writes are staged in memory and committed by the runner
 //! (temporary file + rename) only when the stage succeeds, so a failed or
 //! interrupted stage leaves no torn file.
+//!
+//! The runner ([`Runner`]) reads pipeline.toml ([`PipelineConfig`]), runs the
+//! stages in dependency order (independent ones in parallel), skips a stage
+//! whose key (blake3 of name, params, inputs and code) and outputs are
+//! unchanged, and writes `<out>/manifest.json`.
 
+mod config;
 mod ctx;
+mod error;
+pub mod graph;
+mod hash;
+mod manifest;
+mod runner;
 pub mod stages;
+mod store;
 
+pub use config::{Input, OutputPattern, PipelineConfig, Registry, Settings, StageDecl};
 pub use ctx::{StageCtx, StageFn};
+pub use error::PipelineError;
+pub use runner::{Outcome, RunReport, Runner, StageReport};
+pub use store::{CacheRecord, FileHash};
 pub mod diff;
 pub mod testing;

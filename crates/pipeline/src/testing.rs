@@ -1,1 +1,137 @@
-//! Test helpers: run stages into a temporary out dir and snapshot their outputs. Not written yet.
+//! Test helpers for stage authors: run stages (and their upstream) against the
+//! repo's campaign, thesis tables and ../shared, and snapshot a stage's outputs.
+//!
+//! A stage's snapshot test is one line in `crates/pipeline/tests/snap_<module>.rs`:
+//! `#[test] fn snap() { rig_pipeline::testing::snapshot_stage("estimation"); }`.
+
+use crate::runner::{Outcome, RunReport, Runner};
+use anyhow::Context;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, OnceLock};
+
+/// The workspace root (the folder holding pipeline.toml).
+pub fn workspace_root() -> PathBuf {
+    let here = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    here.canonicalize().unwrap_or(here)
+}
+
+/// Runs the named stages and everything they depend on, against the repo's
+/// default campaign, thesis tables and shared folder, into `out_dir`.
+/// Errors when any of them fails (with the stage's error chain).
+pub fn run_stages(out_dir: &Path, names: &[&str]) -> anyhow::Result<()> {
+    run_report(out_dir, names).map(|_| ())
+}
+
+fn run_report(out_dir: &Path, names: &[&str]) -> anyhow::Result<RunReport> {
+    let toml = workspace_root().join("pipeline.toml");
+    let report = Runner::new(&toml)
+        .with_context(|| format!("loading {}", toml.display()))?
+        .out(out_dir)
+        .only(names)
+        .jobs(2)
+        .run()?;
+    report.into_result()
+}
+
+/// One out dir per test process, so the stages upstream of several snapshot
+/// tests in one binary run once (the runner's cache skips them afterwards).
+/// The lock also keeps two tests from committing into it at the same time.
+fn process_out_dir() -> &'static Mutex<PathBuf> {
+    static DIR: OnceLock<Mutex<PathBuf>> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let tmp = std::env::temp_dir();
+        remove_dead_process_dirs(&tmp);
+        let dir = tmp.join(format!("{PREFIX}{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        Mutex::new(dir)
+    })
+}
+
+const PREFIX: &str = "rig-pipeline-test-";
+
+/// Out dirs of finished test processes (a static is never dropped, so each
+/// process leaves its dir behind); only where /proc tells which pids live.
+fn remove_dead_process_dirs(tmp: &Path) {
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(tmp) else { return };
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if let Some(pid) = name.strip_prefix(PREFIX)
+            && pid.parse::<u32>().is_ok()
+            && !Path::new("/proc").join(pid).exists()
+        {
+            let _ = std::fs::remove_dir_all(entry.path());
+        }
+    }
+}
+
+/// Runs stage `name` (and its upstream) into this process's out dir and
+/// insta-snapshots every output of that stage into `crates/pipeline/tests/snapshots/`:
+/// CSV, MD, JSON and TXT as text; each figure's SVG and PNG as hashes in one
+/// small YAML snapshot (its `.csv` series and `.txt` caption are text
+/// snapshots like any other); any other file as hash and size.
+/// Snapshot names are `<stage>__<output path with / as __>`.
+///
+/// Panics (failing the test) when a stage fails or the stage writes nothing.
+/// An optional stage whose input is missing (no ../shared) is skipped with a note on stderr.
+pub fn snapshot_stage(name: &str) {
+    let dir = process_out_dir().lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    let report = match run_report(&dir, &[name]) {
+        Ok(r) => r,
+        Err(e) => panic!("running stage {name}: {e:#}"),
+    };
+    let stage = report.stage(name).unwrap_or_else(|| panic!("stage {name} is not in pipeline.toml"));
+    if matches!(stage.outcome, Outcome::SkippedOptional) {
+        eprintln!("snapshot_stage({name}): skipped: {}", stage.reasons.join("; "));
+        return;
+    }
+    let outputs = stage.outputs();
+    assert!(!outputs.is_empty(), "stage {name} wrote no outputs ({:?})", stage.outcome);
+    let snapshots = snapshot_texts(&dir, &outputs);
+    let mut settings = insta::Settings::clone_current();
+    settings.set_snapshot_path(workspace_root().join("crates/pipeline/tests/snapshots"));
+    settings.set_prepend_module_to_snapshot(false);
+    settings.set_omit_expression(true);
+    settings.bind(|| {
+        for (rel, text) in snapshots {
+            let snap_name = format!("{name}__{}", rel.replace('/', "__"));
+            insta::assert_snapshot!(snap_name, text);
+        }
+    });
+}
+
+/// Output path (figures: `figures/<id>.render`) -> the text to snapshot.
+fn snapshot_texts(dir: &Path, outputs: &BTreeMap<String, crate::FileHash>) -> BTreeMap<String, String> {
+    let mut texts = BTreeMap::new();
+    let mut renders: BTreeMap<String, BTreeMap<&'static str, String>> = BTreeMap::new();
+    for (rel, hash) in outputs {
+        let ext = rel.rsplit_once('.').map(|(_, e)| e).unwrap_or("");
+        let stem = rel.rsplit_once('.').map(|(s, _)| s).unwrap_or(rel);
+        match ext {
+            "csv" | "md" | "json" | "txt" => {
+                let path = dir.join(rel);
+                let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                texts.insert(rel.clone(), text);
+            }
+            "svg" if rel.starts_with("figures/") => {
+                renders.entry(format!("{stem}.render")).or_default().insert("svg_blake3", hash.blake3.clone());
+            }
+            // Hash of the PNG file: rig-figures exposes no RGB decoder yet, so
+            // an encoder upgrade will show up here as a change.
+            "png" if rel.starts_with("figures/") => {
+                renders.entry(format!("{stem}.render")).or_default().insert("png_blake3", hash.blake3.clone());
+            }
+            _ => {
+                texts.insert(rel.clone(), format!("blake3: {}\nsize: {}\n", hash.blake3, hash.size));
+            }
+        }
+    }
+    for (rel, fields) in renders {
+        let text: String = fields.iter().map(|(k, v)| format!("{k}: {v}\n")).collect();
+        texts.insert(rel, text);
+    }
+    texts
+}

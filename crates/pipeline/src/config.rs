@@ -1,0 +1,244 @@
+//! `pipeline.toml`: settings and `[[stage]]` declarations, parsed and checked
+//! against the stage registry before anything runs.
+
+use crate::StageFn;
+use crate::error::PipelineError;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// The stage registry: a pipeline.toml name -> its body (injectable for tests).
+pub type Registry = fn(&str) -> Option<StageFn>;
+
+/// `[settings]`: folders relative to the directory holding pipeline.toml.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Settings {
+    pub campaign: String,
+    pub thesis: String,
+    pub shared: String,
+    pub out: String,
+}
+
+/// One input of a stage as written in pipeline.toml.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Input {
+    /// A path with `{campaign}`, `{thesis}` or `{shared}` placeholders.
+    Path(String),
+    /// `@stage/rel`: the output `rel` (relative to the out dir) of `stage`.
+    Upstream { stage: String, rel: String },
+}
+
+impl Input {
+    /// The text as written in pipeline.toml (also the label in caches and the manifest).
+    pub fn label(&self) -> String {
+        match self {
+            Input::Path(p) => p.clone(),
+            Input::Upstream { stage, rel } => format!("@{stage}/{rel}"),
+        }
+    }
+}
+
+/// A declared output: an exact relative path or a `prefix*` family.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum OutputPattern {
+    Exact(String),
+    Prefix(String),
+}
+
+impl OutputPattern {
+    fn parse(s: &str) -> Self {
+        match s.strip_suffix('*') {
+            Some(prefix) => OutputPattern::Prefix(prefix.to_string()),
+            None => OutputPattern::Exact(s.to_string()),
+        }
+    }
+
+    pub fn matches(&self, rel: &str) -> bool {
+        match self {
+            OutputPattern::Exact(p) => p == rel,
+            OutputPattern::Prefix(p) => rel.starts_with(p.as_str()),
+        }
+    }
+}
+
+/// One `[[stage]]` block.
+#[derive(Debug, Clone)]
+pub struct StageDecl {
+    pub name: String,
+    pub summary: String,
+    pub inputs: Vec<Input>,
+    /// Stages that must finish first although no data flows (`after`).
+    pub after: Vec<String>,
+    /// Paths (relative to the pipeline.toml directory) hashed as the stage's code.
+    pub code: Vec<String>,
+    pub outputs: Vec<OutputPattern>,
+    /// Skipped with a message, not an error, when an input is missing.
+    pub optional: bool,
+    pub params: toml::Table,
+}
+
+impl StageDecl {
+    /// Stages this one reads from or must run after, in declaration order, without repeats.
+    pub fn dependencies(&self) -> Vec<String> {
+        let mut deps: Vec<String> = Vec::new();
+        let upstream = self.inputs.iter().filter_map(|i| match i {
+            Input::Upstream { stage, .. } => Some(stage.clone()),
+            Input::Path(_) => None,
+        });
+        for d in upstream.chain(self.after.iter().cloned()) {
+            if !deps.contains(&d) {
+                deps.push(d);
+            }
+        }
+        deps
+    }
+
+    pub fn declares_output(&self, rel: &str) -> bool {
+        self.outputs.iter().any(|p| p.matches(rel))
+    }
+}
+
+/// The whole file, validated.
+#[derive(Debug, Clone)]
+pub struct PipelineConfig {
+    /// The pipeline.toml path (named in errors).
+    pub path: PathBuf,
+    /// The directory holding pipeline.toml: settings and code paths are relative to it.
+    pub root: PathBuf,
+    pub settings: Settings,
+    /// In declaration order.
+    pub stages: Vec<StageDecl>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFile {
+    settings: Settings,
+    #[serde(default)]
+    stage: Vec<RawStage>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawStage {
+    name: String,
+    #[serde(default)]
+    summary: String,
+    #[serde(default)]
+    inputs: Vec<String>,
+    #[serde(default)]
+    after: Vec<String>,
+    #[serde(default)]
+    code: Vec<String>,
+    #[serde(default)]
+    outputs: Vec<String>,
+    #[serde(default)]
+    optional: bool,
+    #[serde(default)]
+    params: toml::Table,
+}
+
+impl PipelineConfig {
+    /// Reads and validates `path` against `registry`.
+    pub fn load(path: &Path, registry: Registry) -> Result<Self, PipelineError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| PipelineError::Io { path: path.to_path_buf(), source })?;
+        let root = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let root = if root.as_os_str().is_empty() { PathBuf::from(".") } else { root };
+        Self::parse(&text, path, &root, registry)
+    }
+
+    /// Parses `text` (as if read from `path`) and validates it.
+    pub fn parse(text: &str, path: &Path, root: &Path, registry: Registry) -> Result<Self, PipelineError> {
+        let raw: RawFile = toml::from_str(text)
+            .map_err(|e| PipelineError::Config { path: path.to_path_buf(), stage: None, reason: e.to_string() })?;
+        let stages = raw
+            .stage
+            .into_iter()
+            .map(|s| {
+                let inputs = s.inputs.iter().map(|i| parse_input(path, &s.name, i)).collect::<Result<Vec<_>, _>>()?;
+                Ok(StageDecl {
+                    outputs: s.outputs.iter().map(|o| OutputPattern::parse(o)).collect(),
+                    name: s.name,
+                    summary: s.summary,
+                    inputs,
+                    after: s.after,
+                    code: s.code,
+                    optional: s.optional,
+                    params: s.params,
+                })
+            })
+            .collect::<Result<Vec<_>, PipelineError>>()?;
+        let config = PipelineConfig { path: path.to_path_buf(), root: root.to_path_buf(), settings: raw.settings, stages };
+        config.validate(registry)?;
+        Ok(config)
+    }
+
+    pub fn stage(&self, name: &str) -> Option<&StageDecl> {
+        self.stages.iter().find(|s| s.name == name)
+    }
+
+    fn err(&self, stage: &str, reason: String) -> PipelineError {
+        PipelineError::Config { path: self.path.clone(), stage: Some(stage.to_string()), reason }
+    }
+
+    fn validate(&self, registry: Registry) -> Result<(), PipelineError> {
+        for (i, s) in self.stages.iter().enumerate() {
+            if self.stages[..i].iter().any(|p| p.name == s.name) {
+                return Err(self.err(&s.name, "declared twice".into()));
+            }
+            if registry(&s.name).is_none() {
+                return Err(self.err(&s.name, "unknown stage name: no body registered in stages::lookup".into()));
+            }
+            if s.outputs.is_empty() {
+                return Err(self.err(&s.name, "declares no outputs".into()));
+            }
+            for o in &s.outputs {
+                let (OutputPattern::Exact(p) | OutputPattern::Prefix(p)) = o;
+                if p.starts_with('/') || p.split('/').any(|c| c == "..") || p.starts_with('.') {
+                    return Err(self.err(&s.name, format!("output {p:?} must be relative, inside the out dir, not hidden")));
+                }
+            }
+            for input in &s.inputs {
+                if let Input::Upstream { stage, rel } = input {
+                    let Some(up) = self.stage(stage) else {
+                        return Err(self.err(&s.name, format!("input @{stage}/{rel}: no stage named {stage}")));
+                    };
+                    if !up.declares_output(rel) {
+                        return Err(self.err(&s.name, format!("input @{stage}/{rel}: stage {stage} declares no such output")));
+                    }
+                }
+            }
+            for a in &s.after {
+                if self.stage(a).is_none() {
+                    return Err(self.err(&s.name, format!("after: no stage named {a}")));
+                }
+            }
+        }
+        crate::graph::topological_order(self).map(|_| ())
+    }
+}
+
+fn parse_input(path: &Path, stage: &str, text: &str) -> Result<Input, PipelineError> {
+    let bad = |reason: String| PipelineError::Config { path: path.to_path_buf(), stage: Some(stage.to_string()), reason };
+    if let Some(rest) = text.strip_prefix('@') {
+        let Some((up, rel)) = rest.split_once('/') else {
+            return Err(bad(format!("input {text:?}: expected @stage/relative-path")));
+        };
+        if up.is_empty() || rel.is_empty() {
+            return Err(bad(format!("input {text:?}: expected @stage/relative-path")));
+        }
+        return Ok(Input::Upstream { stage: up.to_string(), rel: rel.to_string() });
+    }
+    // Only the three known placeholders may appear.
+    let mut rest = text;
+    while let Some(open) = rest.find('{') {
+        let close = rest[open..].find('}').ok_or_else(|| bad(format!("input {text:?}: unclosed placeholder")))?;
+        let key = &rest[open + 1..open + close];
+        if !matches!(key, "campaign" | "thesis" | "shared") {
+            return Err(bad(format!("input {text:?}: unknown placeholder {{{key}}} (campaign, thesis, shared)")));
+        }
+        rest = &rest[open + close + 1..];
+    }
+    Ok(Input::Path(text.to_string()))
+}

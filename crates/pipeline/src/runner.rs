@@ -1,0 +1,500 @@
+//! The DAG runner: dependency order with independent stages in parallel, skip
+//! by content hash, atomic commits, the manifest, and a report of what ran and why.
+
+use crate::config::{Input, PipelineConfig, Registry, StageDecl};
+use crate::error::PipelineError;
+use crate::hash::{canonical_params, hash_path};
+use crate::store::{self, CacheRecord, Fault, FileHash};
+use crate::{StageCtx, graph, manifest};
+use std::collections::{BTreeMap, BTreeSet};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::sync::mpsc;
+
+/// How a stage ended in one run.
+#[derive(Debug)]
+pub enum Outcome {
+    /// The body ran and its outputs were committed.
+    Ran,
+    /// Inputs, params, code and outputs unchanged: not run.
+    UpToDate,
+    /// `--dry-run`: would run for the reasons given.
+    WouldRun,
+    /// An `optional` stage whose inputs are missing.
+    SkippedOptional,
+    /// The body returned Ok without staging any output.
+    SkippedEmpty,
+    /// The body, its inputs or its commit failed; nothing of it was written.
+    Failed(anyhow::Error),
+    /// Not run because the named upstream stage failed or was blocked.
+    Blocked { by: String },
+}
+
+/// One stage's line in the run report.
+#[derive(Debug)]
+pub struct StageReport {
+    pub name: String,
+    pub outcome: Outcome,
+    /// Why it ran, would run, was skipped or up to date (for `--why`).
+    pub reasons: Vec<String>,
+    /// The record of its outputs when it ran or was up to date.
+    pub record: Option<CacheRecord>,
+}
+
+impl StageReport {
+    /// The stage's outputs (relative to the out dir) when it ran or was up to date.
+    pub fn outputs(&self) -> BTreeMap<String, FileHash> {
+        self.record.as_ref().map(|r| r.outputs.clone()).unwrap_or_default()
+    }
+
+    fn is_broken(&self) -> bool {
+        matches!(self.outcome, Outcome::Failed(_) | Outcome::Blocked { .. })
+    }
+}
+
+/// Every selected stage in dependency order.
+#[derive(Debug)]
+pub struct RunReport {
+    pub stages: Vec<StageReport>,
+    /// `<out>/manifest.json`, unless this was a dry run.
+    pub manifest: Option<PathBuf>,
+}
+
+impl RunReport {
+    pub fn stage(&self, name: &str) -> Option<&StageReport> {
+        self.stages.iter().find(|s| s.name == name)
+    }
+
+    /// Names of the stages that ran (or would run, in a dry run).
+    pub fn ran(&self) -> Vec<&str> {
+        let ran = |s: &&StageReport| matches!(s.outcome, Outcome::Ran | Outcome::WouldRun);
+        self.stages.iter().filter(ran).map(|s| s.name.as_str()).collect()
+    }
+
+    /// One line per stage: outcome and, with `why`, the reasons.
+    pub fn summary(&self, why: bool) -> String {
+        let mut s = String::new();
+        for st in &self.stages {
+            let what = match &st.outcome {
+                Outcome::Ran => "ran".to_string(),
+                Outcome::UpToDate => "up to date".to_string(),
+                Outcome::WouldRun => "would run".to_string(),
+                Outcome::SkippedOptional => "skipped (optional, input missing)".to_string(),
+                Outcome::SkippedEmpty => "skipped (wrote no output)".to_string(),
+                Outcome::Failed(_) => "FAILED".to_string(),
+                Outcome::Blocked { by } => format!("not run: upstream {by} failed"),
+            };
+            s.push_str(&format!("{:<22} {what}\n", st.name));
+            let always = matches!(st.outcome, Outcome::SkippedOptional | Outcome::WouldRun);
+            if why || always {
+                for r in &st.reasons {
+                    s.push_str(&format!("{:<22}   - {r}\n", ""));
+                }
+            }
+        }
+        s
+    }
+
+    /// Ok when no stage failed; else an error naming each failed stage with its error chain.
+    pub fn into_result(self) -> anyhow::Result<Self> {
+        let failed: Vec<String> = self
+            .stages
+            .iter()
+            .filter_map(|s| match &s.outcome {
+                Outcome::Failed(e) => Some(format!("stage {}: {e:#}", s.name)),
+                _ => None,
+            })
+            .collect();
+        if failed.is_empty() { Ok(self) } else { Err(anyhow::anyhow!("{}", failed.join("\n"))) }
+    }
+}
+
+/// Runs the DAG of a pipeline.toml (see the crate docs for the rules).
+pub struct Runner {
+    config: PipelineConfig,
+    registry: Registry,
+    campaign: Option<PathBuf>,
+    out: Option<PathBuf>,
+    jobs: usize,
+    dry_run: bool,
+    only: Vec<String>,
+    progress: bool,
+    faults: BTreeMap<String, Fault>,
+}
+
+/// The folders a run resolves `{campaign}`, `{thesis}`, `{shared}` and outputs against.
+struct Dirs {
+    campaign: PathBuf,
+    thesis: PathBuf,
+    shared: Option<PathBuf>,
+    shared_declared: PathBuf,
+    out: PathBuf,
+}
+
+impl Runner {
+    /// The pipeline at `path` with the real stage bodies.
+    pub fn new(path: &Path) -> Result<Self, PipelineError> {
+        Self::with_registry(path, crate::stages::lookup)
+    }
+
+    /// The pipeline at `path` with another registry (tests use fake stages).
+    pub fn with_registry(path: &Path, registry: Registry) -> Result<Self, PipelineError> {
+        let config = PipelineConfig::load(path, registry)?;
+        Ok(Runner {
+            config,
+            registry,
+            campaign: None,
+            out: None,
+            jobs: 2,
+            dry_run: false,
+            only: Vec::new(),
+            progress: false,
+            faults: BTreeMap::new(),
+        })
+    }
+
+    pub fn config(&self) -> &PipelineConfig {
+        &self.config
+    }
+
+    /// Another campaign folder instead of `settings.campaign`.
+    pub fn campaign(mut self, dir: &Path) -> Self {
+        self.campaign = Some(dir.to_path_buf());
+        self
+    }
+
+    /// Another out dir instead of `settings.out`.
+    pub fn out(mut self, dir: &Path) -> Self {
+        self.out = Some(dir.to_path_buf());
+        self
+    }
+
+    /// Worker threads for stages, and the size of the rayon pool stage bodies use.
+    pub fn jobs(mut self, n: usize) -> Self {
+        self.jobs = n.max(1);
+        self
+    }
+
+    pub fn dry_run(mut self, yes: bool) -> Self {
+        self.dry_run = yes;
+        self
+    }
+
+    /// Only these stages and what they depend on (empty: all).
+    pub fn only(mut self, names: &[&str]) -> Self {
+        self.only = names.iter().map(|s| s.to_string()).collect();
+        self
+    }
+
+    /// A progress bar on stderr (drawn only when stderr is a terminal).
+    pub fn progress(mut self, yes: bool) -> Self {
+        self.progress = yes;
+        self
+    }
+
+    /// Test hook: `stage`'s commit fails after `renames` files, as if killed.
+    #[doc(hidden)]
+    pub fn inject_commit_fault(mut self, stage: &str, renames: usize) -> Self {
+        self.faults.insert(stage.to_string(), Fault { fail_after_renames: Some(renames) });
+        self
+    }
+
+    /// The out dir this run writes to.
+    pub fn out_dir(&self) -> PathBuf {
+        self.dirs().out
+    }
+
+    fn dirs(&self) -> Dirs {
+        let root = &self.config.root;
+        let s = &self.config.settings;
+        let shared_declared = root.join(&s.shared);
+        Dirs {
+            campaign: self.campaign.clone().unwrap_or_else(|| root.join(&s.campaign)),
+            thesis: root.join(&s.thesis),
+            shared: shared_declared.is_dir().then(|| shared_declared.clone()),
+            shared_declared,
+            out: self.out.clone().unwrap_or_else(|| root.join(&s.out)),
+        }
+    }
+
+    /// Runs (or with `dry_run` only assesses) every selected stage.
+    /// Stage failures are in the report; an `Err` means the run could not start.
+    pub fn run(&self) -> Result<RunReport, PipelineError> {
+        let dirs = self.dirs();
+        let selected = if self.only.is_empty() {
+            self.config.stages.iter().map(|s| s.name.clone()).collect()
+        } else {
+            let names: Vec<&str> = self.only.iter().map(String::as_str).collect();
+            graph::with_upstream(&self.config, &names)?
+        };
+        let order: Vec<String> =
+            graph::topological_order(&self.config)?.into_iter().filter(|n| selected.contains(n)).collect();
+        if !self.dry_run {
+            std::fs::create_dir_all(&dirs.out).map_err(|source| PipelineError::Io { path: dirs.out.clone(), source })?;
+            store::remove_temp_files(&dirs.out)?;
+        }
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(self.jobs).build().map_err(|e| {
+            PipelineError::Config { path: self.config.path.clone(), stage: None, reason: format!("thread pool: {e}") }
+        })?;
+        let bar = if self.progress && std::io::stderr().is_terminal() {
+            let bar = indicatif::ProgressBar::new(order.len() as u64);
+            if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} stages {wide_msg}") {
+                bar.set_style(style);
+            }
+            bar
+        } else {
+            indicatif::ProgressBar::hidden()
+        };
+        let memo = Mutex::new(BTreeMap::new());
+        let mut done: BTreeMap<String, StageReport> = BTreeMap::new();
+        std::thread::scope(|scope| {
+            let (tx, rx) = mpsc::channel::<StageReport>();
+            let mut pending: Vec<String> = order.clone();
+            let mut running: BTreeSet<String> = BTreeSet::new();
+            loop {
+                // Launch every ready stage while workers are free, in declaration order.
+                while running.len() < self.jobs {
+                    let ready = pending.iter().position(|n| {
+                        let decl = self.config.stage(n).expect("validated");
+                        decl.dependencies().iter().all(|d| done.contains_key(d) || !selected.contains(d))
+                    });
+                    let Some(i) = ready else { break };
+                    let name = pending.remove(i);
+                    let decl = self.config.stage(&name).expect("validated");
+                    let broken = decl.dependencies().into_iter().find(|d| done.get(d).is_some_and(|r| r.is_broken()));
+                    if let Some(by) = broken {
+                        let reasons = vec![format!("upstream {by} did not succeed")];
+                        done.insert(name.clone(), StageReport { name, outcome: Outcome::Blocked { by }, reasons, record: None });
+                        bar.inc(1);
+                        continue;
+                    }
+                    let upstream_runs: Vec<String> = decl
+                        .dependencies()
+                        .into_iter()
+                        .filter(|d| done.get(d).is_some_and(|r| matches!(r.outcome, Outcome::WouldRun)))
+                        .collect();
+                    running.insert(name.clone());
+                    bar.set_message(running.iter().cloned().collect::<Vec<_>>().join(", "));
+                    let (tx, pool, dirs, memo) = (tx.clone(), &pool, &dirs, &memo);
+                    scope.spawn(move || {
+                        let report = pool.install(|| self.run_one(decl, dirs, memo, &upstream_runs));
+                        // The receiver lives until every stage has reported.
+                        let _ = tx.send(report);
+                    });
+                }
+                if running.is_empty() {
+                    break;
+                }
+                let report = rx.recv().expect("a running stage always reports");
+                running.remove(&report.name);
+                bar.inc(1);
+                bar.set_message(running.iter().cloned().collect::<Vec<_>>().join(", "));
+                done.insert(report.name.clone(), report);
+            }
+        });
+        bar.finish_and_clear();
+        let stages: Vec<StageReport> = order.iter().filter_map(|n| done.remove(n)).collect();
+        let manifest = if self.dry_run {
+            None
+        } else {
+            Some(manifest::write(&self.config, &dirs.out, &stages)?)
+        };
+        Ok(RunReport { stages, manifest })
+    }
+
+    /// Assesses one stage and, unless it is up to date (or this is a dry run), runs and commits it.
+    fn run_one(
+        &self,
+        decl: &StageDecl,
+        dirs: &Dirs,
+        memo: &Mutex<BTreeMap<PathBuf, String>>,
+        upstream_runs: &[String],
+    ) -> StageReport {
+        let name = decl.name.clone();
+        let report = |outcome, reasons, record| StageReport { name: name.clone(), outcome, reasons, record };
+        if !upstream_runs.is_empty() {
+            // Dry run: the upstream outputs this stage reads do not exist yet or may change.
+            let reasons = upstream_runs.iter().map(|u| format!("upstream {u} would run; its outputs may change")).collect();
+            return report(Outcome::WouldRun, reasons, None);
+        }
+        // Resolve and check the inputs.
+        let mut resolved: Vec<(String, PathBuf, bool)> = Vec::new();
+        for input in &decl.inputs {
+            let (path, memoise) = match input {
+                Input::Path(t) => (resolve(t, dirs, &self.config.root), true),
+                Input::Upstream { rel, .. } => (dirs.out.join(rel), false),
+            };
+            if !path.exists() {
+                let label = input.label();
+                if decl.optional {
+                    return report(
+                        Outcome::SkippedOptional,
+                        vec![format!("input {label} ({}) is missing", path.display())],
+                        None,
+                    );
+                }
+                let err = PipelineError::MissingInput { stage: name.clone(), label, path };
+                return report(Outcome::Failed(err.into()), vec!["an input is missing".into()], None);
+            }
+            resolved.push((input.label(), path, memoise));
+        }
+        let record = match self.fingerprint(decl, &resolved, memo) {
+            Ok(r) => r,
+            Err(e) => return report(Outcome::Failed(e.into()), vec!["hashing inputs failed".into()], None),
+        };
+        let previous = store::load_record(&dirs.out, &name);
+        let reasons = reasons_to_run(&record, previous.as_ref(), &dirs.out);
+        if reasons.is_empty() {
+            let previous = previous.expect("no reasons implies a record");
+            let n = previous.outputs.len();
+            return report(Outcome::UpToDate, vec![format!("inputs, params and code unchanged; {n} outputs intact")], Some(previous));
+        }
+        if self.dry_run {
+            return report(Outcome::WouldRun, reasons, None);
+        }
+        match self.execute(decl, dirs, record) {
+            Ok(Some(record)) => report(Outcome::Ran, reasons, Some(record)),
+            Ok(None) => report(Outcome::SkippedEmpty, vec!["the stage returned without writing any output".into()], None),
+            Err(e) => report(Outcome::Failed(e), reasons, None),
+        }
+    }
+
+    /// The key and component hashes of a stage: name, canonical params, every
+    /// input's content (directories recursively), every code path's content.
+    fn fingerprint(
+        &self,
+        decl: &StageDecl,
+        inputs: &[(String, PathBuf, bool)],
+        memo: &Mutex<BTreeMap<PathBuf, String>>,
+    ) -> Result<CacheRecord, PipelineError> {
+        let hashed = |path: &Path, memoise: bool| -> Result<String, PipelineError> {
+            if memoise && let Some(h) = memo.lock().expect("memo lock").get(path) {
+                return Ok(h.clone());
+            }
+            let h = hash_path(path)?;
+            if memoise {
+                memo.lock().expect("memo lock").insert(path.to_path_buf(), h.clone());
+            }
+            Ok(h)
+        };
+        let mut key = blake3::Hasher::new();
+        key.update(b"rig-lab stage v1\0");
+        key.update(decl.name.as_bytes());
+        let params = canonical_params(&decl.params);
+        for (k, v) in &params {
+            key.update(format!("\0param {k} = {v}").as_bytes());
+        }
+        let mut input_hashes = BTreeMap::new();
+        for (label, path, memoise) in inputs {
+            let h = hashed(path, *memoise)?;
+            key.update(format!("\0input {label} {h}").as_bytes());
+            input_hashes.insert(label.clone(), h);
+        }
+        let mut code = BTreeMap::new();
+        for c in &decl.code {
+            let path = self.config.root.join(c);
+            if !path.exists() {
+                return Err(PipelineError::Config {
+                    path: self.config.path.clone(),
+                    stage: Some(decl.name.clone()),
+                    reason: format!("code path {c} does not exist"),
+                });
+            }
+            let h = hashed(&path, true)?;
+            key.update(format!("\0code {c} {h}").as_bytes());
+            code.insert(c.clone(), h);
+        }
+        Ok(CacheRecord {
+            stage: decl.name.clone(),
+            key: key.finalize().to_hex().to_string(),
+            inputs: input_hashes,
+            params,
+            code,
+            outputs: BTreeMap::new(),
+        })
+    }
+
+    /// Runs the body (a panic counts as a failure) and commits what it staged.
+    fn execute(&self, decl: &StageDecl, dirs: &Dirs, mut record: CacheRecord) -> anyhow::Result<Option<CacheRecord>> {
+        let body = (self.registry)(&decl.name).expect("validated against the registry");
+        let shared = dirs.shared.as_deref();
+        let mut ctx = StageCtx::new(&decl.name, &dirs.campaign, &dirs.thesis, shared, &dirs.out, decl.params.clone());
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| body(&mut ctx)));
+        match result {
+            Ok(Ok(())) => {}
+            Ok(Err(e)) => return Err(e),
+            Err(panic) => {
+                let msg = panic
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| panic.downcast_ref::<String>().cloned())
+                    .unwrap_or_else(|| "non-string panic".into());
+                anyhow::bail!("stage {} panicked: {msg}", decl.name);
+            }
+        }
+        let staged = ctx.into_staged();
+        if staged.is_empty() {
+            return Ok(None);
+        }
+        let fault = self.faults.get(&decl.name).copied().unwrap_or_default();
+        record.outputs = store::commit(&self.config, decl, &dirs.out, &staged, fault)?;
+        store::save_record(&dirs.out, &record)?;
+        Ok(Some(record))
+    }
+}
+
+/// `{campaign}/x` etc. against the run's folders; other paths against the pipeline.toml folder.
+fn resolve(template: &str, dirs: &Dirs, root: &Path) -> PathBuf {
+    let bases = [("{campaign}", &dirs.campaign), ("{thesis}", &dirs.thesis), ("{shared}", &dirs.shared_declared)];
+    for (placeholder, base) in bases {
+        if let Some(rest) = template.strip_prefix(placeholder) {
+            let rest = rest.trim_start_matches('/');
+            return if rest.is_empty() { base.clone() } else { base.join(rest) };
+        }
+    }
+    root.join(template)
+}
+
+/// Why a stage must run: what changed since its record, which output is gone.
+fn reasons_to_run(now: &CacheRecord, before: Option<&CacheRecord>, out_dir: &Path) -> Vec<String> {
+    let Some(before) = before else {
+        return vec!["no record of an earlier run in this out dir".into()];
+    };
+    if now.key == before.key {
+        return store::output_problems(out_dir, &before.outputs);
+    }
+    let mut reasons = Vec::new();
+    diff_maps("input", &before.inputs, &now.inputs, &mut reasons, false);
+    diff_maps("param", &before.params, &now.params, &mut reasons, true);
+    diff_maps("code", &before.code, &now.code, &mut reasons, false);
+    if reasons.is_empty() {
+        // Same components, different key: the key's recipe changed.
+        reasons.push(format!("stage key changed ({} -> {})", short(&before.key), short(&now.key)));
+    }
+    reasons
+}
+
+fn diff_maps(
+    what: &str,
+    before: &BTreeMap<String, String>,
+    now: &BTreeMap<String, String>,
+    reasons: &mut Vec<String>,
+    show: bool,
+) {
+    for (k, v) in now {
+        match before.get(k) {
+            None => reasons.push(format!("{what} {k} is new")),
+            Some(old) if old != v && show => reasons.push(format!("{what} {k} changed ({old} -> {v})")),
+            Some(old) if old != v => reasons.push(format!("{what} {k} changed")),
+            Some(_) => {}
+        }
+    }
+    for k in before.keys().filter(|k| !now.contains_key(*k)) {
+        reasons.push(format!("{what} {k} was removed"));
+    }
+}
+
+fn short(h: &str) -> &str {
+    &h[..h.len().min(12)]
+}
