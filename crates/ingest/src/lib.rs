@@ -1,22 +1,93 @@
 //! Campaign folders (`rig-campaign/1`, ../shared/spec/recording-format.md) and
 //! thesis tables to typed data, with polars; validates before it returns.
+//!
+//! [`read_campaign`] returns the whole [`Campaign`] or an [`IngestError`]
+//! naming the file, the line and the rule — nothing is half-loaded, and it
+//! writes nothing. It enforces every rule of the format:
+//!
+//! **campaign.toml**
+//! - valid TOML; `format` is exactly `"rig-campaign/1"`; `name` present and
+//!   not blank; `description` optional (empty when absent);
+//! - `[rig]` present with `encoder_ticks_per_rev` (integer > 0),
+//!   `brake_disc_radius_m`, `supply_voltage_v`, `sample_rate_hz` (finite, > 0);
+//! - at least one `[[runs]]`; each has `id` (`[a-z0-9-]+`, unique), `kind`
+//!   (one of the four kinds; others are refused), `file`, and exactly its
+//!   kind's metadata keys;
+//! - `file` is relative, not absolute, has no `..`, exists, is a regular file
+//!   and lies inside the campaign folder also after resolving symlinks.
+//!
+//! **Metadata** (finite numbers; TOML integers are accepted as numbers). The
+//! spec allows zero "only where the kind allows it"; this reader's reading:
+//! - `force_calibration`: `load_n >= 0` (zero load is a tare run, the offset);
+//! - `static_twist`: `torque_nm > 0` (a zero or negative torque gives no
+//!   stiffness point in the thesis' one-directional static test, Table 4.3);
+//! - `voltage_step`: `voltage_v != 0` (no step) and `|voltage_v| <= supply_voltage_v`
+//!   (the drive saturates there); negative steps are allowed;
+//! - `operating_point`: `motor_rpm_setpoint > 0`, `normal_force_n >= 0`
+//!   (zero: brake open), `ramp_s >= 0` (zero: a step reference).
+//!
+//! **Unknown keys are refused** everywhere (top level, `[rig]`, each run):
+//! a typo such as `lod_n` must not silently drop a value.
+//!
+//! **Each run's CSV**
+//! - UTF-8; a header row (line 1) naming exactly the kind's columns, each
+//!   once, in any order; at least one data row; no empty line; every row has
+//!   as many cells as the header (no quoting: cells are plain numbers);
+//! - every cell is a number: no missing cell, no text, no NaN or infinity;
+//! - `time_s` starts at exactly 0 ("Every run starts at time_s = 0") and is
+//!   strictly increasing (a repeated time is refused);
+//! - encoder columns (`motor_ticks`, `rotor_ticks`) are written as integer
+//!   literals: `1.5` is refused, and so are `1.0` and `1e3` — counts come out
+//!   of the acquisition as integers, and a float spelling means the column
+//!   went through floating-point processing. The spec's "zero at the start
+//!   of the run" is *not* enforced: a static-twist run starts with the shaft
+//!   already twisted, counted from the unloaded position (the shipped
+//!   campaign's `twist-1` starts at 70).
+//!
+//! Rules are checked in the order above and the first broken one is
+//! reported; within a CSV, structure (header, rows) before cells (earliest
+//! row, then leftmost column) before time. Error lines are 1-based; the CSV
+//! header is line 1.
+//!
+//! [`lavi::read_lavi`] reads the real UFRJ/LAVI stick-slip recording with the
+//! same CSV rules (without the start-at-zero rule).
 
+mod columns;
+mod error;
+pub mod lavi;
+mod manifest;
 pub mod thesis;
 
-use rig_types::Campaign;
+pub use error::IngestError;
+pub use manifest::FORMAT;
+
+use columns::{ColValues, TimeStart, read_numeric_csv};
+use rig_types::{Campaign, Run, RunData};
 use std::path::Path;
 
-/// Reads and validates a whole campaign folder. Not written yet.
+/// Reads and validates a whole campaign folder (`<dir>/campaign.toml` and the
+/// CSV of every run), in campaign.toml order.
+///
+/// Errors name the file (joined to `dir`), the line and the broken rule; see
+/// the crate docs for the rules and how the spec was read.
 pub fn read_campaign(dir: &Path) -> Result<Campaign, IngestError> {
-    let _ = dir;
-    todo!("rig-ingest: read_campaign")
-}
-
-/// Why a campaign was refused: the file, the line (for CSV) and the rule.
-#[derive(Debug, thiserror::Error)]
-#[error("{file}{}: {rule}", line.map(|l| format!(":{l}")).unwrap_or_default())]
-pub struct IngestError {
-    pub file: std::path::PathBuf,
-    pub line: Option<usize>,
-    pub rule: String,
+    let manifest = manifest::read_manifest(dir)?;
+    let mut runs = Vec::with_capacity(manifest.runs.len());
+    for entry in manifest.runs {
+        let spec = manifest::kind_spec(&entry.kind);
+        let values = read_numeric_csv(&entry.resolved, spec.columns, TimeStart::Zero)?;
+        let mut data = RunData::default();
+        for (col, v) in spec.columns.iter().zip(values) {
+            match (col.name, v) {
+                ("time_s", ColValues::Float(x)) => data.time_s = x,
+                ("motor_voltage_v", ColValues::Float(x)) => data.motor_voltage_v = Some(x),
+                ("brake_force_mv", ColValues::Float(x)) => data.brake_force_mv = Some(x),
+                ("motor_ticks", ColValues::Count(x)) => data.motor_ticks = Some(x),
+                ("rotor_ticks", ColValues::Count(x)) => data.rotor_ticks = Some(x),
+                (name, _) => unreachable!("column {name} of kind {} has no RunData field", spec.name),
+            }
+        }
+        runs.push(Run { id: entry.id, kind: entry.kind, file: entry.file, data });
+    }
+    Ok(Campaign { name: manifest.name, description: manifest.description, rig: manifest.rig, runs })
 }

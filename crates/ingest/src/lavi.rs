@@ -1,0 +1,63 @@
+//! The real stick-slip recording of the UFRJ/LAVI drill-string test rig
+//! (../shared/data/ufrj-lavi-2018/run-175.csv, Real et al. 2018) as plain columns.
+//!
+//! Validated like a campaign run (header with exactly these columns in any
+//! order, every cell a finite number, `time_s` strictly increasing) but the
+//! recording need not start at t = 0. Sensor glitches (the top speed dips to
+//! about -263 rpm) are finite numbers and are kept: repairing them is the
+//! analysis' job, not the reader's.
+
+use crate::IngestError;
+use crate::columns::{ColSpec, ColType, ColValues, TIME_COLUMN, TimeStart, read_numeric_csv};
+use std::path::Path;
+
+/// One LAVI recording; every column has `time_s.len()` entries.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LaviRecording {
+    /// Sample times, strictly increasing (1 kHz in run 175).
+    pub time_s: Vec<f64>,
+    /// Drive-side (top) speed, rpm; contains sensor glitches.
+    pub top_speed_rpm: Vec<f64>,
+    /// Bottom-rotor (bit) speed, rpm.
+    pub bit_speed_rpm: Vec<f64>,
+    /// Torque on bit (the friction torque at the bottom), N m.
+    pub bit_torque_nm: Vec<f64>,
+    /// Weight on bit (normal force of the bit-rock contact), N.
+    pub wob_n: Vec<f64>,
+}
+
+impl LaviRecording {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.time_s.len()
+    }
+
+    /// True when there are no samples (never for a recording from [`read_lavi`]).
+    pub fn is_empty(&self) -> bool {
+        self.time_s.is_empty()
+    }
+}
+
+const COLUMNS: &[ColSpec] = &[
+    ColSpec { name: TIME_COLUMN, ty: ColType::Float },
+    ColSpec { name: "top_speed_rpm", ty: ColType::Float },
+    ColSpec { name: "bit_speed_rpm", ty: ColType::Float },
+    ColSpec { name: "bit_torque_nm", ty: ColType::Float },
+    ColSpec { name: "wob_n", ty: ColType::Float },
+];
+
+/// Reads a LAVI CSV (`time_s, top_speed_rpm, bit_speed_rpm, bit_torque_nm, wob_n`).
+pub fn read_lavi(path: &Path) -> Result<LaviRecording, IngestError> {
+    let mut cols = read_numeric_csv(path, COLUMNS, TimeStart::Any)?.into_iter().map(|c| match c {
+        ColValues::Float(v) => v,
+        ColValues::Count(_) => unreachable!("LAVI columns are all Float"),
+    });
+    let mut next = || cols.next().expect("one value vector per column");
+    Ok(LaviRecording {
+        time_s: next(),
+        top_speed_rpm: next(),
+        bit_speed_rpm: next(),
+        bit_torque_nm: next(),
+        wob_n: next(),
+    })
+}
