@@ -4,6 +4,8 @@
 //! saturates at the campaign's supply voltage; the `drive_voltage_limit`
 //! candidate at a fitted Vmax. The PI gains are nuisance parameters fitted
 //! here on the same data for both, so the comparison isolates the limit.
+//! (The integral is driven by the measured error, so the prediction is a
+//! one-step filter of the data, not a free-run simulation.)
 
 use crate::friction::golden;
 use crate::linalg::Normal;
@@ -17,28 +19,28 @@ pub struct Pi {
     pub limit_v: f64,
 }
 
-/// Predicted voltage and whether the clamp was active, sample by sample.
-/// Anti-windup by conditional integration: the integral is frozen while the
-/// output is clamped and the error would push it further into the clamp.
+/// Predicted voltage, the PI integral ∫e and whether the clamp was active,
+/// sample by sample. Anti-windup by back-calculation exactly as rig-model's
+/// drive: d(∫e)/dt = e + (V − V_raw)/(ki·T_t), T_t = rig_model::ANTI_WINDUP_TRACKING_S
+/// (explicit Euler at the sample step; dt/T_t = 0.2 at 500 Hz is stable).
 pub fn predict_voltage(pi: &Pi, s: &RunSignals) -> (Vec<f64>, Vec<f64>, Vec<bool>) {
     let n = s.time_s.len();
     let mut v = Vec::with_capacity(n);
     let mut integ = Vec::with_capacity(n);
     let mut sat = Vec::with_capacity(n);
     let mut i_acc = 0.0;
+    let tt = rig_model::ANTI_WINDUP_TRACKING_S;
     for k in 0..n {
         let e = s.reference_rad_s(s.time_s[k]) - s.motor_speed_rad_s[k];
         let u = pi.kp_v_s_rad * e + pi.ki_v_rad * i_acc;
         let clamped = u.clamp(-pi.limit_v, pi.limit_v);
-        let is_sat = clamped != u;
         v.push(clamped);
         integ.push(i_acc);
-        sat.push(is_sat);
+        sat.push(clamped != u);
         if k + 1 < n {
             let dt = s.time_s[k + 1] - s.time_s[k];
-            if !(is_sat && e.signum() == u.signum()) {
-                i_acc += e * dt;
-            }
+            let rate = if pi.ki_v_rad.abs() < 1e-9 { e } else { e + (clamped - u) / (pi.ki_v_rad * tt) };
+            i_acc += rate * dt;
         }
     }
     (v, integ, sat)
@@ -86,12 +88,12 @@ pub fn fit_gains(runs: &[&RunSignals], limit_v: f64) -> Option<Pi> {
 }
 
 /// The drive-limit candidate: Vmax minimising the voltage RSS (gains refitted
-/// at every trial limit), searched between 30 % of the supply and the supply.
+/// at every trial limit), searched between 5 % of the supply and the supply.
 /// Returns (Pi, rss, n, stderr of Vmax from the RSS curvature).
 pub fn fit_limit(runs: &[&RunSignals], supply_v: f64) -> Option<(Pi, f64, usize, f64)> {
     let eval = |l: f64| fit_gains(runs, l).map(|p| voltage_rss(&p, runs).0).unwrap_or(f64::INFINITY);
     // Coarse grid first (the RSS is not unimodal far from the optimum), then golden section.
-    let grid: Vec<f64> = (0..=28).map(|j| supply_v * (0.3 + 0.025 * j as f64)).collect();
+    let grid: Vec<f64> = (0..=38).map(|j| supply_v * (0.05 + 0.025 * j as f64)).collect();
     let scores: Vec<f64> = {
         use rayon::prelude::*;
         grid.par_iter().map(|&l| eval(l)).collect()

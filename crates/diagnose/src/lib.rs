@@ -43,6 +43,7 @@
 
 pub mod drive;
 pub mod friction;
+pub mod features;
 mod linalg;
 pub mod lines;
 pub mod prepare;
@@ -116,4 +117,27 @@ pub enum DiagnoseError {
     Estimation(String),
     #[error("the baseline fit is singular: {0}")]
     Singular(&'static str),
+}
+
+/// Diagnosis of a campaign whose calibration is done: prepares the signals
+/// with the campaign's force calibration, selects the effect, and — when a
+/// baseline `RigParams` is given — simulates every operating point free-run
+/// with it for the per-run feature comparison.
+pub fn diagnose(
+    c: &rig_types::Campaign,
+    cal: &rig_calibrate::CampaignCalibration,
+    baseline: Option<&rig_types::RigParams>,
+    thesis_mu_dynamic: Option<f64>,
+    opts: &DiagnoseOptions,
+) -> Result<Diagnosis, DiagnoseError> {
+    let fc = ForceCal { factor_mv_per_n: cal.force_factor_mv_per_n, offset_mv: cal.force_offset_mv };
+    let runs = prepare::prepare_runs(c, fc, opts)?;
+    let mut d = diagnose_signals(&c.name, &runs, c.rig.supply_voltage_v, thesis_mu_dynamic, opts)?;
+    if let Some(p) = baseline {
+        let sims = features::simulate_features(c, p, opts);
+        for (row, f) in d.detail.runs.iter_mut().zip(sims) {
+            row.simulated = f;
+        }
+    }
+    Ok(d)
 }

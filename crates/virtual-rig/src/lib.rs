@@ -1,1 +1,216 @@
-//! A campaign generator for tests only (truth model with hidden effects, sensor chain). Not written yet.
+//! A campaign generator for tests only (truth model with hidden effects, sensor chain).
+//!
+//! The virtual rig draws plausible rig parameters (seeded), hides one effect
+//! in the truth model (any vocabulary effect of ../shared/spec/diagnosis.md,
+//! or [`Hidden::MotorCogging`], which is outside the vocabulary), simulates a
+//! whole `rig-campaign/1` campaign with `rig_model` and passes it through a
+//! sensor chain: encoders quantised to 1000 ticks/rev (floor), a force sensor
+//! with gain, offset and noise in mV, and voltage noise. [`write_campaign`]
+//! writes campaign.toml + runs/*.csv so tests read it back through rig-ingest
+//! like a user's data. No analysis crate may depend on this crate.
+
+mod draw;
+mod write;
+
+pub use draw::{Hidden, Truth, draw_hidden, draw_truth};
+pub use write::write_campaign;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use rig_model::SimOptions;
+use rig_types::{Campaign, Effect, RigInfo, Run, RunData, RunInput, RunKind};
+use std::f64::consts::PI;
+use std::path::PathBuf;
+
+/// The protocol of a generated campaign (defaults: the shipped campaign's).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Protocol {
+    pub sample_rate_hz: f64,
+    pub force_loads_n: Vec<f64>,
+    pub twist_torques_nm: Vec<f64>,
+    pub step_voltages_v: Vec<f64>,
+    pub step_duration_s: f64,
+    /// (motor rpm set-point, normal force N) of each operating point.
+    pub op_points: Vec<(f64, f64)>,
+    pub op_duration_s: f64,
+    pub ramp_s: f64,
+}
+
+impl Protocol {
+    /// The shipped campaign's protocol: 30 operating points across the severity
+    /// map, 40 s each at 500 Hz with a 2 s ramp.
+    pub fn full() -> Self {
+        let mut op = Vec::new();
+        for rpm in [20.0, 45.0, 85.0, 130.0] {
+            for n in [1.0, 4.0, 10.0, 25.0] {
+                op.push((rpm, n));
+            }
+        }
+        for rpm in [10.0, 15.0, 25.0, 32.0, 38.0, 55.0, 65.0] {
+            op.push((rpm, 10.0));
+        }
+        for n in [2.0, 3.0, 5.0, 6.0, 7.5, 13.0, 18.0] {
+            op.push((20.0, n));
+        }
+        Protocol {
+            sample_rate_hz: 500.0,
+            force_loads_n: vec![0.7, 2.0, 3.3, 4.4, 5.8],
+            twist_torques_nm: vec![0.115, 0.17, 0.23, 0.29, 0.34],
+            step_voltages_v: vec![6.0, 8.0, 10.0, 12.0],
+            step_duration_s: 20.0,
+            op_points: op,
+            op_duration_s: 40.0,
+            ramp_s: 2.0,
+        }
+    }
+
+    /// A smaller campaign for fast tests: 12 operating points of 30 s.
+    pub fn small() -> Self {
+        let op = vec![
+            (20.0, 4.0),
+            (45.0, 10.0),
+            (85.0, 4.0),
+            (130.0, 10.0),
+            (20.0, 10.0),
+            (45.0, 25.0),
+            (85.0, 10.0),
+            (130.0, 25.0),
+            (32.0, 6.0),
+            (65.0, 7.5),
+            (25.0, 13.0),
+            (55.0, 18.0),
+        ];
+        Protocol { op_points: op, op_duration_s: 30.0, step_voltages_v: vec![8.0, 12.0], ..Protocol::full() }
+    }
+}
+
+/// Why a campaign could not be generated.
+#[derive(Debug, thiserror::Error)]
+pub enum VirtualRigError {
+    #[error("simulating run {run}: {source}")]
+    Model { run: String, source: rig_model::ModelError },
+    #[error("writing {path}: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+}
+
+fn times(duration_s: f64, rate_hz: f64) -> Vec<f64> {
+    let n = (duration_s * rate_hz).round() as usize;
+    (0..n).map(|k| k as f64 / rate_hz).collect()
+}
+
+fn ticks(angle_rad: &[f64], per_rev: u32) -> Vec<i64> {
+    angle_rad.iter().map(|a| (a * per_rev as f64 / (2.0 * PI)).floor() as i64).collect()
+}
+
+/// Generates a whole campaign (in memory) from `truth` under `protocol`; the
+/// noise and the per-run phases come from `seed`.
+pub fn generate(name: &str, truth: &Truth, protocol: &Protocol, seed: u64) -> Result<Campaign, VirtualRigError> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let per_rev = 1000u32;
+    let rate = protocol.sample_rate_hz;
+    let mv_noise = Normal::new(0.0, truth.force_noise_mv).expect("finite σ");
+    let v_noise = Normal::new(0.0, truth.voltage_noise_v).expect("finite σ");
+    let mut runs = Vec::new();
+    for (j, &load) in protocol.force_loads_n.iter().enumerate() {
+        let t = times(2.0, rate);
+        let mv = t.iter().map(|_| truth.force_offset_mv + truth.force_factor_mv_per_n * load + mv_noise.sample(&mut rng)).collect();
+        runs.push(run(format!("cal-{}", j + 1), RunKind::ForceCalibration { load_n: load }, RunData {
+            time_s: t,
+            brake_force_mv: Some(mv),
+            ..Default::default()
+        }));
+    }
+    for (j, &torque) in protocol.twist_torques_nm.iter().enumerate() {
+        let t = times(2.0, rate);
+        let angle = torque / truth.params.shaft_stiffness_nm_rad;
+        // The held angle wanders by a fraction of a tick (hand-held torque).
+        let a: Vec<f64> = t.iter().map(|_| angle + rng.random_range(-0.004..0.004)).collect();
+        runs.push(run(format!("twist-{}", j + 1), RunKind::StaticTwist { torque_nm: torque }, RunData {
+            time_s: t,
+            rotor_ticks: Some(ticks(&a, per_rev)),
+            ..Default::default()
+        }));
+    }
+    let sim_opts = SimOptions::default();
+    for &v in &protocol.step_voltages_v {
+        let t = times(protocol.step_duration_s, rate);
+        let id = format!("step-{}v", v);
+        let mut p = truth.params.clone();
+        p.effects.clear();
+        let tr = rig_model::simulate(&p, &RunInput::VoltageStep { voltage_v: v }, &t, &sim_opts)
+            .map_err(|source| VirtualRigError::Model { run: id.clone(), source })?;
+        let volt = tr.voltage_v.iter().map(|x| x + v_noise.sample(&mut rng)).collect();
+        runs.push(run(id, RunKind::VoltageStep { voltage_v: v }, RunData {
+            motor_voltage_v: Some(volt),
+            motor_ticks: Some(ticks(&tr.motor_angle_rad, per_rev)),
+            rotor_ticks: Some(ticks(&tr.rotor_angle_rad, per_rev)),
+            time_s: t,
+            ..Default::default()
+        }));
+    }
+    // Operating points: per-run phases of the hidden effect drawn here (θ free per run).
+    let mut ops = Vec::new();
+    for (j, &(rpm, n0)) in protocol.op_points.iter().enumerate() {
+        let mut p = truth.params.clone();
+        for e in p.effects.iter_mut() {
+            let th = rng.random_range(0.0..2.0 * PI);
+            match e {
+                Effect::NormalForceModulation { phase_rad, .. }
+                | Effect::AnglePeriodicFriction { phase_rad, .. }
+                | Effect::MotorCogging { phase_rad, .. } => *phase_rad = th,
+            }
+        }
+        let seed_j: u64 = rng.random();
+        ops.push((format!("op-{:02}", j + 1), rpm, n0, p, seed_j));
+    }
+    let op_runs: Vec<Result<Run, VirtualRigError>> = {
+        use rayon::prelude::*;
+        ops.par_iter()
+            .map(|(id, rpm, n0, p, seed_j)| {
+                let mut rng = ChaCha8Rng::seed_from_u64(*seed_j);
+                let t = times(protocol.op_duration_s, rate);
+                let input =
+                    RunInput::OperatingPoint { motor_rpm_setpoint: *rpm, normal_force_n: *n0, ramp_s: protocol.ramp_s };
+                let tr = rig_model::simulate(p, &input, &t, &sim_opts)
+                    .map_err(|source| VirtualRigError::Model { run: id.clone(), source })?;
+                let r = p.brake_disc_radius_m;
+                let mv = tr
+                    .friction_torque_nm
+                    .iter()
+                    .map(|tq| truth.force_offset_mv + truth.force_factor_mv_per_n * tq / r + mv_noise.sample(&mut rng))
+                    .collect();
+                let volt = tr.voltage_v.iter().map(|x| x + v_noise.sample(&mut rng)).collect();
+                Ok(run(
+                    id.clone(),
+                    RunKind::OperatingPoint { motor_rpm_setpoint: *rpm, normal_force_n: *n0, ramp_s: protocol.ramp_s },
+                    RunData {
+                        motor_voltage_v: Some(volt),
+                        motor_ticks: Some(ticks(&tr.motor_angle_rad, per_rev)),
+                        rotor_ticks: Some(ticks(&tr.rotor_angle_rad, per_rev)),
+                        brake_force_mv: Some(mv),
+                        time_s: t,
+                    },
+                ))
+            })
+            .collect()
+    };
+    for r in op_runs {
+        runs.push(r?);
+    }
+    Ok(Campaign {
+        name: name.to_string(),
+        description: format!("virtual rig, hidden effect: {}", truth.hidden.id()),
+        rig: RigInfo {
+            encoder_ticks_per_rev: per_rev,
+            brake_disc_radius_m: truth.params.brake_disc_radius_m,
+            supply_voltage_v: truth.supply_voltage_v,
+            sample_rate_hz: rate,
+        },
+        runs,
+    })
+}
+
+fn run(id: String, kind: RunKind, data: RunData) -> Run {
+    Run { file: PathBuf::from(format!("runs/{id}.csv")), id, kind, data }
+}
