@@ -2,7 +2,7 @@
 //!
 //! J θ̈ = k (θ_top − θ) + c (Ω_top − Ω) − T_fric(Ω),
 //!
-//! with the bit friction T_fric(Ω) = sign(Ω) (a + b·exp(−|Ω|/vs)) in slip and a
+//! with the bit friction T_fric(Ω) = sign(Ω) (a + b·exp(−(|Ω|/vs)^δ)) in slip and a
 //! stick phase (Ω = 0) while |k φ + c Ω_top| ≤ a + b, where φ = θ_top − θ is the
 //! twist. This is the lumped model of Real et al. (2018) for a rig whose drive
 //! is not stiff: the measured top speed is the input, so the drive needs no model.
@@ -14,7 +14,8 @@
 
 use crate::ModelError;
 
-/// Bit friction law T(Ω) = sign(Ω) (a + b e^{−|Ω|/vs}) in slip; break-away at a + b.
+/// Bit friction law T(Ω) = sign(Ω) (a + b e^{−(|Ω|/vs)^δ}) in slip; break-away at a + b.
+/// δ = 1 is an exponential decay, δ = 2 the Gaussian Stribeck curve.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OneDofFriction {
     /// a: the kinetic level reached at high speed, N m.
@@ -22,12 +23,14 @@ pub struct OneDofFriction {
     /// b: the extra torque at Ω → 0⁺, N m (b > 0 is velocity weakening).
     pub weakening_nm: f64,
     pub stribeck_speed_rad_s: f64,
+    pub shape_exponent: f64,
 }
 
 impl OneDofFriction {
     /// Slip torque at speed Ω (odd in Ω).
     pub fn slip_torque_nm(&self, omega_rad_s: f64) -> f64 {
-        let mag = self.kinetic_nm + self.weakening_nm * (-omega_rad_s.abs() / self.stribeck_speed_rad_s).exp();
+        let x = (omega_rad_s.abs() / self.stribeck_speed_rad_s).powf(self.shape_exponent);
+        let mag = self.kinetic_nm + self.weakening_nm * (-x).exp();
         omega_rad_s.signum() * mag
     }
 
@@ -94,26 +97,23 @@ fn twist_increment(time_s: &[f64], top: &[f64], bit: &[f64]) -> Vec<f64> {
     phi
 }
 
-/// Solves the symmetric positive definite system `a x = b` (n ≤ 4) by Gaussian
-/// elimination with partial pivoting; also returns the inverse for the covariance.
-fn solve_with_inverse(mut a: [[f64; 4]; 4], b: [f64; 4]) -> Option<([f64; 4], [[f64; 4]; 4])> {
-    let mut inv = [[0.0; 4]; 4];
-    for (i, row) in inv.iter_mut().enumerate() {
-        row[i] = 1.0;
-    }
-    let mut rhs = b;
-    for col in 0..4 {
-        let piv = (col..4).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
+/// Solves `a x = b` (a small normal-equation matrix) by Gauss–Jordan elimination
+/// with partial pivoting; also returns a⁻¹ for the covariance.
+fn solve_with_inverse(mut a: Vec<Vec<f64>>, mut rhs: Vec<f64>) -> Option<(Vec<f64>, Vec<Vec<f64>>)> {
+    let m = rhs.len();
+    let mut inv: Vec<Vec<f64>> = (0..m).map(|i| (0..m).map(|j| if i == j { 1.0 } else { 0.0 }).collect()).collect();
+    for col in 0..m {
+        let piv = (col..m).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
         if a[piv][col].abs() < 1e-300 {
             return None;
         }
         a.swap(col, piv);
         inv.swap(col, piv);
         rhs.swap(col, piv);
-        for r in 0..4 {
+        for r in 0..m {
             if r != col {
                 let f = a[r][col] / a[col][col];
-                for c in 0..4 {
+                for c in 0..m {
                     a[r][c] -= f * a[col][c];
                     inv[r][c] -= f * inv[col][c];
                 }
@@ -121,13 +121,10 @@ fn solve_with_inverse(mut a: [[f64; 4]; 4], b: [f64; 4]) -> Option<([f64; 4], [[
             }
         }
     }
-    let mut x = [0.0; 4];
-    for i in 0..4 {
-        x[i] = rhs[i] / a[i][i];
+    let x = (0..m).map(|i| rhs[i] / a[i][i]).collect();
+    for (i, row) in inv.iter_mut().enumerate() {
         let d = a[i][i];
-        for c in 0..4 {
-            inv[i][c] /= d;
-        }
+        row.iter_mut().for_each(|v| *v /= d);
     }
     Some((x, inv))
 }
@@ -137,13 +134,16 @@ fn solve_with_inverse(mut a: [[f64; 4]; 4], b: [f64; 4]) -> Option<([f64; 4], [[
 /// unknowns p = (k/J, c/J, 1/J, k φ0 / J), with Δφ the integrated twist from
 /// the first sample. `bit_accel_rad_s2` is the caller's derivative of the bit
 /// speed (filtered: differentiation amplifies noise). `bit_torque_nm` is the
-/// measured torque the contact applies (in stick too).
+/// measured torque the contact applies (in stick too). With
+/// `fixed_damping_nm_s_rad = Some(c)` the damping is not estimated: the
+/// regressor becomes c (Ω_top − Ω) − T with coefficient 1/J (stderr of c = 0).
 pub fn fit_one_dof(
     time_s: &[f64],
     top_speed_rad_s: &[f64],
     bit_speed_rad_s: &[f64],
     bit_accel_rad_s2: &[f64],
     bit_torque_nm: &[f64],
+    fixed_damping_nm_s_rad: Option<f64>,
 ) -> Result<OneDofFit, ModelError> {
     let n = time_s.len();
     check_lengths(
@@ -160,13 +160,21 @@ pub fn fit_one_dof(
     }
     check_times(time_s)?;
     let dphi = twist_increment(time_s, top_speed_rad_s, bit_speed_rad_s);
-    let row = |i: usize| [dphi[i], top_speed_rad_s[i] - bit_speed_rad_s[i], -bit_torque_nm[i], 1.0];
-    let (mut ata, mut atb) = ([[0.0; 4]; 4], [0.0; 4]);
+    // Columns: Δφ, [Ω_top − Ω], −T (or c(Ω_top − Ω) − T), 1. Index of 1/J in p: `ij`.
+    let row = |i: usize| -> Vec<f64> {
+        let rate = top_speed_rad_s[i] - bit_speed_rad_s[i];
+        match fixed_damping_nm_s_rad {
+            None => vec![dphi[i], rate, -bit_torque_nm[i], 1.0],
+            Some(c) => vec![dphi[i], c * rate - bit_torque_nm[i], 1.0],
+        }
+    };
+    let (ij, m) = if fixed_damping_nm_s_rad.is_some() { (1, 3) } else { (2, 4) };
+    let (mut ata, mut atb) = (vec![vec![0.0; m]; m], vec![0.0; m]);
     for i in 0..n {
         let x = row(i);
-        for r in 0..4 {
+        for r in 0..m {
             atb[r] += x[r] * bit_accel_rad_s2[i];
-            for c in 0..4 {
+            for c in 0..m {
                 ata[r][c] += x[r] * x[c];
             }
         }
@@ -179,31 +187,34 @@ pub fn fit_one_dof(
     let mean_acc = bit_accel_rad_s2.iter().sum::<f64>() / n as f64;
     let (mut sse, mut sst) = (0.0, 0.0);
     for i in 0..n {
-        let x = row(i);
-        let pred: f64 = (0..4).map(|j| p[j] * x[j]).sum();
+        let pred: f64 = row(i).iter().zip(&p).map(|(x, pj)| x * pj).sum();
         sse += (bit_accel_rad_s2[i] - pred).powi(2);
         sst += (bit_accel_rad_s2[i] - mean_acc).powi(2);
     }
-    let s2 = sse / (n - 4) as f64;
+    let s2 = sse / (n - m) as f64;
     let var = |j: usize| (s2 * inv[j][j]).max(0.0);
-    if p[2] <= 0.0 {
+    if p[ij] <= 0.0 {
         return Err(ModelError::InvalidParameter {
             name: "1/J",
-            value: p[2],
+            value: p[ij],
             rule: "the fitted inverse inertia must be positive (torque sign or units wrong?)",
         });
     }
-    let j = 1.0 / p[2];
-    // First-order propagation: J = 1/p3, k = p1/p3, c = p2/p3 (cross-covariances neglected).
-    let rel3 = var(2).sqrt() / p[2];
+    let j = 1.0 / p[ij];
+    // First-order propagation: J = 1/p_J, k = p_k/p_J, c = p_c/p_J (cross-covariances neglected).
+    let rel_j = var(ij).sqrt() / p[ij];
+    let (c, c_se) = match fixed_damping_nm_s_rad {
+        Some(c) => (c, 0.0),
+        None => (p[1] * j, (p[1] * j).abs() * ((var(1).sqrt() / p[1]).powi(2) + rel_j * rel_j).sqrt()),
+    };
     Ok(OneDofFit {
         inertia_kgm2: j,
         stiffness_nm_rad: p[0] * j,
-        damping_nm_s_rad: p[1] * j,
-        initial_twist_rad: p[3] / p[0],
-        inertia_stderr: j * rel3,
-        stiffness_stderr: (p[0] * j) * ((var(0).sqrt() / p[0]).powi(2) + rel3 * rel3).sqrt(),
-        damping_stderr: (p[1] * j).abs() * ((var(1).sqrt() / p[1]).powi(2) + rel3 * rel3).sqrt(),
+        damping_nm_s_rad: c,
+        initial_twist_rad: p[m - 1] / p[0],
+        inertia_stderr: j * rel_j,
+        stiffness_stderr: (p[0] * j) * ((var(0).sqrt() / p[0]).powi(2) + rel_j * rel_j).sqrt(),
+        damping_stderr: c_se,
         r_squared: 1.0 - sse / sst,
         points: n,
     })
@@ -321,7 +332,12 @@ mod tests {
             inertia_kgm2: 0.05,
             stiffness_nm_rad: 2.0,
             damping_nm_s_rad: 0.02,
-            friction: OneDofFriction { kinetic_nm: 1.0, weakening_nm: 0.8, stribeck_speed_rad_s: 1.0 },
+            friction: OneDofFriction {
+                kinetic_nm: 1.0,
+                weakening_nm: 0.8,
+                stribeck_speed_rad_s: 1.0,
+                shape_exponent: 1.0,
+            },
         }
     }
 
@@ -359,13 +375,17 @@ mod tests {
                 (r.bit_speed_rad_s[b] - r.bit_speed_rad_s[a]) / (t[b] - t[a])
             })
             .collect();
-        let fit = fit_one_dof(&t, &u, &r.bit_speed_rad_s, &acc_all, &r.friction_torque_nm).unwrap();
+        let fit = fit_one_dof(&t, &u, &r.bit_speed_rad_s, &acc_all, &r.friction_torque_nm, None).unwrap();
         let rel = |a: f64, b: f64| (a / b - 1.0).abs();
         assert!(rel(fit.inertia_kgm2, 0.05) < 0.01, "{fit:?}");
         assert!(rel(fit.stiffness_nm_rad, 2.0) < 0.01, "{fit:?}");
         assert!(rel(fit.damping_nm_s_rad, 0.02) < 0.05, "{fit:?}");
         // Measured: J +0.8 %, k +0.6 %, c +1.1 %, φ0 −0.003 rad (of a ≈ 0.9 rad twist).
         assert!(fit.initial_twist_rad.abs() < 0.01 && fit.r_squared > 0.99, "{fit:?}");
+        // Damping fixed at its true value: J and k as well recovered.
+        let fixed = fit_one_dof(&t, &u, &r.bit_speed_rad_s, &acc_all, &r.friction_torque_nm, Some(0.02)).unwrap();
+        assert!(rel(fixed.inertia_kgm2, 0.05) < 0.01 && rel(fixed.stiffness_nm_rad, 2.0) < 0.01, "{fixed:?}");
+        assert_eq!((fixed.damping_nm_s_rad, fixed.damping_stderr), (0.02, 0.0));
     }
 
     #[test]

@@ -140,9 +140,11 @@ pub fn bin_means(x: &[f64], y: &[f64], lo: f64, hi: f64, bins: usize) -> Vec<Bin
         .collect()
 }
 
-/// y(v) = a + b·exp(−v / vs), fitted in slip (v > 0).
+/// y(v) = a + b·exp(−(v / vs)^δ), fitted in slip (v > 0).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct WeakeningFit {
+    /// δ: 1 exponential, 2 Gaussian (Stribeck).
+    pub shape_exponent: f64,
     pub a: f64,
     pub b: f64,
     pub vs: f64,
@@ -159,11 +161,21 @@ impl WeakeningFit {
     pub fn static_over_kinetic(&self) -> f64 {
         (self.a + self.b) / self.a
     }
+
+    pub fn eval(&self, v: f64) -> f64 {
+        self.a + self.b * (-(v.abs() / self.vs).powf(self.shape_exponent)).exp()
+    }
 }
 
 /// For fixed vs the model is linear in (a, b): least squares in closed form;
 /// vs is scanned on a log grid over [vs_min, vs_max] and refined by golden section.
-pub fn fit_weakening(v: &[f64], y: &[f64], vs_min: f64, vs_max: f64) -> Result<WeakeningFit, SpectraError> {
+pub fn fit_weakening(
+    v: &[f64],
+    y: &[f64],
+    shape_exponent: f64,
+    vs_min: f64,
+    vs_max: f64,
+) -> Result<WeakeningFit, SpectraError> {
     if v.len() != y.len() {
         return Err(SpectraError::LengthMismatch { a: "v", len_a: v.len(), b: "y", len_b: y.len() });
     }
@@ -177,7 +189,7 @@ pub fn fit_weakening(v: &[f64], y: &[f64], vs_min: f64, vs_max: f64) -> Result<W
     check_finite("y", y)?;
     let linear = |vs: f64| -> (f64, f64, f64) {
         let n = v.len() as f64;
-        let e: Vec<f64> = v.iter().map(|vi| (-vi / vs).exp()).collect();
+        let e: Vec<f64> = v.iter().map(|vi| (-(vi.abs() / vs).powf(shape_exponent)).exp()).collect();
         let (se, see) = (e.iter().sum::<f64>(), e.iter().map(|x| x * x).sum::<f64>());
         let (sy, sey) = (y.iter().sum::<f64>(), e.iter().zip(y).map(|(a, b)| a * b).sum::<f64>());
         let det = n * see - se * se;
@@ -208,5 +220,5 @@ pub fn fit_weakening(v: &[f64], y: &[f64], vs_min: f64, vs_max: f64) -> Result<W
     let (a, b, rmse) = linear(vs);
     let mean = y.iter().sum::<f64>() / y.len() as f64;
     let rmse_constant = (y.iter().map(|yi| (yi - mean).powi(2)).sum::<f64>() / y.len() as f64).sqrt();
-    Ok(WeakeningFit { a, b, vs, rmse, rmse_constant, points: v.len(), converged: ib > 0 && ib < grid })
+    Ok(WeakeningFit { shape_exponent, a, b, vs, rmse, rmse_constant, points: v.len(), converged: ib > 0 && ib < grid })
 }

@@ -190,9 +190,14 @@ fn weakening_fit_recovers_known_law_and_severity_conventions() {
     use rig_spectra::stickslip::*;
     let v: Vec<f64> = (1..400).map(|i| i as f64 * 0.5).collect();
     let y: Vec<f64> = v.iter().map(|vi| 1.2 + 0.9 * (-vi / 17.0).exp()).collect();
-    let f = fit_weakening(&v, &y, 0.5, 500.0).unwrap();
+    let f = fit_weakening(&v, &y, 1.0, 0.5, 500.0).unwrap();
     assert!((f.a - 1.2).abs() < 1e-6 && (f.b - 0.9).abs() < 1e-6 && (f.vs - 17.0).abs() < 1e-4, "{f:?}");
     assert!(f.converged && (f.static_over_kinetic() - 1.75).abs() < 1e-6);
+    // Gaussian (Stribeck) shape, with the exponential fit clearly worse on it.
+    let y: Vec<f64> = v.iter().map(|vi| 0.5 + 2.0 * (-(vi / 60.0).powi(2)).exp()).collect();
+    let g = fit_weakening(&v, &y, 2.0, 0.5, 500.0).unwrap();
+    assert!((g.a - 0.5).abs() < 1e-6 && (g.b - 2.0).abs() < 1e-6 && (g.vs - 60.0).abs() < 1e-4, "{g:?}");
+    assert!(fit_weakening(&v, &y, 1.0, 0.5, 500.0).unwrap().rmse > 10.0 * g.rmse.max(1e-9));
     let s = severity(&[0.0, 100.0, 200.0]);
     assert_eq!((s.half_range_over_mean, s.range_over_mean), (1.0, 2.0));
     let b = bin_means(&[0.5, 1.5, 1.6], &[1.0, 2.0, 4.0], 0.0, 3.0, 3);
