@@ -17,6 +17,10 @@ fn bench(c: &mut Criterion) {
     c.bench_function("rig model 40 s, 40 rpm, 15 N, default tol", |b| {
         b.iter(|| simulate_with_stats(black_box(&p), black_box(&input), black_box(&t), &o).unwrap())
     });
+    let last = [40.0];
+    c.bench_function("rig model 40 s, 40 rpm, 15 N, default tol, one sample", |b| {
+        b.iter(|| simulate_with_stats(black_box(&p), black_box(&input), black_box(&last), &o).unwrap())
+    });
     let thesis = common::thesis_params();
     c.bench_function("thesis model 40 s, 40 rpm, 15 N, default tol", |b| {
         b.iter(|| simulate_with_stats(black_box(&thesis), black_box(&input), black_box(&t), &o).unwrap())

@@ -107,12 +107,14 @@ pub(crate) struct Dopri {
     pub n_reject: u64,
 }
 
-fn axpy(y: &Vector, h: f64, terms: &[(f64, &Vector)]) -> Vector {
+/// y + h Σ a_s k_s; fixed arity so the compiler unrolls the stage sum.
+#[inline(always)]
+fn axpy<const S: usize>(y: &Vector, h: f64, a: [f64; S], k: [&Vector; S]) -> Vector {
     let mut out = *y;
     for j in 0..DIM {
         let mut s = 0.0;
-        for (a, k) in terms {
-            s += a * k[j];
+        for i in 0..S {
+            s += a[i] * k[i][j];
         }
         out[j] += h * s;
     }
@@ -148,7 +150,7 @@ impl Dopri {
         let d1 = (k1.iter().enumerate().map(|(j, v)| (v / sc(j)).powi(2)).sum::<f64>() / DIM as f64).sqrt();
         let h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
         let h0 = h0.min(self.max_step).min(span);
-        let y1 = axpy(y, h0, &[(1.0, k1)]);
+        let y1 = axpy(y, h0, [1.0], [k1]);
         let k2 = f(t + h0, &y1);
         let d2 = (k2.iter().zip(k1).enumerate().map(|(j, (a, b))| ((a - b) / sc(j)).powi(2)).sum::<f64>() / DIM as f64)
             .sqrt()
@@ -191,12 +193,12 @@ impl Dopri {
             if h <= 16.0 * f64::EPSILON * t.abs().max(1.0) && !last {
                 return Err(StepFailure::StepTooSmall { h });
             }
-            let k2 = f(t + C2 * h, &axpy(y, h, &[(A21, &k1)]));
-            let k3 = f(t + C3 * h, &axpy(y, h, &[(A31, &k1), (A32, &k2)]));
-            let k4 = f(t + C4 * h, &axpy(y, h, &[(A41, &k1), (A42, &k2), (A43, &k3)]));
-            let k5 = f(t + C5 * h, &axpy(y, h, &[(A51, &k1), (A52, &k2), (A53, &k3), (A54, &k4)]));
-            let k6 = f(t + h, &axpy(y, h, &[(A61, &k1), (A62, &k2), (A63, &k3), (A64, &k4), (A65, &k5)]));
-            let y1 = axpy(y, h, &[(A71, &k1), (A73, &k3), (A74, &k4), (A75, &k5), (A76, &k6)]);
+            let k2 = f(t + C2 * h, &axpy(y, h, [A21], [&k1]));
+            let k3 = f(t + C3 * h, &axpy(y, h, [A31, A32], [&k1, &k2]));
+            let k4 = f(t + C4 * h, &axpy(y, h, [A41, A42, A43], [&k1, &k2, &k3]));
+            let k5 = f(t + C5 * h, &axpy(y, h, [A51, A52, A53, A54], [&k1, &k2, &k3, &k4]));
+            let k6 = f(t + h, &axpy(y, h, [A61, A62, A63, A64, A65], [&k1, &k2, &k3, &k4, &k5]));
+            let y1 = axpy(y, h, [A71, A73, A74, A75, A76], [&k1, &k3, &k4, &k5, &k6]);
             let t1 = if last { t_stop } else { t + h };
             let k7 = f(t1, &y1);
             self.n_eval += 6;

@@ -60,14 +60,33 @@ pub(crate) struct System<'a> {
     pub n0: f64,
     /// Gear ratio n.
     gear: f64,
-    /// Reflected motor inertia n² J_m at the shaft.
-    j_motor: f64,
+    /// 1 / (n² J_m): reflected motor inertia at the shaft, inverted once.
+    inv_j_motor: f64,
+    inv_j1: f64,
+    inv_inductance: f64,
+    /// Back-EMF at the shaft n·k_e and viscous loss at the shaft n²·C_m.
+    ke_shaft: f64,
+    cm_shaft: f64,
+    /// Whether any effect, harmonic term or cogging is present (skips their loops).
+    plain: bool,
 }
 
 impl<'a> System<'a> {
     pub fn new(p: &'a RigParams, drive: Drive, n0: f64) -> Self {
         let gear = p.motor.gear_ratio;
-        System { p, kind: p.kind, drive, n0, gear, j_motor: gear * gear * p.motor.inertia_kgm2 }
+        System {
+            p,
+            kind: p.kind,
+            drive,
+            n0,
+            gear,
+            inv_j_motor: 1.0 / (gear * gear * p.motor.inertia_kgm2),
+            inv_j1: 1.0 / p.rotor_inertia_kgm2,
+            inv_inductance: 1.0 / p.motor.inductance_h,
+            ke_shaft: gear * p.motor.voltage_constant_v_s_rad,
+            cm_shaft: gear * gear * p.motor.speed_regulation_nm_s_rad,
+            plain: p.effects.is_empty() && p.harmonic.is_none(),
+        }
     }
 
     /// Whether friction can act at all (brake closed).
@@ -124,12 +143,19 @@ impl<'a> System<'a> {
     }
 
     pub fn normal_force_n(&self, t: f64, y: &Vector) -> f64 {
+        if self.plain {
+            return self.n0;
+        }
         normal_force_n(self.n0, &self.p.effects, self.p.harmonic.as_ref(), t, y[PHI1])
+    }
+
+    fn torque_factor(&self, t: f64) -> f64 {
+        if self.plain { 1.0 } else { torque_factor(self.p.harmonic.as_ref(), t) }
     }
 
     /// Stick threshold μs·N·r (× |sin ω_p t| under Eq. 4-11 as published).
     pub fn stick_limit_nm(&self, t: f64, y: &Vector) -> f64 {
-        let factor = torque_factor(self.p.harmonic.as_ref(), t).abs();
+        let factor = self.torque_factor(t).abs();
         static_mu(&self.p.friction) * self.normal_force_n(t, y) * self.p.brake_disc_radius_m * factor
     }
 
@@ -138,7 +164,7 @@ impl<'a> System<'a> {
         if !self.brake_closed() {
             return 0.0;
         }
-        let nr = self.normal_force_n(t, y) * self.p.brake_disc_radius_m * torque_factor(self.p.harmonic.as_ref(), t);
+        let nr = self.normal_force_n(t, y) * self.p.brake_disc_radius_m * self.torque_factor(t);
         match (self.kind, mode) {
             // Eq. 4-10 (or 4-11) as published: a signed lookup, no stick phase.
             (ModelKind::Thesis, _) => match &self.p.friction {
@@ -167,10 +193,9 @@ impl<'a> System<'a> {
     /// n·(k_T i − T_f − C_m·n·Ω2) + cogging (Eq. 4-6b with the gear made explicit).
     pub fn motor_drive_torque_nm(&self, y: &Vector) -> f64 {
         let m = &self.p.motor;
-        let armature = m.torque_constant_nm_a * y[CUR]
-            - self.motor_friction_nm(y[W2])
-            - m.speed_regulation_nm_s_rad * self.gear * y[W2];
-        self.gear * armature + cogging_nm(&self.p.effects, y[PHI2])
+        let shaft =
+            self.gear * (m.torque_constant_nm_a * y[CUR] - self.motor_friction_nm(y[W2])) - self.cm_shaft * y[W2];
+        if self.plain { shaft } else { shaft + cogging_nm(&self.p.effects, y[PHI2]) }
     }
 
     /// dq/dt (Eq. 4-9 made consistent, q = [φ1 φ2 Ω1 Ω2 i ∫e]).
@@ -181,11 +206,11 @@ impl<'a> System<'a> {
         let ts = self.shaft_torque_nm(y);
         let mut dy = [0.0; DIM];
         // Eq. 4-6a with the back-EMF of the armature speed n·Ω2.
-        dy[CUR] = (v - m.resistance_ohm * y[CUR] - m.voltage_constant_v_s_rad * self.gear * y[W2]) / m.inductance_h;
+        dy[CUR] = (v - m.resistance_ohm * y[CUR] - self.ke_shaft * y[W2]) * self.inv_inductance;
         dy[INT] = int_rate;
         // Eq. 4-7, second row, at the shaft: n² J_m Ω̇2 = n(k_T i − T_f − C_m n Ω2) − T_shaft.
         dy[PHI2] = y[W2];
-        dy[W2] = (self.motor_drive_torque_nm(y) - ts) / self.j_motor;
+        dy[W2] = (self.motor_drive_torque_nm(y) - ts) * self.inv_j_motor;
         if mode == Mode::Stick {
             return dy;
         }
@@ -195,7 +220,7 @@ impl<'a> System<'a> {
             ModelKind::Rig => 0.0,
         };
         dy[PHI1] = y[W1];
-        dy[W1] = (ts - absolute_damping - self.friction_torque_nm(mode, t, y)) / p.rotor_inertia_kgm2;
+        dy[W1] = (ts - absolute_damping - self.friction_torque_nm(mode, t, y)) * self.inv_j1;
         dy
     }
 
