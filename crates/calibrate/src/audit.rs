@@ -779,7 +779,96 @@ fn motor_and_friction(a: &mut Audit, t: &ThesisTables) -> Result<(), CalibrateEr
             ),
         );
     }
+    // Table 4.7's μ_neg set-point "≤ 0" against Eq. 4-10's "Ω1 < 0".
+    let neg = t.friction("mu_neg")?;
+    if neg.setpoint_relation != EQ_4_10_NEG_RELATION {
+        a.flag(
+            "table-4-7",
+            "mu_neg",
+            "setpoint_relation",
+            format!("{} {}", neg.setpoint_relation, fmt_printed(neg.setpoint_rpm)),
+            format!("{EQ_4_10_NEG_RELATION} 0 (Eq. 4-10)"),
+            format!(
+                "Table 4.7 applies μ_neg for speeds {} {}, Eq. 4-10 for Ω1 {EQ_4_10_NEG_RELATION} 0: at Ω1 = 0 the table says μ_neg \
+                 and the equation μ_st",
+                neg.setpoint_relation,
+                fmt_printed(neg.setpoint_rpm)
+            ),
+        );
+    }
+    // C = 2 ξ √(J1 K) (text under Eq. 4-9) with Table 4.5's J1, K: the printed ξ against Eq. 4-2b's.
+    let m42 = t.table_4_2.iter().find(|r| r.trial == "mean").ok_or_else(|| missing_row("table-4-2.csv", "mean"))?;
+    let (j1, k1) = (t.t45("J_1")?.value, t.t45("K_s")?.value);
+    let c_printed = 2.0 * m42.damping_ratio.value * (j1 * k1).sqrt();
+    let c_eq = 2.0 * f::damping_ratio(m42.log_decrement.value) * (j1 * k1).sqrt();
+    a.note(
+        "eq-4-7",
+        "C",
+        "2 ξ √(J_1 K_s)",
+        "not printed".into(),
+        format!("{} / {}", fmt_fixed(c_printed, 5), fmt_fixed(c_eq, 5)),
+        format!(
+            "with Table 4.5's J_1, K_s the damping C is {c_printed:.5} N·m·s/rad from the printed mean ξ = {} but {c_eq:.5} from \
+             ξ of Eq. 4-2b ({:.2} times less): the model's damping inherits Table 4.2's ξ error",
+            fmt_printed(m42.damping_ratio),
+            c_printed / c_eq
+        ),
+    );
+    eq_4_9(a);
     Ok(())
+}
+
+/// Eq. 4-10's third case as printed: μ_neg if Ω1 < 0.
+const EQ_4_10_NEG_RELATION: &str = "<";
+
+/// Eq. 4-9 as printed (a transcription, no judgement): the state vector, and
+/// each printed row of A as (row height, entries with their column widths;
+/// −J⁻¹K and −J⁻¹C are 2×2 blocks), and F.
+const EQ_4_9_Q: [&str; 5] = ["φ1", "φ2", "Ω1", "Ω2", "i"];
+const EQ_4_9_A: [(usize, &[(&str, usize)]); 4] = [
+    (1, &[("0", 1), ("0", 1), ("1", 1), ("0", 1), ("0", 1)]),
+    (1, &[("0", 1), ("0", 1), ("0", 1), ("1", 1), ("0", 1)]),
+    (2, &[("-J^-1 K", 2), ("-J^-1 C", 2), ("0", 1), ("0", 1), ("0", 1)]),
+    (1, &[("0", 1), ("0", 1), ("0", 1), ("-k_e/L", 1), ("-R/L", 1)]),
+];
+const EQ_4_9_F: [&str; 5] = ["0", "0", "-T_1/J_1", "-T_f/J_m", "V/L"];
+
+/// Shape and coupling of Eq. 4-9's state space against its own state vector and Eq. 4-7.
+fn eq_4_9(a: &mut Audit) {
+    let n = EQ_4_9_Q.len();
+    let height: usize = EQ_4_9_A.iter().map(|(h, _)| h).sum();
+    for (i, (_, row)) in EQ_4_9_A.iter().enumerate() {
+        let width: usize = row.iter().map(|(_, w)| w).sum();
+        if width != n || height != n {
+            let printed: Vec<&str> = row.iter().map(|(e, _)| *e).collect();
+            a.flag(
+                "eq-4-9",
+                &format!("A row {}", i + 1),
+                "columns",
+                printed.join(" "),
+                format!("{width} columns for {n} states"),
+                format!(
+                    "A is printed {height} rows high, but this row spans {width} columns (2×2 blocks −J⁻¹K and −J⁻¹C plus three \
+                     zeros) for a state vector of {n}; which block column multiplies which state is ambiguous"
+                ),
+            );
+        }
+    }
+    // Eq. 4-7 drives the motor inertia with k_T i; Eq. 4-9 must carry k_T somewhere in A or F.
+    let has_kt = EQ_4_9_A.iter().flat_map(|(_, r)| r.iter()).any(|(e, _)| e.contains("k_T"))
+        || EQ_4_9_F.iter().any(|e| e.contains("k_T"));
+    if !has_kt {
+        a.flag(
+            "eq-4-9",
+            "A, F",
+            "k_T i",
+            format!("F = [{}]", EQ_4_9_F.join(", ")),
+            "no k_T term".into(),
+            "Eq. 4-7's motor torque k_T i appears nowhere in Eq. 4-9's A or F, so in the printed state space the current i \
+             never drives Ω2 (and the motor equation 4-6b is decoupled from the mechanics)"
+                .into(),
+        );
+    }
 }
 
 fn table_4_8(a: &mut Audit, t: &ThesisTables) -> Result<(), CalibrateError> {
