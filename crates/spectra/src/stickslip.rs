@@ -154,6 +154,8 @@ pub struct WeakeningFit {
     pub points: usize,
     /// False when the best vs sits on the edge of the scanned range (no interior optimum).
     pub converged: bool,
+    /// True when the unconstrained optimum had a < 0 and a was held at 0.
+    pub a_at_bound: bool,
 }
 
 impl WeakeningFit {
@@ -167,8 +169,10 @@ impl WeakeningFit {
     }
 }
 
-/// For fixed vs the model is linear in (a, b): least squares in closed form;
-/// vs is scanned on a log grid over [vs_min, vs_max] and refined by golden section.
+/// For fixed vs the model is linear in (a, b): least squares in closed form,
+/// with a ≥ 0 enforced (a negative kinetic level would make friction drive the
+/// rotor at high speed); vs is scanned on a log grid over [vs_min, vs_max] and
+/// refined by golden section.
 pub fn fit_weakening(
     v: &[f64],
     y: &[f64],
@@ -193,8 +197,12 @@ pub fn fit_weakening(
         let (se, see) = (e.iter().sum::<f64>(), e.iter().map(|x| x * x).sum::<f64>());
         let (sy, sey) = (y.iter().sum::<f64>(), e.iter().zip(y).map(|(a, b)| a * b).sum::<f64>());
         let det = n * see - se * se;
-        let (a, b) =
+        let (mut a, mut b) =
             if det.abs() > 1e-300 { ((see * sy - se * sey) / det, (n * sey - se * sy) / det) } else { (sy / n, 0.0) };
+        if a < 0.0 {
+            // Constrained optimum on the boundary a = 0: y ≈ b e.
+            (a, b) = (0.0, sey / see.max(1e-300));
+        }
         let sse: f64 = e.iter().zip(y).map(|(ei, yi)| (yi - a - b * ei).powi(2)).sum();
         (a, b, (sse / n).sqrt())
     };
@@ -218,7 +226,18 @@ pub fn fit_weakening(
     }
     let vs = (0.5 * (lo + hi)).exp();
     let (a, b, rmse) = linear(vs);
+    let a_at_bound = a == 0.0;
     let mean = y.iter().sum::<f64>() / y.len() as f64;
     let rmse_constant = (y.iter().map(|yi| (yi - mean).powi(2)).sum::<f64>() / y.len() as f64).sqrt();
-    Ok(WeakeningFit { shape_exponent, a, b, vs, rmse, rmse_constant, points: v.len(), converged: ib > 0 && ib < grid })
+    Ok(WeakeningFit {
+        shape_exponent,
+        a,
+        b,
+        vs,
+        rmse,
+        rmse_constant,
+        points: v.len(),
+        converged: ib > 0 && ib < grid,
+        a_at_bound,
+    })
 }

@@ -198,6 +198,10 @@ fn weakening_fit_recovers_known_law_and_severity_conventions() {
     let g = fit_weakening(&v, &y, 2.0, 0.5, 500.0).unwrap();
     assert!((g.a - 0.5).abs() < 1e-6 && (g.b - 2.0).abs() < 1e-6 && (g.vs - 60.0).abs() < 1e-4, "{g:?}");
     assert!(fit_weakening(&v, &y, 1.0, 0.5, 500.0).unwrap().rmse > 10.0 * g.rmse.max(1e-9));
+    // A law with a negative level (vs pinned at its true 100): a is held at 0.
+    let y: Vec<f64> = v.iter().map(|vi| -0.5 + 2.0 * (-(vi / 100.0).powi(2)).exp()).collect();
+    let h = fit_weakening(&v, &y, 2.0, 99.99, 100.01).unwrap();
+    assert!(h.a == 0.0 && h.a_at_bound && h.b > 0.0, "{h:?}");
     let s = severity(&[0.0, 100.0, 200.0]);
     assert_eq!((s.half_range_over_mean, s.range_over_mean), (1.0, 2.0));
     let b = bin_means(&[0.5, 1.5, 1.6], &[1.0, 2.0, 4.0], 0.0, 3.0, 3);
