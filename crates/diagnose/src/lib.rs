@@ -141,3 +141,15 @@ pub fn diagnose(
     }
     Ok(d)
 }
+
+/// The whole blind chain on a campaign: calibrate (rig-calibrate) → diagnose.
+/// Reads nothing but the campaign (recordings + campaign.toml).
+/// `thesis_mu_dynamic` is Table 4.7's μ_dyn for the thesis rung of the ladder.
+pub fn diagnose_campaign(
+    c: &rig_types::Campaign,
+    thesis_mu_dynamic: Option<f64>,
+    opts: &DiagnoseOptions,
+) -> Result<Diagnosis, DiagnoseError> {
+    let cal = rig_calibrate::calibrate_campaign(c).map_err(|e| DiagnoseError::Calibration(e.to_string()))?;
+    diagnose(c, &cal, None, thesis_mu_dynamic, opts)
+}
