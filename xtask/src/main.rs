@@ -1,2 +1,47 @@
-//! cargo xtask entry point (see README).
-fn main() {}
+//! `cargo xtask`: parses flags and calls rig-pipeline; computes nothing itself.
+//! One match, one module per command.
+
+mod diff;
+mod graph;
+mod reproduce;
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(name = "cargo xtask", about = "rig-lab tasks: reproduce the reports, print the DAG, diff against a revision")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run the pipeline.toml DAG (only what changed) into the out dir.
+    Reproduce(reproduce::Args),
+    /// Print the stage DAG as Mermaid (default) or Graphviz DOT.
+    Graph(graph::Args),
+    /// Compare every table and figure series with a git revision.
+    Diff(diff::Args),
+}
+
+/// The workspace root: pipeline.toml lives there, and the default paths are relative to it.
+fn workspace_root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn main() -> std::process::ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Reproduce(args) => reproduce::run(args),
+        Command::Graph(args) => graph::run(args),
+        Command::Diff(args) => diff::run(args),
+    };
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}

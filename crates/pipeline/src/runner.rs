@@ -269,9 +269,11 @@ impl Runner {
                         bar.inc(1);
                         continue;
                     }
+                    // Dry run: a data input from a stage that would run may change (`after` carries no data).
                     let upstream_runs: Vec<String> = decl
                         .dependencies()
                         .into_iter()
+                        .filter(|d| !decl.after.contains(d) || decl.inputs.iter().any(|i| reads_from(i, d)))
                         .filter(|d| done.get(d).is_some_and(|r| matches!(r.outcome, Outcome::WouldRun)))
                         .collect();
                     running.insert(name.clone());
@@ -442,6 +444,10 @@ impl Runner {
         store::save_record(&dirs.out, &record)?;
         Ok(Some(record))
     }
+}
+
+fn reads_from(input: &Input, stage: &str) -> bool {
+    matches!(input, Input::Upstream { stage: s, .. } if s == stage)
 }
 
 /// `{campaign}/x` etc. against the run's folders; other paths against the pipeline.toml folder.

@@ -1,0 +1,45 @@
+//! `cargo xtask reproduce`: runs the DAG through `rig_pipeline::Runner`.
+
+use anyhow::Result;
+use rig_pipeline::Runner;
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Campaign folder (rig-campaign/1 format); default: settings.campaign of pipeline.toml.
+    #[arg(long)]
+    campaign: Option<PathBuf>,
+    /// Out dir; default: settings.out of pipeline.toml (reports/).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Stages run at once, and the size of the thread pool inside stages.
+    #[arg(long, default_value_t = 2)]
+    jobs: usize,
+    /// List what would run and why; run nothing.
+    #[arg(long)]
+    dry_run: bool,
+    /// Print for each stage why it runs or is skipped.
+    #[arg(long)]
+    why: bool,
+    /// Run only this stage and what it depends on (repeatable).
+    #[arg(long)]
+    only: Vec<String>,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let toml = super::workspace_root().join("pipeline.toml");
+    let only: Vec<&str> = args.only.iter().map(String::as_str).collect();
+    let mut runner = Runner::new(&toml)?.jobs(args.jobs).dry_run(args.dry_run).only(&only).progress(true);
+    if let Some(c) = &args.campaign {
+        runner = runner.campaign(c);
+    }
+    if let Some(o) = &args.out {
+        runner = runner.out(o);
+    }
+    let report = runner.run()?;
+    eprint!("{}", report.summary(args.why || args.dry_run));
+    if let Some(m) = &report.manifest {
+        eprintln!("manifest: {}", m.display());
+    }
+    report.into_result().map(|_| ())
+}
