@@ -49,6 +49,24 @@ impl InitialValues {
     }
 }
 
+impl InitialValues {
+    /// From `data/thesis.json` (Table 4.4 as the thesis-tables stage wrote it).
+    pub fn from_thesis_data(t: &rig_calibrate::ThesisData) -> Self {
+        let m = &t.motor_initial;
+        InitialValues {
+            motor_inertia_kgm2: m.inertia_kgm2,
+            inductance_h: m.inductance_h,
+            resistance_ohm: m.resistance_ohm,
+            torque_constant_nm_a: m.torque_constant_nm_a,
+            voltage_constant_v_s_rad: m.voltage_constant_v_s_rad,
+            friction_torque_nm: m.friction_torque_nm,
+            speed_regulation_nm_s_rad: m.speed_regulation_nm_s_rad,
+            rotor_inertia_kgm2: t.rotor_inertia_initial_kgm2,
+            shaft_stiffness_nm_rad: t.shaft_stiffness_initial_nm_rad,
+        }
+    }
+}
+
 /// Which solver minimises the voltage-step misfit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -99,7 +117,7 @@ impl EstimateOptions {
             solver_kind: SolverKind::LevenbergMarquardt,
             holdout: None,
             speed_window_samples: 25,
-            step_residual: StepResidual::Angle,
+            step_residual: StepResidual::Speed,
             sim_rtol: 1e-7,
             sim_atol: 1e-9,
             sim_max_step_s: 0.01,

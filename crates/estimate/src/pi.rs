@@ -20,8 +20,25 @@ use rig_types::{Campaign, RunKind};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::TAU;
 
+/// How the encoder quantisation in the regressors is handled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PiMethod {
+    /// Corrected least squares: subtract the known quantisation variance
+    /// (Δ²/12 per encoder sample, independent between samples while the
+    /// motor turns) from the normal equations.
+    CorrectedLs,
+    /// Instrumental variables: ē instrumented by the mean error over the
+    /// window widened by half a window on each side.
+    Iv,
+    /// Plain least squares, ignoring the quantisation (biased: kp attenuated);
+    /// kept to show the size of the correction.
+    Ols,
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PiOptions {
+    pub method: PiMethod,
     /// Samples per averaging window. Long windows keep the encoder
     /// quantisation in ē small against ē's own variation: at 1000 counts/rev
     /// the round-trip test gives kp −7 % at 25 samples, within 0.1 % at 100.
@@ -34,7 +51,12 @@ pub struct PiOptions {
 
 impl Default for PiOptions {
     fn default() -> Self {
-        PiOptions { window_samples: 100, saturation_margin_v: 0.5, min_segment_windows: 4 }
+        PiOptions {
+            method: PiMethod::CorrectedLs,
+            window_samples: 250,
+            saturation_margin_v: 0.5,
+            min_segment_windows: 4,
+        }
     }
 }
 
@@ -165,10 +187,20 @@ pub fn estimate_pi(c: &Campaign, limit_v: f64, opts: &PiOptions) -> Result<PiEst
         .collect();
     // ē = (I(b) − I(a))/Δt carries the encoder quantisation of φ2 at both
     // ends; as a regressor that attenuates kp (errors in variables: −20 % in
-    // the round-trip test with plain least squares). Instrumental variables
-    // with the widened-window mean error remove it without assuming the
-    // quantisation variance.
-    let fit = linreg::iv(&x, &z, &y, "PI gains: V = kp·e + ki·∫e + offsets")?;
+    // the round-trip test with plain least squares).
+    let fit = match opts.method {
+        PiMethod::CorrectedLs => {
+            // Var of ē: 2·(Δ²/12)/Δt²; of Ī (trapezoid mean of w + 1 samples): ≈ (Δ²/12)/(w + 1).
+            let q = (TAU / c.rig.encoder_ticks_per_rev as f64).powi(2) / 12.0;
+            let dt = w as f64 / c.rig.sample_rate_hz;
+            let mut noise_var = vec![0.0; p];
+            noise_var[0] = 2.0 * q / (dt * dt);
+            noise_var[1] = q / (w + 1) as f64;
+            linreg::ols_eiv(&x, &y, &noise_var, "PI gains: V = kp·e + ki·∫e + offsets")?
+        }
+        PiMethod::Iv => linreg::iv(&x, &z, &y, "PI gains: V = kp·e + ki·∫e + offsets")?,
+        PiMethod::Ols => linreg::ols(&x, &y, "PI gains: V = kp·e + ki·∫e + offsets")?,
+    };
     Ok(PiEstimate {
         kp_v_s_rad: fit.beta[0],
         kp_stderr: fit.stderr[0],

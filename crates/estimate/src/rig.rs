@@ -14,8 +14,8 @@ use crate::report::{
     nrmse, whiteness,
 };
 use crate::steps::{
-    FREE, HELD, StepData, StepProblem, StepResidual, coupled_mode, get_param, scales_with_torque, simulate_step, split,
-    step_data, unit_of,
+    FREE, HELD, StepData, StepProblem, coupled_mode, get_param, scales_with_torque, simulate_step, split, step_data,
+    unit_of,
 };
 use rayon::prelude::*;
 use rig_calibrate::CampaignCalibration;
@@ -316,9 +316,8 @@ pub fn estimate_rig(
     }
     let white = whiteness(&segments, o.whiteness_max_lag);
     let m = sol.residuals.len();
-    // k: free parameters, the noise variance, and the two angle offsets per step.
-    let offsets = if o.step_residual == StepResidual::Angle { 2 * problem.steps.len() } else { 0 };
-    let (aic, bic) = aic_bic(sol.ssr, m, FREE.len() + 1 + offsets);
+    // k: free parameters and the noise variance.
+    let (aic, bic) = aic_bic(sol.ssr, m, FREE.len() + 1);
 
     let pi = estimate_pi(c, c.rig.supply_voltage_v, &o.pi)?;
     let friction = estimate_friction(c, cal.force_offset_mv, cal.force_factor_mv_per_n, &o.friction)?;

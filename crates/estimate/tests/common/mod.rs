@@ -13,7 +13,6 @@ use rig_types::{
 use std::f64::consts::TAU;
 
 pub const TICKS: u32 = 1000;
-thread_local! { pub static TICKS_OVERRIDE: std::cell::Cell<u32> = const { std::cell::Cell::new(TICKS) }; }
 pub const FORCE_FACTOR_MV_N: f64 = 214.0;
 pub const FORCE_OFFSET_MV: f64 = 3.5;
 pub const VOLTAGE_NOISE_V: f64 = 0.02;
@@ -36,7 +35,8 @@ pub fn truth() -> RigParams {
             speed_regulation_nm_s_rad: 1.8e-4,
             gear_ratio: 8.0,
         },
-        drive: DriveParams { kp_v_s_rad: 1.5, ki_v_rad: 6.0, limit_v: 24.0 },
+        // A stiff speed loop like the campaign's drive appears to be (kp ~ 4, ki ~ 40).
+        drive: DriveParams { kp_v_s_rad: 4.0, ki_v_rad: 40.0, limit_v: 24.0 },
         friction: FrictionLaw::Coulomb { mu_static: 1.5, mu_kinetic: 1.1 },
         brake_disc_radius_m: 0.062,
         effects: vec![],
@@ -45,8 +45,7 @@ pub fn truth() -> RigParams {
 }
 
 fn ticks(angle: &[f64]) -> Vec<i64> {
-    let t = TICKS_OVERRIDE.with(|c| c.get()) as f64;
-    angle.iter().map(|a| (a * t / TAU).floor() as i64).collect()
+    angle.iter().map(|a| (a * TICKS as f64 / TAU).floor() as i64).collect()
 }
 
 fn times(duration_s: f64, rate_hz: f64) -> Vec<f64> {
@@ -145,7 +144,7 @@ pub fn campaign(p: &RigParams, volts: &[f64], step_s: f64, ops: &[(f64, f64)], o
         name: format!("synthetic-{seed}"),
         description: "round-trip test campaign".into(),
         rig: RigInfo {
-            encoder_ticks_per_rev: TICKS_OVERRIDE.with(|c| c.get()),
+            encoder_ticks_per_rev: TICKS,
             brake_disc_radius_m: p.brake_disc_radius_m,
             supply_voltage_v: p.drive.limit_v,
             sample_rate_hz: 500.0,
