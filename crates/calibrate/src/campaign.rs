@@ -8,7 +8,7 @@ use crate::{CalibrateError, formulas};
 use rig_types::{Campaign, Run, RunKind};
 use serde::{Deserialize, Serialize};
 
-/// Confidence level of every interval reported here.
+/// Default confidence level of every interval reported here.
 pub const CONFIDENCE: f64 = 0.95;
 
 /// One force_calibration run: the sensor's mean output under a known load.
@@ -81,6 +81,7 @@ pub struct CampaignCalibration {
     pub rotor_inertia_kgm2: f64,
     pub rotor_inertia_kgm2_stderr: f64,
     pub steps: Vec<StepDecay>,
+    pub settings: CalibrationSettings,
     pub twist_settings: DecaySettings,
     pub speed_settings: DecaySettings,
 }
@@ -138,28 +139,70 @@ pub fn twist_runs(c: &Campaign) -> Result<Vec<TwistRun>, CalibrateError> {
     Ok(out)
 }
 
-/// Settings for the twist decay: one encoder tick is 2π/1000 rad, so the
-/// hysteresis is 3 ticks and pairs stop when a swing falls under 20 ticks
-/// (beyond that one tick is > 5 % of the swing). Extrema are located by a
-/// parabola over ±0.15 s, ±25° of phase at the ≈ 0.45 Hz the chapter reports. The first extremum is
-/// skipped: it is reached while the motor is still spinning up from rest, so
-/// the swing into it is forced, not free.
-pub fn twist_settings(ticks_per_rev: u32) -> DecaySettings {
-    let tick = 2.0 * std::f64::consts::PI / ticks_per_rev as f64;
-    DecaySettings {
-        smooth_half_s: 0.02,
-        peak_fit_half_s: 0.15,
-        hysteresis: 3.0 * tick,
-        min_swing: 20.0 * tick,
-        skip_extrema: 1,
+/// The knobs of the campaign calibration (pipeline.toml `[stage.params]` of
+/// `campaign-calibration`; [`Default`] holds the documented values).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CalibrationSettings {
+    /// Confidence of every interval (two-sided).
+    pub confidence: f64,
+    /// Zero-phase smoothing before the extremum search, half-width in s.
+    pub smooth_half_s: f64,
+    /// Half-width of the parabola that locates each extremum, s: ±0.15 s is
+    /// ±25° of phase at the ≈ 0.45 Hz the chapter reports.
+    pub peak_fit_half_s: f64,
+    /// Twist: an extremum is confirmed after the signal leaves it by this many
+    /// encoder ticks (3 rejects quantisation flicker on flat tops).
+    pub twist_hysteresis_ticks: f64,
+    /// Twist: pairs stop when a swing falls under this many ticks (20: beyond
+    /// that one tick is > 5 % of the swing).
+    pub twist_min_swing_ticks: f64,
+    /// Rotor-speed cross-check: the differentiator leaves ≈ 0.16 rad/s of
+    /// quantisation noise, so 0.5 rad/s hysteresis and a 3 rad/s smallest swing.
+    pub speed_hysteresis_rad_s: f64,
+    pub speed_min_swing_rad_s: f64,
+    /// Extrema skipped at the start: the first is reached while the motor is
+    /// still spinning up from rest, so the swing into it is forced, not free.
+    pub skip_extrema: usize,
+}
+
+impl Default for CalibrationSettings {
+    fn default() -> Self {
+        CalibrationSettings {
+            confidence: CONFIDENCE,
+            smooth_half_s: 0.02,
+            peak_fit_half_s: 0.15,
+            twist_hysteresis_ticks: 3.0,
+            twist_min_swing_ticks: 20.0,
+            speed_hysteresis_rad_s: 0.5,
+            speed_min_swing_rad_s: 3.0,
+            skip_extrema: 1,
+        }
     }
 }
 
-/// Settings for the rotor-speed cross-check: the differentiator leaves
-/// ≈ 0.16 rad/s of quantisation noise (signal::SPEED_HALF_WINDOW_S), so the
-/// hysteresis is 0.5 rad/s and the smallest swing used is 3 rad/s.
-pub fn speed_settings() -> DecaySettings {
-    DecaySettings { smooth_half_s: 0.02, peak_fit_half_s: 0.15, hysteresis: 0.5, min_swing: 3.0, skip_extrema: 1 }
+impl CalibrationSettings {
+    /// Decay settings for the twist, in rad for an encoder of `ticks_per_rev`.
+    pub fn twist(&self, ticks_per_rev: u32) -> DecaySettings {
+        let tick = 2.0 * std::f64::consts::PI / ticks_per_rev as f64;
+        DecaySettings {
+            smooth_half_s: self.smooth_half_s,
+            peak_fit_half_s: self.peak_fit_half_s,
+            hysteresis: self.twist_hysteresis_ticks * tick,
+            min_swing: self.twist_min_swing_ticks * tick,
+            skip_extrema: self.skip_extrema,
+        }
+    }
+
+    /// Decay settings for the rotor-speed cross-check, rad/s.
+    pub fn speed(&self) -> DecaySettings {
+        DecaySettings {
+            smooth_half_s: self.smooth_half_s,
+            peak_fit_half_s: self.peak_fit_half_s,
+            hysteresis: self.speed_hysteresis_rad_s,
+            min_swing: self.speed_min_swing_rad_s,
+            skip_extrema: self.skip_extrema,
+        }
+    }
 }
 
 /// The whole campaign-side calibration.
@@ -173,27 +216,32 @@ pub fn speed_settings() -> DecaySettings {
 /// Ω1 = Ω2 − θ̇ carries the same δ and ω_d; it is analysed too as a cross-check.
 /// J1 = K/ω_n² (Eq. 4-4) with K the campaign's static stiffness.
 pub fn calibrate_campaign(c: &Campaign) -> Result<CampaignCalibration, CalibrateError> {
+    calibrate_campaign_with(c, &CalibrationSettings::default())
+}
+
+/// [`calibrate_campaign`] with explicit settings.
+pub fn calibrate_campaign_with(c: &Campaign, s: &CalibrationSettings) -> Result<CampaignCalibration, CalibrateError> {
     let forces = force_runs(c)?;
     need("force_calibration", 3, forces.len())?;
     let loads: Vec<f64> = forces.iter().map(|f| f.load_n).collect();
     let mvs: Vec<f64> = forces.iter().map(|f| f.mean_mv).collect();
-    let force_fit = stats::fit_with_offset(&loads, &mvs, CONFIDENCE)?;
+    let force_fit = stats::fit_with_offset(&loads, &mvs, s.confidence)?;
     let ratios: Vec<f64> = forces.iter().filter_map(|f| f.ratio_mv_per_n).collect();
 
     let twists = twist_runs(c)?;
     need("static_twist", 2, twists.len())?;
     let angles: Vec<f64> = twists.iter().map(|t| t.angle_rad).collect();
     let torques: Vec<f64> = twists.iter().map(|t| t.torque_nm).collect();
-    let k_fit = stats::fit_through_origin(&angles, &torques, CONFIDENCE)?;
+    let k_fit = stats::fit_through_origin(&angles, &torques, s.confidence)?;
     let k_offset = if twists.len() >= 3 {
-        stats::fit_with_offset(&angles, &torques, CONFIDENCE)?
+        stats::fit_with_offset(&angles, &torques, s.confidence)?
     } else {
         k_fit.clone() // too few runs for an offset: repeat the origin fit (flagged by through_origin)
     };
     let k = k_fit.slope;
 
-    let tset = twist_settings(c.rig.encoder_ticks_per_rev);
-    let sset = speed_settings();
+    let tset = s.twist(c.rig.encoder_ticks_per_rev);
+    let sset = s.speed();
     let mut steps = Vec::new();
     for run in c.runs_of("voltage_step") {
         let RunKind::VoltageStep { voltage_v } = run.kind else { continue };
@@ -253,6 +301,7 @@ pub fn calibrate_campaign(c: &Campaign) -> Result<CampaignCalibration, Calibrate
         rotor_inertia_kgm2: j1,
         rotor_inertia_kgm2_stderr: j1_se,
         steps,
+        settings: s.clone(),
         twist_settings: tset,
         speed_settings: sset,
     })

@@ -5,22 +5,28 @@ use crate::campaign::CampaignCalibration;
 use crate::stats::LineFit;
 use rig_types::{Table, fmt_fixed};
 
+/// `ci95` for a 95 % interval: column names carry the level actually used.
+fn ci_tag(c: &CampaignCalibration) -> String {
+    format!("ci{}", fmt_fixed(100.0 * c.settings.confidence, 0))
+}
+
 /// Force runs (mean and spread of each run's mV, Table 4.6's ratio) and the
-/// least-squares line mV = offset + factor·N with its 95 % CI and standard errors.
+/// least-squares line mV = offset + factor·N with its CI and standard errors.
 pub fn force_table(c: &CampaignCalibration) -> Table {
+    let ci = ci_tag(c);
     let mut t = Table::new([
-        "run",
-        "load_n",
-        "mean_mv",
-        "std_mv",
-        "samples",
-        "ratio_mv_per_n",
-        "factor_mv_per_n",
-        "factor_stderr_mv_per_n",
-        "factor_ci95_low_mv_per_n",
-        "factor_ci95_high_mv_per_n",
-        "offset_mv",
-        "offset_stderr_mv",
+        "run".to_string(),
+        "load_n".into(),
+        "mean_mv".into(),
+        "std_mv".into(),
+        "samples".into(),
+        "ratio_mv_per_n".into(),
+        "factor_mv_per_n".into(),
+        "factor_stderr_mv_per_n".into(),
+        format!("factor_{ci}_low_mv_per_n"),
+        format!("factor_{ci}_high_mv_per_n"),
+        "offset_mv".into(),
+        "offset_stderr_mv".into(),
     ]);
     for r in &c.force_runs {
         t.push([
@@ -83,17 +89,18 @@ fn fit_cells(f: &LineFit) -> [String; 6] {
 
 /// Static twist runs (Table 4.3's procedure) and the stiffness fits.
 pub fn stiffness_table(c: &CampaignCalibration) -> Table {
+    let ci = ci_tag(c);
     let mut t = Table::new([
-        "run",
-        "torque_nm",
-        "angle_rad",
-        "angle_std_rad",
-        "k_nm_rad",
-        "k_stderr_nm_rad",
-        "k_ci95_low_nm_rad",
-        "k_ci95_high_nm_rad",
-        "offset_nm",
-        "offset_stderr_nm",
+        "run".to_string(),
+        "torque_nm".into(),
+        "angle_rad".into(),
+        "angle_std_rad".into(),
+        "k_nm_rad".into(),
+        "k_stderr_nm_rad".into(),
+        format!("k_{ci}_low_nm_rad"),
+        format!("k_{ci}_high_nm_rad"),
+        "offset_nm".into(),
+        "offset_stderr_nm".into(),
     ]);
     for r in &c.twist_runs {
         let mut row = vec![
@@ -115,7 +122,7 @@ pub fn stiffness_table(c: &CampaignCalibration) -> Table {
         intercept_ci: [0.0, 0.0],
         residual_std: 0.0,
         dof: 0,
-        confidence: 0.95,
+        confidence: c.settings.confidence,
         through_origin: true,
     };
     for (name, f) in

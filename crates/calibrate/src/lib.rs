@@ -13,7 +13,10 @@ pub mod stats;
 pub mod thesis;
 
 pub use audit::{AuditRow, Status};
-pub use campaign::{CampaignCalibration, ForceRun, StepDecay, TwistRun, calibrate_campaign, friction_torque_nm};
+pub use campaign::{
+    CalibrationSettings, CampaignCalibration, ForceRun, StepDecay, TwistRun, calibrate_campaign,
+    calibrate_campaign_with, friction_torque_nm,
+};
 pub use published::ThesisTables;
 pub use signal::{DecayAnalysis, DecayPair, DecaySettings, rotor_speed_rad_s};
 pub use stats::LineFit;

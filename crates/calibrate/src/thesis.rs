@@ -231,9 +231,9 @@ pub fn table_4_6_points(t: &ThesisTables) -> Vec<(f64, f64)> {
 }
 
 /// Least-squares fits through the origin and with offset (95 % CI) of (x, y) points.
-pub fn fits(points: &[(f64, f64)]) -> Result<(LineFit, LineFit), CalibrateError> {
+pub fn fits(points: &[(f64, f64)], confidence: f64) -> Result<(LineFit, LineFit), CalibrateError> {
     let (x, y): (Vec<f64>, Vec<f64>) = points.iter().copied().unzip();
-    Ok((stats::fit_through_origin(&x, &y, CONFIDENCE)?, stats::fit_with_offset(&x, &y, CONFIDENCE)?))
+    Ok((stats::fit_through_origin(&x, &y, confidence)?, stats::fit_with_offset(&x, &y, confidence)?))
 }
 
 /// Table 4.3 recomputed (K_SE = T/φ, relative error to K_sA) plus the
@@ -311,7 +311,7 @@ pub fn with_fits(
     dec: usize,
     icpt_unit: &str,
 ) -> Result<Table, CalibrateError> {
-    let (o, w) = fits(points)?;
+    let (o, w) = fits(points, CONFIDENCE)?;
     let col = tab
         .columns
         .iter()
@@ -368,7 +368,7 @@ pub fn thesis_outputs(t: &ThesisTables, rounding_tolerance: f64) -> Result<Thesi
         table_4_6: with_fits(table_4_6(t), &p46, "factor_mv_per_n", 3, "mv")?,
         audit_rows: audit::audit(t, rounding_tolerance)?,
         data: thesis_data(t)?,
-        stiffness_fits: fits(&p43)?,
-        force_fits: fits(&p46)?,
+        stiffness_fits: fits(&p43, CONFIDENCE)?,
+        force_fits: fits(&p46, CONFIDENCE)?,
     })
 }

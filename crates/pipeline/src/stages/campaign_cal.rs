@@ -4,12 +4,22 @@
 
 use crate::StageCtx;
 use anyhow::Result;
-use rig_calibrate::{calibrate_campaign, campaign_tables, figures, signal};
+use rig_calibrate::{CalibrationSettings, calibrate_campaign_with, campaign_tables, figures, signal};
 use rig_types::{RunKind, SeriesStyle};
 
 pub fn run(ctx: &mut StageCtx) -> Result<()> {
+    let settings = CalibrationSettings {
+        confidence: ctx.param_f64("confidence")?,
+        smooth_half_s: ctx.param_f64("smooth_half_s")?,
+        peak_fit_half_s: ctx.param_f64("peak_fit_half_s")?,
+        twist_hysteresis_ticks: ctx.param_f64("twist_hysteresis_ticks")?,
+        twist_min_swing_ticks: ctx.param_f64("twist_min_swing_ticks")?,
+        speed_hysteresis_rad_s: ctx.param_f64("speed_hysteresis_rad_s")?,
+        speed_min_swing_rad_s: ctx.param_f64("speed_min_swing_rad_s")?,
+        skip_extrema: ctx.param_usize("skip_extrema")?,
+    };
     let campaign = ctx.campaign()?.clone();
-    let cal = calibrate_campaign(&campaign)?;
+    let cal = calibrate_campaign_with(&campaign, &settings)?;
 
     ctx.write_table("tables/campaign-force-calibration.csv", &campaign_tables::force_table(&cal))?;
     ctx.write_table("tables/campaign-stiffness.csv", &campaign_tables::stiffness_table(&cal))?;
@@ -69,8 +79,10 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
             &format!("Shaft twist φ2 − φ1 after a {} V step, run {} (the log-decrement signal)", dec.voltage_v, dec.id),
             &format!(
                 "Twist from the two encoders (ticks difference × 2π/1000), decimated for plotting; marked: the extrema of the \
-                 pairs used (swings ≥ 20 ticks, first extremum skipped as start-up). δ = {:.4} ± {:.4}, ξ = {:.5}, \
+                 pairs used (swings ≥ {} ticks, first {} extrema skipped as start-up). δ = {:.4} ± {:.4}, ξ = {:.5}, \
                  ω_d = {:.4} rad/s, ω_n = {:.4} rad/s, J1 = K/ω_n² = {:.5} kg·m² with K = {:.4} N·m/rad.",
+                settings.twist_min_swing_ticks,
+                settings.skip_extrema,
                 dec.twist.log_decrement_mean,
                 dec.twist.log_decrement_std,
                 dec.twist.damping_ratio_mean,
@@ -88,14 +100,14 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     }
 
     let k_points: Vec<(f64, f64)> = cal.twist_runs.iter().map(|r| (r.angle_rad, r.torque_nm)).collect();
-    let (k_origin, k_offset) = rig_calibrate::thesis::fits(&k_points)?;
+    let (k_origin, k_offset) = rig_calibrate::thesis::fits(&k_points, settings.confidence)?;
     ctx.write_figure(&figures::fit_figure(
         "fig-4-10-campaign",
         "Fig. 4.10 (campaign): torque vs rotor angle in the static twist runs",
         &format!(
             "Each point: a static_twist run's known torque against its mean rotor angle (ticks × 2π/1000). Lines: least \
-             squares through the origin (K = {:.4} N·m/rad, 95 % CI {:.4} to {:.4}) and with an offset (K = {:.4}, offset {:.5} N·m).",
-            k_origin.slope, k_origin.slope_ci[0], k_origin.slope_ci[1], k_offset.slope, k_offset.intercept
+             squares through the origin (K = {:.4} N·m/rad, {:.0} % CI {:.4} to {:.4}) and with an offset (K = {:.4}, offset {:.5} N·m).",
+            k_origin.slope, 100.0 * settings.confidence, k_origin.slope_ci[0], k_origin.slope_ci[1], k_offset.slope, k_offset.intercept
         ),
         ("angle [rad]", "torque [N·m]"),
         &k_points,
@@ -104,16 +116,17 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
         (4, 4),
     ))?;
     let f_points: Vec<(f64, f64)> = cal.force_runs.iter().map(|r| (r.load_n, r.mean_mv)).collect();
-    let (f_origin, f_offset) = rig_calibrate::thesis::fits(&f_points)?;
+    let (f_origin, f_offset) = rig_calibrate::thesis::fits(&f_points, settings.confidence)?;
     ctx.write_figure(&figures::fit_figure(
         "fig-4-14-campaign",
         "Fig. 4.14 (campaign): force-sensor voltage vs load",
         &format!(
             "Each point: a force_calibration run's known load against its mean sensor voltage. Lines: least squares through \
-             the origin ({:.3} mV/N) and with an offset ({:.3} mV/N, 95 % CI {:.3} to {:.3}; offset {:.3} ± {:.3} mV), the \
+             the origin ({:.3} mV/N) and with an offset ({:.3} mV/N, {:.0} % CI {:.3} to {:.3}; offset {:.3} ± {:.3} mV), the \
              calibration used to turn brake_force_mv into newtons.",
             f_origin.slope,
             f_offset.slope,
+            100.0 * settings.confidence,
             f_offset.slope_ci[0],
             f_offset.slope_ci[1],
             f_offset.intercept,
