@@ -47,6 +47,7 @@ pub mod features;
 mod linalg;
 pub mod lines;
 pub mod prepare;
+pub mod render;
 mod report;
 mod select;
 
@@ -82,6 +83,9 @@ pub struct DiagnoseOptions {
     pub max_order: u32,
     /// Order-line power over its local floor that counts as a line.
     pub line_ratio: f64,
+    /// Estimate the baseline and simulate every operating point free-run for
+    /// the feature comparison (needs the thesis' initial values).
+    pub free_run: bool,
 }
 
 impl Default for DiagnoseOptions {
@@ -100,6 +104,7 @@ impl Default for DiagnoseOptions {
             freq_step_hz: 0.01,
             max_order: 8,
             line_ratio: 25.0,
+            free_run: true,
         }
     }
 }
@@ -142,14 +147,27 @@ pub fn diagnose(
     Ok(d)
 }
 
-/// The whole blind chain on a campaign: calibrate (rig-calibrate) → diagnose.
-/// Reads nothing but the campaign (recordings + campaign.toml).
-/// `thesis_mu_dynamic` is Table 4.7's μ_dyn for the thesis rung of the ladder.
+/// The whole blind chain on a campaign: calibrate (rig-calibrate) → estimate
+/// the baseline rig model (rig-estimate, started from the thesis' Table 4.4
+/// when `thesis` is given, as the estimation stage does) → diagnose.
+/// Reads nothing but the campaign (recordings + campaign.toml) and the
+/// published thesis values. The verdict does not depend on the estimate:
+/// the candidates are compared on teacher-forced channels whose baseline
+/// coefficients are refitted on the same training runs (crate docs); the
+/// estimated model gives the free-run feature comparison. A failed
+/// estimate is reported as data (no free-run features), not an error.
 pub fn diagnose_campaign(
     c: &rig_types::Campaign,
-    thesis_mu_dynamic: Option<f64>,
+    thesis: Option<&rig_calibrate::ThesisData>,
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
     let cal = rig_calibrate::calibrate_campaign(c).map_err(|e| DiagnoseError::Calibration(e.to_string()))?;
-    diagnose(c, &cal, None, thesis_mu_dynamic, opts)
+    let baseline = match thesis {
+        Some(t) if opts.free_run => {
+            let o = rig_estimate::EstimateOptions::new(rig_estimate::InitialValues::from_thesis_data(t));
+            rig_estimate::estimate_rig(c, &cal, &o).ok().map(|e| e.params)
+        }
+        _ => None,
+    };
+    diagnose(c, &cal, baseline.as_ref(), thesis.map(|t| t.friction.mu_dynamic), opts)
 }

@@ -1,0 +1,270 @@
+//! The diagnosis for people: diagnosis.md, the tables and the evidence
+//! figures (as rig_types data; the pipeline stage writes them).
+
+use crate::report::{Diagnosis, Features};
+use rig_types::{FigureSpec, Series, SeriesStyle, Table, fmt_fixed};
+use std::fmt::Write as _;
+
+fn f4(x: f64) -> String {
+    if x.is_finite() { fmt_fixed(x, 4) } else { "nan".into() }
+}
+
+/// tables/diagnosis-runs.csv: per operating point, measured vs simulated
+/// features and the misfits (crate docs define the misfit).
+pub fn runs_table(d: &Diagnosis) -> Table {
+    let mut t = Table::new([
+        "run",
+        "heldout",
+        "motor_rpm_setpoint",
+        "normal_force_n",
+        "slip_samples",
+        "meas_stick_slip",
+        "sim_stick_slip",
+        "meas_rotor_min_rad_s",
+        "sim_rotor_min_rad_s",
+        "meas_rotor_max_rad_s",
+        "sim_rotor_max_rad_s",
+        "meas_fundamental_hz",
+        "sim_fundamental_hz",
+        "meas_motor_dip_rad_s",
+        "sim_motor_dip_rad_s",
+        "misfit_baseline",
+        "misfit_extended",
+        "misfit_noise_floor",
+    ]);
+    let opt = |f: &Option<Features>, g: fn(&Features) -> String| f.as_ref().map(g).unwrap_or_else(|| "".into());
+    for r in &d.detail.runs {
+        t.push([
+            r.id.clone(),
+            r.heldout.to_string(),
+            fmt_fixed(r.motor_rpm_setpoint, 1),
+            fmt_fixed(r.normal_force_n, 2),
+            r.slip_samples.to_string(),
+            r.measured.stick_slip().to_string(),
+            opt(&r.simulated, |f| f.stick_slip().to_string()),
+            fmt_fixed(r.measured.rotor_min_rad_s, 2),
+            opt(&r.simulated, |f| fmt_fixed(f.rotor_min_rad_s, 2)),
+            fmt_fixed(r.measured.rotor_max_rad_s, 2),
+            opt(&r.simulated, |f| fmt_fixed(f.rotor_max_rad_s, 2)),
+            fmt_fixed(r.measured.fundamental_hz, 2),
+            opt(&r.simulated, |f| fmt_fixed(f.fundamental_hz, 2)),
+            fmt_fixed(r.measured.motor_dip_rad_s, 2),
+            opt(&r.simulated, |f| fmt_fixed(f.motor_dip_rad_s, 2)),
+            f4(r.misfit_baseline),
+            f4(r.misfit_extended),
+            f4(r.misfit_noise_floor),
+        ]);
+    }
+    t
+}
+
+/// tables/diagnosis-candidates.csv: every candidate with its criterion and held-out score.
+pub fn candidates_table(d: &Diagnosis) -> Table {
+    let mut t = Table::new(["effect", "delta_bic", "heldout_misfit", "relative_gain", "significant", "params"]);
+    t.push([
+        "none".to_string(),
+        "0".into(),
+        f4(d.detail.heldout_misfit_baseline),
+        "0".into(),
+        "".into(),
+        d.detail.baseline_text.clone(),
+    ]);
+    for (e, dbic, m, g, sig, p) in &d.detail.scores {
+        t.push([e.clone(), fmt_fixed(*dbic, 1), f4(*m), f4(*g), sig.to_string(), p.clone()]);
+    }
+    t
+}
+
+/// tables/diagnosis-rungs.csv: thesis model → recalibrated rig model → extended model.
+pub fn rungs_table(d: &Diagnosis) -> Table {
+    let mut t = Table::new(["rung", "heldout_misfit", "gain_vs_previous", "cause"]);
+    let mut prev: Option<f64> = None;
+    for (name, m, cause) in &d.detail.rungs {
+        let gain = prev.map(|p| f4(1.0 - m / p)).unwrap_or_default();
+        t.push([name.clone(), f4(*m), gain, cause.clone()]);
+        prev = Some(*m);
+    }
+    t
+}
+
+/// The evidence figures.
+pub fn figures(d: &Diagnosis) -> Vec<FigureSpec> {
+    let mut out = Vec::new();
+    let det = &d.detail;
+    if !det.mu_vs_speed.is_empty() {
+        let s = |name: &str, k: usize, style| Series {
+            name: name.into(),
+            x: det.mu_vs_speed.iter().map(|r| r.0).collect(),
+            y: det.mu_vs_speed.iter().map(|r| [r.1, r.2, r.3][k]).collect(),
+            style,
+        };
+        out.push(FigureSpec {
+            id: "diagnosis-friction-vs-slip".into(),
+            title: "Friction coefficient against slip speed (training runs)".into(),
+            caption: format!(
+                "Mean observed μ = F/N0 over slip samples binned by |Ω1| (30 bins), with the baseline (Coulomb) and the \
+                 verdict's model ({}) averaged over the same samples. A speed law shows as a trend; a time or angle \
+                 modulation averages out here.",
+                d.verdict
+            ),
+            x_label: "slip speed |Ω1| [rad/s]".into(),
+            y_label: "friction coefficient μ [-]".into(),
+            series: vec![s("measured", 0, SeriesStyle::Points), s("baseline", 1, SeriesStyle::Dashed), s("extended", 2, SeriesStyle::Line)],
+            x_decimals: 2,
+            y_decimals: 4,
+            heatmap: None,
+        });
+    }
+    if !det.freq_scan.is_empty() {
+        out.push(FigureSpec {
+            id: "diagnosis-frequency-scan".into(),
+            title: "Residual spectrum of the friction coefficient (normal-force scan)".into(),
+            caption: "Fraction of the baseline's weighted residual sum of squares explained by a sinusoid in time at each \
+                      frequency (shared frequency, own amplitude and phase per run) over the training runs' slip samples. \
+                      A narrow peak is a time-periodic normal force."
+                .into(),
+            x_label: "frequency [Hz]".into(),
+            y_label: "explained fraction of RSS [-]".into(),
+            series: vec![Series {
+                name: "scan".into(),
+                x: det.freq_scan.iter().map(|r| r.0).collect(),
+                y: det.freq_scan.iter().map(|r| r.1).collect(),
+                style: SeriesStyle::Line,
+            }],
+            x_decimals: 2,
+            y_decimals: 4,
+            heatmap: None,
+        });
+    }
+    if !det.residual_vs_angle.is_empty() {
+        out.push(FigureSpec {
+            id: "diagnosis-residual-vs-angle".into(),
+            title: "Friction residual against rotor angle (training run with most slip)".into(),
+            caption: "Mean of μ_obs − μk over slip samples in 72 bins of the rotor angle φ1 mod 2π. A warped or eccentric \
+                      disc shows n periods per revolution."
+                .into(),
+            x_label: "rotor angle mod 2π [rad]".into(),
+            y_label: "μ residual [-]".into(),
+            series: vec![Series {
+                name: "residual".into(),
+                x: det.residual_vs_angle.iter().map(|r| r.0).collect(),
+                y: det.residual_vs_angle.iter().map(|r| r.1).collect(),
+                style: SeriesStyle::Line,
+            }],
+            x_decimals: 3,
+            y_decimals: 4,
+            heatmap: None,
+        });
+    }
+    let dips: Vec<_> = det.runs.iter().collect();
+    if !dips.is_empty() {
+        let mut series = vec![Series {
+            name: "measured".into(),
+            x: dips.iter().map(|r| r.motor_rpm_setpoint).collect(),
+            y: dips.iter().map(|r| r.measured.motor_dip_rad_s).collect(),
+            style: SeriesStyle::Points,
+        }];
+        let sim: Vec<_> = dips.iter().filter_map(|r| r.simulated.map(|f| (r.motor_rpm_setpoint, f.motor_dip_rad_s))).collect();
+        if !sim.is_empty() {
+            series.push(Series {
+                name: "baseline simulation".into(),
+                x: sim.iter().map(|p| p.0).collect(),
+                y: sim.iter().map(|p| p.1).collect(),
+                style: SeriesStyle::Markers,
+            });
+        }
+        out.push(FigureSpec {
+            id: "diagnosis-motor-dips".into(),
+            title: "Deepest motor-speed dip below the set-point, per operating point".into(),
+            caption: "Largest Ω_set − Ω2 over each run's steady state (after ramp + settle). A drive that saturates lets \
+                      the motor slow while the rotor is stuck; the PI loop of the baseline holds it."
+                .into(),
+            x_label: "motor set-point [rpm]".into(),
+            y_label: "motor speed dip [rad/s]".into(),
+            series,
+            x_decimals: 1,
+            y_decimals: 3,
+            heatmap: None,
+        });
+    }
+    out
+}
+
+/// diagnosis.md.
+pub fn markdown(d: &Diagnosis) -> String {
+    let det = &d.detail;
+    let mut s = String::new();
+    let _ = writeln!(s, "# Diagnosis of campaign `{}`\n", d.campaign);
+    let _ = writeln!(s, "**Verdict: `{}`**\n", d.verdict);
+    for f in &d.findings {
+        let _ = writeln!(s, "{}\n", f.evidence);
+        if !f.params.is_empty() {
+            let _ = writeln!(s, "| parameter | value | standard error |\n|---|---|---|");
+            for (k, v) in &f.params {
+                let _ = writeln!(s, "| {k} | {v} | {} |", f.params_stderr.get(k).copied().unwrap_or(f64::NAN));
+            }
+            s.push('\n');
+        }
+        let _ = writeln!(
+            s,
+            "Held-out runs {}: misfit {} (baseline) → {} (extended), relative gain {}.\n",
+            f.heldout_runs.join(", "),
+            f.heldout_misfit_baseline,
+            f.heldout_misfit_extended,
+            f.relative_gain
+        );
+    }
+    let _ = writeln!(
+        s,
+        "## How it was decided\n\nEach operating point's friction coefficient in slip (μ = F/N0 from the calibrated force \
+         sensor) and drive voltage are predicted teacher-forced from the measured speeds and angles. The baseline is \
+         the calibrated rig model: {}. Each vocabulary effect is fitted on the training runs and must lower the BIC by \
+         more than the threshold AND the misfit on the held-out runs by the minimum gain. The misfit is \
+         M = sqrt((e_μ² + e_V²)/2) with e_μ the RMS error of μ relative to its mean and e_V the RMS voltage error \
+         relative to the supply (rig-diagnose crate docs). Held-out baseline misfit {:.4}; noise floor {:.4}.\n",
+        det.baseline_text, det.heldout_misfit_baseline, det.heldout_misfit_noise_floor
+    );
+    let _ = writeln!(s, "| effect | ΔBIC | held-out misfit | relative gain | significant | parameters |\n|---|---|---|---|---|---|");
+    for (e, dbic, m, g, sig, p) in &det.scores {
+        let _ = writeln!(s, "| {e} | {dbic:.1} | {m:.4} | {g:.3} | {sig} | {p} |");
+    }
+    if det.lines.is_empty() {
+        let _ = writeln!(s, "\nNo order line locked to a shaft angle is significant in most runs.");
+    } else {
+        let _ = writeln!(s, "\nOrder lines (speed components locked to a shaft angle):\n");
+        for l in &det.lines {
+            let _ = writeln!(s, "- {l}");
+        }
+    }
+    let _ = writeln!(s, "\n## The ladder (tables/diagnosis-rungs.csv)\n\n| rung | held-out misfit | cause |\n|---|---|---|");
+    for (n, m, c) in &det.rungs {
+        let _ = writeln!(s, "| {n} | {m:.4} | {c} |");
+    }
+    let _ = writeln!(
+        s,
+        "\n## Per run (tables/diagnosis-runs.csv)\n\nMeasured features of the steady state against the free-run baseline \
+         simulation (empty when no baseline simulation was made), and the misfit per run.\n"
+    );
+    let _ = writeln!(s, "| run | held out | rpm | N0 | stick-slip meas/sim | Ω1 max meas/sim | f0 meas/sim [Hz] | misfit base | misfit ext | floor |\n|---|---|---|---|---|---|---|---|---|---|");
+    for r in &det.runs {
+        let sim = r.simulated;
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.0} | {:.1} | {}/{} | {:.2}/{} | {:.2}/{} | {:.4} | {:.4} | {:.4} |",
+            r.id,
+            r.heldout,
+            r.motor_rpm_setpoint,
+            r.normal_force_n,
+            r.measured.stick_slip(),
+            sim.map(|f| f.stick_slip().to_string()).unwrap_or("–".into()),
+            r.measured.rotor_max_rad_s,
+            sim.map(|f| format!("{:.2}", f.rotor_max_rad_s)).unwrap_or("–".into()),
+            r.measured.fundamental_hz,
+            sim.map(|f| format!("{:.2}", f.fundamental_hz)).unwrap_or("–".into()),
+            r.misfit_baseline,
+            r.misfit_extended,
+            r.misfit_noise_floor
+        );
+    }
+    s
+}
