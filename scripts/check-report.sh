@@ -40,13 +40,13 @@ flags=(--headless --no-sandbox --disable-gpu --disable-quic --no-first-run
     --virtual-time-budget=5000)
 
 status=0
-if ! "$browser" "${flags[@]}" --window-size=1400,2000 --screenshot="$png" "$url" \
+if ! "$browser" "${flags[@]}" --window-size=1400,2400 --screenshot="$png" "$url" \
     >"$logs/shot.out" 2>"$logs/shot.err"; then
     echo "check-report: chromium failed to take the screenshot:" >&2
     cat "$logs/shot.err" >&2
     status=1
 fi
-if ! "$browser" "${flags[@]}" --window-size=1400,2000 --dump-dom "$url" \
+if ! "$browser" "${flags[@]}" --window-size=1400,2400 --dump-dom "$url" \
     >"$logs/dom.html" 2>"$logs/dom.err"; then
     echo "check-report: chromium failed to dump the DOM:" >&2
     cat "$logs/dom.err" >&2
@@ -59,7 +59,8 @@ if grep -h -E "Uncaught|Failed to load|ERR_FILE_NOT_FOUND|Refused to|net::ERR" "
     status=1
 fi
 
-check_line="$(grep -o 'page-check [^<]*' "$logs/dom.html" || true)"
+# The element's text as the script left it (the script's own source also contains "page-check").
+check_line="$(grep -o 'id="page-check"[^>]*>[^<]*' "$logs/dom.html" | sed 's/^[^>]*>//' || true)"
 if [[ "$check_line" == "page-check ok:"* ]]; then
     echo "check-report: $check_line"
 else

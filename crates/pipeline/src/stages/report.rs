@@ -186,19 +186,22 @@ span.ok{background:#bfe6c6}span.rounding{background:#ffe08a}span.inconsistent{ba
 .missing{color:#8a5a00;background:#fff6e0;border-left:4px solid #e0a000;padding:.4em .8em}
 figure{margin:1.2em 0;padding:.6em;border:1px solid #e4e4e4}figure svg{max-width:100%;height:auto;display:block}
 figcaption{font-size:.92em;color:#333}figcaption .thesis{color:#555;font-style:italic}
-.fig-head{font-weight:bold;margin-top:1.6em}.verdict{font-size:1.2em}
+.fig-head{font-weight:bold;margin-top:1.6em}.fig-skip{margin:.3em 0;color:#555}.verdict{font-size:1.2em}
 details{margin:.4em 0}summary{cursor:pointer}
 ";
 
-/// Proves in a browser that the page parsed and every inline figure is an SVG
-/// element with a size; scripts/check-report.sh reads the result from the DOM.
+/// Proves in a browser that the page parsed, every inline figure is an SVG
+/// element with a size and nothing external is loaded;
+/// scripts/check-report.sh reads the result from the DOM.
 const CHECK_SCRIPT: &str = "(function(){
   var el=document.getElementById('page-check');
   var want=parseInt(document.body.getAttribute('data-figures'),10);
-  var svgs=document.querySelectorAll('svg');
+  var figs=document.querySelectorAll('svg');
   var bad=0;
-  for(var i=0;i<svgs.length;i++){var b=svgs[i].getBoundingClientRect();if(!(b.width>0&&b.height>0)){bad++;}}
-  el.textContent=(svgs.length===want&&bad===0)?('page-check ok: '+svgs.length+' figures'):('page-check FAILED: '+svgs.length+' of '+want+' figures, '+bad+' without size');
+  for(var i=0;i<figs.length;i++){var b=figs[i].getBoundingClientRect();if(!(b.width>0&&b.height>0)){bad++;}}
+  // A self-contained page loads nothing: no element that fetches a resource.
+  var ext=document.querySelectorAll('img,link,iframe,object,embed,script[src],use[href]').length+performance.getEntriesByType('resource').length;
+  el.textContent=(figs.length===want&&bad===0&&ext===0)?('page-check ok: '+figs.length+' figures'):('page-check FAILED: '+figs.length+' of '+want+' figures, '+bad+' without size, '+ext+' external resources');
 })();
 ";
 
@@ -347,18 +350,22 @@ fn section_figures(entries: &[CatalogueEntry], figures: &FigureFiles) -> (String
     ));
     let mut claimed = std::collections::BTreeSet::new();
     for e in entries {
+        if !e.reproducible {
+            // One line: there is nothing to compute for a photograph or a schematic.
+            s.push_str(&format!(
+                "<p class=\"fig-skip\" id=\"fig-{}\"><strong>Figure {}</strong> <em>{}</em> — not reproducible: {}.</p>\n",
+                escape(&e.number),
+                escape(&e.number),
+                escape(&e.caption),
+                escape(e.reason.as_deref().unwrap_or("no reason given"))
+            ));
+            continue;
+        }
         s.push_str(&format!(
             "<div class=\"fig-head\" id=\"fig-{0}\">Figure {0}</div>\n<p class=\"thesis\">Thesis caption: <em>{1}</em></p>\n",
             escape(&e.number),
             escape(&e.caption)
         ));
-        if !e.reproducible {
-            s.push_str(&format!(
-                "<p>Not reproducible: {} (nothing to compute).</p>\n",
-                escape(e.reason.as_deref().unwrap_or("no reason given"))
-            ));
-            continue;
-        }
         let prefix = e.files.as_deref().unwrap_or_default();
         let stems = figures.matching(prefix);
         if stems.is_empty() {
