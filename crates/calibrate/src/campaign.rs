@@ -48,6 +48,14 @@ pub struct StepDecay {
     pub rotor_inertia_kgm2: f64,
 }
 
+/// A voltage step left out of the decay analysis, and why.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SkippedStep {
+    pub id: String,
+    pub voltage_v: f64,
+    pub reason: String,
+}
+
 /// Everything the campaign's calibration runs say. Fields named in the brief
 /// are the interface other crates rely on.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -81,6 +89,8 @@ pub struct CampaignCalibration {
     pub rotor_inertia_kgm2: f64,
     pub rotor_inertia_kgm2_stderr: f64,
     pub steps: Vec<StepDecay>,
+    /// Voltage steps that showed no measurable free decay (left out of the means).
+    pub steps_without_decay: Vec<SkippedStep>,
     pub settings: CalibrationSettings,
     pub twist_settings: DecaySettings,
     pub speed_settings: DecaySettings,
@@ -243,6 +253,7 @@ pub fn calibrate_campaign_with(c: &Campaign, s: &CalibrationSettings) -> Result<
     let tset = s.twist(c.rig.encoder_ticks_per_rev);
     let sset = s.speed();
     let mut steps = Vec::new();
+    let mut steps_without_decay = Vec::new();
     for run in c.runs_of("voltage_step") {
         let RunKind::VoltageStep { voltage_v } = run.kind else { continue };
         let t = &run.data.time_s;
@@ -250,13 +261,29 @@ pub fn calibrate_campaign_with(c: &Campaign, s: &CalibrationSettings) -> Result<
         let rt = column(run, &run.data.rotor_ticks, "rotor_ticks")?;
         let twist_ticks: Vec<i64> = mt.iter().zip(rt).map(|(m, r)| m - r).collect();
         let twist = signal::ticks_to_rad(&twist_ticks, c.rig.encoder_ticks_per_rev);
-        let td = signal::decay_analysis(&format!("run {} twist", run.id), t, &twist, &tset)?;
+        let td = match signal::decay_analysis(&format!("run {} twist", run.id), t, &twist, &tset) {
+            Ok(a) => a,
+            // A step without a measurable decay is data: it is listed, and the others still calibrate.
+            Err(e @ CalibrateError::NoDecay { .. }) => {
+                steps_without_decay.push(SkippedStep { id: run.id.clone(), voltage_v, reason: e.to_string() });
+                continue;
+            }
+            Err(e) => return Err(e),
+        };
         let w1 = signal::rotor_speed_rad_s(t, rt, c.rig.encoder_ticks_per_rev);
         let sd = signal::decay_analysis(&format!("run {} rotor speed", run.id), t, &w1, &sset).ok();
         let j = formulas::inertia_from_frequency_kgm2(k, td.natural_rad_s_mean);
         steps.push(StepDecay { id: run.id.clone(), voltage_v, twist: td, rotor_speed: sd, rotor_inertia_kgm2: j });
     }
-    need("voltage_step", 1, steps.len())?;
+    if steps.is_empty() {
+        return Err(match steps_without_decay.first() {
+            Some(first) => CalibrateError::NoDecay {
+                what: format!("all {} voltage_step runs", steps_without_decay.len()),
+                reason: first.reason.clone(),
+            },
+            None => CalibrateError::MissingRuns { kind: "voltage_step".into(), need: 1, got: 0 },
+        });
+    }
 
     // Across steps: mean of step means; stderr from the spread over steps, or
     // from the within-step spread over pairs when there is a single step.
@@ -301,6 +328,7 @@ pub fn calibrate_campaign_with(c: &Campaign, s: &CalibrationSettings) -> Result<
         rotor_inertia_kgm2: j1,
         rotor_inertia_kgm2_stderr: j1_se,
         steps,
+        steps_without_decay,
         settings: s.clone(),
         twist_settings: tset,
         speed_settings: sset,

@@ -138,7 +138,8 @@ pub fn stiffness_table(c: &CampaignCalibration) -> Table {
 }
 
 /// Per voltage step: pairs used, δ, ξ, ω_d, ω_n (mean ± std over pairs), J1,
-/// and the rotor-speed cross-check δ; then the campaign values (mean ± stderr over steps).
+/// and the rotor-speed cross-check δ; steps without a measurable decay (0 pairs);
+/// then the campaign values (mean ± stderr over steps).
 pub fn log_decrement_table(c: &CampaignCalibration) -> Table {
     let mut t = Table::new([
         "run",
@@ -176,6 +177,11 @@ pub fn log_decrement_table(c: &CampaignCalibration) -> Table {
             s.rotor_speed.as_ref().map(|r| fmt_fixed(r.log_decrement_mean, 4)).unwrap_or_default(),
             s.rotor_speed.as_ref().map(|r| r.pairs.len().to_string()).unwrap_or_default(),
         ]);
+    }
+    for k in &c.steps_without_decay {
+        let mut row = vec![k.id.clone(), fmt_fixed(k.voltage_v, 1), "0".to_string()];
+        row.extend(std::iter::repeat_n(String::new(), 12));
+        t.push(row);
     }
     t.push([
         "campaign (mean, stderr over steps)".to_string(),

@@ -104,3 +104,22 @@ fn missing_kinds_are_named() {
     let e = calibrate_campaign(&camp).unwrap_err();
     assert!(matches!(e, CalibrateError::MissingRuns { ref kind, .. } if kind == "static_twist"), "{e}");
 }
+
+/// A voltage step whose twist never oscillates (rotor locked to the motor) is
+/// listed as skipped, the others still calibrate; with no decaying step at all
+/// the error names the problem.
+#[test]
+fn steps_without_decay_are_data() {
+    let mut camp = synthetic();
+    let flat = camp.runs.iter_mut().find(|r| r.id == "step-1").unwrap();
+    flat.data.rotor_ticks = flat.data.motor_ticks.clone();
+    let c = calibrate_campaign(&camp).unwrap();
+    assert_eq!(c.steps.len(), 1);
+    assert_eq!(c.steps_without_decay.len(), 1);
+    assert_eq!(c.steps_without_decay[0].id, "step-1");
+    for r in camp.runs.iter_mut().filter(|r| r.id == "step-0") {
+        r.data.rotor_ticks = r.data.motor_ticks.clone();
+    }
+    let e = calibrate_campaign(&camp).unwrap_err();
+    assert!(matches!(e, CalibrateError::NoDecay { .. }), "{e}");
+}
