@@ -117,8 +117,9 @@ pub(super) fn eq_4_1_to_4_5(a: &mut Audit, t: &ThesisTables) -> Result<(), Calib
 
     // "1.39 % of relative error" between J_1E and J_1A.
     let rel = t.statement("rel-error-j1")?.value;
-    let rel_ref_a = |x: &[f64]| f::relative_error_pct(x[0], x[1]);
-    a.check(
+    // Signed relative error (x − ref)/ref in %; check_abs takes its magnitude.
+    let rel_ref_a = |x: &[f64]| 100.0 * (x[0] - x[1]) / x[1];
+    a.check_abs(
         Check {
             table: "statement",
             row: "rel-error-j1",
@@ -130,7 +131,7 @@ pub(super) fn eq_4_1_to_4_5(a: &mut Audit, t: &ThesisTables) -> Result<(), Calib
         &rel_ref_a,
         &|v| format!("gives {v:.3} %"),
     );
-    a.check(
+    a.check_abs(
         Check {
             table: "statement",
             row: "rel-error-j1",
@@ -144,7 +145,7 @@ pub(super) fn eq_4_1_to_4_5(a: &mut Audit, t: &ThesisTables) -> Result<(), Calib
     );
     let j1a_rec = j_disc(&[m.value, r.value]);
     let j1e_rec = j_from(&[k_rec, wn_hz.value]);
-    a.check(
+    a.check_abs(
         Check {
             table: "statement",
             row: "rel-error-j1",
@@ -307,7 +308,7 @@ pub(super) fn table_4_3(a: &mut Audit, t: &ThesisTables) -> Result<(), Calibrate
             },
         );
         k_from_ratio.push((tq, ang));
-        a.check(
+        a.check_abs(
             Check {
                 table: "table-4-3",
                 row: tr,
@@ -316,10 +317,10 @@ pub(super) fn table_4_3(a: &mut Audit, t: &ThesisTables) -> Result<(), Calibrate
                 inputs: vec![rounded(r.k_se_nm_rad), rounded(ksa)],
                 what: "|K_SE − K_sA|/K_sA from the printed K_SE and K_sA = 0.268",
             },
-            &|x| f::relative_error_pct(x[0], x[1]),
+            &|x| 100.0 * (x[0] - x[1]) / x[1],
             &|v| format!("gives {v:.3} %"),
         );
-        a.check(
+        a.check_abs(
             Check {
                 table: "table-4-3",
                 row: tr,
@@ -328,7 +329,7 @@ pub(super) fn table_4_3(a: &mut Audit, t: &ThesisTables) -> Result<(), Calibrate
                 inputs: vec![rounded(tq), rounded(ang), rounded(ksa)],
                 what: "|torque/angle − K_sA|/K_sA",
             },
-            &|x| f::relative_error_pct(x[0] / x[1], x[2]),
+            &|x| 100.0 * (x[0] / x[1] - x[2]) / x[2],
             &|v| format!("K_SE = {k_rec:.4} from torque/angle gives {v:.3} %"),
         );
         let ticks = ang.value / tick_rad;

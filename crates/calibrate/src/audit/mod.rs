@@ -70,8 +70,9 @@ fn val(v: f64) -> In {
     In { v, half: 0.0 }
 }
 
-/// Range of `g` over every corner of the inputs' rounding box (the formulas
-/// here are monotone in each input, so the corners bound the range).
+/// Range of `g` over every corner of the inputs' rounding box. The formulas
+/// passed here are monotone in each input over the box, so the corners bound
+/// the range; absolute values go through [`Audit::check_abs`].
 fn corner_range(inputs: &[In], g: &dyn Fn(&[f64]) -> f64) -> (f64, f64) {
     let n = inputs.len();
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -123,6 +124,27 @@ impl Audit {
     fn check(&mut self, c: Check, g: &dyn Fn(&[f64]) -> f64, if_wrong: &dyn Fn(f64) -> String) -> (f64, Status) {
         let nominal = g(&c.inputs.iter().map(|p| p.v).collect::<Vec<_>>());
         let (lo, hi) = corner_range(&c.inputs, g);
+        self.judge(c, nominal, (lo, hi), if_wrong)
+    }
+
+    /// Like [`Audit::check`] for |g| where g is monotone but changes sign
+    /// inside the rounding box (relative errors): the corners bound g, and the
+    /// range of |g| follows from g's (0 when g's range straddles 0).
+    fn check_abs(&mut self, c: Check, g: &dyn Fn(&[f64]) -> f64, if_wrong: &dyn Fn(f64) -> String) -> (f64, Status) {
+        let nominal = g(&c.inputs.iter().map(|p| p.v).collect::<Vec<_>>()).abs();
+        let (lo, hi) = corner_range(&c.inputs, g);
+        let range =
+            if lo <= 0.0 && hi >= 0.0 { (0.0, hi.max(-lo)) } else { (lo.abs().min(hi.abs()), lo.abs().max(hi.abs())) };
+        self.judge(c, nominal, range, if_wrong)
+    }
+
+    fn judge(
+        &mut self,
+        c: Check,
+        nominal: f64,
+        (lo, hi): (f64, f64),
+        if_wrong: &dyn Fn(f64) -> String,
+    ) -> (f64, Status) {
         let unit = c.published.unit();
         let p = c.published.value;
         let eps = 1e-9 * unit;
@@ -278,4 +300,48 @@ pub fn audit_markdown(rows: &[AuditRow], rounding_tolerance: f64) -> String {
         ));
     }
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn p(value: f64, decimals: i32) -> Printed {
+        Printed { value, decimals }
+    }
+
+    fn run(published: Printed, inputs: Vec<In>, g: &dyn Fn(&[f64]) -> f64, abs: bool) -> Status {
+        let mut a = Audit::new(0.5);
+        let c = Check { table: "t", row: "r", column: "c", published, inputs, what: "w" };
+        if abs { a.check_abs(c, g, &|_| String::new()).1 } else { a.check(c, g, &|_| String::new()).1 }
+    }
+
+    #[test]
+    fn statuses_follow_the_arithmetic() {
+        let ratio = |x: &[f64]| x[0] / x[1];
+        // 1/3 = 0.3333 → printed 0.333 is ok.
+        assert_eq!(run(p(0.333, 3), vec![val(1.0), val(3.0)], &ratio, false), Status::Ok);
+        // 0.139/0.532 = 0.26128: printed 0.260 is reachable from inputs rounded at 3 decimals.
+        assert_eq!(run(p(0.260, 3), vec![rounded(p(0.139, 3)), rounded(p(0.532, 3))], &ratio, false), Status::Rounding);
+        // ... but not from exact inputs.
+        assert_eq!(run(p(0.260, 3), vec![val(0.139), val(0.532)], &ratio, false), Status::Inconsistent);
+    }
+
+    /// |x − 1| with x = 1.0 ± 0.1 (printed 1.0): the magnitude reaches 0 inside
+    /// the box although no corner does; check_abs must see that.
+    #[test]
+    fn absolute_values_straddling_zero() {
+        let signed = |x: &[f64]| x[0] - 1.0;
+        assert_eq!(run(p(0.02, 2), vec![rounded(p(1.0, 1))], &signed, true), Status::Rounding);
+        assert_eq!(
+            run(p(0.02, 2), vec![rounded(p(1.0, 1))], &|x: &[f64]| (x[0] - 1.0).abs(), false),
+            Status::Inconsistent
+        );
+    }
+
+    #[test]
+    fn natural_order() {
+        assert!(natural_key("eq-4-4") < natural_key("eq-4-10"));
+        assert!(natural_key("table-4-2") < natural_key("table-4-10"));
+    }
 }
