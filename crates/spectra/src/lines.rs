@@ -40,7 +40,7 @@ pub struct Line {
 
 impl From<&Peak> for Line {
     fn from(p: &Peak) -> Self {
-        Line { freq_hz: p.freq_hz, amplitude: p.amplitude, sigma_hz: 0.0 }
+        Line { freq_hz: p.freq_hz, amplitude: p.amplitude, sigma_hz: p.sigma_hz }
     }
 }
 

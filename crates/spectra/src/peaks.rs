@@ -98,6 +98,12 @@ pub struct Peak {
     pub prominence: f64,
     /// The spectrum bin of the maximum.
     pub bin: usize,
+    /// Frequency standard uncertainty, Hz: Δf / (π R) with R = amplitude / noise
+    /// floor (the band's median amplitude). This is the Cramér–Rao bound for a
+    /// tone in white noise written with the windowed spectrum's own numbers
+    /// (σ_f ≥ √(3 / (π² η N)) bins, η N = 3 R² for a Hann window), so it is a
+    /// lower bound: jitter of a real oscillation only widens it.
+    pub sigma_hz: f64,
 }
 
 /// Gaussian interpolation: the vertex of the parabola through (−1, ln a),
@@ -151,7 +157,14 @@ pub fn spectral_peaks(s: &Spectrum, o: &PeakOptions) -> Vec<Peak> {
             let k = lo + p.index;
             let (delta, _) = interpolate_gaussian(s.amplitude[k - 1], s.amplitude[k], s.amplitude[k + 1]);
             let amplitude = s.amplitude[k] / window_response(&w, delta);
-            Peak { freq_hz: (k as f64 + delta) * s.resolution_hz, amplitude, prominence: p.prominence, bin: k }
+            let sigma_hz = s.resolution_hz / (std::f64::consts::PI * (amplitude / median.max(f64::MIN_POSITIVE)));
+            Peak {
+                freq_hz: (k as f64 + delta) * s.resolution_hz,
+                amplitude,
+                prominence: p.prominence,
+                bin: k,
+                sigma_hz,
+            }
         })
         .collect();
     peaks.sort_by(|a, b| b.prominence.total_cmp(&a.prominence).then(a.bin.cmp(&b.bin)));

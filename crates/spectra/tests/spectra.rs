@@ -207,3 +207,20 @@ fn weakening_fit_recovers_known_law_and_severity_conventions() {
     let b = bin_means(&[0.5, 1.5, 1.6], &[1.0, 2.0, 4.0], 0.0, 3.0, 3);
     assert_eq!((b[0].count, b[1].count, b[2].count, b[1].mean), (1, 2, 0, 3.0));
 }
+
+#[test]
+fn peak_sigma_matches_the_scatter_of_noisy_estimates() {
+    // 40 noisy records of one tone: the rms frequency error should be about the
+    // reported σ_f (a Cramér–Rao estimate); accept a factor 2 either way.
+    let (n, fs, f) = (4000, 500.0, 37.33);
+    let (mut se, mut sig) = (0.0, 0.0);
+    for seed in 0..40u64 {
+        let x: Vec<f64> = tone(n, fs, f, 1.0, 0.3).iter().zip(noise(n, 1000 + seed, 2.0)).map(|(a, b)| a + b).collect();
+        let s = amplitude_spectrum(&x, fs, Window::Hann, Detrend::Constant).unwrap();
+        let p = spectral_peaks(&s, &PeakOptions { max_peaks: 1, ..PeakOptions::default() });
+        se += (p[0].freq_hz - f).powi(2);
+        sig += p[0].sigma_hz;
+    }
+    let (rms, mean_sigma) = ((se / 40.0).sqrt(), sig / 40.0);
+    assert!((0.5..2.0).contains(&(rms / mean_sigma)), "rms error {rms} Hz vs mean sigma {mean_sigma} Hz");
+}
