@@ -2,13 +2,14 @@
 //! with polars, refusing anything malformed with the file, the 1-based line
 //! (header = line 1) and the rule.
 //!
-//! The file is first scanned line by line (cheap: one pass of `memchr`), so
-//! that structural faults get exact line numbers and so that data row `i`
-//! is known to be line `i + 2` — polars itself would silently skip blank
-//! lines and could not say which line a bad cell came from. polars then parses
-//! every column with its final type (`Float64` or `Int64`) with
-//! `ignore_errors`, so an unparsable cell becomes a null whose row points
-//! back at the raw text for the message.
+//! The file is first indexed line by line (one `memchr` pass) so that the
+//! header and blank lines are checked with exact line numbers and data row
+//! `i` is known to be line `i + 2` (polars would read a blank line as a row
+//! of nulls and cannot say which line a bad cell came from). polars then
+//! parses every column with its final type (`Float64` or `Int64`) with
+//! `ignore_errors`, so an unparsable or missing cell becomes a null whose row
+//! points back at the raw text for the message. Per-line cell counts are only
+//! scanned once polars has reported a problem, to keep the common path fast.
 
 use crate::IngestError;
 use polars::prelude::{CsvReadOptions, DataType, Field, Schema, SerReader};
@@ -92,11 +93,12 @@ impl<'a> Lines<'a> {
 /// Reads a numeric CSV whose columns are exactly `spec` (in any order) and
 /// returns the values in `spec` order. One column must be [`TIME_COLUMN`].
 ///
-/// Rules (the first broken one is reported): UTF-8 text; a header row naming
-/// each column of `spec` once and nothing else; at least one data row; no
-/// empty line; every row with as many cells as the header; every cell a
-/// number of its column's type; every value finite; `time_s` strictly
-/// increasing (and starting at 0 for [`TimeStart::Zero`]).
+/// Rules, checked in this order: UTF-8 text; a header row naming each column
+/// of `spec` once and nothing else; at least one data row; no empty line;
+/// then the earliest row (leftmost column first) with a wrong number of
+/// cells, a missing cell, text, or a non-finite value (a row with too *many*
+/// cells is reported before any cell fault: polars refuses the whole file);
+/// then `time_s` starting at 0 (for [`TimeStart::Zero`]) and strictly increasing.
 pub(crate) fn read_numeric_csv(
     path: &Path,
     spec: &[ColSpec],
@@ -134,7 +136,11 @@ pub(crate) fn read_numeric_csv(
         .map_parse_options(|p| p.with_quote_char(None).with_missing_is_null(true))
         .into_reader_with_file_handle(Cursor::new(bytes.as_slice()))
         .finish()
-        .map_err(|e| IngestError::Csv { file: path.to_path_buf(), message: e.to_string() })?;
+        .map_err(|e| {
+            // polars refuses rows with too many cells without saying where: find the line.
+            ragged_row(path, &lines, header.len())
+                .unwrap_or_else(|| IngestError::Csv { file: path.to_path_buf(), message: e.to_string() })
+        })?;
     if df.height() != n_rows {
         return Err(IngestError::Csv {
             file: path.to_path_buf(),
@@ -187,6 +193,10 @@ pub(crate) fn read_numeric_csv(
         by_file_pos.push(values);
     }
     if let Some((row, pos, fault)) = first_bad {
+        // A row with too few cells reads as nulls in its last columns.
+        if let Some(e) = ragged_line(path, &lines, row + 1, header.len()) {
+            return Err(e);
+        }
         let col = spec[header[pos]];
         let raw = lines.cell(row, pos);
         return Err(IngestError::rule(path, Some(row + 2), cell_message(col, raw, fault)));
@@ -257,22 +267,30 @@ fn check_structure(path: &Path, lines: &Lines<'_>, spec: &[ColSpec]) -> Result<V
     if lines.len() == 1 {
         return Err(IngestError::rule(path, Some(1), "header row but no data rows"));
     }
-    let n_cells = header.len();
+    // Blank lines would shift the row -> line mapping (polars reads them as
+    // rows of nulls); a line of just `\n` or `\r\n` is at most 2 bytes long.
+    // Cell counts are checked later, off the fast path (see `ragged_row`).
     for k in 1..lines.len() {
-        let line = lines.get(k);
-        if line.is_empty() {
+        let next = lines.starts.get(k + 1).copied().unwrap_or(lines.text.len());
+        if next - lines.starts[k] <= 2 && lines.get(k).is_empty() {
+            let n_cells = header.len();
             return Err(IngestError::rule(path, Some(k + 1), format!("empty line (every row needs {n_cells} cells)")));
-        }
-        let cells = line.matches(',').count() + 1;
-        if cells != n_cells {
-            return Err(IngestError::rule(
-                path,
-                Some(k + 1),
-                format!("row has {cells} cells but the header has {n_cells}"),
-            ));
         }
     }
     Ok(header)
+}
+
+/// The first data line whose cell count differs from the header's, if any
+/// (a full scan: only run once polars has reported a problem).
+fn ragged_row(path: &Path, lines: &Lines<'_>, n_cells: usize) -> Option<IngestError> {
+    (1..lines.len()).find_map(|k| ragged_line(path, lines, k, n_cells))
+}
+
+/// An error if the 0-based line `k` does not have `n_cells` cells.
+fn ragged_line(path: &Path, lines: &Lines<'_>, k: usize, n_cells: usize) -> Option<IngestError> {
+    let cells = lines.get(k).matches(',').count() + 1;
+    (cells != n_cells)
+        .then(|| IngestError::rule(path, Some(k + 1), format!("row has {cells} cells but the header has {n_cells}")))
 }
 
 /// `time_s` is strictly increasing and, if asked, starts at exactly 0.

@@ -45,9 +45,11 @@
 //!   campaign's `twist-1` starts at 70).
 //!
 //! Rules are checked in the order above and the first broken one is
-//! reported; within a CSV, structure (header, rows) before cells (earliest
-//! row, then leftmost column) before time. Error lines are 1-based; the CSV
-//! header is line 1.
+//! reported (campaign.toml entirely before any CSV; runs in file order).
+//! Within a CSV: header, empty lines, then the earliest faulty row (cell
+//! count, missing/text/non-finite cell, leftmost column first; a row with too
+//! many cells is reported first), then time. Error lines are 1-based; the
+//! CSV header is line 1.
 //!
 //! [`lavi::read_lavi`] reads the real UFRJ/LAVI stick-slip recording with the
 //! same CSV rules (without the start-at-zero rule).

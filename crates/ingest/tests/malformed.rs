@@ -585,3 +585,52 @@ fn time_column_not_first_still_checked() {
         "<c>/runs/twist-1.csv:4: time_s must be strictly increasing (0.001 after 0.002)",
     );
 }
+
+// ---- encodings and spellings ----
+
+#[test]
+fn crlf_line_endings_are_accepted() {
+    let tmp = tempfile::tempdir().unwrap();
+    for (name, text) in base() {
+        let path = tmp.path().join(name);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, text.replace('\n', "\r\n")).unwrap();
+    }
+    let c = read_campaign(tmp.path()).unwrap();
+    assert_eq!(c.runs[3].data.motor_voltage_v.as_deref(), Some(&[6.012, 5.999, 6.003][..]));
+    assert_eq!(c.runs[3].data.rotor_ticks.as_deref(), Some(&[0, 0, 0][..]));
+}
+
+#[test]
+fn not_utf8() {
+    check_with(
+        |_| {},
+        |dir| {
+            let mut bytes = std::fs::read(dir.join("runs/cal-1.csv")).unwrap();
+            // The first byte of line 3 (after the second newline) becomes invalid UTF-8.
+            let third_line = bytes.iter().enumerate().filter(|(_, b)| **b == b'\n').nth(1).unwrap().0 + 1;
+            bytes[third_line] = 0xff;
+            std::fs::write(dir.join("runs/cal-1.csv"), bytes).unwrap();
+        },
+        "<c>/runs/cal-1.csv:3: the file is not UTF-8 text",
+    );
+}
+
+#[test]
+fn quoted_number() {
+    check(
+        |f| edit(f, "runs/cal-1.csv", "0.0020,150.10", "0.0020,\"150.10\""),
+        "<c>/runs/cal-1.csv:3: '\"150.10\"' in column brake_force_mv is not a number",
+    );
+}
+
+#[test]
+fn crlf_blank_line() {
+    check(
+        |f| {
+            let t = f.get_mut("runs/twist-1.csv").unwrap();
+            *t = t.replace('\n', "\r\n").replace("0.0020,70\r\n", "0.0020,70\r\n\r\n");
+        },
+        "<c>/runs/twist-1.csv:4: empty line (every row needs 2 cells)",
+    );
+}

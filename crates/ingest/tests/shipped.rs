@@ -72,12 +72,9 @@ fn shipped_campaign_loads() {
     assert_eq!(*d.motor_ticks.as_ref().unwrap().last().unwrap(), 12993);
     assert_eq!(*d.rotor_ticks.as_ref().unwrap().last().unwrap(), 12228);
     assert_eq!(*d.brake_force_mv.as_ref().unwrap().last().unwrap(), 4329.58);
-}
 
-#[test]
-fn reading_twice_gives_identical_campaigns() {
-    let dir = repo().join("data/emulated-rig-2026");
-    assert_eq!(read_campaign(&dir).unwrap(), read_campaign(&dir).unwrap());
+    // Same folder, same campaign: nothing depends on thread timing or map order.
+    assert_eq!(read_campaign(&repo().join("data/emulated-rig-2026")).unwrap(), c);
 }
 
 /// The real recording lives outside the repository (../shared, never copied
