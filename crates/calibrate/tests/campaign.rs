@@ -123,3 +123,19 @@ fn steps_without_decay_are_data() {
     let e = calibrate_campaign(&camp).unwrap_err();
     assert!(matches!(e, CalibrateError::NoDecay { .. }), "{e}");
 }
+
+/// The campaign tables of the synthetic campaign, pinned. Checked: factor
+/// 213.000 mV/N and offset 4.000 mV (the construction), std 0.500 mV (the ±0.5
+/// alternation), K = 0.27000 exactly with zero offset; δ = 2πξ/√(1−ξ²) = 0.5678,
+/// ω_d = 2.9878 rad/s
+/// and ω_n = √(K/J) = 3.0000 rad/s within the tolerances asserted above.
+#[test]
+fn synthetic_tables() {
+    let c = calibrate_campaign(&synthetic()).unwrap();
+    insta::assert_snapshot!("synthetic_force", rig_calibrate::campaign_tables::force_table(&c).to_csv());
+    insta::assert_snapshot!("synthetic_stiffness", rig_calibrate::campaign_tables::stiffness_table(&c).to_csv());
+    insta::assert_snapshot!(
+        "synthetic_log_decrement",
+        rig_calibrate::campaign_tables::log_decrement_table(&c).to_csv()
+    );
+}
