@@ -99,6 +99,15 @@
 //! on the saturation boundary and the adaptive step collapse. Voltage steps: V constant, drive
 //! bypassed, brake open (N = 0).
 //!
+//! # Trajectory channels
+//!
+//! Every channel is interpolated on the dense output at the requested times.
+//! `friction_torque_nm` is T1 (positive opposes positive Ω1): the slip law in
+//! slip, the balancing shaft torque in stick. `stuck` is the stick phase of
+//! the rig model; the thesis model has none, so there it marks the static
+//! branch of its lookup (|Ω1| below the static set-point, 0.05 rpm), the
+//! closest thing the published model has to a standstill.
+//!
 //! # Integrator
 //!
 //! Dormand–Prince 5(4) with Hairer's PI step control and 4th-order dense

@@ -204,9 +204,9 @@ fn normal_force_modulation_scales_slip_friction() {
     let nf = 2.0;
     let tr = simulate(&p, &op(100.0, nf, 1.0), &t, &opts(1e-8)).unwrap();
     let mut checked = 0;
-    for k in 0..tr.len() {
+    for (k, &tk) in t.iter().enumerate() {
         if !tr.stuck[k] && tr.rotor_speed_rad_s[k] > 0.0 {
-            let expect = 0.35 * nf * (1.0 + a * (2.0 * PI * f * t[k] + th).sin()) * p.brake_disc_radius_m;
+            let expect = 0.35 * nf * (1.0 + a * (2.0 * PI * f * tk + th).sin()) * p.brake_disc_radius_m;
             assert!((tr.friction_torque_nm[k] - expect).abs() < 1e-12);
             checked += 1;
         }
@@ -266,4 +266,29 @@ fn continuation_matches_one_piece_run() {
     let max_diff = joined.iter().zip(&whole.rotor_speed_rad_s).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
     assert!(max_diff < 1e-5, "{max_diff}");
     assert!(whole.stuck.iter().filter(|s| **s).count() > 100, "the run must stick-slip");
+}
+
+/// Thesis model: T1 follows the Eq. 4-10 lookup at every sample, and Eq. 4-11
+/// as published multiplies it by sin(ω_p t) (Table 4.8's first peak).
+#[test]
+fn thesis_friction_follows_lookup_and_eq_4_11() {
+    let mut p = thesis_params();
+    let FrictionLaw::Thesis(table) = p.friction.clone() else { unreachable!() };
+    let t = grid(10.0, 100.0);
+    let nf = 5.0;
+    let nr = nf * p.brake_disc_radius_m;
+    let plain = simulate(&p, &op(60.0, nf, 2.0), &t, &opts(1e-9)).unwrap();
+    for k in 0..plain.len() {
+        let mu = rig_model::friction::thesis_lookup(&table, plain.rotor_speed_rad_s[k]);
+        assert!((plain.friction_torque_nm[k] - mu * nr).abs() < 1e-12);
+    }
+    let omega_p = 2.209;
+    p.harmonic = Some(rig_types::HarmonicFriction::MultiplyTorque { omega_p_rad_s: omega_p });
+    let harmonic = simulate(&p, &op(60.0, nf, 2.0), &t, &opts(1e-9)).unwrap();
+    for (k, &tk) in t.iter().enumerate() {
+        let mu = rig_model::friction::thesis_lookup(&table, harmonic.rotor_speed_rad_s[k]);
+        assert!((harmonic.friction_torque_nm[k] - mu * nr * (omega_p * tk).sin()).abs() < 1e-12);
+    }
+    // Published Eq. 4-11 lets the "friction" drive the rotor half of the time.
+    assert!(harmonic.friction_torque_nm.iter().any(|&x| x < -0.1 * nr));
 }
