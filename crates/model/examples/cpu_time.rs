@@ -1,4 +1,5 @@
-//! Scratch: CPU time (not wall) per simulate call, from /proc/self/stat.
+//! CPU time (not wall time) per simulate call, read from /proc/self/stat (Linux):
+//! criterion measures wall time, which other jobs on the two shared cores inflate.
 #[path = "../tests/common/mod.rs"]
 mod common;
 use rig_model::{SimOptions, simulate_with_stats};
