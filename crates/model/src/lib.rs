@@ -117,7 +117,8 @@
 //! Samples are interpolated on the dense output, so the sample rate does not
 //! constrain the step. The end of the reference ramp is a breakpoint.
 //! Failures (non-finite state, step below round-off, more than
-//! [`MAX_STEPS`] steps, events that do not advance time) are
+//! the step budget [`MAX_STEPS`] + [`MAX_STEPS_PER_S`]·duration, events that
+//! do not advance time) are
 //! [`ModelError::IntegratorFailed`], never a hang or a panic.
 
 mod dopri;
@@ -126,7 +127,7 @@ pub mod one_dof;
 mod sim;
 mod system;
 
-pub use sim::{MAX_STEPS, SimStats};
+pub use sim::{MAX_STEPS, MAX_STEPS_PER_S, SimStats};
 pub use system::{ANTI_WINDUP_TRACKING_S, MOTOR_FRICTION_SPEED_RAD_S};
 
 use rig_types::{

@@ -73,3 +73,17 @@ fn no_nan_over_the_operating_range() {
         }
     }
 }
+
+/// A parameter set that makes the equations absurdly stiff (L/R = 1 ns) is an
+/// error naming the time constant, returned after the step budget, not a hang.
+#[test]
+fn absurdly_stiff_parameters_fail_with_a_budget_error() {
+    let mut p = rig_params();
+    p.motor.inductance_h = 1e-9 * p.motor.resistance_ohm;
+    let start = std::time::Instant::now();
+    let err =
+        simulate(&p, &RunInput::VoltageStep { voltage_v: 6.0 }, &grid(20.0, 10.0), &SimOptions::default()).unwrap_err();
+    let rig_model::ModelError::IntegratorFailed { reason, .. } = err else { panic!("{err:?}") };
+    assert!(reason.contains("L/R = 1.00e-9 s"), "{reason}");
+    assert!(start.elapsed().as_secs() < 60);
+}
