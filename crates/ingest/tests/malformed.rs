@@ -634,3 +634,19 @@ fn crlf_blank_line() {
         "<c>/runs/twist-1.csv:4: empty line (every row needs 2 cells)",
     );
 }
+
+#[test]
+fn error_accessors_name_file_and_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut files = base();
+    edit(&mut files, "runs/op-01.csv", "0.0060,0.080", "0.0030,0.080");
+    for (name, text) in files {
+        let path = tmp.path().join(name);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, text).unwrap();
+    }
+    let err = read_campaign(tmp.path()).unwrap_err();
+    assert_eq!(err.file(), tmp.path().join("runs/op-01.csv"));
+    assert_eq!(err.line(), Some(5));
+    assert!(matches!(err, rig_ingest::IngestError::Rule { .. }));
+}
