@@ -390,6 +390,43 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], max_order: u32)
     })
 }
 
+/// Variance inflation for correlated residuals: τ = 1 + 2 Σ_{k=1..K} ρ_k of the
+/// weighted residuals, consecutive slip samples of one run (K = 50 samples,
+/// 0.1 s at 500 Hz; the sum stops at the first negative ρ). Standard errors
+/// from σ²(JᵀJ)⁻¹ assume white residuals; multiplying them by √τ uses the
+/// effective sample size instead. τ ≥ 1.
+pub fn autocorr_inflation(d: &SlipData, m: &FrictionModel, phases: &[f64]) -> f64 {
+    let r: Vec<f64> = (0..d.len())
+        .map(|i| {
+            let th = phases.get(d.run[i]).copied().unwrap_or(0.0);
+            d.w(i).sqrt() * (d.mu[i] - m.mu(d.t[i], d.phi[i], d.omega[i], th))
+        })
+        .collect();
+    let var = r.iter().map(|x| x * x).sum::<f64>() / r.len().max(1) as f64;
+    if var <= 0.0 {
+        return 1.0;
+    }
+    let mut tau = 1.0;
+    for k in 1..=50 {
+        let (mut s, mut n) = (0.0, 0usize);
+        for i in k..r.len() {
+            if d.run[i] == d.run[i - k] {
+                s += r[i] * r[i - k];
+                n += 1;
+            }
+        }
+        if n == 0 {
+            break;
+        }
+        let rho = s / n as f64 / var;
+        if rho <= 0.0 {
+            break;
+        }
+        tau += 2.0 * rho;
+    }
+    tau
+}
+
 /// Per-run fit of the nuisance phase with the shared parameters fixed, for a
 /// held-out run: the phase is free per run in the vocabulary, the rest is not.
 pub fn heldout_phase(m: &FrictionModel, d: &SlipData) -> f64 {
@@ -443,4 +480,89 @@ pub fn relative_mu_error(m: &FrictionModel, d: &SlipData, theta: f64) -> Option<
     let ms = (0..d.len()).map(|i| (d.mu[i] - m.mu(d.t[i], d.phi[i], d.omega[i], theta)).powi(2)).sum::<f64>()
         / d.len() as f64;
     Some(ms.sqrt() / mean.abs().max(1e-9))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Deterministic Gaussian-ish noise (sum of 12 LCG uniforms).
+    fn noise(seed: &mut u64) -> f64 {
+        let mut acc = 0.0;
+        for _ in 0..12 {
+            *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            acc += (*seed >> 11) as f64 / (1u64 << 53) as f64;
+        }
+        acc - 6.0
+    }
+
+    /// Slip data of `runs` runs: a saw-tooth slip speed 0..15 rad/s (period 2 s),
+    /// angle its integral, and μ from `law` plus noise of σ = 0.005.
+    fn synth(runs: usize, law: impl Fn(usize, f64, f64, f64) -> f64) -> SlipData {
+        let mut d = SlipData { n_runs: runs, ..Default::default() };
+        let mut seed = 99u64;
+        for r in 0..runs {
+            d.run_weight.push(1.0);
+            let mut phi = 0.0;
+            for k in 0..10000 {
+                let t = k as f64 * 0.002;
+                let w = 0.6 + 14.4 * ((t + 0.37 * r as f64) % 2.0) / 2.0;
+                phi += w * 0.002;
+                d.run.push(r);
+                d.t.push(t);
+                d.phi.push(phi);
+                d.omega.push(w);
+                d.mu.push(law(r, t, phi, w) + 0.005 * noise(&mut seed));
+            }
+        }
+        d
+    }
+
+    #[test]
+    fn stribeck_law_is_recovered() {
+        let d = synth(4, |_, _, _, w| 0.4 + 0.2 * (-(w / 2.0f64).powi(2)).exp());
+        let f = fit_stribeck(&d).unwrap();
+        let FrictionModel::Stribeck { mu_k, mu_s, vs } = f.model else { panic!() };
+        assert!((mu_k - 0.4).abs() < 1e-3 && (mu_s - 0.6).abs() < 5e-3 && (vs - 2.0).abs() < 0.05, "{:?}", f.model);
+        // The Coulomb baseline is much worse on the same data.
+        assert!(fit_coulomb(&d).rss_w > 10.0 * f.rss_w);
+    }
+
+    #[test]
+    fn viscous_law_is_recovered() {
+        let d = synth(3, |_, _, _, w| 0.5 + 0.01 * w);
+        let f = fit_viscous(&d).unwrap();
+        let FrictionModel::Viscous { mu_k, c } = f.model else { panic!() };
+        assert!((mu_k - 0.5).abs() < 1e-3 && (c - 0.01).abs() < 2e-4, "{:?}", f.model);
+    }
+
+    #[test]
+    fn time_modulation_is_recovered_with_per_run_phases() {
+        let d = synth(4, |r, t, _, _| 0.5 * (1.0 + 0.1 * (2.0 * PI * 1.37 * t + r as f64).sin()));
+        let freqs: Vec<f64> = (0..300).map(|j| 0.05 + 0.01 * j as f64).collect();
+        let f = fit_sine(&d, true, &freqs, 8).unwrap();
+        let FrictionModel::TimeSine { mu_k, a, f_hz } = f.model else { panic!() };
+        assert!((mu_k - 0.5).abs() < 1e-3 && (a - 0.1).abs() < 3e-3 && (f_hz - 1.37).abs() < 1e-3, "{:?}", f.model);
+        for (r, th) in f.phases.iter().enumerate() {
+            let e = (th - r as f64).rem_euclid(2.0 * PI);
+            assert!(e.min(2.0 * PI - e) < 0.05, "run {r}: phase {th}");
+        }
+    }
+
+    #[test]
+    fn angle_order_is_recovered() {
+        let d = synth(3, |r, _, phi, _| 0.5 * (1.0 + 0.15 * (3.0 * phi + 0.5 * r as f64).sin()));
+        let f = fit_sine(&d, false, &[], 8).unwrap();
+        let FrictionModel::AngleSine { a, order, .. } = f.model else { panic!() };
+        assert_eq!(order, 3);
+        assert!((a - 0.15).abs() < 3e-3);
+    }
+
+    #[test]
+    fn white_residuals_do_not_inflate() {
+        let d = synth(2, |_, _, _, _| 0.5);
+        let f = fit_coulomb(&d);
+        let tau = autocorr_inflation(&d, &f.model, &[]);
+        assert!(tau < 1.2, "τ = {tau}");
+    }
 }

@@ -179,6 +179,12 @@ pub fn diagnose_signals(
             });
             continue;
         };
+        // Correlated residuals: scale the standard errors by √τ (effective sample size).
+        let tau = friction::autocorr_inflation(&d, &fit.model, &fit.phases).sqrt();
+        let mut fit = fit;
+        for p in fit.params.iter_mut() {
+            p.2 *= tau;
+        }
         let model = Model { friction: fit.model.clone(), pi: pi_base };
         let per_run: Vec<f64> = held.iter().map(|s| run_misfit(&model, s, supply_v).total()).collect();
         let dbic = nf * (fit.rss_w / coul.rss_w).ln() + (fit.k as f64 - coul.k as f64) * ln_nf;
