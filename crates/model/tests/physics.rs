@@ -292,3 +292,38 @@ fn thesis_friction_follows_lookup_and_eq_4_11() {
     // Published Eq. 4-11 lets the "friction" drive the rotor half of the time.
     assert!(harmonic.friction_torque_nm.iter().any(|&x| x < -0.1 * nr));
 }
+
+/// In slip the rig model's T1 is μ(|Ω1|)·N·r for every vocabulary law, and the
+/// normal-force variant of the harmonic friction scales N by 1 + a sin(ω_p t).
+#[test]
+fn slip_friction_follows_each_law_and_the_harmonic_normal_force() {
+    let laws = [
+        FrictionLaw::Stribeck { mu_static: 0.5, mu_kinetic: 0.3, stribeck_speed_rad_s: 1.5 },
+        FrictionLaw::Viscous { mu_static: 0.5, mu_kinetic: 0.3, viscous_per_rad_s: 0.01 },
+        FrictionLaw::Coulomb { mu_static: 0.5, mu_kinetic: 0.35 },
+    ];
+    let t = grid(15.0, 100.0);
+    for law in laws {
+        for harmonic in
+            [None, Some(rig_types::HarmonicFriction::NormalForce { omega_p_rad_s: 4.51, amplitude_ratio: 0.3 })]
+        {
+            let mut p = rig_params();
+            p.friction = law.clone();
+            p.harmonic = harmonic.clone();
+            let nf = 8.0;
+            let tr = simulate(&p, &op(30.0, nf, 2.0), &t, &opts(1e-9)).unwrap();
+            let mut slipping = 0;
+            for (k, &tk) in t.iter().enumerate() {
+                let w1 = tr.rotor_speed_rad_s[k];
+                if tr.stuck[k] || w1 == 0.0 {
+                    continue;
+                }
+                let n = nf * if harmonic.is_some() { 1.0 + 0.3 * (4.51 * tk).sin() } else { 1.0 };
+                let expect = w1.signum() * rig_model::friction_coefficient(&law, w1) * n * p.brake_disc_radius_m;
+                assert!((tr.friction_torque_nm[k] - expect).abs() < 1e-12, "{law:?} t = {tk}");
+                slipping += 1;
+            }
+            assert!(slipping > 100, "{law:?}: {slipping}");
+        }
+    }
+}
