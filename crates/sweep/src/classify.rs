@@ -18,7 +18,7 @@
 //!    lands in the stick phase where Ω1 = 0 on every cycle and cannot tell
 //!    period-1 from chaos. The cycle peaks are sorted and split into clusters
 //!    at gaps larger than max(`cluster_abs_rad_s`, `cluster_rel` · (max − min)).
-//!    With k clusters (k ≤ `max_period`), at least `min_cycles_per_period`·k
+//!    With k clusters each no wider than that same tolerance (k ≤ `max_period`), at least `min_cycles_per_period`·k
 //!    cycles and a label sequence that repeats with period k, the motion is
 //!    **period-k**.
 //! 5. Otherwise the **spectrum** decides (rig_spectra line analysis of the
@@ -79,7 +79,7 @@ impl Default for ClassifyOptions {
             cluster_abs_rad_s: 0.3,
             cluster_rel: 0.05,
             max_period: 4,
-            min_cycles_per_period: 2,
+            min_cycles_per_period: 3,
             min_freq_hz: 0.1,
             max_freq_hz: 10.0,
             tolerance_bins: 0.5,
@@ -95,9 +95,16 @@ pub enum Regime {
     /// Steady sliding (or noise only).
     Equilibrium,
     /// Period-k oscillation; `stick` when the rotor stops in it (stick-slip).
-    Periodic { period: u32, stick: bool },
-    QuasiPeriodic { stick: bool },
-    Chaotic { stick: bool },
+    Periodic {
+        period: u32,
+        stick: bool,
+    },
+    QuasiPeriodic {
+        stick: bool,
+    },
+    Chaotic {
+        stick: bool,
+    },
 }
 
 impl Regime {
@@ -174,9 +181,10 @@ pub fn classify(speed_rad_s: &[f64], fs_hz: f64, o: &ClassifyOptions) -> Classif
     let peaks = cycle_peaks(speed_rad_s, mean, o.hysteresis_rel * range);
     out.cycles = peaks.len();
     let tol = o.cluster_abs_rad_s.max(o.cluster_rel * range);
-    let (labels, k) = clusters(&peaks, tol);
+    let (labels, k, width) = clusters(&peaks, tol);
     out.clusters = k;
-    if k >= 1 && k <= o.max_period && peaks.len() >= o.min_cycles_per_period * k && repeats(&labels, k) {
+    let tight = width <= tol;
+    if tight && k >= 1 && k <= o.max_period && peaks.len() >= o.min_cycles_per_period * k && repeats(&labels, k) {
         out.regime = Regime::Periodic { period: k as u32, stick };
         out.decided_by = "section".into();
         return out;
@@ -214,10 +222,12 @@ fn cycle_peaks(x: &[f64], level: f64, h: f64) -> Vec<f64> {
 }
 
 /// Cluster label of each value (clusters split at sorted gaps > tol, labelled
-/// in increasing value) and the number of clusters.
-fn clusters(values: &[f64], tol: f64) -> (Vec<usize>, usize) {
+/// in increasing value), the number of clusters and the widest cluster's
+/// spread: a chaotic section fills a continuum with small gaps, so a single
+/// gap-split cluster is not enough — each must also be narrower than tol.
+fn clusters(values: &[f64], tol: f64) -> (Vec<usize>, usize, f64) {
     if values.is_empty() {
-        return (Vec::new(), 0);
+        return (Vec::new(), 0, 0.0);
     }
     let mut sorted: Vec<f64> = values.to_vec();
     sorted.sort_by(f64::total_cmp);
@@ -228,8 +238,16 @@ fn clusters(values: &[f64], tol: f64) -> (Vec<usize>, usize) {
             edges.push(w[0]);
         }
     }
-    let labels = values.iter().map(|v| edges.iter().filter(|&&e| *v > e).count()).collect();
-    (labels, edges.len() + 1)
+    let labels: Vec<usize> = values.iter().map(|v| edges.iter().filter(|&&e| *v > e).count()).collect();
+    let k = edges.len() + 1;
+    let width = (0..k)
+        .map(|c| {
+            let members = values.iter().zip(&labels).filter(|(_, l)| **l == c).map(|(v, _)| *v);
+            let (lo, hi) = members.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+            hi - lo
+        })
+        .fold(0.0, f64::max);
+    (labels, k, width)
 }
 
 /// True when the label sequence repeats with period k and uses all k labels
@@ -252,7 +270,11 @@ fn spectral_regime(x: &[f64], fs_hz: f64, f_cycle_hz: f64, stick: bool, o: &Clas
         &PeakOptions { min_freq_hz: o.min_freq_hz, max_freq_hz: o.max_freq_hz, ..PeakOptions::default() },
     );
     let lines: Vec<rig_spectra::Line> = peaks.iter().map(Into::into).collect();
-    let a = analyse_lines(&lines, s.resolution_hz, &LineOptions { tolerance_bins: o.tolerance_bins, ..LineOptions::default() });
+    let a = analyse_lines(
+        &lines,
+        s.resolution_hz,
+        &LineOptions { tolerance_bins: o.tolerance_bins, ..LineOptions::default() },
+    );
     let unrelated = a.count(LineClass::Unrelated);
     let mean = x.iter().sum::<f64>() / x.len() as f64;
     let variance = x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / x.len() as f64;

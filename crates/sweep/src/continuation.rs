@@ -11,12 +11,12 @@
 //! for the attractor to be reached or left; the stick-slip period is the
 //! torsional period plus the stick time (a twist of 2(μs − μk)N r/K built at
 //! the motor speed), between ≈ 2 s and ≈ 6 s on the maps' range, so a 20 s
-//! window holds 3 to 10 cycles — the classifier asks for two per period.
+//! window holds 3 to 10 cycles — the classifier asks for three per period.
 //! The first point of a chain starts from rest with a set-point step and gets
 //! `first_transient_s` instead.
 
-use crate::classify::{Classification, ClassifyOptions, classify};
 use crate::SweepError;
+use crate::classify::{Classification, ClassifyOptions, classify};
 use rayon::prelude::*;
 use rig_model::{SimOptions, State, simulate_from};
 use rig_types::RigParams;
@@ -238,7 +238,9 @@ pub fn merge_slices(slices: Vec<MapSlice>) -> Result<MapSlice, SweepError> {
     chains.sort_by_key(|c| c.index);
     let complete = chains.len() == total && chains.iter().enumerate().all(|(k, c)| c.index == k);
     if !complete {
-        return Err(SweepError::Merge { rule: "slices must cover every chain exactly once (missing or duplicate shard)" });
+        return Err(SweepError::Merge {
+            rule: "slices must cover every chain exactly once (missing or duplicate shard)",
+        });
     }
     Ok(MapSlice { spec, total_chains: total, chains })
 }

@@ -24,7 +24,11 @@ const COLUMNS: [&str; 13] = [
 
 fn push_chain(t: &mut Table, c: &ChainResult) {
     for o in &c.points {
-        let mut row = vec![c.direction.as_str().to_string(), fmt_fixed(o.point.motor_rpm, 2), fmt_fixed(o.point.normal_force_n, 3)];
+        let mut row = vec![
+            c.direction.as_str().to_string(),
+            fmt_fixed(o.point.motor_rpm, 2),
+            fmt_fixed(o.point.normal_force_n, 3),
+        ];
         match &o.result {
             // Simulated speeds are exact (no encoder): two decimals of rpm; severities to 0.001.
             Ok(k) => row.extend([
