@@ -96,6 +96,10 @@ pub struct EstimateOptions {
     /// every this many samples; speeds are means over such windows).
     pub speed_window_samples: usize,
     pub step_residual: StepResidual,
+    /// Estimate the armature inductance too (default: held at Table 4.4,
+    /// since L/R is about one sample interval; the report gives the
+    /// correlation and standard error it would have if freed).
+    pub free_inductance: bool,
     /// Integrator tolerances for the fits.
     pub sim_rtol: f64,
     pub sim_atol: f64,
@@ -118,6 +122,7 @@ impl EstimateOptions {
             holdout: None,
             speed_window_samples: 25,
             step_residual: StepResidual::Speed,
+            free_inductance: false,
             sim_rtol: 1e-7,
             sim_atol: 1e-9,
             sim_max_step_s: 0.01,

@@ -131,10 +131,12 @@ fn held_analysis(
     problem: &StepProblem,
     sol: &LsqSolution,
     o: &EstimateOptions,
+    held: &[&'static str],
 ) -> Result<Vec<(Option<(&'static str, f64)>, Option<f64>)>, EstimateError> {
-    HELD.iter()
+    let free = &problem.names;
+    held.iter()
         .map(|h| {
-            let mut names: Vec<&'static str> = FREE.to_vec();
+            let mut names: Vec<&'static str> = free.clone();
             names.push(h);
             let mut x: Vec<f64> = sol.x.clone();
             x.push(get_param(&problem.base, h));
@@ -157,7 +159,7 @@ fn held_analysis(
                 ..sol.clone()
             };
             let cov = covariance(&trial);
-            let i = FREE.len();
+            let i = free.len();
             if !cov.regular {
                 return Ok((None, None));
             }
@@ -194,15 +196,22 @@ pub fn estimate_rig(
     let base = initial_params(c, cal, o)?;
     let sim = sim_options(o);
     let est_steps: Vec<&StepData> = steps.iter().zip(&used).filter(|(_, u)| **u).map(|(s, _)| s).collect();
+    // The free set: FREE, plus L when asked (see EstimateOptions::free_inductance).
+    let mut free: Vec<&'static str> = FREE.to_vec();
+    let mut held: Vec<&'static str> = HELD.to_vec();
+    if o.free_inductance {
+        free.push("L_DC");
+        held.retain(|h| *h != "L_DC");
+    }
     let problem = StepProblem {
         base: base.clone(),
-        names: FREE.to_vec(),
+        names: free.clone(),
         steps: est_steps,
         sim: sim.clone(),
         residual: o.step_residual,
     };
-    let x0: Vec<f64> = FREE.iter().map(|n| get_param(&base, n)).collect();
-    let tr = vec![Transform::Log; FREE.len()];
+    let x0: Vec<f64> = free.iter().map(|n| get_param(&base, n)).collect();
+    let tr = vec![Transform::Log; free.len()];
     let sol = match o.solver_kind {
         SolverKind::LevenbergMarquardt => levenberg_marquardt(&problem, &x0, &tr, &o.solver)?,
         SolverKind::GaussNewtonLineSearch => gauss_newton_ls(&problem, &x0, &tr, &o.solver)?,
@@ -210,7 +219,7 @@ pub fn estimate_rig(
     let cov = covariance(&sol);
     let k_rel = cal.stiffness_nm_rad_stderr / cal.stiffness_nm_rad;
     let fitted = problem.params_at(&sol.x);
-    let held = held_analysis(&problem, &sol, o)?;
+    let held_info = held_analysis(&problem, &sol, o, &held)?;
 
     // Parameter table in the chapter's order, then C and the gear.
     let pairs = flagged_pairs(&cov.correlation);
@@ -219,7 +228,7 @@ pub fn estimate_rig(
     for name in order {
         let initial = get_param(&base, name);
         let estimate = get_param(&fitted, name);
-        let (stderr, identifiable) = if let Some(j) = FREE.iter().position(|f| *f == name) {
+        let (stderr, identifiable) = if let Some(j) = free.iter().position(|f| *f == name) {
             let mut se = cov.stderr[j];
             if scales_with_torque(name) && k_rel.is_finite() {
                 se = estimate * ((se / estimate).powi(2) + k_rel * k_rel).sqrt();
@@ -228,9 +237,9 @@ pub fn estimate_rig(
                 .iter()
                 .filter_map(|(a, b, _)| {
                     if *a == j {
-                        Some(FREE[*b].to_string())
+                        Some(free[*b].to_string())
                     } else if *b == j {
-                        Some(FREE[*a].to_string())
+                        Some(free[*a].to_string())
                     } else {
                         None
                     }
@@ -246,8 +255,8 @@ pub fn estimate_rig(
                 },
             )
         } else {
-            let h = HELD.iter().position(|f| *f == name).expect("held parameter");
-            (None, Identifiability::Fixed { reason: held_reason(name, held[h].0, held[h].1) })
+            let h = held.iter().position(|f| *f == name).expect("held parameter");
+            (None, Identifiability::Fixed { reason: held_reason(name, held_info[h].0, held_info[h].1) })
         };
         params.push(ParamEstimate {
             name: name.into(),
@@ -317,7 +326,7 @@ pub fn estimate_rig(
     let white = whiteness(&segments, o.whiteness_max_lag);
     let m = sol.residuals.len();
     // k: free parameters and the noise variance.
-    let (aic, bic) = aic_bic(sol.ssr, m, FREE.len() + 1);
+    let (aic, bic) = aic_bic(sol.ssr, m, free.len() + 1);
 
     let pi = estimate_pi(c, c.rig.supply_voltage_v, &o.pi)?;
     let friction = estimate_friction(c, cal.force_offset_mv, cal.force_factor_mv_per_n, &o.friction)?;
@@ -361,9 +370,9 @@ pub fn estimate_rig(
         params: final_params,
         report: FitReport {
             params,
-            estimated: FREE.iter().map(|s| s.to_string()).collect(),
+            estimated: free.iter().map(|s| s.to_string()).collect(),
             correlation: cov.correlation.clone(),
-            flagged_pairs: pairs.iter().map(|(a, b, r)| (FREE[*a].to_string(), FREE[*b].to_string(), *r)).collect(),
+            flagged_pairs: pairs.iter().map(|(a, b, r)| (free[*a].to_string(), free[*b].to_string(), *r)).collect(),
             n_residuals: m,
             ssr: sol.ssr,
             sigma2: cov.sigma2,
