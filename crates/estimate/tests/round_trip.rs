@@ -63,8 +63,16 @@ fn estimate_rig_recovers_a_simulated_rig() {
     let names = ["n kT/R", "n^2 (kT ke/R + Cm)", "n Tf", "n^2 Jm"];
     let tol = [0.01, 0.01, 0.03, 0.01];
     for i in 0..4 {
+        eprintln!("{}: rel. error {:.2e}", names[i], rel(ce[i], ct[i]));
         assert!(rel(ce[i], ct[i]) < tol[i], "{}: {} vs {}", names[i], ce[i], ct[i]);
     }
+    eprintln!(
+        "J1 {:.2e}, C {:.2e}, kp {:.2e}, ki {:.2e}",
+        rel(p.rotor_inertia_kgm2, truth.rotor_inertia_kgm2),
+        rel(p.shaft_damping_nm_s_rad, truth.shaft_damping_nm_s_rad),
+        rel(p.drive.kp_v_s_rad, truth.drive.kp_v_s_rad),
+        rel(p.drive.ki_v_rad, truth.drive.ki_v_rad)
+    );
     assert!(rel(p.rotor_inertia_kgm2, truth.rotor_inertia_kgm2) < 0.01, "J1 {}", p.rotor_inertia_kgm2);
     assert!(rel(p.shaft_damping_nm_s_rad, truth.shaft_damping_nm_s_rad) < 0.05, "C {}", p.shaft_damping_nm_s_rad);
     assert!(rel(p.drive.kp_v_s_rad, truth.drive.kp_v_s_rad) < 0.05, "kp {}", p.drive.kp_v_s_rad);
@@ -74,6 +82,7 @@ fn estimate_rig_recovers_a_simulated_rig() {
     else {
         panic!("baseline must be Coulomb")
     };
+    eprintln!("mu_s {:.2e}, mu_k {:.2e}", rel(*mu_static, *s0), rel(*mu_kinetic, *k0));
     assert!(rel(*mu_static, *s0) < 0.02, "mu_s {mu_static}");
     assert!(rel(*mu_kinetic, *k0) < 0.02, "mu_k {mu_kinetic}");
     assert_eq!(p.drive.limit_v, 24.0);
