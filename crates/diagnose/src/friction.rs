@@ -136,14 +136,17 @@ pub fn fit_coulomb(d: &SlipData) -> FrictionFit {
 }
 
 /// Linear least squares of μ on fixed columns; returns (solution, covariance, rss).
-fn linear_fit(d: &SlipData, ncol: usize, cols: impl Fn(usize, &mut [f64])) -> Option<(Vec<f64>, Vec<f64>, f64)> {
+fn linear_fit(d: &SlipData, ncol: usize, /* ≤ 4 */ cols: impl Fn(usize, &mut [f64])) -> Option<(Vec<f64>, Vec<f64>, f64)> {
     let mut ne = Normal::new(ncol);
     let mut row = vec![0.0; ncol];
     for i in 0..d.len() {
         cols(i, &mut row);
         let sw = d.w(i).sqrt();
-        let sparse: Vec<(usize, f64)> = row.iter().enumerate().map(|(j, &v)| (j, v * sw)).collect();
-        ne.add_sparse(&sparse, d.mu[i] * sw);
+        let mut sparse = [(0usize, 0.0f64); 4];
+        for (j, &v) in row.iter().enumerate() {
+            sparse[j] = (j, v * sw);
+        }
+        ne.add_sparse(&sparse[..ncol], d.mu[i] * sw);
     }
     let p = ne.solve()?;
     let mut rss = 0.0;
@@ -249,28 +252,66 @@ pub(crate) fn golden(mut lo: f64, mut hi: f64, iters: usize, f: impl Fn(f64) -> 
     if f1 <= f2 { x1 } else { x2 }
 }
 
-/// Scan of the per-run sine regression μ = μk + A_r sin x + B_r cos x (shared μk),
-/// returning the weighted RSS. Linear, so the scan is exact for each x.
-fn sine_scan_rss(d: &SlipData, arg: impl Fn(usize) -> f64) -> Option<(f64, Vec<f64>)> {
+/// Per-run sine regression μ = μk + A_r sin x + B_r cos x (shared μk) for
+/// given (sin x, cos x) per sample: (weighted RSS, solution). Linear, so the
+/// scan is exact at each x. RSS = yᵀWy − pᵀJᵀWy at the solution.
+fn sine_rss_from(d: &SlipData, sc: &[(f64, f64)], ywy: f64) -> Option<(f64, Vec<f64>)> {
     let n = 1 + 2 * d.n_runs;
     let mut ne = Normal::new(n);
-    let mut sc = Vec::with_capacity(d.len());
     for i in 0..d.len() {
-        let (s, c) = arg(i).sin_cos();
-        sc.push((s, c));
+        let (s, c) = sc[i];
         let r = d.run[i];
         let sw = d.w(i).sqrt();
         ne.add_sparse(&[(0, sw), (1 + 2 * r, sw * s), (2 + 2 * r, sw * c)], sw * d.mu[i]);
     }
     let p = ne.solve()?;
-    let rss = (0..d.len())
-        .map(|i| {
-            let r = d.run[i];
-            let e = d.mu[i] - p[0] - p[1 + 2 * r] * sc[i].0 - p[2 + 2 * r] * sc[i].1;
-            d.w(i) * e * e
+    let rss = ywy - p.iter().zip(&ne.atb).map(|(a, b)| a * b).sum::<f64>();
+    Some((rss.max(0.0), p))
+}
+
+fn ywy(d: &SlipData) -> f64 {
+    (0..d.len()).map(|i| d.w(i) * d.mu[i] * d.mu[i]).sum()
+}
+
+fn sine_scan_rss(d: &SlipData, arg: impl Fn(usize) -> f64) -> Option<(f64, Vec<f64>)> {
+    let sc: Vec<(f64, f64)> = (0..d.len()).map(|i| arg(i).sin_cos()).collect();
+    sine_rss_from(d, &sc, ywy(d))
+}
+
+/// RSS of the time-sine regression on a uniform frequency grid. Chunks of 64
+/// frequencies run in parallel; inside a chunk sin/cos advance by rotation
+/// (angle 2πΔf·t per sample), re-synchronised exactly at each chunk start.
+fn time_scan(d: &SlipData, freqs_hz: &[f64]) -> Vec<(f64, f64)> {
+    use rayon::prelude::*;
+    let yy = ywy(d);
+    let uniform = freqs_hz.len() > 1
+        && freqs_hz.windows(2).all(|w| ((w[1] - w[0]) - (freqs_hz[1] - freqs_hz[0])).abs() < 1e-9);
+    if !uniform {
+        return freqs_hz
+            .par_iter()
+            .map(|&f| (f, sine_scan_rss(d, |i| 2.0 * PI * f * d.t[i]).map(|x| x.0).unwrap_or(f64::INFINITY)))
+            .collect();
+    }
+    let df = freqs_hz[1] - freqs_hz[0];
+    let rot: Vec<(f64, f64)> = d.t.iter().map(|t| (2.0 * PI * df * t).sin_cos()).collect();
+    let chunks: Vec<&[f64]> = freqs_hz.chunks(64).collect();
+    chunks
+        .par_iter()
+        .map(|chunk| {
+            let mut sc: Vec<(f64, f64)> = d.t.iter().map(|t| (2.0 * PI * chunk[0] * t).sin_cos()).collect();
+            let mut out = Vec::with_capacity(chunk.len());
+            for &f in chunk.iter() {
+                out.push((f, sine_rss_from(d, &sc, yy).map(|x| x.0).unwrap_or(f64::INFINITY)));
+                for (v, r) in sc.iter_mut().zip(&rot) {
+                    *v = (v.0 * r.1 + v.1 * r.0, v.1 * r.1 - v.0 * r.0);
+                }
+            }
+            out
         })
-        .sum();
-    Some((rss, p))
+        .collect::<Vec<_>>()
+        .into_iter()
+        .flatten()
+        .collect()
 }
 
 /// Sine models: scan the frequency (time kind, grid of `freqs_hz`) or the
@@ -282,7 +323,9 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], max_order: u32)
     }
     let cands: Vec<f64> = if time_kind { freqs_hz.to_vec() } else { (1..=max_order).map(f64::from).collect() };
     let xarg = |psi: f64, i: usize| if time_kind { 2.0 * PI * psi * d.t[i] } else { psi * d.phi[i] };
-    let scored: Vec<(f64, f64)> = {
+    let scored: Vec<(f64, f64)> = if time_kind {
+        time_scan(d, &cands)
+    } else {
         use rayon::prelude::*;
         cands.par_iter().map(|&psi| (psi, sine_scan_rss(d, |i| xarg(psi, i)).map(|x| x.0).unwrap_or(f64::INFINITY))).collect()
     };
@@ -326,11 +369,14 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], max_order: u32)
             let (mk, a) = (theta[0], theta[1]);
             let sw = d.w(i).sqrt();
             let e = d.mu[i] - mk * (1.0 + a * s);
-            let mut row = vec![(0, sw * (1.0 + a * s)), (1, sw * mk * s), (2 + nf + r, sw * mk * a * c)];
-            if time_kind {
-                row.push((2, sw * mk * a * c * 2.0 * PI * d.t[i]));
-            }
-            ne.add_sparse(&row, sw * e);
+            let mut row = [(0, sw * (1.0 + a * s)), (1, sw * mk * s), (2 + nf + r, sw * mk * a * c), (2, 0.0)];
+            let len = if time_kind {
+                row[3].1 = sw * mk * a * c * 2.0 * PI * d.t[i];
+                4
+            } else {
+                3
+            };
+            ne.add_sparse(&row[..len], sw * e);
         }
         let Some(step) = ne.solve() else { break };
         let mut lambda = 1.0;
