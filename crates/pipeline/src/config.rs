@@ -141,8 +141,8 @@ struct RawStage {
 impl PipelineConfig {
     /// Reads and validates `path` against `registry`.
     pub fn load(path: &Path, registry: Registry) -> Result<Self, PipelineError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| PipelineError::Io { path: path.to_path_buf(), source })?;
+        let text =
+            std::fs::read_to_string(path).map_err(|source| PipelineError::Io { path: path.to_path_buf(), source })?;
         let root = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let root = if root.as_os_str().is_empty() { PathBuf::from(".") } else { root };
         Self::parse(&text, path, &root, registry)
@@ -150,8 +150,11 @@ impl PipelineConfig {
 
     /// Parses `text` (as if read from `path`) and validates it.
     pub fn parse(text: &str, path: &Path, root: &Path, registry: Registry) -> Result<Self, PipelineError> {
-        let raw: RawFile = toml::from_str(text)
-            .map_err(|e| PipelineError::Config { path: path.to_path_buf(), stage: None, reason: e.to_string() })?;
+        let raw: RawFile = toml::from_str(text).map_err(|e| PipelineError::Config {
+            path: path.to_path_buf(),
+            stage: None,
+            reason: e.to_string(),
+        })?;
         let stages = raw
             .stage
             .into_iter()
@@ -169,7 +172,8 @@ impl PipelineConfig {
                 })
             })
             .collect::<Result<Vec<_>, PipelineError>>()?;
-        let config = PipelineConfig { path: path.to_path_buf(), root: root.to_path_buf(), settings: raw.settings, stages };
+        let config =
+            PipelineConfig { path: path.to_path_buf(), root: root.to_path_buf(), settings: raw.settings, stages };
         config.validate(registry)?;
         Ok(config)
     }
@@ -196,7 +200,9 @@ impl PipelineConfig {
             for o in &s.outputs {
                 let (OutputPattern::Exact(p) | OutputPattern::Prefix(p)) = o;
                 if p.starts_with('/') || p.split('/').any(|c| c == "..") || p.starts_with('.') {
-                    return Err(self.err(&s.name, format!("output {p:?} must be relative, inside the out dir, not hidden")));
+                    return Err(
+                        self.err(&s.name, format!("output {p:?} must be relative, inside the out dir, not hidden"))
+                    );
                 }
             }
             for input in &s.inputs {
@@ -205,7 +211,9 @@ impl PipelineConfig {
                         return Err(self.err(&s.name, format!("input @{stage}/{rel}: no stage named {stage}")));
                     };
                     if !up.declares_output(rel) {
-                        return Err(self.err(&s.name, format!("input @{stage}/{rel}: stage {stage} declares no such output")));
+                        return Err(
+                            self.err(&s.name, format!("input @{stage}/{rel}: stage {stage} declares no such output"))
+                        );
                     }
                 }
             }
@@ -220,7 +228,8 @@ impl PipelineConfig {
 }
 
 fn parse_input(path: &Path, stage: &str, text: &str) -> Result<Input, PipelineError> {
-    let bad = |reason: String| PipelineError::Config { path: path.to_path_buf(), stage: Some(stage.to_string()), reason };
+    let bad =
+        |reason: String| PipelineError::Config { path: path.to_path_buf(), stage: Some(stage.to_string()), reason };
     if let Some(rest) = text.strip_prefix('@') {
         let Some((up, rel)) = rest.split_once('/') else {
             return Err(bad(format!("input {text:?}: expected @stage/relative-path")));

@@ -231,7 +231,8 @@ impl Runner {
         let order: Vec<String> =
             graph::topological_order(&self.config)?.into_iter().filter(|n| selected.contains(n)).collect();
         if !self.dry_run {
-            std::fs::create_dir_all(&dirs.out).map_err(|source| PipelineError::Io { path: dirs.out.clone(), source })?;
+            std::fs::create_dir_all(&dirs.out)
+                .map_err(|source| PipelineError::Io { path: dirs.out.clone(), source })?;
             store::remove_temp_files(&dirs.out)?;
         }
         let pool = rayon::ThreadPoolBuilder::new().num_threads(self.jobs).build().map_err(|e| {
@@ -265,7 +266,10 @@ impl Runner {
                     let broken = decl.dependencies().into_iter().find(|d| done.get(d).is_some_and(|r| r.is_broken()));
                     if let Some(by) = broken {
                         let reasons = vec![format!("upstream {by} did not succeed")];
-                        done.insert(name.clone(), StageReport { name, outcome: Outcome::Blocked { by }, reasons, record: None });
+                        done.insert(
+                            name.clone(),
+                            StageReport { name, outcome: Outcome::Blocked { by }, reasons, record: None },
+                        );
                         bar.inc(1);
                         continue;
                     }
@@ -297,11 +301,7 @@ impl Runner {
         });
         bar.finish_and_clear();
         let stages: Vec<StageReport> = order.iter().filter_map(|n| done.remove(n)).collect();
-        let manifest = if self.dry_run {
-            None
-        } else {
-            Some(manifest::write(&self.config, &dirs.out, &stages)?)
-        };
+        let manifest = if self.dry_run { None } else { Some(manifest::write(&self.config, &dirs.out, &stages)?) };
         Ok(RunReport { stages, manifest })
     }
 
@@ -317,7 +317,8 @@ impl Runner {
         let report = |outcome, reasons, record| StageReport { name: name.clone(), outcome, reasons, record };
         if !upstream_runs.is_empty() {
             // Dry run: the upstream outputs this stage reads do not exist yet or may change.
-            let reasons = upstream_runs.iter().map(|u| format!("upstream {u} would run; its outputs may change")).collect();
+            let reasons =
+                upstream_runs.iter().map(|u| format!("upstream {u} would run; its outputs may change")).collect();
             return report(Outcome::WouldRun, reasons, None);
         }
         // Resolve and check the inputs.
@@ -350,14 +351,20 @@ impl Runner {
         if reasons.is_empty() {
             let previous = previous.expect("no reasons implies a record");
             let n = previous.outputs.len();
-            return report(Outcome::UpToDate, vec![format!("inputs, params and code unchanged; {n} outputs intact")], Some(previous));
+            return report(
+                Outcome::UpToDate,
+                vec![format!("inputs, params and code unchanged; {n} outputs intact")],
+                Some(previous),
+            );
         }
         if self.dry_run {
             return report(Outcome::WouldRun, reasons, None);
         }
         match self.execute(decl, dirs, record) {
             Ok(Some(record)) => report(Outcome::Ran, reasons, Some(record)),
-            Ok(None) => report(Outcome::SkippedEmpty, vec!["the stage returned without writing any output".into()], None),
+            Ok(None) => {
+                report(Outcome::SkippedEmpty, vec!["the stage returned without writing any output".into()], None)
+            }
             Err(e) => report(Outcome::Failed(e), reasons, None),
         }
     }

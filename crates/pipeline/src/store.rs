@@ -137,7 +137,10 @@ pub fn commit(
         std::fs::rename(tmp, path).map_err(|source| PipelineError::Io { path: path.clone(), source })?;
     }
     remove_stale(config, decl, out_dir, staged)?;
-    Ok(staged.iter().map(|(rel, bytes)| (rel.clone(), FileHash { blake3: hash_bytes(bytes), size: bytes.len() as u64 })).collect())
+    Ok(staged
+        .iter()
+        .map(|(rel, bytes)| (rel.clone(), FileHash { blake3: hash_bytes(bytes), size: bytes.len() as u64 }))
+        .collect())
 }
 
 fn remove_stale(

@@ -194,7 +194,10 @@ fn runs_in_dependency_order_and_commits_outputs() {
     let ev = events(&f.out());
     let pos = |e: &str| ev.iter().position(|x| x == e).unwrap_or_else(|| panic!("{e} not in {ev:?}"));
     assert!(pos("end a") < pos("start c") && pos("end b") < pos("start c"), "{ev:?}");
-    assert_eq!(f.read_out("c/out.txt"), "stage c\nstage a\nalpha\nfile a/one.txt\nstage b\nbeta\nfile b.txt\nfile c/out.txt\n");
+    assert_eq!(
+        f.read_out("c/out.txt"),
+        "stage c\nstage a\nalpha\nfile a/one.txt\nstage b\nbeta\nfile b.txt\nfile c/out.txt\n"
+    );
     assert!(r.into_result().is_ok());
 }
 
@@ -480,7 +483,8 @@ fn config_errors_name_the_file_and_the_stage() {
                  [[stage]]\nname = \"q\"\nafter = [\"p\"]\noutputs = [\"q.txt\"]\n";
     let e = config_error(cycle);
     assert!(e.contains("pipeline.toml: stage p: dependency cycle among stages p, q"), "{e}");
-    let e = config_error(&format!("{DIAMOND}[[stage]]\nname = \"e\"\ninputs = [\"@a/b.txt\"]\noutputs = [\"e.txt\"]\n"));
+    let e =
+        config_error(&format!("{DIAMOND}[[stage]]\nname = \"e\"\ninputs = [\"@a/b.txt\"]\noutputs = [\"e.txt\"]\n"));
     assert!(e.contains("pipeline.toml: stage e: input @a/b.txt: stage a declares no such output"), "{e}");
     let e = config_error("[[stage]]\nname = \"p\"\ninputs = [\"{campain}\"]\noutputs = [\"p.txt\"]\n");
     assert!(e.contains("stage p") && e.contains("unknown placeholder {campain}"), "{e}");
@@ -505,4 +509,14 @@ fn the_repository_pipeline_toml_is_valid() {
     let order = rig_pipeline::graph::topological_order(runner.config()).unwrap();
     assert_eq!(order.first().map(String::as_str), Some("thesis-tables"));
     assert_eq!(order.last().map(String::as_str), Some("report"));
+}
+
+#[test]
+fn reformatting_pipeline_toml_reruns_nothing() {
+    let f = Fixture::new(&DIAMOND.replace("write = [\"d.txt\"]", "write = [\"d.txt\"]\nx = 1.5\ny = { b = 1, a = 2 }"));
+    f.run();
+    f.edit_toml("x = 1.5\ny = { b = 1, a = 2 }", "y = {a=2,b=1}   # reordered\nx = 1.50");
+    f.edit_toml("name = \"c\"", "name = \"c\"\nsummary = \"a summary is documentation, not a parameter\"");
+    let r = f.run();
+    assert!(r.ran().is_empty(), "{}", r.summary(true));
 }

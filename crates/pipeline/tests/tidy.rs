@@ -43,7 +43,8 @@ fn metadata() -> Graph {
         .iter()
         .map(|p| (p["id"].as_str().unwrap().to_string(), p["name"].as_str().unwrap().to_string()))
         .collect();
-    let members = meta["workspace_members"].as_array().unwrap().iter().map(|id| name_of[id.as_str().unwrap()].clone()).collect();
+    let members =
+        meta["workspace_members"].as_array().unwrap().iter().map(|id| name_of[id.as_str().unwrap()].clone()).collect();
     let mut edges = BTreeMap::new();
     for node in meta["resolve"]["nodes"].as_array().unwrap() {
         let name = name_of[node["id"].as_str().unwrap()].clone();
@@ -139,7 +140,8 @@ fn rust_files(dir: &Path) -> Vec<PathBuf> {
 
 #[test]
 fn model_does_no_io() {
-    let forbidden = ["std::fs", "std::io", "std::env", "std::net", "File::", "println!", "eprintln!", "print!", "eprint!", "dbg!"];
+    let forbidden =
+        ["std::fs", "std::io", "std::env", "std::net", "File::", "println!", "eprintln!", "print!", "eprint!", "dbg!"];
     let files = rust_files(&root().join("crates/model/src"));
     assert!(!files.is_empty(), "no sources found under crates/model/src");
     let mut problems = Vec::new();
