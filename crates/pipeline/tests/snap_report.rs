@@ -149,3 +149,16 @@ fn populated_out_dir_shows_audit_figures_and_diagnosis() {
     // Deterministic bytes.
     assert_eq!(staged, run_report(out));
 }
+
+/// A tool, not a check: renders the report for an existing out dir (e.g. a
+/// partial `cargo xtask reproduce --out DIR`) without running the upstream
+/// stages, to look at the page while the pipeline is incomplete:
+/// `RIG_REPORT_OUT=/tmp/out cargo test -p rig-pipeline --test snap_report -- --ignored render_existing`.
+#[test]
+#[ignore = "tool: needs RIG_REPORT_OUT"]
+fn render_existing_out_dir() {
+    let out = std::path::PathBuf::from(std::env::var("RIG_REPORT_OUT").expect("set RIG_REPORT_OUT to an out dir"));
+    for (rel, bytes) in run_report(&out) {
+        std::fs::write(out.join(rel), bytes).unwrap();
+    }
+}
