@@ -100,9 +100,8 @@ pub fn covariance(sol: &LsqSolution) -> Covariance {
 /// Pairs (i, j), i < j, with |ρ| > CORRELATION_FLAG, in index order.
 pub fn flagged_pairs(correlation: &[Vec<f64>]) -> Vec<(usize, usize, f64)> {
     let mut out = Vec::new();
-    for i in 0..correlation.len() {
-        for j in i + 1..correlation.len() {
-            let r = correlation[i][j];
+    for (i, row) in correlation.iter().enumerate() {
+        for (j, &r) in row.iter().enumerate().skip(i + 1) {
             if !r.is_finite() || r.abs() > CORRELATION_FLAG {
                 out.push((i, j, r));
             }

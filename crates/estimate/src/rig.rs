@@ -124,6 +124,9 @@ fn held_reason(name: &str, corr: Option<(&str, f64)>, rel_se: Option<f64>) -> St
     }
 }
 
+/// A held parameter's strongest partner (name, ρ) and relative standard error, if freed.
+type HeldInfo = (Option<(&'static str, f64)>, Option<f64>);
+
 /// Identifiability of each held parameter: freed alone next to the estimated
 /// ones, the Jacobian at the solution gives its strongest correlation and
 /// the relative standard error it would have.
@@ -132,7 +135,7 @@ fn held_analysis(
     sol: &LsqSolution,
     o: &EstimateOptions,
     held: &[&'static str],
-) -> Result<Vec<(Option<(&'static str, f64)>, Option<f64>)>, EstimateError> {
+) -> Result<Vec<HeldInfo>, EstimateError> {
     let free = &problem.names;
     held.iter()
         .map(|h| {
@@ -277,7 +280,8 @@ pub fn estimate_rig(
     });
 
     // Every step simulated at the estimate: fit on used and held-out runs.
-    let sims: Vec<Result<(Vec<f64>, Vec<f64>), EstimateError>> = steps
+    type Speeds = (Vec<f64>, Vec<f64>);
+    let sims: Vec<Result<Speeds, EstimateError>> = steps
         .par_iter()
         .map(|s| simulate_step(&fitted, s, &sim).map_err(|source| EstimateError::Model { run: s.id.clone(), source }))
         .collect();
