@@ -326,7 +326,7 @@ pub fn report_markdown(e: &RigEstimate, campaign: &str, o: &EstimateOptions) -> 
          windows of {} samples, ∫e = ∫Ω_ref − φ2 from the encoder (no derivative), ē from angle differences. {} \
          One constant c_k per unsaturated segment and run (encoder rounding, anti-windup after saturation). Samples \
          with |V| ≥ supply − {} V are saturated: {:.2} % of all samples; {} windows, {} offsets.\n\nkp = {} ± {} V s/rad, \
-         ki = {} ± {} V/rad; residual RMS {:.4} V.\n",
+         ki = {} ± {} V/rad; residual RMS {:.4} V. {}\n",
         o.pi.window_samples,
         match o.pi.method {
             crate::pi::PiMethod::CorrectedLs => {
@@ -347,7 +347,14 @@ pub fn report_markdown(e: &RigEstimate, campaign: &str, o: &EstimateOptions) -> 
         se_text(Some(pi.kp_stderr)),
         value_text(pi.ki_v_rad, Some(pi.ki_stderr)),
         se_text(Some(pi.ki_stderr)),
-        pi.residual_rms_v
+        pi.residual_rms_v,
+        match pi.voltage_plateau_v {
+            Some(p) => format!(
+                "The recorded |V| piles up at {p:.2} V in several runs: the drive clips there, below the nominal supply \
+                 (samples within the margin of it are treated as saturated)."
+            ),
+            None => "No saturation plateau of |V| below the supply is seen in the records.".into(),
+        }
     );
     let fr = &e.friction;
     let _ = writeln!(s, "## Baseline friction (Coulomb, Eq. 4-10 without its lookup)\n");

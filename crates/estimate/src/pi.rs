@@ -74,6 +74,8 @@ pub struct PiEstimate {
     pub n_offsets: usize,
     /// RMS of the regression residual, V.
     pub residual_rms_v: f64,
+    /// A saturation plateau of |V| found in the records (see [`voltage_plateau_v`]).
+    pub voltage_plateau_v: Option<f64>,
 }
 
 /// ∫₀ᵗ Ω_ref dt of the ramp 0 → ω_sp over ramp_s, then constant (rad).
@@ -92,8 +94,31 @@ fn trapz(t: &[f64], y: &[f64], a: usize, b: usize) -> f64 {
     (a..b).map(|i| 0.5 * (y[i] + y[i + 1]) * (t[i + 1] - t[i])).sum()
 }
 
-/// Estimates kp, ki from every operating-point run of `c`, drive limit `limit_v`.
+/// A saturation plateau in the recorded voltages: the largest |V| of all
+/// operating points, if at least two runs each spend 0.5 % of their samples
+/// within 0.1 V of it. A drive that clips piles samples up at one level in
+/// every run that asks for more; a run merely holding a steady voltage has
+/// its own level, which other runs do not share. Blind evidence of a drive
+/// limit below the nominal supply.
+pub fn voltage_plateau_v(c: &Campaign) -> Option<f64> {
+    let runs: Vec<&Vec<f64>> = c.runs_of("operating_point").filter_map(|r| r.data.motor_voltage_v.as_ref()).collect();
+    let max = runs.iter().flat_map(|v| v.iter()).map(|v| v.abs()).fold(0.0_f64, f64::max);
+    let at_limit = runs
+        .iter()
+        .filter(|v| {
+            let near = v.iter().filter(|x| x.abs() >= max - 0.1).count();
+            !v.is_empty() && near as f64 >= 0.005 * v.len() as f64
+        })
+        .count();
+    (at_limit >= 2).then_some(max)
+}
+
+/// Estimates kp, ki from every operating-point run of `c`, drive limit `limit_v`
+/// (the supply; a lower plateau found by [`voltage_plateau_v`] takes precedence
+/// for deciding which samples are saturated).
 pub fn estimate_pi(c: &Campaign, limit_v: f64, opts: &PiOptions) -> Result<PiEstimate, EstimateError> {
+    let plateau = voltage_plateau_v(c);
+    let limit_v = plateau.map_or(limit_v, |p| p.min(limit_v));
     let w = opts.window_samples.max(1);
     // Rows: (ē, Ī, offset index or None, V̄).
     let mut rows: Vec<(f64, f64, Option<usize>, f64, f64)> = Vec::new();
@@ -210,5 +235,6 @@ pub fn estimate_pi(c: &Campaign, limit_v: f64, opts: &PiOptions) -> Result<PiEst
         n_windows: rows.len(),
         n_offsets,
         residual_rms_v: (fit.ssr / rows.len() as f64).sqrt(),
+        voltage_plateau_v: plateau,
     })
 }

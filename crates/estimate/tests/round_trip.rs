@@ -141,7 +141,23 @@ fn pi_gains_recovered_through_saturation() {
     truth.drive.limit_v = 3.0;
     let c = common::campaign(&truth, &[], 10.0, &[(20.0, 10.0), (45.0, 4.0), (85.0, 25.0)], 15.0, 4);
     let pi = estimate_pi(&c, 3.0, &PiOptions::default()).unwrap();
+    eprintln!("saturated: kp {:.4} ± {:.4}, ki {:.4} ± {:.4}", pi.kp_v_s_rad, pi.kp_stderr, pi.ki_v_rad, pi.ki_stderr);
     assert!(pi.saturated_fraction > 0.01, "the case must saturate: {}", pi.saturated_fraction);
+    assert!(rel(pi.kp_v_s_rad, truth.drive.kp_v_s_rad) < 0.05, "kp {} ± {}", pi.kp_v_s_rad, pi.kp_stderr);
+    assert!(rel(pi.ki_v_rad, truth.drive.ki_v_rad) < 0.05, "ki {} ± {}", pi.ki_v_rad, pi.ki_stderr);
+}
+
+/// A drive that clips at 3 V while campaign.toml says 24 V: the plateau is
+/// found blind and the clipped samples are left out.
+#[test]
+fn pi_gains_recovered_with_an_unannounced_lower_limit() {
+    let mut truth = common::truth();
+    truth.drive.limit_v = 3.0;
+    // Two runs that ask for more than 3 V (45 and 85 rpm under 25 N), one that does not.
+    let c = common::campaign(&truth, &[], 10.0, &[(20.0, 10.0), (45.0, 25.0), (85.0, 25.0)], 15.0, 6);
+    let pi = estimate_pi(&c, 24.0, &PiOptions::default()).unwrap();
+    let plateau = pi.voltage_plateau_v.expect("plateau at the 3 V limit");
+    assert!((plateau - 3.0).abs() < 0.1, "plateau {plateau}");
     assert!(rel(pi.kp_v_s_rad, truth.drive.kp_v_s_rad) < 0.05, "kp {} ± {}", pi.kp_v_s_rad, pi.kp_stderr);
     assert!(rel(pi.ki_v_rad, truth.drive.ki_v_rad) < 0.05, "ki {} ± {}", pi.ki_v_rad, pi.ki_stderr);
 }
