@@ -7,6 +7,8 @@
 //!    conventions: (max − min)/(2·mean) and (max − min)/mean.
 //! 2. **Equilibrium** when max − min ≤ max(`equilibrium_floor_rad_s`,
 //!    `equilibrium_rel` · |mean|): steady sliding with at most noise on it.
+//!    A window whose second half swings less than `decay_ratio` of its first
+//!    half is a transient decaying towards sliding: also equilibrium (`decay`).
 //! 3. **Stick** when min ≤ max(`stick_floor_rad_s`, `stick_rel` · |mean|) — the
 //!    same rule as the simulation stage's misfit table.
 //! 4. **Poincaré section**: upward crossings of Ω1 through its window mean,
@@ -42,6 +44,11 @@ pub struct ClassifyOptions {
     pub equilibrium_floor_rad_s: f64,
     /// ... or below this fraction of the mean speed.
     pub equilibrium_rel: f64,
+    /// A window whose second half has a peak-to-peak below this fraction of
+    /// the first half's is a decaying transient: equilibrium (`decay`). 0.6
+    /// sits between a free decay over half a 20 s window at ξ = 0.03
+    /// (e^{-2π·0.03·5} ≈ 0.39) and a stationary oscillation (≈ 1).
+    pub decay_ratio: f64,
     /// Min speed at or below which the rotor counts as stuck, rad/s.
     pub stick_floor_rad_s: f64,
     pub stick_rel: f64,
@@ -73,6 +80,7 @@ impl Default for ClassifyOptions {
         ClassifyOptions {
             equilibrium_floor_rad_s: 0.5,
             equilibrium_rel: 0.1,
+            decay_ratio: 0.6,
             stick_floor_rad_s: 0.3,
             stick_rel: 0.1,
             hysteresis_rel: 0.1,
@@ -152,7 +160,7 @@ pub struct Classification {
     pub cycles: usize,
     /// Distinct clusters of cycle peaks (0 at equilibrium).
     pub clusters: usize,
-    /// How the regime was decided: `range`, `section` or `spectrum`.
+    /// How the regime was decided: `range`, `decay`, `section` or `spectrum`.
     pub decided_by: String,
 }
 
@@ -175,6 +183,16 @@ pub fn classify(speed_rad_s: &[f64], fs_hz: f64, o: &ClassifyOptions) -> Classif
         decided_by: "range".into(),
     };
     if speed_rad_s.len() < 4 || range <= o.equilibrium_floor_rad_s.max(o.equilibrium_rel * mean.abs()) {
+        return out;
+    }
+    // A transient still ringing down towards steady sliding (ξ of a few per
+    // cent leaves ~40 % of a step's ringing after 5 periods) is not an attractor.
+    let half = speed_rad_s.len() / 2;
+    let pp = |x: &[f64]| {
+        x.iter().copied().fold(f64::NEG_INFINITY, f64::max) - x.iter().copied().fold(f64::INFINITY, f64::min)
+    };
+    if pp(&speed_rad_s[half..]) < o.decay_ratio * pp(&speed_rad_s[..half]) {
+        out.decided_by = "decay".into();
         return out;
     }
     let stick = min <= o.stick_floor_rad_s.max(o.stick_rel * mean.abs());

@@ -22,6 +22,15 @@ fn steady_sliding_with_ripple_is_equilibrium() {
     check(&signal(20.0, |t| 5.0 + 0.1 * (2.0 * PI * 3.0 * t).sin()), Regime::Equilibrium);
 }
 
+#[test]
+fn ringing_down_transient_is_equilibrium() {
+    // A step's ringing at 0.45 Hz and ξ = 0.03 around 5 rad/s, starting at 2 rad/s amplitude.
+    let w = 2.0 * PI * 0.45;
+    let x = signal(20.0, |t| 5.0 + 2.0 * (-0.03 * w * t).exp() * (w * t).sin());
+    let c = classify(&x, FS_HZ, &ClassifyOptions::default());
+    assert_eq!((c.regime, c.decided_by.as_str()), (Regime::Equilibrium, "decay"));
+}
+
 /// Half-wave rectified sine: the rotor is stuck (0) half the cycle, slips in a hump.
 fn stick_slip(t: f64, f_hz: f64, peak: f64) -> f64 {
     (peak * (2.0 * PI * f_hz * t).sin()).max(0.0)
