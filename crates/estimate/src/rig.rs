@@ -72,11 +72,11 @@ fn sim_options(o: &EstimateOptions) -> SimOptions {
 /// C = 2ξ√(J1 K) with the log-decrement ξ (Eq. 4-7's definition).
 fn initial_params(c: &Campaign, cal: &CampaignCalibration, o: &EstimateOptions) -> Result<RigParams, EstimateError> {
     let i = &o.initial;
-    let (j1, k) = if o.initial_from_calibration {
-        (cal.rotor_inertia_kgm2, cal.stiffness_nm_rad)
-    } else {
-        (i.rotor_inertia_kgm2, i.shaft_stiffness_nm_rad)
-    };
+    // The calibration's values when asked and usable (finite, > 0), else Table 4.4's.
+    let usable = |v: f64| v.is_finite() && v > 0.0;
+    let pick = |cal_v: f64, table_v: f64| if o.initial_from_calibration && usable(cal_v) { cal_v } else { table_v };
+    let (j1, k) =
+        (pick(cal.rotor_inertia_kgm2, i.rotor_inertia_kgm2), pick(cal.stiffness_nm_rad, i.shaft_stiffness_nm_rad));
     for (name, v) in [("J1 initial", j1), ("K_s initial", k), ("gear_ratio", o.gear_ratio)] {
         if !(v.is_finite() && v > 0.0) {
             return Err(EstimateError::InvalidOption { name: name.into(), value: v, rule: "must be finite and > 0" });
@@ -220,7 +220,12 @@ pub fn estimate_rig(
         SolverKind::GaussNewtonLineSearch => gauss_newton_ls(&problem, &x0, &tr, &o.solver)?,
     };
     let cov = covariance(&sol);
-    let k_rel = cal.stiffness_nm_rad_stderr / cal.stiffness_nm_rad;
+    // K's relative error joins the torque-scaled parameters' (only when K is the calibration's).
+    let k_rel = if base.shaft_stiffness_nm_rad == cal.stiffness_nm_rad {
+        cal.stiffness_nm_rad_stderr / cal.stiffness_nm_rad
+    } else {
+        f64::NAN
+    };
     let fitted = problem.params_at(&sol.x);
     let held_info = held_analysis(&problem, &sol, o, &held)?;
 
@@ -252,9 +257,13 @@ pub fn estimate_rig(
             (cov.regular.then_some(se), id)
         } else if name == "K_s" {
             (
-                cal.stiffness_nm_rad_stderr.is_finite().then_some(cal.stiffness_nm_rad_stderr),
+                k_rel.is_finite().then_some(cal.stiffness_nm_rad_stderr),
                 Identifiability::Fixed {
-                    reason: "static-twist calibration; steps fix torques only relative to K".into(),
+                    reason: if k_rel.is_finite() {
+                        "static-twist calibration; steps fix torques only relative to K".into()
+                    } else {
+                        "Table 4.4 (no usable static-twist calibration); steps fix torques only relative to K".into()
+                    },
                 },
             )
         } else {
