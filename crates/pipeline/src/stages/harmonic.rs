@@ -57,12 +57,12 @@ struct Case {
 }
 
 impl Case {
-    /// Quasi-periodic: a second base frequency incommensurate with f0 (ratio
-    /// test within the resolution) and at least one combination tone of the two.
+    /// Quasi-periodic: a second base frequency f2 incommensurate with f0 (no
+    /// p/q with q ≤ 3 within the tolerance): the motion has two independent
+    /// frequencies. Combination tones (counted separately) show that the two
+    /// interact through the nonlinearity; they are not required.
     fn quasi_periodic(&self) -> bool {
-        self.lines.ratio.is_some_and(|r| r.incommensurate)
-            && self.lines.f2_hz.is_some()
-            && self.lines.count(LineClass::Combination) > 0
+        self.lines.ratio.is_some_and(|r| r.incommensurate) && self.lines.f2_hz.is_some()
     }
 }
 
@@ -341,7 +341,8 @@ fn write_md(ctx: &mut StageCtx, cases: &[Case], p: &Params) -> Result<()> {
         "Operating point {} rpm / {} N (Fig. 4.24), both models, for each ω_p of Table 4.8. Steady window {} s after \
          a {} s ramp and {} s settling, rotor speed sampled at {} Hz; resolution {:.4} Hz. Line analysis of the rotor-speed \
          spectrum (rig-spectra; tolerance max(0.1 bin, 3σ_f)). *Quasi-periodic* here means: a second base frequency f2 \
-         whose ratio to f0 is not p/q with q ≤ 3 within the tolerance, and at least one combination tone |m f0 ± n f2|. \
+         whose ratio to f0 is not p/q with q ≤ 3 within the tolerance (combination tones |m f0 ± n f2|, counted in \
+         the summary table, show the two interact). \
          Tables: tables/harmonic-summary.csv, tables/harmonic-lines.csv.\n",
         p.motor_rpm,
         p.normal_force_n,
@@ -405,14 +406,52 @@ fn write_md(ctx: &mut StageCtx, cases: &[Case], p: &Params) -> Result<()> {
             nf.len()
         );
     }
+    // The mechanism, stated only as far as the runs above support it.
+    let span = |c: &Case| {
+        let s = severity(&c.rotor_rpm);
+        s.max - s.min
+    };
+    let of = |model: &str, variant: &str| -> Vec<&Case> {
+        cases.iter().filter(|c| c.model == model && c.variant == variant).collect()
+    };
+    let (mut lowered, mut raised, mut dissipation_drop, mut backwards, mut total) = (0, 0, 0, 0, 0);
+    for model in ["thesis", "rig"] {
+        let Some(base) = of(model, "baseline").first().copied() else { continue };
+        for c in of(model, "eq_4_11") {
+            total += 1;
+            lowered += usize::from(span(c) < span(base));
+            raised += usize::from(span(c) > span(base));
+            dissipation_drop += usize::from(c.mean_torque_nm.abs() < 0.5 * base.mean_torque_nm.abs());
+            backwards += usize::from(c.negative_speed_fraction > 0.0);
+        }
+    }
+    let n_nf = of("thesis", "normal_force").len() + of("rig", "normal_force").len();
+    let qp_eq = cases.iter().filter(|c| c.variant == "eq_4_11" && c.quasi_periodic()).count();
+    let qp_nf = cases.iter().filter(|c| c.variant == "normal_force" && c.quasi_periodic()).count();
+    let comb_nf =
+        cases.iter().filter(|c| c.variant == "normal_force" && c.lines.count(LineClass::Combination) > 0).count();
     let _ = writeln!(
         md,
-        "**Why Eq. 4-11 only lowers the amplitudes.** It multiplies the whole friction torque by sin(ω_p t), which is \
-         negative half the time: the brake then *drives* the rotor, and over a period the friction work averages toward \
-         zero (the mean friction torque above, against the baseline's). With less net dissipation and a friction that no \
-         longer has a velocity-weakening step to feed the stick-slip cycle, the torsional oscillation shrinks. Modulating \
-         the normal force instead keeps the friction dissipative (N ≥ 0 for a < 1) and keeps the stick-slip mechanism, \
-         adding a second, independent frequency ω_p: the place where quasi-periodicity can come from."
+        "**Answer.** Quasi-periodic cases: Eq. 4-11 {qp_eq} of {total}; normal-force modulation {qp_nf} of {n_nf} \
+         (with combination tones in {comb_nf}). Eq. 4-11 multiplies the whole friction torque by sin(ω_p t), which is \
+         negative half the time: the brake then drives the rotor, and the mean friction torque fell below half the \
+         baseline's in {dissipation_drop} of {total} cases (it averages toward zero: the brake no longer dissipates on \
+         average). The rotor-speed span was lowered in {lowered} and raised in {raised} of {total} cases, and the rotor \
+         ran backwards in {backwards} of {total}.{}\n",
+        if lowered == 0 {
+            " So in these models Eq. 4-11 does *not* reproduce the chapter's lower amplitudes: with no net dissipation \
+             the motion becomes a large forced response locked to ω_p (f0 = ω_p / 2π or a submultiple in the table), \
+             periodic, not quasi-periodic — a sign-alternating friction is not a physical brake."
+        } else {
+            " The chapter's lower amplitudes are reproduced only in the cases counted above."
+        }
+    );
+    let _ = writeln!(
+        md,
+        "Modulating the normal force, N(t) = N0 (1 + a sin(ω_p t)) with a < 1, keeps the friction dissipative (mean \
+         friction torque equal to the baseline's within the table's precision) and adds ω_p as a frequency independent \
+         of the torsional/stick-slip one: where the second line is not locked to the first (ratio test), the motion is \
+         quasi-periodic — the physically consistent way to obtain what the chapter looked for."
     );
     ctx.write_text("harmonic.md", &md)?;
     Ok(())
