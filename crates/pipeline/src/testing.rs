@@ -34,38 +34,37 @@ fn run_report(out_dir: &Path, names: &[&str]) -> anyhow::Result<RunReport> {
     report.into_result()
 }
 
-/// One out dir per test process, so the stages upstream of several snapshot
-/// tests in one binary run once (the runner's cache skips them afterwards).
-/// The lock also keeps two tests from committing into it at the same time.
-fn process_out_dir() -> &'static Mutex<PathBuf> {
-    static DIR: OnceLock<Mutex<PathBuf>> = OnceLock::new();
-    DIR.get_or_init(|| {
-        let tmp = std::env::temp_dir();
-        remove_dead_process_dirs(&tmp);
-        let dir = tmp.join(format!("{PREFIX}{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        Mutex::new(dir)
-    })
+/// One out dir shared by every snapshot test process: nextest runs each test
+/// in its own process, and the runner's content-hash cache lets a later
+/// process skip the upstream stages an earlier one already ran (a stage
+/// re-runs whenever its inputs, params or code change, so this is never
+/// stale). A file lock serialises the processes that use it.
+fn shared_out_dir() -> PathBuf {
+    workspace_root().join("target").join("rig-snapshot-out")
 }
 
-const PREFIX: &str = "rig-pipeline-test-";
+/// Holds an exclusive lock on `<out dir>.lock` for the life of the guard.
+struct DirLock(#[allow(dead_code)] std::fs::File);
 
-/// Out dirs of finished test processes (a static is never dropped, so each
-/// process leaves its dir behind); only where /proc tells which pids live.
-fn remove_dead_process_dirs(tmp: &Path) {
-    if !Path::new("/proc/self").exists() {
-        return;
+fn lock_shared_out_dir(dir: &Path) -> DirLock {
+    if let Some(parent) = dir.parent() {
+        std::fs::create_dir_all(parent).unwrap_or_else(|e| panic!("{}: {e}", parent.display()));
     }
-    let Ok(entries) = std::fs::read_dir(tmp) else { return };
-    for entry in entries.flatten() {
-        let name = entry.file_name().to_string_lossy().into_owned();
-        if let Some(pid) = name.strip_prefix(PREFIX)
-            && pid.parse::<u32>().is_ok()
-            && !Path::new("/proc").join(pid).exists()
-        {
-            let _ = std::fs::remove_dir_all(entry.path());
-        }
-    }
+    let lock_path = dir.with_extension("lock");
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&lock_path)
+        .unwrap_or_else(|e| panic!("{}: {e}", lock_path.display()));
+    file.lock().unwrap_or_else(|e| panic!("locking {}: {e}", lock_path.display()));
+    DirLock(file)
+}
+
+/// Serialises tests of one process too (the file lock is per open file).
+fn process_mutex() -> &'static Mutex<()> {
+    static M: OnceLock<Mutex<()>> = OnceLock::new();
+    M.get_or_init(|| Mutex::new(()))
 }
 
 /// Runs stage `name` (and its upstream) into this process's out dir and
@@ -78,7 +77,9 @@ fn remove_dead_process_dirs(tmp: &Path) {
 /// Panics (failing the test) when a stage fails or the stage writes nothing.
 /// An optional stage whose input is missing (no ../shared) is skipped with a note on stderr.
 pub fn snapshot_stage(name: &str) {
-    let dir = process_out_dir().lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    let _guard = process_mutex().lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    let dir = shared_out_dir();
+    let _lock = lock_shared_out_dir(&dir);
     let report = match run_report(&dir, &[name]) {
         Ok(r) => r,
         Err(e) => panic!("running stage {name}: {e:#}"),
