@@ -22,6 +22,8 @@ pub struct MotorParams {
 
 /// PI speed loop on the motor-side shaft speed Ω2 (the spec's "PI loop on
 /// motor speed"): V = clamp(kp·e + ki·∫e, −limit_v, +limit_v), e = Ω_ref − Ω2.
+/// rig-model adds back-calculation anti-windup (tracking time constant
+/// `rig_model::ANTI_WINDUP_TRACKING_S`); see its crate docs.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DriveParams {
     pub kp_v_s_rad: f64,
