@@ -44,7 +44,7 @@ pub struct GlitchReport {
 /// them (held constant at the record's ends).
 pub fn repair_glitches(x: &[f64], o: &GlitchOptions) -> Result<(Vec<f64>, GlitchReport), SpectraError> {
     check_finite("x", x)?;
-    if o.median_window < 3 || o.median_window % 2 == 0 {
+    if o.median_window < 3 || o.median_window.is_multiple_of(2) {
         return Err(SpectraError::InvalidParameter {
             name: "median_window",
             value: o.median_window as f64,

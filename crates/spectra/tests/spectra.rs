@@ -172,8 +172,8 @@ fn glitches_are_found_and_bridged() {
     // A slow oscillation with two 15-sample dips to −260 and a negative blip.
     let clean: Vec<f64> = (0..5000).map(|i| 80.0 + 40.0 * (2.0 * PI * i as f64 / 700.0).sin()).collect();
     let mut x = clean.clone();
-    for i in 1000..1015 {
-        x[i] = -260.0 * ((i - 1000) as f64 / 14.0 * PI).sin();
+    for (j, v) in x[1000..1015].iter_mut().enumerate() {
+        *v = -260.0 * (j as f64 / 14.0 * PI).sin();
     }
     for v in &mut x[3000..3015] {
         *v = -100.0;
