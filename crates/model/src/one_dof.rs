@@ -170,10 +170,10 @@ pub fn fit_one_dof(
     };
     let (ij, m) = if fixed_damping_nm_s_rad.is_some() { (1, 3) } else { (2, 4) };
     let (mut ata, mut atb) = (vec![vec![0.0; m]; m], vec![0.0; m]);
-    for i in 0..n {
+    for (i, acc) in bit_accel_rad_s2.iter().enumerate() {
         let x = row(i);
         for r in 0..m {
-            atb[r] += x[r] * bit_accel_rad_s2[i];
+            atb[r] += x[r] * acc;
             for c in 0..m {
                 ata[r][c] += x[r] * x[c];
             }
@@ -186,10 +186,10 @@ pub fn fit_one_dof(
     })?;
     let mean_acc = bit_accel_rad_s2.iter().sum::<f64>() / n as f64;
     let (mut sse, mut sst) = (0.0, 0.0);
-    for i in 0..n {
+    for (i, acc) in bit_accel_rad_s2.iter().enumerate() {
         let pred: f64 = row(i).iter().zip(&p).map(|(x, pj)| x * pj).sum();
-        sse += (bit_accel_rad_s2[i] - pred).powi(2);
-        sst += (bit_accel_rad_s2[i] - mean_acc).powi(2);
+        sse += (acc - pred).powi(2);
+        sst += (acc - mean_acc).powi(2);
     }
     let s2 = sse / (n - m) as f64;
     let var = |j: usize| (s2 * inv[j][j]).max(0.0);
