@@ -136,7 +136,11 @@ pub fn fit_coulomb(d: &SlipData) -> FrictionFit {
 }
 
 /// Linear least squares of μ on fixed columns; returns (solution, covariance, rss).
-fn linear_fit(d: &SlipData, ncol: usize, /* ≤ 4 */ cols: impl Fn(usize, &mut [f64])) -> Option<(Vec<f64>, Vec<f64>, f64)> {
+fn linear_fit(
+    d: &SlipData,
+    ncol: usize,
+    /* ≤ 4 */ cols: impl Fn(usize, &mut [f64]),
+) -> Option<(Vec<f64>, Vec<f64>, f64)> {
     let mut ne = Normal::new(ncol);
     let mut row = vec![0.0; ncol];
     for i in 0..d.len() {
@@ -189,11 +193,7 @@ pub fn fit_stribeck(d: &SlipData) -> Option<FrictionFit> {
     };
     let grid: Vec<f64> = (0..41).map(|j| 0.05 * 10f64.powf(j as f64 * 3.0 / 40.0)).collect();
     let rss_at = |lv: f64| lin(lv.exp()).map(|x| x.2).unwrap_or(f64::INFINITY);
-    let (best, _) = grid
-        .iter()
-        .enumerate()
-        .map(|(j, &v)| (j, rss_at(v.ln())))
-        .min_by(|a, b| a.1.total_cmp(&b.1))?;
+    let (best, _) = grid.iter().enumerate().map(|(j, &v)| (j, rss_at(v.ln()))).min_by(|a, b| a.1.total_cmp(&b.1))?;
     let lo = grid[best.saturating_sub(1)].ln();
     let hi = grid[(best + 1).min(grid.len() - 1)].ln();
     let lv = golden(lo, hi, 40, rss_at);
@@ -284,8 +284,8 @@ fn sine_scan_rss(d: &SlipData, arg: impl Fn(usize) -> f64) -> Option<(f64, Vec<f
 fn time_scan(d: &SlipData, freqs_hz: &[f64]) -> Vec<(f64, f64)> {
     use rayon::prelude::*;
     let yy = ywy(d);
-    let uniform = freqs_hz.len() > 1
-        && freqs_hz.windows(2).all(|w| ((w[1] - w[0]) - (freqs_hz[1] - freqs_hz[0])).abs() < 1e-9);
+    let uniform =
+        freqs_hz.len() > 1 && freqs_hz.windows(2).all(|w| ((w[1] - w[0]) - (freqs_hz[1] - freqs_hz[0])).abs() < 1e-9);
     if !uniform {
         return freqs_hz
             .par_iter()
@@ -327,7 +327,10 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], max_order: u32)
         time_scan(d, &cands)
     } else {
         use rayon::prelude::*;
-        cands.par_iter().map(|&psi| (psi, sine_scan_rss(d, |i| xarg(psi, i)).map(|x| x.0).unwrap_or(f64::INFINITY))).collect()
+        cands
+            .par_iter()
+            .map(|&psi| (psi, sine_scan_rss(d, |i| xarg(psi, i)).map(|x| x.0).unwrap_or(f64::INFINITY)))
+            .collect()
     };
     let (psi0, _) = scored.iter().copied().min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.total_cmp(&b.0)))?;
     let (_, p) = sine_scan_rss(d, |i| xarg(psi0, i))?;

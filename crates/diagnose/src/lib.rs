@@ -42,8 +42,8 @@
 //! training runs (negative favours the candidate).
 
 pub mod drive;
-pub mod friction;
 pub mod features;
+pub mod friction;
 mod linalg;
 pub mod lines;
 pub mod prepare;

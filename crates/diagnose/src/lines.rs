@@ -36,7 +36,8 @@ fn order_power(phi: &[f64], x: &[f64], q: f64) -> f64 {
 /// smoothed over ±8 samples or more, and order 8 at the fastest set-point is
 /// below 20 Hz) keeps the scan cheap.
 pub fn order_lines(s: &RunSignals, motor: bool, max_order: u32) -> Vec<OrderLine> {
-    let (phi, w) = if motor { (&s.motor_angle_rad, &s.motor_speed_rad_s) } else { (&s.rotor_angle_rad, &s.rotor_speed_rad_s) };
+    let (phi, w) =
+        if motor { (&s.motor_angle_rad, &s.motor_speed_rad_s) } else { (&s.rotor_angle_rad, &s.rotor_speed_rad_s) };
     let idx: Vec<usize> = (s.steady_from..phi.len()).step_by(8).collect();
     if idx.len() < 64 {
         return vec![];

@@ -127,7 +127,13 @@ fn prepare_run(
     let mut last_stuck: Option<usize> = None;
     let mut next_stuck = vec![usize::MAX; n];
     for k in (0..n).rev() {
-        next_stuck[k] = if !moved[k] { k } else if k + 1 < n { next_stuck[k + 1] } else { usize::MAX };
+        next_stuck[k] = if !moved[k] {
+            k
+        } else if k + 1 < n {
+            next_stuck[k + 1]
+        } else {
+            usize::MAX
+        };
     }
     for k in 0..n {
         if !moved[k] {

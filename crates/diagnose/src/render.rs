@@ -140,9 +140,10 @@ pub fn figures(d: &Diagnosis) -> Vec<FigureSpec> {
         out.push(FigureSpec {
             id: "diagnosis-residual-vs-angle".into(),
             title: "Friction residual against rotor angle (training run with most slip)".into(),
-            caption: "Mean of μ_obs − μk over slip samples in 72 bins of the rotor angle φ1 mod 2π. A warped or eccentric \
+            caption:
+                "Mean of μ_obs − μk over slip samples in 72 bins of the rotor angle φ1 mod 2π. A warped or eccentric \
                       disc shows n periods per revolution."
-                .into(),
+                    .into(),
             x_label: "rotor angle mod 2π [rad]".into(),
             y_label: "μ residual [-]".into(),
             series: vec![Series {
@@ -164,7 +165,8 @@ pub fn figures(d: &Diagnosis) -> Vec<FigureSpec> {
             y: dips.iter().map(|r| r.measured.motor_dip_rad_s).collect(),
             style: SeriesStyle::Points,
         }];
-        let sim: Vec<_> = dips.iter().filter_map(|r| r.simulated.map(|f| (r.motor_rpm_setpoint, f.motor_dip_rad_s))).collect();
+        let sim: Vec<_> =
+            dips.iter().filter_map(|r| r.simulated.map(|f| (r.motor_rpm_setpoint, f.motor_dip_rad_s))).collect();
         if !sim.is_empty() {
             series.push(Series {
                 name: "baseline simulation".into(),
@@ -176,9 +178,10 @@ pub fn figures(d: &Diagnosis) -> Vec<FigureSpec> {
         out.push(FigureSpec {
             id: "diagnosis-motor-dips".into(),
             title: "Deepest motor-speed dip below the set-point, per operating point".into(),
-            caption: "Largest Ω_set − Ω2 over each run's steady state (after ramp + settle). A drive that saturates lets \
+            caption:
+                "Largest Ω_set − Ω2 over each run's steady state (after ramp + settle). A drive that saturates lets \
                       the motor slow while the rotor is stuck; the PI loop of the baseline holds it."
-                .into(),
+                    .into(),
             x_label: "motor set-point [rpm]".into(),
             y_label: "motor speed dip [rad/s]".into(),
             series,
@@ -224,7 +227,10 @@ pub fn markdown(d: &Diagnosis) -> String {
          relative to the supply (rig-diagnose crate docs). Held-out baseline misfit {:.4}; noise floor {:.4}.\n",
         det.baseline_text, det.heldout_misfit_baseline, det.heldout_misfit_noise_floor
     );
-    let _ = writeln!(s, "| effect | ΔBIC | held-out misfit | relative gain | significant | parameters |\n|---|---|---|---|---|---|");
+    let _ = writeln!(
+        s,
+        "| effect | ΔBIC | held-out misfit | relative gain | significant | parameters |\n|---|---|---|---|---|---|"
+    );
     for (e, dbic, m, g, sig, p) in &det.scores {
         let _ = writeln!(s, "| {e} | {dbic:.1} | {m:.4} | {g:.3} | {sig} | {p} |");
     }
@@ -236,7 +242,10 @@ pub fn markdown(d: &Diagnosis) -> String {
             let _ = writeln!(s, "- {l}");
         }
     }
-    let _ = writeln!(s, "\n## The ladder (tables/diagnosis-rungs.csv)\n\n| rung | held-out misfit | cause |\n|---|---|---|");
+    let _ = writeln!(
+        s,
+        "\n## The ladder (tables/diagnosis-rungs.csv)\n\n| rung | held-out misfit | cause |\n|---|---|---|"
+    );
     for (n, m, c) in &det.rungs {
         let _ = writeln!(s, "| {n} | {m:.4} | {c} |");
     }
@@ -245,7 +254,10 @@ pub fn markdown(d: &Diagnosis) -> String {
         "\n## Per run (tables/diagnosis-runs.csv)\n\nMeasured features of the steady state against the free-run baseline \
          simulation (empty when no baseline simulation was made), and the misfit per run.\n"
     );
-    let _ = writeln!(s, "| run | held out | rpm | N0 | stick-slip meas/sim | Ω1 max meas/sim | f0 meas/sim [Hz] | misfit base | misfit ext | floor |\n|---|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(
+        s,
+        "| run | held out | rpm | N0 | stick-slip meas/sim | Ω1 max meas/sim | f0 meas/sim [Hz] | misfit base | misfit ext | floor |\n|---|---|---|---|---|---|---|---|---|---|"
+    );
     for r in &det.runs {
         let sim = r.simulated;
         let _ = writeln!(

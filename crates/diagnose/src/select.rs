@@ -107,7 +107,13 @@ pub fn steady_features(t: &[f64], w1: &[f64], w2: &[f64], setpoint_rad_s: f64, s
             }
         }
     }
-    Features { stuck_fraction: stuck, rotor_min_rad_s: min, rotor_max_rad_s: max, fundamental_hz: best.0, motor_dip_rad_s: dip }
+    Features {
+        stuck_fraction: stuck,
+        rotor_min_rad_s: min,
+        rotor_max_rad_s: max,
+        fundamental_hz: best.0,
+        motor_dip_rad_s: dip,
+    }
 }
 
 /// The whole selection on prepared signals. `thesis_mu_dynamic` (Table 4.7) adds
@@ -130,7 +136,8 @@ pub fn diagnose_signals(
     }
     // Baseline on the training runs.
     let coul = friction::fit_coulomb(&d);
-    let pi_base = drive::fit_gains(&train, supply_v).ok_or(DiagnoseError::Singular("PI gains of the baseline drive"))?;
+    let pi_base =
+        drive::fit_gains(&train, supply_v).ok_or(DiagnoseError::Singular("PI gains of the baseline drive"))?;
     let (rss_v_base, n_v) = drive::voltage_rss(&pi_base, &train);
     let base = Model { friction: coul.model.clone(), pi: pi_base };
 
@@ -226,8 +233,7 @@ pub fn diagnose_signals(
     let _ = n_v;
 
     let gain = |m: f64| if base_m > 0.0 { 1.0 - m / base_m } else { 0.0 };
-    let significant =
-        |s: &Scored| s.ok && s.dbic < -opts.bic_threshold && gain(s.misfit) >= opts.min_relative_gain;
+    let significant = |s: &Scored| s.ok && s.dbic < -opts.bic_threshold && gain(s.misfit) >= opts.min_relative_gain;
     let winner = scored
         .iter()
         .enumerate()
@@ -305,7 +311,8 @@ pub fn diagnose_signals(
         None => verdict = "none".into(),
     }
 
-    let mut candidates = vec![CandidateScore { effect: "none".into(), heldout_misfit_extended: round_sig(base_m, 4), criterion: 0.0 }];
+    let mut candidates =
+        vec![CandidateScore { effect: "none".into(), heldout_misfit_extended: round_sig(base_m, 4), criterion: 0.0 }];
     for s in &scored {
         candidates.push(CandidateScore {
             effect: s.effect.into(),
@@ -328,7 +335,12 @@ pub fn diagnose_signals(
         ..Default::default()
     };
     for s in &scored {
-        let ptxt = s.params.iter().map(|(k, v, e)| format!("{k} = {} ± {}", round_sig(*v, 4), round_sig(*e, 2))).collect::<Vec<_>>().join("; ");
+        let ptxt = s
+            .params
+            .iter()
+            .map(|(k, v, e)| format!("{k} = {} ± {}", round_sig(*v, 4), round_sig(*e, 2)))
+            .collect::<Vec<_>>()
+            .join("; ");
         detail.scores.push((s.effect.into(), s.dbic, s.misfit, gain(s.misfit), significant(s), ptxt));
     }
     if let Some(fit) = scored[0].fit.as_ref() {
@@ -363,7 +375,11 @@ pub fn diagnose_signals(
             format!("Table 4.7 μ_dyn = {mu_dyn} in slip, drive saturating at the supply"),
         ));
     }
-    detail.rungs.push(("rig model recalibrated".into(), base_m, format!("μk = {:.4} fitted on the campaign's slip samples", coul.params[0].1)));
+    detail.rungs.push((
+        "rig model recalibrated".into(),
+        base_m,
+        format!("μk = {:.4} fitted on the campaign's slip samples", coul.params[0].1),
+    ));
     if let Some(c) = chosen {
         detail.rungs.push(("extended model".into(), c.misfit, format!("+ {}", c.effect)));
     }

@@ -9,13 +9,31 @@ use rig_types::{DriveParams, Effect, FrictionLaw, ModelKind, MotorParams, RigPar
 #[derive(Debug, Clone, PartialEq)]
 pub enum Hidden {
     None,
-    NormalForceModulation { amplitude_ratio: f64, frequency_hz: f64 },
-    AnglePeriodicFriction { amplitude_ratio: f64, order: u32 },
-    VelocityWeakening { mu_static: f64, mu_kinetic: f64, stribeck_speed_rad_s: f64 },
-    ViscousBrake { mu_kinetic: f64, viscous_per_rad_s: f64 },
-    DriveVoltageLimit { limit_v: f64 },
+    NormalForceModulation {
+        amplitude_ratio: f64,
+        frequency_hz: f64,
+    },
+    AnglePeriodicFriction {
+        amplitude_ratio: f64,
+        order: u32,
+    },
+    VelocityWeakening {
+        mu_static: f64,
+        mu_kinetic: f64,
+        stribeck_speed_rad_s: f64,
+    },
+    ViscousBrake {
+        mu_kinetic: f64,
+        viscous_per_rad_s: f64,
+    },
+    DriveVoltageLimit {
+        limit_v: f64,
+    },
     /// Outside the vocabulary: the diagnosis must answer `unexplained`.
-    MotorCogging { amplitude_nm: f64, order: u32 },
+    MotorCogging {
+        amplitude_nm: f64,
+        order: u32,
+    },
 }
 
 impl Hidden {
@@ -88,10 +106,9 @@ pub fn draw_hidden(class: &str, mu_kinetic: f64, max_setpoint_rpm: f64, seed: u6
             amplitude_ratio: r.random_range(0.08..0.3),
             frequency_hz: r.random_range(0.5..3.0),
         },
-        "angle_periodic_friction" => Hidden::AnglePeriodicFriction {
-            amplitude_ratio: r.random_range(0.08..0.3),
-            order: r.random_range(1..=6),
-        },
+        "angle_periodic_friction" => {
+            Hidden::AnglePeriodicFriction { amplitude_ratio: r.random_range(0.08..0.3), order: r.random_range(1..=6) }
+        }
         "velocity_weakening_friction" => Hidden::VelocityWeakening {
             mu_static: mu_kinetic * r.random_range(1.3..1.8),
             mu_kinetic,

@@ -115,23 +115,26 @@ pub fn generate(name: &str, truth: &Truth, protocol: &Protocol, seed: u64) -> Re
     let mut runs = Vec::new();
     for (j, &load) in protocol.force_loads_n.iter().enumerate() {
         let t = times(2.0, rate);
-        let mv = t.iter().map(|_| truth.force_offset_mv + truth.force_factor_mv_per_n * load + mv_noise.sample(&mut rng)).collect();
-        runs.push(run(format!("cal-{}", j + 1), RunKind::ForceCalibration { load_n: load }, RunData {
-            time_s: t,
-            brake_force_mv: Some(mv),
-            ..Default::default()
-        }));
+        let mv = t
+            .iter()
+            .map(|_| truth.force_offset_mv + truth.force_factor_mv_per_n * load + mv_noise.sample(&mut rng))
+            .collect();
+        runs.push(run(
+            format!("cal-{}", j + 1),
+            RunKind::ForceCalibration { load_n: load },
+            RunData { time_s: t, brake_force_mv: Some(mv), ..Default::default() },
+        ));
     }
     for (j, &torque) in protocol.twist_torques_nm.iter().enumerate() {
         let t = times(2.0, rate);
         let angle = torque / truth.params.shaft_stiffness_nm_rad;
         // The held angle wanders by a fraction of a tick (hand-held torque).
         let a: Vec<f64> = t.iter().map(|_| angle + rng.random_range(-0.004..0.004)).collect();
-        runs.push(run(format!("twist-{}", j + 1), RunKind::StaticTwist { torque_nm: torque }, RunData {
-            time_s: t,
-            rotor_ticks: Some(ticks(&a, per_rev)),
-            ..Default::default()
-        }));
+        runs.push(run(
+            format!("twist-{}", j + 1),
+            RunKind::StaticTwist { torque_nm: torque },
+            RunData { time_s: t, rotor_ticks: Some(ticks(&a, per_rev)), ..Default::default() },
+        ));
     }
     let sim_opts = SimOptions::default();
     for &v in &protocol.step_voltages_v {
@@ -142,13 +145,17 @@ pub fn generate(name: &str, truth: &Truth, protocol: &Protocol, seed: u64) -> Re
         let tr = rig_model::simulate(&p, &RunInput::VoltageStep { voltage_v: v }, &t, &sim_opts)
             .map_err(|source| VirtualRigError::Model { run: id.clone(), source })?;
         let volt = tr.voltage_v.iter().map(|x| x + v_noise.sample(&mut rng)).collect();
-        runs.push(run(id, RunKind::VoltageStep { voltage_v: v }, RunData {
-            motor_voltage_v: Some(volt),
-            motor_ticks: Some(ticks(&tr.motor_angle_rad, per_rev)),
-            rotor_ticks: Some(ticks(&tr.rotor_angle_rad, per_rev)),
-            time_s: t,
-            ..Default::default()
-        }));
+        runs.push(run(
+            id,
+            RunKind::VoltageStep { voltage_v: v },
+            RunData {
+                motor_voltage_v: Some(volt),
+                motor_ticks: Some(ticks(&tr.motor_angle_rad, per_rev)),
+                rotor_ticks: Some(ticks(&tr.rotor_angle_rad, per_rev)),
+                time_s: t,
+                ..Default::default()
+            },
+        ));
     }
     // Operating points: per-run phases of the hidden effect drawn here (θ free per run).
     let mut ops = Vec::new();

@@ -22,7 +22,13 @@ pub fn write_campaign(dir: &Path, c: &Campaign) -> Result<(), VirtualRigError> {
         c.rig.encoder_ticks_per_rev, c.rig.brake_disc_radius_m, c.rig.supply_voltage_v, c.rig.sample_rate_hz
     );
     for r in &c.runs {
-        let _ = writeln!(toml, "[[runs]]\nid = {:?}\nkind = {:?}\nfile = {:?}", r.id, r.kind.name(), r.file.display().to_string());
+        let _ = writeln!(
+            toml,
+            "[[runs]]\nid = {:?}\nkind = {:?}\nfile = {:?}",
+            r.id,
+            r.kind.name(),
+            r.file.display().to_string()
+        );
         match r.kind {
             RunKind::ForceCalibration { load_n } => {
                 let _ = writeln!(toml, "load_n = {load_n:?}");

@@ -21,7 +21,8 @@ fn check(class: &str, seed: u64) {
     write_campaign(dir.path(), &c).expect("write");
     let read = rig_ingest::read_campaign(dir.path()).expect("the generated campaign is valid rig-campaign/1");
     let d = rig_diagnose::diagnose_campaign(&read, None, &Default::default()).expect("diagnosis");
-    let scores: Vec<String> = d.detail.scores.iter().map(|s| format!("{} ΔBIC {:.1} gain {:.3} [{}]", s.0, s.1, s.3, s.5)).collect();
+    let scores: Vec<String> =
+        d.detail.scores.iter().map(|s| format!("{} ΔBIC {:.1} gain {:.3} [{}]", s.0, s.1, s.3, s.5)).collect();
     assert_eq!(d.verdict, truth.hidden.id(), "truth {:?}; candidates:\n{}", truth.hidden, scores.join("\n"));
     for (k, v) in truth.hidden.params() {
         let est = d.findings[0].params[k];
@@ -75,6 +76,7 @@ fn confusion_matrix_full() {
     });
     let t = confusion_table(&out);
     println!("{}", t.to_csv());
-    let wrong: Vec<_> = out.iter().filter(|o| !o.correct()).map(|o| (o.class, o.seed, o.verdict().to_string())).collect();
+    let wrong: Vec<_> =
+        out.iter().filter(|o| !o.correct()).map(|o| (o.class, o.seed, o.verdict().to_string())).collect();
     assert!(wrong.len() * 10 <= out.len(), "more than 10 % wrong: {wrong:?}");
 }

@@ -53,13 +53,17 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
         let _ = writeln!(md, "| {} |", r.join(" | "));
     }
     let _ = writeln!(md, "\n## Parameter errors of the right verdicts (tables/confusion-params.csv)\n");
-    let _ = writeln!(md, "| hidden | seed | parameter | truth | estimate | relative error | tolerance | within |\n|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(
+        md,
+        "| hidden | seed | parameter | truth | estimate | relative error | tolerance | within |\n|---|---|---|---|---|---|---|---|"
+    );
     for r in &params.rows {
         let tol = tolerance(&r[2]);
         let err: f64 = r[5].parse().unwrap_or(f64::NAN);
         let truth: f64 = r[3].parse().unwrap_or(f64::NAN);
         let within = if r[2] == "frequency_hz" { (err * truth).abs() <= tol } else { err.abs() <= tol };
-        let _ = writeln!(md, "| {} | {} | {} | {} | {} | {} | {} | {} |", r[0], r[1], r[2], r[3], r[4], r[5], tol, within);
+        let _ =
+            writeln!(md, "| {} | {} | {} | {} | {} | {} | {} | {} |", r[0], r[1], r[2], r[3], r[4], r[5], tol, within);
     }
     let _ = writeln!(md, "\nTolerance: relative error, except `frequency_hz` (absolute, Hz) and `order` (exact).");
     let wrong: Vec<_> = out.iter().filter(|o| !o.correct()).collect();
