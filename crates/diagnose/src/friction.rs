@@ -258,8 +258,7 @@ pub(crate) fn golden(mut lo: f64, mut hi: f64, iters: usize, f: impl Fn(f64) -> 
 fn sine_rss_from(d: &SlipData, sc: &[(f64, f64)], ywy: f64) -> Option<(f64, Vec<f64>)> {
     let n = 1 + 2 * d.n_runs;
     let mut ne = Normal::new(n);
-    for i in 0..d.len() {
-        let (s, c) = sc[i];
+    for (i, &(s, c)) in sc.iter().enumerate().take(d.len()) {
         let r = d.run[i];
         let sw = d.w(i).sqrt();
         ne.add_sparse(&[(0, sw), (1 + 2 * r, sw * s), (2 + 2 * r, sw * c)], sw * d.mu[i]);
