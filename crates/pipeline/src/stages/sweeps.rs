@@ -31,7 +31,8 @@ use std::io::IsTerminal;
 const RAD_S_TO_RPM: f64 = 60.0 / (2.0 * PI);
 const MAX_POINTS: usize = 2000;
 /// Max and min of a window, for the diagrams' two series.
-const EXTREMES: [(&str, fn(&Classification) -> f64); 2] = [("max", |k| k.max_rad_s), ("min", |k| k.min_rad_s)];
+type Extreme = (&'static str, fn(&Classification) -> f64);
+const EXTREMES: [Extreme; 2] = [("max", |k| k.max_rad_s), ("min", |k| k.min_rad_s)];
 
 /// One model's results.
 struct ModelSweeps {
@@ -389,13 +390,13 @@ fn map_figure(m: &ModelSweeps, dir: usize, ops: &[OpPoint], labels: &[Labelled],
     let mut z = vec![vec![0.0; nx]; ny];
     let mut failed = 0;
     let mut bistable = (Vec::new(), Vec::new());
-    for j in 0..ny {
+    for (j, z_row) in z.iter_mut().enumerate() {
         let (up, down) = (&m.map.chains[2 * j], &m.map.chains[2 * j + 1]);
         let chain = if dir == 0 { up } else { down };
         for (k, o) in chain.points.iter().enumerate() {
             let i = if dir == 0 { k } else { nx - 1 - k };
             match &o.result {
-                Ok(c) => z[j][i] = c.severity_full,
+                Ok(c) => z_row[i] = c.severity_full,
                 Err(_) => failed += 1,
             }
         }
