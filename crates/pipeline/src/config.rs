@@ -17,6 +17,11 @@ pub struct Settings {
     pub thesis: String,
     pub shared: String,
     pub out: String,
+    /// Code every stage depends on (shared types, the reader, the figure
+    /// renderer, the stage context, the lockfile): hashed into every stage's
+    /// key after its own `code`, so a change there re-runs every stage.
+    #[serde(default)]
+    pub common_code: Vec<String>,
 }
 
 /// One input of a stage as written in pipeline.toml.
@@ -155,6 +160,7 @@ impl PipelineConfig {
             stage: None,
             reason: e.to_string(),
         })?;
+        let common_code = raw.settings.common_code.clone();
         let stages = raw
             .stage
             .into_iter()
@@ -166,7 +172,7 @@ impl PipelineConfig {
                     summary: s.summary,
                     inputs,
                     after: s.after,
-                    code: s.code,
+                    code: s.code.iter().chain(common_code.iter().filter(|c| !s.code.contains(c))).cloned().collect(),
                     optional: s.optional,
                     params: s.params,
                 })
