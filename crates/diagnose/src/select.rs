@@ -329,7 +329,7 @@ pub fn diagnose_signals(
         heldout_misfit_noise_floor: floor_m,
         lines: line_text,
         baseline_text: format!(
-            "μk = {:.4} ± {:.4} (Coulomb, training slip samples); PI kp = {:.3} V·s/rad, ki = {:.3} V/rad, limit {:.1} V (supply)",
+            "μk = {:.4} ± {:.4} (Coulomb, training slip samples); voltage predictor kp = {:.3} V·s/rad, ki = {:.3} V/rad, limit {:.1} V (supply). These gains are the best teacher-forced predictor of the recorded voltage from the measured, differentiated motor speed: speed noise biases kp low (errors in variables), so they are not the drive's physical gains, which estimation.md gives with that bias corrected",
             coul.params[0].1, coul.params[0].2, pi_base.kp_v_s_rad, pi_base.ki_v_rad, supply_v
         ),
         ..Default::default()
