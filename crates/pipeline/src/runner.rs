@@ -273,18 +273,28 @@ impl Runner {
                         bar.inc(1);
                         continue;
                     }
-                    // Dry run: a data input from a stage that would run may change (`after` carries no data).
+                    // Dry run: an input from a stage that would run may change; so may the
+                    // outputs of an `after` stage, which are hashed into this stage's key.
                     let upstream_runs: Vec<String> = decl
                         .dependencies()
                         .into_iter()
-                        .filter(|d| !decl.after.contains(d) || decl.inputs.iter().any(|i| reads_from(i, d)))
                         .filter(|d| done.get(d).is_some_and(|r| matches!(r.outcome, Outcome::WouldRun)))
+                        .collect();
+                    // Everything an `after` stage wrote counts as an input of this stage
+                    // (the report reads every figure and page they make).
+                    let after_outputs: Vec<(String, String)> = decl
+                        .after
+                        .iter()
+                        .filter_map(|d| done.get(d).and_then(|r| r.record.as_ref()).map(|rec| (d, rec)))
+                        .flat_map(|(d, rec)| {
+                            rec.outputs.iter().map(move |(rel, h)| (format!("@{d}/{rel}"), h.blake3.clone()))
+                        })
                         .collect();
                     running.insert(name.clone());
                     bar.set_message(running.iter().cloned().collect::<Vec<_>>().join(", "));
                     let (tx, pool, dirs, memo) = (tx.clone(), &pool, &dirs, &memo);
                     scope.spawn(move || {
-                        let report = pool.install(|| self.run_one(decl, dirs, memo, &upstream_runs));
+                        let report = pool.install(|| self.run_one(decl, dirs, memo, &upstream_runs, &after_outputs));
                         // The receiver lives until every stage has reported.
                         let _ = tx.send(report);
                     });
@@ -312,6 +322,7 @@ impl Runner {
         dirs: &Dirs,
         memo: &Mutex<BTreeMap<PathBuf, String>>,
         upstream_runs: &[String],
+        after_outputs: &[(String, String)],
     ) -> StageReport {
         let name = decl.name.clone();
         let report = |outcome, reasons, record| StageReport { name: name.clone(), outcome, reasons, record };
@@ -343,7 +354,18 @@ impl Runner {
             resolved.push((input.label(), path, memoise));
         }
         let record = match self.fingerprint(decl, &resolved, memo) {
-            Ok(r) => r,
+            Ok(mut r) => {
+                if !after_outputs.is_empty() {
+                    let mut key = blake3::Hasher::new();
+                    key.update(r.key.as_bytes());
+                    for (label, h) in after_outputs {
+                        key.update(format!("\0after {label} {h}").as_bytes());
+                        r.inputs.insert(label.clone(), h.clone());
+                    }
+                    r.key = key.finalize().to_hex().to_string();
+                }
+                r
+            }
             Err(e) => return report(Outcome::Failed(e.into()), vec!["hashing inputs failed".into()], None),
         };
         let previous = store::load_record(&dirs.out, &name);
@@ -451,10 +473,6 @@ impl Runner {
         store::save_record(&dirs.out, &record)?;
         Ok(Some(record))
     }
-}
-
-fn reads_from(input: &Input, stage: &str) -> bool {
-    matches!(input, Input::Upstream { stage: s, .. } if s == stage)
 }
 
 /// `{campaign}/x` etc. against the run's folders; other paths against the pipeline.toml folder.

@@ -520,3 +520,30 @@ fn reformatting_pipeline_toml_reruns_nothing() {
     let r = f.run();
     assert!(r.ran().is_empty(), "{}", r.summary(true));
 }
+
+/// e reads nothing declared but runs `after` d (like the report after every
+/// figure stage): a change in d's outputs must re-run e.
+#[test]
+fn outputs_of_an_after_stage_are_part_of_the_key() {
+    let stages = format!(
+        "{DIAMOND}{}",
+        r#"
+[[stage]]
+name = "e"
+after = ["d"]
+outputs = ["e.txt"]
+[stage.params]
+read = ["out:d.txt"]
+write = ["e.txt"]
+"#
+    );
+    let f = Fixture::new(&stages);
+    f.run();
+    assert!(f.run().ran().is_empty());
+    // d hashes the campaign folder and writes its params: a new tag changes d.txt.
+    f.edit_toml("write = [\"d.txt\"]", "write = [\"d.txt\"]\ntag = 2");
+    let r = f.run();
+    assert_eq!(r.ran(), ["d", "e"], "{}", r.summary(true));
+    assert_eq!(reasons(&r, "e"), ["input @d/d.txt changed"]);
+    assert!(f.read_out("e.txt").contains("tag 2"));
+}
