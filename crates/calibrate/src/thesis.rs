@@ -3,7 +3,7 @@
 //! not print), and [`ThesisData`], the parameters downstream stages use.
 
 use crate::formulas as f;
-use crate::published::{LabelledPoint, ThesisTables};
+use crate::published::{LabelledPoint, PublishedTables, ThesisTables};
 use crate::stats::{self, LineFit};
 use crate::{CalibrateError, audit};
 use rig_types::{MotorParams, Table, ThesisFriction, fmt_fixed};

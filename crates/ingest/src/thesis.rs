@@ -2,109 +2,13 @@
 //! Plain std CSV parsing (the files are tiny and hand-written); every number
 //! keeps its printed precision; every refusal names the file and line.
 //!
-//! The types mirror `rig_calibrate::published` field for field (this crate
-//! does not depend on rig-calibrate); they serialise to the same JSON.
+//! The types are `rig_types::thesis`, shared with rig-calibrate.
 
 use crate::IngestError;
-use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// A number as printed: value and number of printed decimals
-/// (`0.30` → 2, `0.37e-3` → 5, `7850` → 0, `-0.20` → 2).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Printed {
-    pub value: f64,
-    pub decimals: i32,
-}
-
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ParamRow {
-    pub symbol: String,
-    pub description: String,
-    pub value: Printed,
-    pub unit: String,
-}
-
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct DecayRow {
-    pub trial: String,
-    pub x1_rad: Printed,
-    pub x2_rad: Printed,
-    pub log_decrement: Printed,
-    pub damping_ratio: Printed,
-    pub damped_hz: Printed,
-    pub natural_hz: Printed,
-}
-
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct StiffnessRow {
-    pub trial: String,
-    pub torque_nm: Option<Printed>,
-    pub angle_rad: Option<Printed>,
-    pub k_se_nm_rad: Printed,
-    pub rel_error_pct: Printed,
-}
-
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ForceRow {
-    pub trial: String,
-    pub weight_n: Option<Printed>,
-    pub voltage_mv: Option<Printed>,
-    pub factor_mv_per_n: Printed,
-}
-
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct FrictionRow {
-    pub symbol: String,
-    pub description: String,
-    pub value: Printed,
-    pub setpoint_relation: String,
-    pub setpoint_rpm: Printed,
-}
-
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct PeakRow {
-    pub peak: String,
-    pub freq_hz: Printed,
-    pub freq_rad_s: Printed,
-}
-
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Statement {
-    pub id: String,
-    pub symbol: String,
-    pub value: Printed,
-    pub unit: String,
-    #[serde(rename = "where")]
-    pub location: String,
-    pub statement: String,
-}
-
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct LabelledPoint {
-    pub figure: String,
-    pub panel: String,
-    pub motor_rpm: f64,
-    pub frict_n: f64,
-    pub label: String,
-    pub source: String,
-}
-
-/// Every table of the chapter, as `rig_calibrate::published::ThesisTables`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ThesisTables {
-    pub table_4_1: Vec<ParamRow>,
-    pub table_4_2: Vec<DecayRow>,
-    pub table_4_3: Vec<StiffnessRow>,
-    pub table_4_4: Vec<ParamRow>,
-    pub table_4_5: Vec<ParamRow>,
-    pub table_4_6: Vec<ForceRow>,
-    pub table_4_7: Vec<FrictionRow>,
-    pub table_4_8: Vec<PeakRow>,
-    pub statements: Vec<Statement>,
-    pub labelled_points: Vec<LabelledPoint>,
-}
+pub use rig_types::thesis::*;
 
 /// Parses a printed number and counts its printed decimals. Accepts
 /// `[-]digits[.digits][e[-]digits]`; a decimal comma is refused (the README

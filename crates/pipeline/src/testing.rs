@@ -136,3 +136,37 @@ fn snapshot_texts(dir: &Path, outputs: &BTreeMap<String, crate::FileHash>) -> BT
     }
     texts
 }
+
+/// Developer aid for stage authors: runs only stage `name` against an out dir
+/// that already holds its upstream outputs (`out`), without re-running or
+/// re-checking upstream stages, and writes what it staged to `out/dev-<name>/`.
+pub fn dev_run_only(name: &str, out: &Path) -> anyhow::Result<()> {
+    let root = workspace_root();
+    let text = std::fs::read_to_string(root.join("pipeline.toml"))?;
+    let cfg: toml::Table = toml::from_str(&text)?;
+    let params = cfg
+        .get("stage")
+        .and_then(|s| s.as_array())
+        .and_then(|stages| stages.iter().find(|s| s.get("name").and_then(|n| n.as_str()) == Some(name)))
+        .and_then(|decl| decl.get("params"))
+        .and_then(|p| p.as_table())
+        .cloned()
+        .unwrap_or_default();
+    let body = crate::stages::lookup(name).with_context(|| format!("no stage {name}"))?;
+    let shared = root.join("../shared");
+    let mut ctx = crate::StageCtx::new(
+        name,
+        &root.join("data/emulated-rig-2026"),
+        &root.join("data/thesis"),
+        shared.exists().then_some(shared.as_path()),
+        out,
+        params,
+    );
+    body(&mut ctx)?;
+    for (rel, bytes) in ctx.into_staged() {
+        let path = out.join(format!("dev-{name}")).join(rel);
+        std::fs::create_dir_all(path.parent().expect("a file path has a parent"))?;
+        std::fs::write(path, bytes)?;
+    }
+    Ok(())
+}

@@ -5,6 +5,7 @@ mod campaign;
 mod figure;
 mod params;
 mod table;
+pub mod thesis;
 mod trajectory;
 
 pub use campaign::{Campaign, RigInfo, Run, RunData, RunKind};

@@ -3,7 +3,7 @@
 
 use super::{Audit, Check, In, exact, fmt_printed, missing_row, rounded, val};
 use crate::formulas::{self as f};
-use crate::published::{Printed, ThesisTables};
+use crate::published::{Printed, PublishedTables, ThesisTables};
 use crate::{CalibrateError, stats};
 use rig_types::fmt_fixed;
 use std::f64::consts::PI;

@@ -5,7 +5,7 @@
 use super::{Audit, AuditRow, Check, Status, exact, fmt_printed, missing_row, rounded};
 use crate::CalibrateError;
 use crate::formulas::{self as f};
-use crate::published::{Printed, ThesisTables};
+use crate::published::{Printed, PublishedTables, ThesisTables};
 use rig_types::fmt_fixed;
 use std::f64::consts::PI;
 

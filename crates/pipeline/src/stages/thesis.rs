@@ -3,16 +3,12 @@
 //! the thesis' parameters for downstream stages (`data/thesis.json`).
 
 use crate::StageCtx;
-use anyhow::{Context, Result};
+use anyhow::Result;
 use rig_calibrate::{audit, figures, thesis};
 
 pub fn run(ctx: &mut StageCtx) -> Result<()> {
     let tolerance = ctx.param_f64("rounding_tolerance")?;
-    let read = rig_ingest::thesis::read_thesis_tables(&ctx.thesis_dir)?;
-    // rig-ingest's and rig-calibrate's table types are field-for-field the same
-    // (ingest does not depend on calibrate); serde carries one into the other.
-    let tables: rig_calibrate::ThesisTables = serde_json::from_value(serde_json::to_value(&read)?)
-        .context("thesis tables: ingest and calibrate types differ")?;
+    let tables = rig_ingest::thesis::read_thesis_tables(&ctx.thesis_dir)?;
     let o = thesis::thesis_outputs(&tables, tolerance)?;
 
     ctx.write_table("tables/thesis-eq-4-1.csv", &o.eq_4_1)?;
