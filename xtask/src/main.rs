@@ -3,6 +3,7 @@
 
 mod diff;
 mod graph;
+mod merge_shards;
 mod reproduce;
 
 use clap::{Parser, Subcommand};
@@ -23,6 +24,8 @@ enum Command {
     Graph(graph::Args),
     /// Compare every table and figure series with a git revision.
     Diff(diff::Args),
+    /// Join severity-map shards of a job array into the map tables.
+    MergeShards(merge_shards::Args),
 }
 
 /// The workspace root: pipeline.toml lives there, and the default paths are relative to it.
@@ -36,6 +39,7 @@ fn main() -> std::process::ExitCode {
         Command::Reproduce(args) => reproduce::run(args),
         Command::Graph(args) => graph::run(args),
         Command::Diff(args) => diff::run(args),
+        Command::MergeShards(args) => merge_shards::run(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

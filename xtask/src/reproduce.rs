@@ -1,6 +1,6 @@
 //! `cargo xtask reproduce`: runs the DAG through `rig_pipeline::Runner`.
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use rig_pipeline::Runner;
 use std::path::PathBuf;
 
@@ -24,12 +24,21 @@ pub struct Args {
     /// Run only this stage and what it depends on (repeatable).
     #[arg(long)]
     only: Vec<String>,
+    /// Override a stage param for this run, `STAGE.KEY=VALUE` (repeatable), e.g.
+    /// `--set sweeps.shard=2/4` for job 2 of a 4-job array (then `cargo xtask merge-shards`).
+    #[arg(long = "set", value_name = "STAGE.KEY=VALUE")]
+    set: Vec<String>,
 }
 
 pub fn run(args: Args) -> Result<()> {
     let toml = super::workspace_root().join("pipeline.toml");
     let only: Vec<&str> = args.only.iter().map(String::as_str).collect();
     let mut runner = Runner::new(&toml)?.jobs(args.jobs).dry_run(args.dry_run).only(&only).progress(true);
+    for item in &args.set {
+        let (lhs, value) = item.split_once('=').with_context(|| format!("--set {item}: expected STAGE.KEY=VALUE"))?;
+        let (stage, key) = lhs.split_once('.').with_context(|| format!("--set {item}: expected STAGE.KEY=VALUE"))?;
+        runner = runner.set_param(stage, key, value)?;
+    }
     if let Some(c) = &args.campaign {
         runner = runner.campaign(c);
     }

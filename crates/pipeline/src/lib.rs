@@ -28,4 +28,5 @@ pub use error::PipelineError;
 pub use runner::{Outcome, RunReport, Runner, StageReport};
 pub use store::{CacheRecord, FileHash};
 pub mod diff;
+pub mod shards;
 pub mod testing;

@@ -187,6 +187,25 @@ impl Runner {
         self
     }
 
+    /// Overrides `[stage.params] key` of `stage` for this run (`value` is read
+    /// as a TOML value, or as a string when it is not one), e.g. the sweeps
+    /// stage's `shard = "2/4"` for one job of a job array. The override is part
+    /// of the stage's key like any param.
+    pub fn set_param(mut self, stage: &str, key: &str, value: &str) -> Result<Self, PipelineError> {
+        let parsed = toml::from_str::<toml::Table>(&format!("v = {value}"))
+            .ok()
+            .and_then(|mut t| t.remove("v"))
+            .unwrap_or_else(|| toml::Value::String(value.to_string()));
+        let path = self.config.path.clone();
+        let decl = self.config.stages.iter_mut().find(|s| s.name == stage).ok_or_else(|| PipelineError::Config {
+            path,
+            stage: Some(stage.to_string()),
+            reason: format!("--set {stage}.{key}: no such stage"),
+        })?;
+        decl.params.insert(key.to_string(), parsed);
+        Ok(self)
+    }
+
     /// A progress bar on stderr (drawn only when stderr is a terminal).
     pub fn progress(mut self, yes: bool) -> Self {
         self.progress = yes;
