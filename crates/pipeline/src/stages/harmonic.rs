@@ -8,7 +8,7 @@ use crate::StageCtx;
 use anyhow::{Context, Result};
 use rayon::prelude::*;
 use rig_calibrate::ThesisData;
-use rig_model::{SimOptions, ThesisModelInputs, simulate, thesis_model_params};
+use rig_model::{SimOptions, simulate};
 use rig_spectra::stickslip::severity;
 use rig_spectra::{
     Detrend, Line, LineAnalysis, LineClass, LineOptions, PeakOptions, Window, amplitude_spectrum, analyse_lines,
@@ -101,16 +101,8 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     let p = params(ctx)?;
     let thesis: ThesisData = ctx.read_json("data/thesis.json")?;
     let rig: RigParams = ctx.read_json("data/rig-params.json")?;
-    let thesis_params = thesis_model_params(&ThesisModelInputs {
-        motor: thesis.motor_estimated.clone(),
-        rotor_inertia_kgm2: thesis.rotor_inertia_kgm2,
-        shaft_stiffness_nm_rad: thesis.shaft_stiffness_nm_rad,
-        damping_ratio: thesis.damping_ratio,
-        friction: thesis.friction.clone(),
-        brake_disc_radius_m: thesis.brake_disc_radius_m,
-        // The chapter publishes no PI gains: the rig's identified ones (estimation stage).
-        drive: rig.drive.clone(),
-    });
+    // The chapter publishes no PI gains: the rig's identified ones (estimation stage).
+    let thesis_params = super::thesis_model(&thesis, rig.drive.clone());
     let omegas: Vec<f64> = thesis.peaks.iter().map(|pk| pk.omega_rad_s).collect();
     anyhow::ensure!(!omegas.is_empty(), "data/thesis.json: Table 4.8 peaks are missing");
 

@@ -32,3 +32,18 @@ pub fn lookup(name: &str) -> Option<StageFn> {
         _ => return None,
     })
 }
+
+/// The thesis model as published (Table 4.5, the chapter's printed ξ — its C —,
+/// Table 4.7, r; see `rig_model::thesis_model_params`) with `drive`: the chapter
+/// publishes no PI gains, so stages pass the rig's identified drive.
+pub(crate) fn thesis_model(data: &rig_calibrate::ThesisData, drive: rig_types::DriveParams) -> rig_types::RigParams {
+    rig_model::thesis_model_params(&rig_model::ThesisModelInputs {
+        motor: data.motor_estimated.clone(),
+        rotor_inertia_kgm2: data.rotor_inertia_kgm2,
+        shaft_stiffness_nm_rad: data.shaft_stiffness_nm_rad,
+        damping_ratio: data.damping_ratio,
+        friction: data.friction.clone(),
+        brake_disc_radius_m: data.brake_disc_radius_m,
+        drive,
+    })
+}

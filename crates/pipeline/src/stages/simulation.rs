@@ -27,7 +27,7 @@ use anyhow::{Context, Result, anyhow, bail};
 use rayon::prelude::*;
 use rig_calibrate::signal::SPEED_HALF_WINDOW_S;
 use rig_calibrate::{CampaignCalibration, ThesisData, friction_torque_nm, rotor_speed_rad_s};
-use rig_model::{SimOptions, ThesisModelInputs, friction_coefficient, simulate, thesis_model_params};
+use rig_model::{SimOptions, friction_coefficient, simulate};
 use rig_types::{
     FigureSpec, FrictionLaw, RigParams, Run, RunInput, RunKind, Series, SeriesStyle, Table, Trajectory, fmt_fixed,
 };
@@ -102,16 +102,7 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
 /// identified drive (rig-params.json) is used.
 fn thesis_params(ctx: &StageCtx, rig: &RigParams) -> Result<RigParams> {
     let data: ThesisData = ctx.read_json("data/thesis.json")?;
-    Ok(thesis_model_params(&ThesisModelInputs {
-        motor: data.motor_estimated,
-        rotor_inertia_kgm2: data.rotor_inertia_kgm2,
-        shaft_stiffness_nm_rad: data.shaft_stiffness_nm_rad,
-        // ξ as printed in Table 4.2 (the chapter's C); the audit discusses the recomputed one.
-        damping_ratio: data.damping_ratio,
-        friction: data.friction,
-        brake_disc_radius_m: data.brake_disc_radius_m,
-        drive: rig.drive.clone(),
-    }))
+    Ok(super::thesis_model(&data, rig.drive.clone()))
 }
 
 fn input_of(run: &Run) -> Result<RunInput> {

@@ -19,7 +19,7 @@ use anyhow::{Context, Result, anyhow, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rig_calibrate::signal::SPEED_HALF_WINDOW_S;
 use rig_calibrate::{ThesisData, rotor_speed_rad_s};
-use rig_model::{SimOptions, ThesisModelInputs, simulate, thesis_model_params};
+use rig_model::{SimOptions, simulate};
 use rig_sweep::{
     ChainResult, Classification, ClassifyOptions, MapSlice, MapSpec, Point, Shard, SweepSettings, WindowSpec,
     bifurcation_chains, chain_table, classify, hysteresis, linspace, map_table, run_chains, run_map_shard,
@@ -229,15 +229,7 @@ fn progress_bar(total: u64) -> ProgressBar {
 /// construction as the simulation stage.
 fn thesis_params(ctx: &StageCtx, rig: &RigParams) -> Result<RigParams> {
     let data: ThesisData = ctx.read_json("data/thesis.json")?;
-    Ok(thesis_model_params(&ThesisModelInputs {
-        motor: data.motor_estimated,
-        rotor_inertia_kgm2: data.rotor_inertia_kgm2,
-        shaft_stiffness_nm_rad: data.shaft_stiffness_nm_rad,
-        damping_ratio: data.damping_ratio,
-        friction: data.friction,
-        brake_disc_radius_m: data.brake_disc_radius_m,
-        drive: rig.drive.clone(),
-    }))
+    Ok(super::thesis_model(&data, rig.drive.clone()))
 }
 
 /// Samples of the classification window: last `window_s` before the differentiator's edge.
