@@ -23,23 +23,7 @@ pub fn ols(x: &[Vec<f64>], y: &[f64], context: &str) -> Result<OlsFit, EstimateE
 /// diagonal, which attenuates its coefficient; subtracting it removes the bias.
 /// `noise_var[j]` is that variance for column j (0 for exact regressors).
 pub fn ols_eiv(x: &[Vec<f64>], y: &[f64], noise_var: &[f64], context: &str) -> Result<OlsFit, EstimateError> {
-    let n = x.len();
-    let p = x.first().map_or(0, Vec::len);
-    if n <= p {
-        return Err(EstimateError::TooFewSamples {
-            context: context.into(),
-            got: n,
-            need: p + 1,
-            rule: "need more rows than regressors",
-        });
-    }
-    // Scaling each column to unit RMS keeps the normal equations well conditioned.
-    let scale: Vec<f64> = (0..p)
-        .map(|j| {
-            let s = (x.iter().map(|r| r[j] * r[j]).sum::<f64>() / n as f64).sqrt();
-            if s > 0.0 { s } else { 1.0 }
-        })
-        .collect();
+    let (n, p, scale) = shape_and_scale(x, true, context)?;
     let xs = Mat::<f64>::from_fn(n, p, |i, j| x[i][j] / scale[j]);
     let ym = Mat::<f64>::from_fn(n, 1, |i, _| y[i]);
     let mut xtx = xs.transpose() * &xs;
@@ -76,22 +60,7 @@ pub fn ols_eiv(x: &[Vec<f64>], y: &[f64], noise_var: &[f64], context: &str) -> R
 /// noise: each instrument column correlates with the true regressor but not
 /// with its noise. Standard errors σ²·(ZᵀX)⁻¹ ZᵀZ (XᵀZ)⁻¹, σ² = SSR/(n − p).
 pub fn iv(x: &[Vec<f64>], z: &[Vec<f64>], y: &[f64], context: &str) -> Result<OlsFit, EstimateError> {
-    let n = x.len();
-    let p = x.first().map_or(0, Vec::len);
-    if n <= p || z.len() != n {
-        return Err(EstimateError::TooFewSamples {
-            context: context.into(),
-            got: n,
-            need: p + 1,
-            rule: "need more rows than regressors",
-        });
-    }
-    let scale: Vec<f64> = (0..p)
-        .map(|j| {
-            let s = (x.iter().map(|r| r[j] * r[j]).sum::<f64>() / n as f64).sqrt();
-            if s > 0.0 { s } else { 1.0 }
-        })
-        .collect();
+    let (n, p, scale) = shape_and_scale(x, z.len() == x.len(), context)?;
     let xs = Mat::<f64>::from_fn(n, p, |i, j| x[i][j] / scale[j]);
     let zs = Mat::<f64>::from_fn(n, p, |i, j| z[i][j] / scale[j]);
     let ym = Mat::<f64>::from_fn(n, 1, |i, _| y[i]);
@@ -124,4 +93,27 @@ pub fn iv(x: &[Vec<f64>], z: &[Vec<f64>], y: &[f64], context: &str) -> Result<Ol
         return Err(singular());
     }
     Ok(OlsFit { beta, stderr, ssr })
+}
+
+/// Rows n, regressors p (refused unless n > p and `rows_match`), and each
+/// column's RMS: scaling columns to unit RMS keeps the normal equations well
+/// conditioned.
+fn shape_and_scale(x: &[Vec<f64>], rows_match: bool, context: &str) -> Result<(usize, usize, Vec<f64>), EstimateError> {
+    let n = x.len();
+    let p = x.first().map_or(0, Vec::len);
+    if n <= p || !rows_match {
+        return Err(EstimateError::TooFewSamples {
+            context: context.into(),
+            got: n,
+            need: p + 1,
+            rule: "need more rows than regressors",
+        });
+    }
+    let scale = (0..p)
+        .map(|j| {
+            let s = (x.iter().map(|r| r[j] * r[j]).sum::<f64>() / n as f64).sqrt();
+            if s > 0.0 { s } else { 1.0 }
+        })
+        .collect();
+    Ok((n, p, scale))
 }
