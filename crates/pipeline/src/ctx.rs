@@ -49,6 +49,17 @@ impl StageCtx {
         }
     }
 
+    /// `[stage.params]` as a typed struct. Declare it
+    /// `#[derive(Deserialize)] #[serde(deny_unknown_fields)]` in the analysis
+    /// crate that owns the knobs: an unknown, missing or mistyped key is then an
+    /// error that names the stage and the key.
+    pub fn typed_params<T: DeserializeOwned>(&self) -> Result<T> {
+        self.params
+            .clone()
+            .try_into::<T>()
+            .map_err(|e| anyhow!("pipeline.toml: stage {}: [stage.params]: {}", self.name, e.to_string().trim()))
+    }
+
     /// A numeric parameter from `[stage.params]` (integers are accepted as floats).
     pub fn param_f64(&self, key: &str) -> Result<f64> {
         match self.params.get(key) {
