@@ -68,7 +68,7 @@ fn bench(c: &mut Criterion) {
         .map(PathBuf::from)
         .unwrap_or_else(|_| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/emulated-rig-2026"));
     let campaign = read(&dir);
-    let opts = DiagnoseOptions { free_run: false, ..DiagnoseOptions::default() };
+    let opts = DiagnoseOptions::from_pipeline_toml(include_str!("../../../pipeline.toml")).expect("pipeline.toml");
     let mut g = c.benchmark_group("diagnose");
     g.sample_size(10);
     g.bench_function("30-run campaign, blind", |b| {

@@ -15,8 +15,10 @@ pub enum FrictionModel {
     Coulomb { mu_k: f64 },
     /// μ = μk + c|Ω| (vocabulary `viscous_brake_friction`).
     Viscous { mu_k: f64, c: f64 },
-    /// μ = μk + (μs − μk) exp(−(Ω/vs)²) (vocabulary `velocity_weakening_friction`).
-    Stribeck { mu_k: f64, mu_s: f64, vs: f64 },
+    /// μ = μk + (μs − μk) exp(−(Ω/vs)²) + c|Ω| (vocabulary
+    /// `velocity_weakening_friction`; c ≠ 0 only when `viscous_brake_friction`
+    /// is in the model too).
+    Stribeck { mu_k: f64, mu_s: f64, vs: f64, c: f64 },
     /// μ = μk (1 + a sin(2π f t + θ_r)) (vocabulary `normal_force_modulation`).
     TimeSine { mu_k: f64, a: f64, f_hz: f64 },
     /// μ = μk (1 + a sin(n φ1 + θ_r)) (vocabulary `angle_periodic_friction`).
@@ -58,7 +60,7 @@ impl SlipData {
     pub fn is_empty(&self) -> bool {
         self.mu.is_empty()
     }
-    fn w(&self, i: usize) -> f64 {
+    pub(crate) fn w(&self, i: usize) -> f64 {
         self.run_weight[self.run[i]]
     }
 }
@@ -87,7 +89,9 @@ impl FrictionModel {
         match *self {
             FrictionModel::Coulomb { mu_k } => mu_k,
             FrictionModel::Viscous { mu_k, c } => mu_k + c * omega,
-            FrictionModel::Stribeck { mu_k, mu_s, vs } => mu_k + (mu_s - mu_k) * (-(omega / vs).powi(2)).exp(),
+            FrictionModel::Stribeck { mu_k, mu_s, vs, c } => {
+                mu_k + (mu_s - mu_k) * (-(omega / vs).powi(2)).exp() + c * omega
+            }
             FrictionModel::TimeSine { mu_k, a, f_hz } => mu_k * (1.0 + a * (2.0 * PI * f_hz * t + theta).sin()),
             FrictionModel::AngleSine { mu_k, a, order } => mu_k * (1.0 + a * (order as f64 * phi + theta).sin()),
         }
@@ -182,13 +186,18 @@ pub fn fit_viscous(d: &SlipData) -> Option<FrictionFit> {
     })
 }
 
-/// μ = μk + Δ exp(−(Ω/vs)²): linear in (μk, Δ) for fixed vs; vs by a log
-/// grid then golden-section refinement; covariance from the numerical Jacobian.
-pub fn fit_stribeck(d: &SlipData) -> Option<FrictionFit> {
+/// μ = μk + Δ exp(−(Ω/vs)²) [+ c|Ω| when `with_viscous`]: linear in (μk, Δ[, c])
+/// for fixed vs; vs by a log grid then golden-section refinement; covariance
+/// from the numerical Jacobian.
+pub fn fit_stribeck(d: &SlipData, with_viscous: bool) -> Option<FrictionFit> {
+    let ncol = if with_viscous { 3 } else { 2 };
     let lin = |vs: f64| {
-        linear_fit(d, 2, |i, r| {
+        linear_fit(d, ncol, |i, r| {
             r[0] = 1.0;
             r[1] = (-(d.omega[i] / vs).powi(2)).exp();
+            if with_viscous {
+                r[2] = d.omega[i];
+            }
         })
     };
     let grid: Vec<f64> = (0..41).map(|j| 0.05 * 10f64.powf(j as f64 * 3.0 / 40.0)).collect();
@@ -200,29 +209,39 @@ pub fn fit_stribeck(d: &SlipData) -> Option<FrictionFit> {
     let vs = lv.exp();
     let (p, _, rss) = lin(vs)?;
     let (mu_k, dmu) = (p[0], p[1]);
-    // Gauss–Newton covariance over (μk, Δ, vs).
-    let mut ne = Normal::new(3);
+    let c = if with_viscous { p[2] } else { 0.0 };
+    // Gauss–Newton covariance over (μk, Δ, vs[, c]).
+    let np = ncol + 1;
+    let mut ne = Normal::new(np);
     for i in 0..d.len() {
         let g = (-(d.omega[i] / vs).powi(2)).exp();
         let dg_dvs = g * 2.0 * d.omega[i].powi(2) / vs.powi(3);
         let sw = d.w(i).sqrt();
-        ne.add_sparse(&[(0, sw), (1, sw * g), (2, sw * dmu * dg_dvs)], 0.0);
+        if with_viscous {
+            ne.add_sparse(&[(0, sw), (1, sw * g), (2, sw * dmu * dg_dvs), (3, sw * d.omega[i])], 0.0);
+        } else {
+            ne.add_sparse(&[(0, sw), (1, sw * g), (2, sw * dmu * dg_dvs)], 0.0);
+        }
     }
-    let var = rss / (d.len().saturating_sub(3).max(1)) as f64;
+    let var = rss / (d.len().saturating_sub(np).max(1)) as f64;
     let inv = ne.inverse();
-    let se = |a: usize, b: usize| inv.as_ref().map(|m| m[a * 3 + b] * var).unwrap_or(f64::NAN);
+    let se = |a: usize, b: usize| inv.as_ref().map(|m| m[a * np + b] * var).unwrap_or(f64::NAN);
     let se_mu_s = (se(0, 0) + se(1, 1) + 2.0 * se(0, 1)).max(0.0).sqrt();
+    let mut params = vec![
+        ("mu_static", mu_k + dmu, se_mu_s),
+        ("mu_kinetic", mu_k, se(0, 0).max(0.0).sqrt()),
+        ("stribeck_speed_rad_s", vs, se(2, 2).max(0.0).sqrt()),
+    ];
+    if with_viscous {
+        params.push(("viscous_per_rad_s", c, se(3, 3).max(0.0).sqrt()));
+    }
     Some(FrictionFit {
-        model: FrictionModel::Stribeck { mu_k, mu_s: mu_k + dmu, vs },
+        model: FrictionModel::Stribeck { mu_k, mu_s: mu_k + dmu, vs, c },
         phases: vec![],
-        params: vec![
-            ("mu_static", mu_k + dmu, se_mu_s),
-            ("mu_kinetic", mu_k, se(0, 0).max(0.0).sqrt()),
-            ("stribeck_speed_rad_s", vs, se(2, 2).max(0.0).sqrt()),
-        ],
+        params,
         rss_w: rss,
         n: d.len(),
-        k: 3,
+        k: np,
         converged: inv.is_some(),
         scan: vec![],
     })
@@ -450,6 +469,12 @@ pub fn autocorr_inflation(d: &SlipData, m: &FrictionModel, phases: &[f64]) -> f6
             d.w(i).sqrt() * (d.mu[i] - m.mu(d.t[i], d.phi[i], d.omega[i], th))
         })
         .collect();
+    inflation_of(&r, &d.run)
+}
+
+/// τ of residuals `r` whose sample i belongs to run `run[i]` (lags never
+/// cross runs). The definition is [`autocorr_inflation`]'s.
+pub fn inflation_of(r: &[f64], run: &[usize]) -> f64 {
     let var = r.iter().map(|x| x * x).sum::<f64>() / r.len().max(1) as f64;
     if var <= 0.0 {
         return 1.0;
@@ -458,7 +483,7 @@ pub fn autocorr_inflation(d: &SlipData, m: &FrictionModel, phases: &[f64]) -> f6
     for k in 1..=50 {
         let (mut s, mut n) = (0.0, 0usize);
         for i in k..r.len() {
-            if d.run[i] == d.run[i - k] {
+            if run[i] == run[i - k] {
                 s += r[i] * r[i - k];
                 n += 1;
             }
@@ -569,8 +594,8 @@ mod tests {
     #[test]
     fn stribeck_law_is_recovered() {
         let d = synth(4, |_, _, _, w| 0.4 + 0.2 * (-(w / 2.0f64).powi(2)).exp());
-        let f = fit_stribeck(&d).unwrap();
-        let FrictionModel::Stribeck { mu_k, mu_s, vs } = f.model else { panic!() };
+        let f = fit_stribeck(&d, false).unwrap();
+        let FrictionModel::Stribeck { mu_k, mu_s, vs, .. } = f.model else { panic!() };
         assert!((mu_k - 0.4).abs() < 1e-3 && (mu_s - 0.6).abs() < 5e-3 && (vs - 2.0).abs() < 0.05, "{:?}", f.model);
         // The Coulomb baseline is much worse on the same data.
         assert!(fit_coulomb(&d).rss_w > 10.0 * f.rss_w);

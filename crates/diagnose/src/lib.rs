@@ -41,6 +41,7 @@
 //! `criterion` in diagnosis.json is `BIC(candidate) − BIC(baseline)` on the
 //! training runs (negative favours the candidate).
 
+pub mod composite;
 pub mod drive;
 pub mod features;
 pub mod friction;
@@ -50,17 +51,24 @@ pub mod prepare;
 pub mod render;
 mod report;
 mod select;
+pub mod signature;
+pub mod vocab;
 
 pub use prepare::{ForceCal, RunSignals};
-pub use report::{CandidateScore, Diagnosis, Finding, RunRow, round_sig};
+pub use report::{Adequacy, CandidateScore, Diagnosis, Finding, RunRow, SignatureEntry, StepRow, round_sig};
 pub use select::diagnose_signals;
+pub use vocab::EffectId;
 
-/// Knobs of the diagnosis (explicit, from pipeline.toml or the caller).
-#[derive(Debug, Clone, PartialEq)]
+/// Knobs of the diagnosis: the `[stage.params]` of the `diagnosis` stage in
+/// pipeline.toml, which is their one home (no defaults in code: tests read
+/// them from the same file with [`DiagnoseOptions::from_pipeline_toml`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct DiagnoseOptions {
-    /// Every `heldout_every`-th operating point (campaign order, 1-based
-    /// multiples) is held out of all fits. 3 ⇒ the 3rd, 6th, 9th, … op runs.
-    pub heldout_every: usize,
+    /// Cross-validation folds over the operating points (stratified by
+    /// set-point, then normal force: consecutive runs of one condition go to
+    /// different folds).
+    pub folds: usize,
     /// Rotor speed: centred difference over ±this many samples.
     pub rotor_speed_half_window: usize,
     /// Motor speed (for the PI error): centred difference over ±this many samples.
@@ -71,10 +79,15 @@ pub struct DiagnoseOptions {
     pub skip_start_s: f64,
     /// Steady state starts at ramp_s + settle_s.
     pub settle_s: f64,
-    /// A candidate must lower the BIC by more than this (10 ≈ "very strong").
-    pub bic_threshold: f64,
-    /// … and lower the held-out misfit by at least this fraction.
+    /// An effect must lower the cross-validated misfit by at least this fraction …
     pub min_relative_gain: f64,
+    /// … with a paired run-level t of ln(M_before/M_after) of at least this.
+    pub min_t: f64,
+    /// The final model is adequate when its cross-validated misfit is at most
+    /// this many times the noise floor (calibrated on effect-free campaigns).
+    pub adequacy_ratio: f64,
+    /// STLSQ threshold of the residual signature, in standard deviations of the residual.
+    pub signature_threshold: f64,
     /// Frequency grid of the normal-force modulation scan, Hz.
     pub freq_min_hz: f64,
     pub freq_max_hz: f64,
@@ -83,29 +96,26 @@ pub struct DiagnoseOptions {
     pub max_order: u32,
     /// Order-line power over its local floor that counts as a line.
     pub line_ratio: f64,
-    /// Estimate the baseline and simulate every operating point free-run for
-    /// the feature comparison (needs the thesis' initial values).
-    pub free_run: bool,
 }
 
-impl Default for DiagnoseOptions {
-    fn default() -> Self {
-        DiagnoseOptions {
-            heldout_every: 3,
-            rotor_speed_half_window: 8,
-            motor_speed_half_window: 15,
-            slip_speed_rad_s: 0.5,
-            skip_start_s: 0.0,
-            settle_s: 3.0,
-            bic_threshold: 10.0,
-            min_relative_gain: 0.05,
-            freq_min_hz: 0.05,
-            freq_max_hz: 10.0,
-            freq_step_hz: 0.01,
-            max_order: 8,
-            line_ratio: 25.0,
-            free_run: true,
+impl DiagnoseOptions {
+    /// The `[stage.params]` of the stage named `diagnosis` in a pipeline.toml text.
+    pub fn from_pipeline_toml(text: &str) -> Result<Self, String> {
+        #[derive(serde::Deserialize)]
+        struct Stage {
+            name: String,
+            params: Option<toml::Value>,
         }
+        #[derive(serde::Deserialize)]
+        struct File {
+            stage: Vec<Stage>,
+        }
+        let f: File = toml::from_str(text).map_err(|e| format!("pipeline.toml: {e}"))?;
+        let st = f.stage.into_iter().find(|s| s.name == "diagnosis").ok_or("pipeline.toml: no stage `diagnosis`")?;
+        st.params
+            .ok_or("pipeline.toml: stage diagnosis has no [stage.params]")?
+            .try_into()
+            .map_err(|e| format!("pipeline.toml: stage diagnosis: [stage.params]: {e}"))
     }
 }
 
@@ -125,19 +135,30 @@ pub enum DiagnoseError {
 }
 
 /// Diagnosis of a campaign whose calibration is done: prepares the signals
-/// with the campaign's force calibration, selects the effect, and — when a
-/// baseline `RigParams` is given — simulates every operating point free-run
-/// with it for the per-run feature comparison.
+/// with the campaign's force calibration, selects the effects, tests the
+/// final model's adequacy (with `channel_checks`: significant mismatches of
+/// the other run kinds, as (run kind, sentence)), and — when a baseline
+/// `RigParams` is given — simulates every operating point free-run with it
+/// for the per-run feature comparison.
 pub fn diagnose(
     c: &rig_types::Campaign,
     cal: &rig_calibrate::CampaignCalibration,
     baseline: Option<&rig_types::RigParams>,
     thesis_mu_dynamic: Option<f64>,
+    channel_checks: &[(String, String)],
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
     let fc = ForceCal { factor_mv_per_n: cal.force_factor_mv_per_n, offset_mv: cal.force_offset_mv };
     let runs = prepare::prepare_runs(c, fc, opts)?;
-    let mut d = diagnose_signals(&c.name, &runs, c.rig.supply_voltage_v, thesis_mu_dynamic, opts)?;
+    let mut d = diagnose_signals(
+        &c.name,
+        &runs,
+        c.rig.supply_voltage_v,
+        c.rig.brake_disc_radius_m,
+        thesis_mu_dynamic,
+        channel_checks,
+        opts,
+    )?;
     if let Some(p) = baseline {
         let sims = features::simulate_features(c, p, opts);
         for (row, f) in d.detail.runs.iter_mut().zip(sims) {
@@ -153,21 +174,18 @@ pub fn diagnose(
 /// Reads nothing but the campaign (recordings + campaign.toml) and the
 /// published thesis values. The verdict does not depend on the estimate:
 /// the candidates are compared on teacher-forced channels whose baseline
-/// coefficients are refitted on the same training runs (crate docs); the
-/// estimated model gives the free-run feature comparison. A failed
-/// estimate is reported as data (no free-run features), not an error.
+/// coefficients are refitted on the same runs (crate docs); the estimated
+/// model gives the free-run feature comparison. A failed estimate is
+/// reported as data (no free-run features), not an error.
 pub fn diagnose_campaign(
     c: &rig_types::Campaign,
     thesis: Option<&rig_calibrate::ThesisData>,
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
     let cal = rig_calibrate::calibrate_campaign(c).map_err(|e| DiagnoseError::Calibration(e.to_string()))?;
-    let baseline = match thesis {
-        Some(t) if opts.free_run => {
-            let o = rig_estimate::EstimateOptions::new(rig_estimate::InitialValues::from_thesis_data(t));
-            rig_estimate::estimate_rig(c, &cal, &o).ok().map(|e| e.params)
-        }
-        _ => None,
-    };
-    diagnose(c, &cal, baseline.as_ref(), thesis.map(|t| t.friction.mu_dynamic), opts)
+    let baseline = thesis.and_then(|t| {
+        let o = rig_estimate::EstimateOptions::new(rig_estimate::InitialValues::from_thesis_data(t));
+        rig_estimate::estimate_rig(c, &cal, &o).ok().map(|e| e.params)
+    });
+    diagnose(c, &cal, baseline.as_ref(), thesis.map(|t| t.friction.mu_dynamic), &[], opts)
 }

@@ -17,8 +17,8 @@ pub struct ForceCal {
 #[derive(Debug, Clone)]
 pub struct RunSignals {
     pub id: String,
-    /// True for the runs held out of every fit (every `heldout_every`-th op run).
-    pub heldout: bool,
+    /// The cross-validation fold in which this run is held out.
+    pub fold: usize,
     pub setpoint_rad_s: f64,
     pub normal_force_n: f64,
     pub ramp_s: f64,
@@ -78,14 +78,37 @@ pub fn diff_noise(x: &[f64]) -> f64 {
     med / (0.6745 * std::f64::consts::SQRT_2)
 }
 
-/// Builds the signals of every operating-point run (campaign order). Runs
-/// with index `i % heldout_every == heldout_every − 1` are held out.
+/// Stratified folds: the runs ranked by (set-point, normal force, campaign
+/// order) and dealt round-robin, so runs of one condition (the highest set
+/// speed, say) land in different folds and every condition is in training
+/// and test sets alike.
+pub fn stratified_folds(conditions: &[(f64, f64)], folds: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..conditions.len()).collect();
+    order.sort_by(|&a, &b| {
+        conditions[a].0.total_cmp(&conditions[b].0).then(conditions[a].1.total_cmp(&conditions[b].1)).then(a.cmp(&b))
+    });
+    let mut fold = vec![0; conditions.len()];
+    for (rank, &i) in order.iter().enumerate() {
+        fold[i] = rank % folds.max(1);
+    }
+    fold
+}
+
+/// Builds the signals of every operating-point run (campaign order), each
+/// with its cross-validation fold ([`stratified_folds`]).
 pub fn prepare_runs(c: &Campaign, cal: ForceCal, opts: &DiagnoseOptions) -> Result<Vec<RunSignals>, DiagnoseError> {
     let ops: Vec<&Run> = c.runs_of("operating_point").collect();
+    let conditions: Vec<(f64, f64)> = ops
+        .iter()
+        .map(|r| match r.kind {
+            RunKind::OperatingPoint { motor_rpm_setpoint, normal_force_n, .. } => (motor_rpm_setpoint, normal_force_n),
+            _ => (0.0, 0.0),
+        })
+        .collect();
+    let folds = stratified_folds(&conditions, opts.folds.min(ops.len()));
     let mut out = Vec::with_capacity(ops.len());
     for (i, run) in ops.iter().enumerate() {
-        let heldout = opts.heldout_every > 0 && i % opts.heldout_every == opts.heldout_every - 1;
-        out.push(prepare_run(c, run, cal, heldout, opts)?);
+        out.push(prepare_run(c, run, cal, folds[i], opts)?);
     }
     Ok(out)
 }
@@ -98,7 +121,7 @@ fn prepare_run(
     c: &Campaign,
     run: &Run,
     cal: ForceCal,
-    heldout: bool,
+    fold: usize,
     opts: &DiagnoseOptions,
 ) -> Result<RunSignals, DiagnoseError> {
     let RunKind::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s } = run.kind else {
@@ -150,7 +173,7 @@ fn prepare_run(
     let steady_from = t.partition_point(|&x| x < ramp_s + opts.settle_s);
     Ok(RunSignals {
         id: run.id.clone(),
-        heldout,
+        fold,
         setpoint_rad_s: motor_rpm_setpoint * 2.0 * PI / 60.0,
         normal_force_n,
         ramp_s,
@@ -172,6 +195,19 @@ fn prepare_run(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn folds_split_each_condition() {
+        // Three runs at the top speed land in three different folds.
+        let c = [(130.0, 4.0), (20.0, 1.0), (130.0, 10.0), (45.0, 1.0), (130.0, 25.0), (20.0, 4.0)];
+        let f = stratified_folds(&c, 3);
+        assert_ne!(f[0], f[2]);
+        assert_ne!(f[2], f[4]);
+        assert_ne!(f[0], f[4]);
+        for k in 0..3 {
+            assert_eq!(f.iter().filter(|&&x| x == k).count(), 2);
+        }
+    }
 
     #[test]
     fn centred_speed_is_exact_on_a_ramp() {

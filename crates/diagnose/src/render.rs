@@ -14,7 +14,7 @@ fn f4(x: f64) -> String {
 pub fn runs_table(d: &Diagnosis) -> Table {
     let mut t = Table::new([
         "run",
-        "heldout",
+        "fold",
         "motor_rpm_setpoint",
         "normal_force_n",
         "slip_samples",
@@ -36,7 +36,7 @@ pub fn runs_table(d: &Diagnosis) -> Table {
     for r in &d.detail.runs {
         t.push([
             r.id.clone(),
-            r.heldout.to_string(),
+            r.fold.to_string(),
             fmt_fixed(r.motor_rpm_setpoint, 1),
             fmt_fixed(r.normal_force_n, 2),
             r.slip_samples.to_string(),
@@ -58,19 +58,31 @@ pub fn runs_table(d: &Diagnosis) -> Table {
     t
 }
 
-/// tables/diagnosis-candidates.csv: every candidate with its criterion and held-out score.
+/// tables/diagnosis-candidates.csv: every effect tried in every forward-selection
+/// step, with its cross-validated misfit, gain (and its spread over folds) and
+/// the paired run-level t (crate docs).
 pub fn candidates_table(d: &Diagnosis) -> Table {
-    let mut t = Table::new(["effect", "delta_bic", "heldout_misfit", "relative_gain", "significant", "params"]);
-    t.push([
-        "none".to_string(),
-        "0".into(),
-        f4(d.detail.heldout_misfit_baseline),
-        "0".into(),
-        "".into(),
-        d.detail.baseline_text.clone(),
+    let mut t = Table::new([
+        "step",
+        "effect",
+        "misfit_before",
+        "misfit_after",
+        "relative_gain",
+        "relative_gain_fold_sd",
+        "paired_t",
+        "accepted",
     ]);
-    for (e, dbic, m, g, sig, p) in &d.detail.scores {
-        t.push([e.clone(), fmt_fixed(*dbic, 1), f4(*m), f4(*g), sig.to_string(), p.clone()]);
+    for r in &d.detail.steps {
+        t.push([
+            r.step.to_string(),
+            r.effect.clone(),
+            f4(r.misfit_before),
+            f4(r.misfit_after),
+            f4(r.gain),
+            f4(r.gain_fold_sd),
+            if r.t.is_finite() { fmt_fixed(r.t, 2) } else { "inf".into() },
+            r.accepted.to_string(),
+        ]);
     }
     t
 }
@@ -190,6 +202,33 @@ pub fn figures(d: &Diagnosis) -> Vec<FigureSpec> {
             heatmap: None,
         });
     }
+    if !det.signature_curve.is_empty() {
+        let best = &det.signature[0];
+        let part = |held: bool| Series {
+            name: if held { "held-out fold".into() } else { "training folds".into() },
+            x: det.signature_curve.iter().filter(|p| p.2 == held).map(|p| p.0).collect(),
+            y: det.signature_curve.iter().filter(|p| p.2 == held).map(|p| p.1).collect(),
+            style: if held { SeriesStyle::Markers } else { SeriesStyle::Points },
+        };
+        out.push(FigureSpec {
+            id: "diagnosis-residual-signature".into(),
+            title: format!("What the leftover mismatch follows: {} ({} channel)", best.signal, best.channel),
+            caption: format!(
+                "Mean residual of the final model ({} channel; relative) in 24 bins of {}, training folds and the \
+                 held-out fold apart (bins with at least 10 samples). A term in this signal removes {:.0} % of the \
+                 held-out residual (rig-diagnose signature module).",
+                best.channel,
+                best.signal,
+                100.0 * best.heldout_gain
+            ),
+            x_label: best.signal.into(),
+            y_label: "mean residual [-]".into(),
+            series: vec![part(false), part(true)],
+            x_decimals: 3,
+            y_decimals: 4,
+            heatmap: None,
+        });
+    }
     out
 }
 
@@ -199,8 +238,28 @@ pub fn markdown(d: &Diagnosis) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Diagnosis of campaign `{}`\n", d.campaign);
     let _ = writeln!(s, "**Verdict: `{}`**\n", d.verdict);
-    for f in &d.findings {
-        let _ = writeln!(s, "{}\n", f.evidence);
+    let a = &d.adequacy;
+    let _ = writeln!(
+        s,
+        "**Adequacy of the final model:** cross-validated misfit {:.2}× the noise floor (threshold {:.1}, calibrated \
+         on effect-free virtual-rig campaigns; crate docs), {} consistent order line(s), {} significant check(s) of \
+         other run kinds → {}.\n",
+        a.residual_over_noise,
+        a.threshold,
+        a.order_lines,
+        a.channel_checks,
+        if a.adequate {
+            "adequate: nothing significant is left"
+        } else {
+            "NOT adequate: a significant mismatch is left"
+        }
+    );
+    let _ = writeln!(s, "## Findings, in the order forward selection added them\n");
+    if d.findings.is_empty() {
+        let _ = writeln!(s, "None: no vocabulary effect earns its place, and nothing significant is left.\n");
+    }
+    for (i, f) in d.findings.iter().enumerate() {
+        let _ = writeln!(s, "### {}. `{}`\n\n{}\n", i + 1, f.effect, f.evidence);
         if !f.params.is_empty() {
             let _ = writeln!(s, "| parameter | value | standard error |\n|---|---|---|");
             for (k, v) in &f.params {
@@ -208,31 +267,51 @@ pub fn markdown(d: &Diagnosis) -> String {
             }
             s.push('\n');
         }
+        if !f.where_.is_empty() {
+            let _ = writeln!(s, "Where: {}.\n", f.where_.join(", "));
+        }
+        for t in &f.signature {
+            let _ = writeln!(s, "- `{}` (held-out gain {}): {}", t.signal, t.heldout_gain, t.description);
+        }
+        if !f.signature.is_empty() {
+            s.push('\n');
+        }
         let _ = writeln!(
             s,
-            "Held-out runs {}: misfit {} (baseline) → {} (extended), relative gain {}.\n",
-            f.heldout_runs.join(", "),
-            f.heldout_misfit_baseline,
-            f.heldout_misfit_extended,
-            f.relative_gain
+            "Cross-validated misfit (every run held out once, {} folds): {} (model before) → {} (with it), relative \
+             gain {} ± {} (sd across folds).\n",
+            det.folds, f.heldout_misfit_baseline, f.heldout_misfit_extended, f.relative_gain, f.relative_gain_fold_sd
         );
     }
     let _ = writeln!(
         s,
-        "## How it was decided\n\nEach operating point's friction coefficient in slip (μ = F/N0 from the calibrated force \
-         sensor) and drive voltage are predicted teacher-forced from the measured speeds and angles. The baseline is \
-         the calibrated rig model: {}. Each vocabulary effect is fitted on the training runs and must lower the BIC by \
-         more than the threshold AND the misfit on the held-out runs by the minimum gain. The misfit is \
+        "## How it was decided\n\nEach operating point's friction coefficient in slip (μ = F/N0 from the calibrated \
+         force sensor) and drive voltage are predicted teacher-forced from the measured speeds and angles. The \
+         baseline is the calibrated rig model: {}. The runs are dealt into {} folds stratified by set-point and \
+         normal force; every model is fitted without a fold and scored on it, so every run is held out once. Forward \
+         selection adds the effect with the largest cross-validated gain while it lowers the misfit of the model that \
+         already has the earlier ones by the minimum gain AND its paired run-level t of ln(M_before/M_after) passes \
+         the threshold: a criterion on runs, not on 500 Hz samples, so it can say no. The misfit is \
          M = sqrt((e_μ² + e_V²)/2) with e_μ the RMS error of μ relative to its mean and e_V the RMS voltage error \
-         relative to the supply (rig-diagnose crate docs). Held-out baseline misfit {:.4}; noise floor {:.4}.\n",
-        det.baseline_text, det.heldout_misfit_baseline, det.heldout_misfit_noise_floor
+         relative to the supply (rig-diagnose crate docs). Baseline misfit {:.4}; noise floor {:.4}; final model's \
+         friction channel {:.2}× and drive channel {:.2}× their floors.\n",
+        det.baseline_text,
+        det.folds,
+        det.heldout_misfit_baseline,
+        det.heldout_misfit_noise_floor,
+        det.channel_over_noise.0,
+        det.channel_over_noise.1
     );
     let _ = writeln!(
         s,
-        "| effect | ΔBIC | held-out misfit | relative gain | significant | parameters |\n|---|---|---|---|---|---|"
+        "| step | effect | misfit before | misfit after | gain | gain sd (folds) | paired t | accepted |\n|---|---|---|---|---|---|---|---|"
     );
-    for (e, dbic, m, g, sig, p) in &det.scores {
-        let _ = writeln!(s, "| {e} | {dbic:.1} | {m:.4} | {g:.3} | {sig} | {p} |");
+    for r in &det.steps {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.4} | {:.4} | {:.3} | {:.3} | {:.1} | {} |",
+            r.step, r.effect, r.misfit_before, r.misfit_after, r.gain, r.gain_fold_sd, r.t, r.accepted
+        );
     }
     if det.lines.is_empty() {
         let _ = writeln!(s, "\nNo order line locked to a shaft angle is significant in most runs.");
@@ -244,7 +323,7 @@ pub fn markdown(d: &Diagnosis) -> String {
     }
     let _ = writeln!(
         s,
-        "\n## The ladder (tables/diagnosis-rungs.csv)\n\n| rung | held-out misfit | cause |\n|---|---|---|"
+        "\n## The ladder (tables/diagnosis-rungs.csv)\n\n| rung | cross-validated misfit | cause |\n|---|---|---|"
     );
     for (n, m, c) in &det.rungs {
         let _ = writeln!(s, "| {n} | {m:.4} | {c} |");
@@ -256,7 +335,7 @@ pub fn markdown(d: &Diagnosis) -> String {
     );
     let _ = writeln!(
         s,
-        "| run | held out | rpm | N0 | stick-slip meas/sim | Ω1 max meas/sim | f0 meas/sim [Hz] | misfit base | misfit ext | floor |\n|---|---|---|---|---|---|---|---|---|---|"
+        "| run | fold | rpm | N0 | stick-slip meas/sim | Ω1 max meas/sim | f0 meas/sim [Hz] | misfit base | misfit ext | floor |\n|---|---|---|---|---|---|---|---|---|---|"
     );
     for r in &det.runs {
         let sim = r.simulated;
@@ -264,7 +343,7 @@ pub fn markdown(d: &Diagnosis) -> String {
             s,
             "| {} | {} | {:.0} | {:.1} | {}/{} | {:.2}/{} | {:.2}/{} | {:.4} | {:.4} | {:.4} |",
             r.id,
-            r.heldout,
+            r.fold,
             r.motor_rpm_setpoint,
             r.normal_force_n,
             r.measured.stick_slip(),

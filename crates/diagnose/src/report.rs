@@ -22,38 +22,87 @@ pub fn round_sig(x: f64, sig: i32) -> f64 {
 pub struct Diagnosis {
     pub campaign: String,
     pub verdict: String,
+    /// Vocabulary effects in the order forward selection added them, then,
+    /// when the adequacy test fails, one `unexplained` finding (spec).
     pub findings: Vec<Finding>,
+    /// Every effect tried against the baseline (first selection step).
     pub candidates: Vec<CandidateScore>,
+    /// The test of the final model against noise (crate docs).
+    pub adequacy: Adequacy,
     /// Detail for the report; not part of the JSON contract.
     #[serde(skip)]
     pub detail: Detail,
 }
 
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, PartialEq, Default)]
 pub struct Finding {
     pub effect: String,
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub params: BTreeMap<String, f64>,
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub params_stderr: BTreeMap<String, f64>,
     pub evidence: String,
+    /// `unexplained` only: the final model's held-out misfit over the noise floor.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub residual_over_noise: Option<f64>,
+    /// `unexplained` only: run kinds and channels where the mismatch shows.
+    #[serde(rename = "where", skip_serializing_if = "Vec::is_empty")]
+    pub where_: Vec<String>,
+    /// `unexplained` only: signals the leftover mismatch follows, best first.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub signature: Vec<SignatureEntry>,
     pub heldout_runs: Vec<String>,
+    /// The misfit of the model before this finding (the bare baseline for the
+    /// first, the model with the earlier findings after that).
     pub heldout_misfit_baseline: f64,
     pub heldout_misfit_extended: f64,
     pub relative_gain: f64,
+    /// Standard deviation of the relative gain across the cross-validation folds.
+    pub relative_gain_fold_sd: f64,
+    /// The selection criterion of this step (crate docs); absent for `unexplained`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub criterion: Option<f64>,
+}
+
+/// One term of an `unexplained` finding's `signature`.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct SignatureEntry {
+    pub signal: String,
+    pub heldout_gain: f64,
+    pub description: String,
 }
 
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct CandidateScore {
     pub effect: String,
     pub heldout_misfit_extended: f64,
-    /// BIC(candidate) − BIC(baseline) on the training runs.
+    pub relative_gain: f64,
+    pub relative_gain_fold_sd: f64,
+    /// −t of the paired run-level comparison with the baseline (crate docs):
+    /// negative favours the candidate.
     pub criterion: f64,
+}
+
+/// The adequacy test of the final model.
+#[derive(Debug, Clone, Serialize, PartialEq, Default)]
+pub struct Adequacy {
+    /// Cross-validated misfit of the final model over the noise floor.
+    pub residual_over_noise: f64,
+    /// The threshold (calibrated on effect-free virtual-rig campaigns, crate docs).
+    pub threshold: f64,
+    /// Consistent order lines locked to a shaft angle (none in an adequate model).
+    pub order_lines: usize,
+    /// Significant checks of the other run kinds and channels.
+    pub channel_checks: usize,
+    pub adequate: bool,
 }
 
 /// Per-run comparison row (tables/diagnosis-runs.csv).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct RunRow {
     pub id: String,
-    pub heldout: bool,
+    /// The cross-validation fold the run is held out in.
+    pub fold: usize,
     pub normal_force_n: f64,
     pub motor_rpm_setpoint: f64,
     pub slip_samples: usize,
@@ -92,8 +141,20 @@ impl Features {
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Detail {
     pub runs: Vec<RunRow>,
-    /// (candidate id, ΔBIC, held-out misfit, relative gain, significant, parameter text).
+    /// (candidate id, criterion, held-out misfit, relative gain, significant, parameter text).
     pub scores: Vec<(String, f64, f64, f64, bool, String)>,
+    /// Forward selection, every step and every effect tried in it.
+    pub steps: Vec<StepRow>,
+    /// Per-channel held-out misfit over its noise floor (friction, drive) of the final model.
+    pub channel_over_noise: (f64, f64),
+    /// Residual signature terms (all channels, best first), when something was left.
+    pub signature: Vec<crate::signature::Term>,
+    /// Held-out gain of the whole sparse signature model.
+    pub signature_gain: f64,
+    /// The best signature term's evidence: (signal value bin centre, mean residual, held-out?) per bin.
+    pub signature_curve: Vec<(f64, f64, bool)>,
+    /// Number of folds of the cross-validation.
+    pub folds: usize,
     pub heldout_misfit_baseline: f64,
     pub heldout_misfit_noise_floor: f64,
     /// Consistent order lines found (text), for `unexplained`.
@@ -108,4 +169,19 @@ pub struct Detail {
     pub baseline_text: String,
     /// Thesis ladder: (rung, held-out misfit, cause).
     pub rungs: Vec<(String, f64, String)>,
+}
+
+/// One effect tried in one forward-selection step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepRow {
+    pub step: usize,
+    pub effect: String,
+    /// Cross-validated misfit of the model before and with the effect.
+    pub misfit_before: f64,
+    pub misfit_after: f64,
+    pub gain: f64,
+    pub gain_fold_sd: f64,
+    /// Paired run-level t of ln(M_before/M_after) (crate docs).
+    pub t: f64,
+    pub accepted: bool,
 }

@@ -1,70 +1,201 @@
-//! Candidate fitting, scoring and the verdict (the rules are stated in the crate docs).
+//! Cross-validated forward selection of vocabulary effects, the adequacy test
+//! of the final model and the residual signature (the rules are stated in the
+//! crate docs).
 
+use crate::composite::{self, Composite, FrictionSet, Phases};
 use crate::drive::{self, Pi};
-use crate::friction::{self, FrictionFit, FrictionModel, SlipData};
+use crate::friction::SlipData;
 use crate::lines;
 use crate::prepare::RunSignals;
-use crate::report::{CandidateScore, Detail, Diagnosis, Features, Finding, RunRow, round_sig};
+use crate::report::{
+    Adequacy, CandidateScore, Detail, Diagnosis, Features, Finding, RunRow, SignatureEntry, StepRow, round_sig,
+};
+use crate::signature::{self, Library, Samples};
+use crate::vocab::{Channel, EffectId, NONE, UNEXPLAINED};
 use crate::{DiagnoseError, DiagnoseOptions};
+use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 
-/// Vocabulary ids in the order candidates are listed.
-pub const EFFECTS: [&str; 5] = [
-    "normal_force_modulation",
-    "angle_periodic_friction",
-    "velocity_weakening_friction",
-    "viscous_brake_friction",
-    "drive_voltage_limit",
-];
-
-/// One model of both channels.
-#[derive(Debug, Clone)]
-struct Model {
-    friction: FrictionModel,
-    pi: Pi,
+/// A model of both channels: which friction effects, whether the drive has its own limit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Default)]
+struct ModelSet {
+    friction: FrictionSet,
+    limit: bool,
 }
 
-/// Misfit parts of one run.
-#[derive(Debug, Clone, Copy)]
-struct RunMisfit {
-    e_mu: Option<f64>,
-    e_v: f64,
-}
-
-impl RunMisfit {
-    fn total(&self) -> f64 {
-        match self.e_mu {
-            Some(m) => ((m * m + self.e_v * self.e_v) / 2.0).sqrt(),
-            None => self.e_v,
+impl ModelSet {
+    fn with(self, e: EffectId) -> Self {
+        match e.channel() {
+            Channel::Drive => ModelSet { limit: true, ..self },
+            Channel::Friction => ModelSet { friction: self.friction.with(e), ..self },
         }
     }
 }
 
-fn run_misfit(m: &Model, s: &RunSignals, supply_v: f64) -> RunMisfit {
-    let d = SlipData::from_runs(&[s]);
-    let e_mu = if d.is_empty() {
-        None
-    } else {
-        let th = friction::heldout_phase(&m.friction, &d);
-        friction::relative_mu_error(&m.friction, &d, th)
-    };
-    RunMisfit { e_mu, e_v: drive::relative_voltage_error(&m.pi, s, supply_v) }
+/// Cross-validated friction channel of one friction set.
+#[derive(Debug, Clone)]
+struct FrictionCv {
+    /// e_μ of every run, from the model fitted without the run's fold (None: no slip).
+    e_mu: Vec<Option<f64>>,
+    /// Per fold, the model fitted on the other folds.
+    models: Vec<Option<Composite>>,
+    /// Per run, its nuisance phases under its fold's model.
+    phases: Vec<Phases>,
 }
 
-fn noise_floor(s: &RunSignals, supply_v: f64) -> f64 {
-    let mean_mu = if s.mu_obs.is_empty() { 0.0 } else { s.mu_obs.iter().sum::<f64>() / s.mu_obs.len() as f64 };
-    let e_v = s.voltage_noise_v / supply_v;
-    if s.mu_obs.is_empty() || mean_mu.abs() < 1e-9 {
-        e_v
-    } else {
-        let e_mu = s.force_noise_n / s.normal_force_n / mean_mu.abs();
-        RunMisfit { e_mu: Some(e_mu), e_v }.total()
+/// Cross-validated drive channel.
+#[derive(Debug, Clone)]
+struct DriveCv {
+    e_v: Vec<f64>,
+    pis: Vec<Option<Pi>>,
+}
+
+struct Cv<'a> {
+    runs: &'a [RunSignals],
+    folds: usize,
+    supply_v: f64,
+    freqs: Vec<f64>,
+    max_order: u32,
+}
+
+impl Cv<'_> {
+    fn train(&self, f: usize) -> Vec<&RunSignals> {
+        self.runs.iter().filter(|r| r.fold != f).collect()
+    }
+
+    fn friction(&self, set: FrictionSet) -> FrictionCv {
+        let per_fold: Vec<(Option<Composite>, Vec<(usize, Option<f64>, Phases)>)> = (0..self.folds)
+            .into_par_iter()
+            .map(|f| {
+                let train = self.train(f);
+                let d = SlipData::from_runs(&train);
+                let model = composite::fit_composite(&d, set, &self.freqs, self.max_order).map(|x| x.model);
+                let mut held = Vec::new();
+                for (i, s) in self.runs.iter().enumerate().filter(|(_, s)| s.fold == f) {
+                    let dr = SlipData::from_runs(&[s]);
+                    let (e, ph) = match &model {
+                        Some(m) => {
+                            let ph = composite::heldout_phases(m, &dr);
+                            (composite::relative_mu_error(m, &dr, ph), ph)
+                        }
+                        None => (None, (0.0, 0.0)),
+                    };
+                    held.push((i, e, ph));
+                }
+                (model, held)
+            })
+            .collect();
+        let mut out = FrictionCv {
+            e_mu: vec![None; self.runs.len()],
+            models: Vec::new(),
+            phases: vec![(0.0, 0.0); self.runs.len()],
+        };
+        for (model, held) in per_fold {
+            out.models.push(model);
+            for (i, e, ph) in held {
+                out.e_mu[i] = e;
+                out.phases[i] = ph;
+            }
+        }
+        out
+    }
+
+    fn drive(&self, limit: bool) -> DriveCv {
+        let per_fold: Vec<Option<Pi>> = (0..self.folds)
+            .into_par_iter()
+            .map(|f| {
+                let train = self.train(f);
+                if limit {
+                    drive::fit_limit(&train, self.supply_v).map(|x| x.0)
+                } else {
+                    drive::fit_gains(&train, self.supply_v)
+                }
+            })
+            .collect();
+        let e_v = self
+            .runs
+            .iter()
+            .map(|s| match &per_fold[s.fold] {
+                Some(pi) => drive::relative_voltage_error(pi, s, self.supply_v),
+                None => f64::INFINITY,
+            })
+            .collect();
+        DriveCv { e_v, pis: per_fold }
+    }
+}
+
+/// M_r = sqrt((e_μ² + e_V²)/2), or e_V without slip samples (crate docs).
+fn combine(e_mu: Option<f64>, e_v: f64) -> f64 {
+    match e_mu {
+        Some(m) => ((m * m + e_v * e_v) / 2.0).sqrt(),
+        None => e_v,
     }
 }
 
 fn overall(ms: &[f64]) -> f64 {
     if ms.is_empty() { f64::NAN } else { (ms.iter().map(|m| m * m).sum::<f64>() / ms.len() as f64).sqrt() }
+}
+
+fn noise_floor_parts(s: &RunSignals, supply_v: f64) -> (Option<f64>, f64) {
+    let mean_mu = if s.mu_obs.is_empty() { 0.0 } else { s.mu_obs.iter().sum::<f64>() / s.mu_obs.len() as f64 };
+    let e_v = s.voltage_noise_v / supply_v;
+    if s.mu_obs.is_empty() || mean_mu.abs() < 1e-9 {
+        (None, e_v)
+    } else {
+        (Some(s.force_noise_n / s.normal_force_n / mean_mu.abs()), e_v)
+    }
+}
+
+/// The comparison of a model with the one before it (crate docs: the criterion).
+#[derive(Debug, Clone, Copy)]
+struct Comparison {
+    before: f64,
+    after: f64,
+    gain: f64,
+    gain_fold_sd: f64,
+    t: f64,
+}
+
+fn compare(before: &[f64], after: &[f64], runs: &[RunSignals], folds: usize) -> Comparison {
+    let (b, a) = (overall(before), overall(after));
+    let gain = if b > 0.0 { 1.0 - a / b } else { 0.0 };
+    let fold_gains: Vec<f64> = (0..folds)
+        .filter_map(|f| {
+            let idx: Vec<usize> = (0..runs.len()).filter(|&i| runs[i].fold == f).collect();
+            let bf = overall(&idx.iter().map(|&i| before[i]).collect::<Vec<_>>());
+            let af = overall(&idx.iter().map(|&i| after[i]).collect::<Vec<_>>());
+            (bf > 0.0 && bf.is_finite() && af.is_finite()).then(|| 1.0 - af / bf)
+        })
+        .collect();
+    let mg = fold_gains.iter().sum::<f64>() / fold_gains.len().max(1) as f64;
+    let sd = if fold_gains.len() > 1 {
+        (fold_gains.iter().map(|g| (g - mg).powi(2)).sum::<f64>() / (fold_gains.len() - 1) as f64).sqrt()
+    } else {
+        f64::NAN
+    };
+    // Paired run-level test on ln(M_before/M_after).
+    let d: Vec<f64> = before
+        .iter()
+        .zip(after)
+        .filter(|(x, y)| **x > 0.0 && **y > 0.0 && x.is_finite() && y.is_finite())
+        .map(|(x, y)| (x / y).ln())
+        .collect();
+    let n = d.len() as f64;
+    let t = if d.len() > 1 {
+        let m = d.iter().sum::<f64>() / n;
+        let v = d.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
+        if v > 0.0 {
+            m / (v / n).sqrt()
+        } else if m > 0.0 {
+            f64::INFINITY
+        } else {
+            0.0
+        }
+    } else {
+        0.0
+    };
+    Comparison { before: b, after: a, gain, gain_fold_sd: sd, t }
 }
 
 /// Measured features of one run's steady state.
@@ -116,145 +247,207 @@ pub fn steady_features(t: &[f64], w1: &[f64], w2: &[f64], setpoint_rad_s: f64, s
     }
 }
 
-/// The whole selection on prepared signals. `thesis_mu_dynamic` (Table 4.7) adds
-/// the thesis rung to the ladder when given.
+/// Residual samples of the final model in both channels, for the signature.
+fn residual_samples(cv: &Cv, fr: &FrictionCv, dr: &DriveCv, disc_radius_m: f64) -> (Samples, Samples) {
+    let per_run: Vec<(Samples, Samples)> = cv
+        .runs
+        .par_iter()
+        .enumerate()
+        .map(|(r, s)| {
+            let lib = Library::of(s, disc_radius_m);
+            let mut mu = Samples::default();
+            if let Some(m) = fr.models[s.fold].as_ref() {
+                for (j, &k) in s.slip_idx.iter().enumerate().step_by(5) {
+                    let mh = m.mu(s.time_s[k], s.rotor_angle_rad[k], s.rotor_speed_rad_s[k].abs(), fr.phases[r]);
+                    if mh.abs() < 1e-9 {
+                        continue;
+                    }
+                    mu.run.push(r);
+                    mu.fold.push(s.fold);
+                    mu.x.push(lib.row(k));
+                    mu.y.push(s.mu_obs[j] / mh - 1.0);
+                    mu.scale.push(mh);
+                }
+            }
+            let mut v = Samples::default();
+            if let Some(pi) = dr.pis[s.fold].as_ref() {
+                let (vh, _, _) = drive::predict_voltage(pi, s);
+                for k in (0..s.time_s.len()).step_by(10) {
+                    v.run.push(r);
+                    v.fold.push(s.fold);
+                    v.x.push(lib.row(k));
+                    v.y.push((s.voltage_v[k] - vh[k]) / cv.supply_v);
+                    v.scale.push(1.0);
+                }
+            }
+            (mu, v)
+        })
+        .collect();
+    let mut mu = Samples::default();
+    let mut v = Samples::default();
+    for (a, b) in per_run {
+        for (dst, src) in [(&mut mu, a), (&mut v, b)] {
+            dst.run.extend(src.run);
+            dst.fold.extend(src.fold);
+            dst.x.extend(src.x);
+            dst.y.extend(src.y);
+            dst.scale.extend(src.scale);
+        }
+    }
+    (mu, v)
+}
+
+/// Binned mean residual against the best signal, training folds and the held-out fold 0 apart.
+fn signature_curve(s: &Samples, col: usize) -> Vec<(f64, f64, bool)> {
+    if s.y.is_empty() {
+        return vec![];
+    }
+    let lo = s.x.iter().map(|r| r[col]).fold(f64::INFINITY, f64::min);
+    let hi = s.x.iter().map(|r| r[col]).fold(f64::NEG_INFINITY, f64::max);
+    if hi <= lo {
+        return vec![];
+    }
+    let nb = 24;
+    let mut out = Vec::new();
+    for held in [false, true] {
+        let mut acc = vec![(0.0, 0usize); nb];
+        for i in 0..s.y.len() {
+            if (s.fold[i] == 0) != held {
+                continue;
+            }
+            let b = (((s.x[i][col] - lo) / (hi - lo) * nb as f64) as usize).min(nb - 1);
+            acc[b].0 += s.y[i];
+            acc[b].1 += 1;
+        }
+        for (b, a) in acc.iter().enumerate() {
+            if a.1 >= 10 {
+                out.push((lo + (b as f64 + 0.5) * (hi - lo) / nb as f64, a.0 / a.1 as f64, held));
+            }
+        }
+    }
+    out
+}
+
+/// The whole selection on prepared signals. `thesis_mu_dynamic` (Table 4.7)
+/// adds the thesis rung to the ladder; `channel_checks` are the significant
+/// mismatches found in the other run kinds (static twist, voltage steps,
+/// free-run operating points), each "run_kind: sentence".
 pub fn diagnose_signals(
     campaign: &str,
     runs: &[RunSignals],
     supply_v: f64,
+    disc_radius_m: f64,
     thesis_mu_dynamic: Option<f64>,
+    channel_checks: &[(String, String)],
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
-    let train: Vec<&RunSignals> = runs.iter().filter(|r| !r.heldout).collect();
-    let held: Vec<&RunSignals> = runs.iter().filter(|r| r.heldout).collect();
-    if train.len() < 2 || held.is_empty() {
+    let folds = opts.folds.min(runs.len());
+    if runs.len() < 3 || folds < 2 {
         return Err(DiagnoseError::TooFewRuns { campaign: campaign.into(), needed: 3, found: runs.len() });
     }
-    let d = SlipData::from_runs(&train);
-    if d.len() < 10 {
-        return Err(DiagnoseError::Singular("no slip samples in the training runs: μk cannot be fitted"));
+    if SlipData::from_runs(&runs.iter().collect::<Vec<_>>()).len() < 10 {
+        return Err(DiagnoseError::Singular("no slip samples in the operating points: μk cannot be fitted"));
     }
-    // Baseline on the training runs.
-    let coul = friction::fit_coulomb(&d);
-    let pi_base =
-        drive::fit_gains(&train, supply_v).ok_or(DiagnoseError::Singular("PI gains of the baseline drive"))?;
-    let (rss_v_base, n_v) = drive::voltage_rss(&pi_base, &train);
-    let base = Model { friction: coul.model.clone(), pi: pi_base };
-
-    // Candidates (each internally parallel where it scans).
     let freqs: Vec<f64> = {
         let n = ((opts.freq_max_hz - opts.freq_min_hz) / opts.freq_step_hz).floor() as usize;
         (0..=n).map(|j| opts.freq_min_hz + opts.freq_step_hz * j as f64).collect()
     };
-    let (fr, dl) = rayon::join(
-        || {
-            let nfm = friction::fit_sine(&d, true, &freqs, opts.max_order);
-            let apf = friction::fit_sine(&d, false, &freqs, opts.max_order);
-            let vwf = friction::fit_stribeck(&d);
-            let vis = friction::fit_viscous(&d);
-            [nfm, apf, vwf, vis]
-        },
-        || drive::fit_limit(&train, supply_v),
-    );
+    let cv = Cv { runs, folds, supply_v, freqs, max_order: opts.max_order };
 
-    let base_ms: Vec<f64> = held.iter().map(|s| run_misfit(&base, s, supply_v).total()).collect();
-    let base_m = overall(&base_ms);
-    let floor_m = overall(&held.iter().map(|s| noise_floor(s, supply_v)).collect::<Vec<_>>());
-    let nf = d.len() as f64;
-    let ln_nf = nf.ln();
-
-    struct Scored {
-        effect: &'static str,
-        model: Model,
-        dbic: f64,
-        misfit: f64,
-        params: Vec<(&'static str, f64, f64)>,
-        fit: Option<FrictionFit>,
-        ok: bool,
-    }
-    let mut scored: Vec<Scored> = Vec::new();
-    for (effect, fit) in EFFECTS.iter().zip(fr) {
-        let Some(fit) = fit else {
-            scored.push(Scored {
-                effect,
-                model: base.clone(),
-                dbic: f64::INFINITY,
-                misfit: f64::NAN,
-                params: vec![],
-                fit: None,
-                ok: false,
-            });
-            continue;
-        };
-        // Correlated residuals: scale the standard errors by √τ (effective sample size).
-        let tau = friction::autocorr_inflation(&d, &fit.model, &fit.phases).sqrt();
-        let mut fit = fit;
-        for p in fit.params.iter_mut() {
-            p.2 *= tau;
-        }
-        let model = Model { friction: fit.model.clone(), pi: pi_base };
-        let per_run: Vec<f64> = held.iter().map(|s| run_misfit(&model, s, supply_v).total()).collect();
-        let dbic = nf * (fit.rss_w / coul.rss_w).ln() + (fit.k as f64 - coul.k as f64) * ln_nf;
-        scored.push(Scored {
-            effect,
-            misfit: overall(&per_run),
-            dbic,
-            params: fit.params.clone(),
-            ok: fit.converged,
-            fit: Some(fit),
-            model,
-        });
-    }
-    match dl {
-        Some((pi, rss, n, se)) => {
-            let model = Model { friction: coul.model.clone(), pi };
-            let per_run: Vec<f64> = held.iter().map(|s| run_misfit(&model, s, supply_v).total()).collect();
-            let dbic = n as f64 * (rss / rss_v_base).ln() + (n as f64).ln();
-            scored.push(Scored {
-                effect: EFFECTS[4],
-                misfit: overall(&per_run),
-                dbic,
-                params: vec![("limit_v", pi.limit_v, se)],
-                fit: None,
-                ok: true,
-                model,
-            });
-        }
-        None => scored.push(Scored {
-            effect: EFFECTS[4],
-            model: base.clone(),
-            dbic: f64::INFINITY,
-            misfit: f64::NAN,
-            params: vec![],
-            fit: None,
-            ok: false,
-        }),
-    }
-    let _ = n_v;
-
-    let gain = |m: f64| if base_m > 0.0 { 1.0 - m / base_m } else { 0.0 };
-    let significant = |s: &Scored| s.ok && s.dbic < -opts.bic_threshold && gain(s.misfit) >= opts.min_relative_gain;
-    let winner = scored
-        .iter()
-        .enumerate()
-        .filter(|(_, s)| significant(s))
-        .min_by(|a, b| a.1.dbic.total_cmp(&b.1.dbic))
-        .map(|(i, _)| i);
-
-    // Order lines over all runs (evidence for `unexplained`).
-    let all_lines: Vec<lines::OrderLine> = {
-        use rayon::prelude::*;
-        runs.par_iter()
-            .map(|s| {
-                let mut v = lines::order_lines(s, true, opts.max_order);
-                v.extend(lines::order_lines(s, false, opts.max_order));
-                v
-            })
-            .collect::<Vec<_>>()
-            .into_iter()
-            .flatten()
-            .collect()
+    // Channel caches: the friction channel depends only on the friction set,
+    // the drive channel only on the limit.
+    let mut fr_cache: BTreeMap<FrictionSet, FrictionCv> = BTreeMap::new();
+    let mut dr_cache: BTreeMap<bool, DriveCv> = BTreeMap::new();
+    let mut misfits = |m: ModelSet| -> Vec<f64> {
+        let fr = fr_cache.entry(m.friction).or_insert_with(|| cv.friction(m.friction));
+        let e_mu = fr.e_mu.clone();
+        let dr = dr_cache.entry(m.limit).or_insert_with(|| cv.drive(m.limit));
+        e_mu.iter().zip(&dr.e_v).map(|(a, b)| combine(*a, *b)).collect()
     };
+
+    // Forward selection.
+    let mut current = ModelSet::default();
+    let base_ms = misfits(current);
+    let mut cur_ms = base_ms.clone();
+    let mut accepted: Vec<(EffectId, Comparison)> = Vec::new();
+    let mut steps: Vec<StepRow> = Vec::new();
+    let mut first_step: Vec<(EffectId, Comparison, Vec<f64>)> = Vec::new();
+    let significant = |c: &Comparison| c.gain >= opts.min_relative_gain && c.t >= opts.min_t && c.after.is_finite();
+    for step in 1..=EffectId::ALL.len() {
+        let remaining: Vec<EffectId> =
+            EffectId::ALL.into_iter().filter(|e| !accepted.iter().any(|a| a.0 == *e)).collect();
+        let mut tried: Vec<(EffectId, Comparison, Vec<f64>)> = Vec::new();
+        for e in remaining {
+            let ms = misfits(current.with(e));
+            tried.push((e, compare(&cur_ms, &ms, runs, folds), ms));
+        }
+        let best = tried
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| t.1.after.is_finite())
+            .max_by(|a, b| a.1.1.gain.total_cmp(&b.1.1.gain).then(b.0.cmp(&a.0)))
+            .map(|(i, _)| i);
+        for (i, (e, c, _)) in tried.iter().enumerate() {
+            steps.push(StepRow {
+                step,
+                effect: e.id().into(),
+                misfit_before: c.before,
+                misfit_after: c.after,
+                gain: c.gain,
+                gain_fold_sd: c.gain_fold_sd,
+                t: c.t,
+                accepted: Some(i) == best && significant(c),
+            });
+        }
+        if step == 1 {
+            first_step = tried.clone();
+        }
+        match best {
+            Some(i) if significant(&tried[i].1) => {
+                let (e, c, ms) = tried.swap_remove(i);
+                current = current.with(e);
+                cur_ms = ms;
+                accepted.push((e, c));
+            }
+            _ => break,
+        }
+    }
+
+    // Final joint fit on every run for the reported parameters.
+    let all: Vec<&RunSignals> = runs.iter().collect();
+    let d_all = SlipData::from_runs(&all);
+    let full = composite::fit_composite(&d_all, current.friction, &cv.freqs, opts.max_order)
+        .ok_or(DiagnoseError::Singular("the joint fit of the retained friction effects"))?;
+    let limit_fit = if current.limit { drive::fit_limit(&all, supply_v) } else { None };
+    let pi_base = drive::fit_gains(&all, supply_v).ok_or(DiagnoseError::Singular("PI gains of the baseline drive"))?;
+    let coulomb = composite::fit_composite(&d_all, FrictionSet::default(), &[], opts.max_order)
+        .ok_or(DiagnoseError::Singular("the Coulomb baseline"))?;
+
+    // Adequacy: the final model against noise, and the other run kinds.
+    let floor_parts: Vec<(Option<f64>, f64)> = runs.iter().map(|s| noise_floor_parts(s, supply_v)).collect();
+    let floor_ms: Vec<f64> = floor_parts.iter().map(|(a, b)| combine(*a, *b)).collect();
+    let floor_m = overall(&floor_ms);
+    let final_m = overall(&cur_ms);
+    let ratio = final_m / floor_m;
+    let fr_final = fr_cache.get(&current.friction).expect("evaluated").clone();
+    let dr_final = dr_cache.get(&current.limit).expect("evaluated").clone();
+    let ch_mu = {
+        let e: Vec<f64> = fr_final.e_mu.iter().flatten().copied().collect();
+        let f: Vec<f64> = floor_parts.iter().filter_map(|p| p.0).collect();
+        overall(&e) / overall(&f)
+    };
+    let ch_v = overall(&dr_final.e_v) / overall(&floor_parts.iter().map(|p| p.1).collect::<Vec<_>>());
+    let all_lines: Vec<lines::OrderLine> = runs
+        .par_iter()
+        .map(|s| {
+            let mut v = lines::order_lines(s, true, opts.max_order);
+            v.extend(lines::order_lines(s, false, opts.max_order));
+            v
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .flatten()
+        .collect();
     let consistent = lines::consistent_lines(&all_lines, opts.line_ratio);
     let line_text: Vec<String> = consistent
         .iter()
@@ -265,162 +458,284 @@ pub fn diagnose_signals(
             )
         })
         .collect();
+    let adequate = ratio <= opts.adequacy_ratio && consistent.is_empty() && channel_checks.is_empty();
+    let adequacy = Adequacy {
+        residual_over_noise: round_sig(ratio, 3),
+        threshold: opts.adequacy_ratio,
+        order_lines: consistent.len(),
+        channel_checks: channel_checks.len(),
+        adequate,
+    };
 
-    let heldout_ids: Vec<String> = held.iter().map(|s| s.id.clone()).collect();
-    let verdict: String;
+    let run_ids: Vec<String> = runs.iter().map(|s| s.id.clone()).collect();
     let mut findings = Vec::new();
-    match winner {
-        Some(i) => {
-            let w = &scored[i];
-            verdict = w.effect.to_string();
-            let mut params = BTreeMap::new();
-            let mut se = BTreeMap::new();
-            for (k, v, e) in &w.params {
-                params.insert(k.to_string(), round_sig(*v, 4));
-                se.insert(k.to_string(), round_sig(*e, 2));
+    for (e, c) in &accepted {
+        let mut params = BTreeMap::new();
+        let mut se = BTreeMap::new();
+        let mut ptext = Vec::new();
+        match e {
+            EffectId::DriveVoltageLimit => {
+                if let Some((pi, _, _, s)) = limit_fit {
+                    params.insert("limit_v".to_string(), round_sig(pi.limit_v, 4));
+                    se.insert("limit_v".to_string(), round_sig(s, 2));
+                    ptext.push(("limit_v", pi.limit_v));
+                }
             }
-            findings.push(Finding {
-                effect: verdict.clone(),
-                params,
-                params_stderr: se,
-                evidence: evidence(w.effect, &w.params, w.dbic, base_m, w.misfit),
-                heldout_runs: heldout_ids.clone(),
-                heldout_misfit_baseline: round_sig(base_m, 4),
-                heldout_misfit_extended: round_sig(w.misfit, 4),
-                relative_gain: round_sig(gain(w.misfit), 4),
-            });
+            _ => {
+                for (eff, k, v, s) in &full.params {
+                    if eff == e && !params.contains_key(*k) {
+                        params.insert(k.to_string(), round_sig(*v, 4));
+                        se.insert(k.to_string(), round_sig(*s, 2));
+                        ptext.push((k, *v));
+                    }
+                }
+            }
         }
-        None if !consistent.is_empty() => {
-            verdict = "unexplained".into();
-            findings.push(Finding {
-                effect: verdict.clone(),
-                params: BTreeMap::new(),
-                params_stderr: BTreeMap::new(),
-                evidence: format!(
-                    "No candidate beats the baseline (ΔBIC < −{} and ≥ {:.0} % held-out gain), yet the {}; none of the vocabulary's laws produces it.",
-                    opts.bic_threshold,
-                    100.0 * opts.min_relative_gain,
-                    line_text[0]
-                ),
-                heldout_runs: heldout_ids.clone(),
-                heldout_misfit_baseline: round_sig(base_m, 4),
-                heldout_misfit_extended: round_sig(base_m, 4),
-                relative_gain: 0.0,
-            });
-        }
-        None => verdict = "none".into(),
-    }
-
-    let mut candidates =
-        vec![CandidateScore { effect: "none".into(), heldout_misfit_extended: round_sig(base_m, 4), criterion: 0.0 }];
-    for s in &scored {
-        candidates.push(CandidateScore {
-            effect: s.effect.into(),
-            heldout_misfit_extended: round_sig(s.misfit, 4),
-            criterion: round_sig(s.dbic, 6),
+        findings.push(Finding {
+            effect: e.id().into(),
+            params,
+            params_stderr: se,
+            evidence: evidence(*e, &ptext, c),
+            heldout_runs: run_ids.clone(),
+            heldout_misfit_baseline: round_sig(c.before, 4),
+            heldout_misfit_extended: round_sig(c.after, 4),
+            relative_gain: round_sig(c.gain, 4),
+            relative_gain_fold_sd: round_sig(c.gain_fold_sd, 2),
+            criterion: Some(round_sig(-c.t, 4)),
+            ..Default::default()
         });
     }
 
-    // Detail for the report.
-    let chosen = winner.map(|i| &scored[i]);
-    let ext_model = chosen.map(|s| s.model.clone()).unwrap_or_else(|| base.clone());
-    let mut detail = Detail {
-        heldout_misfit_baseline: base_m,
-        heldout_misfit_noise_floor: floor_m,
-        lines: line_text,
-        baseline_text: format!(
-            "μk = {:.4} ± {:.4} (Coulomb, training slip samples); voltage predictor kp = {:.3} V·s/rad, ki = {:.3} V/rad, limit {:.1} V (supply). These gains are the best teacher-forced predictor of the recorded voltage from the measured, differentiated motor speed: speed noise biases kp low (errors in variables), so they are not the drive's physical gains, which estimation.md gives with that bias corrected",
-            coul.params[0].1, coul.params[0].2, pi_base.kp_v_s_rad, pi_base.ki_v_rad, supply_v
-        ),
-        ..Default::default()
-    };
-    for s in &scored {
-        let ptxt = s
-            .params
+    // What is left: the signature of the final model's residual.
+    let mut detail = Detail { folds, ..Default::default() };
+    let mut verdict = accepted.first().map(|a| a.0.id().to_string()).unwrap_or_else(|| NONE.into());
+    let mut ext_ms = cur_ms.clone();
+    if !adequate {
+        let (mu_s, v_s) = residual_samples(&cv, &fr_final, &dr_final, disc_radius_m);
+        let sig_mu = signature::channel_signature(&mu_s, "friction", folds, runs.len(), opts.signature_threshold);
+        let sig_v = signature::channel_signature(&v_s, "drive", folds, runs.len(), opts.signature_threshold);
+        // Best data-driven extension: each channel corrected by its sparse model, per run.
+        ext_ms = (0..runs.len())
+            .map(|r| {
+                let e_mu = fr_final.e_mu[r].map(|e| e * sig_mu.run_factor[r].max(0.0).sqrt());
+                combine(e_mu, dr_final.e_v[r] * sig_v.run_factor[r].max(0.0).sqrt())
+            })
+            .collect();
+        let mut terms: Vec<signature::Term> =
+            sig_mu.terms.iter().chain(sig_v.terms.iter()).filter(|t| t.heldout_gain > 0.0).cloned().collect();
+        terms.sort_by(|a, b| b.heldout_gain.total_cmp(&a.heldout_gain).then(a.signal.cmp(b.signal)));
+        if let Some(t0) = terms.first() {
+            let (s, _) = if t0.channel == "friction" { (&mu_s, ()) } else { (&v_s, ()) };
+            let col = signature::SIGNALS.iter().position(|x| *x == t0.signal).expect("library signal");
+            detail.signature_curve = signature_curve(s, col);
+        }
+        detail.signature_gain = sig_mu.combined_gain.max(sig_v.combined_gain);
+        let mut where_: Vec<String> = Vec::new();
+        if ratio > opts.adequacy_ratio || !consistent.is_empty() {
+            where_.push("operating_point".into());
+        }
+        for (kind, _) in channel_checks {
+            if !where_.contains(kind) {
+                where_.push(kind.clone());
+            }
+        }
+        let mut what = Vec::new();
+        if ratio > opts.adequacy_ratio {
+            what.push(format!(
+                "the final model's cross-validated misfit is {:.1}× the noise floor (threshold {:.1}; friction channel \
+                 {:.1}×, drive channel {:.1}×)",
+                ratio, opts.adequacy_ratio, ch_mu, ch_v
+            ));
+        }
+        what.extend(line_text.iter().take(2).cloned());
+        what.extend(channel_checks.iter().take(3).map(|(k, t)| format!("{k}: {t}")));
+        let signature_entries: Vec<SignatureEntry> = terms
             .iter()
-            .map(|(k, v, e)| format!("{k} = {} ± {}", round_sig(*v, 4), round_sig(*e, 2)))
-            .collect::<Vec<_>>()
-            .join("; ");
-        detail.scores.push((s.effect.into(), s.dbic, s.misfit, gain(s.misfit), significant(s), ptxt));
+            .take(4)
+            .map(|t| SignatureEntry {
+                signal: t.signal.into(),
+                heldout_gain: round_sig(t.heldout_gain, 3),
+                description: format!(
+                    "{} residual changes by {:.3e} per unit of {} (±1 sd of the signal moves it by {:.3e}); a term in \
+                     it removes {:.0} % of the held-out residual. Causes that leave this: {}.",
+                    if t.channel == "friction" { "the relative friction-coefficient" } else { "the relative voltage" },
+                    t.slope,
+                    t.signal,
+                    t.residual_sd,
+                    100.0 * t.heldout_gain,
+                    signature::causes(t.signal)
+                ),
+            })
+            .collect();
+        let explained = if findings.is_empty() {
+            "No vocabulary effect earns its place".to_string()
+        } else {
+            format!(
+                "The vocabulary explains part of the mismatch ({})",
+                findings.iter().map(|f| f.effect.as_str()).collect::<Vec<_>>().join(", ")
+            )
+        };
+        let follows = match terms.first() {
+            Some(t) => format!(
+                " The leftover follows {} (held-out gain {:.0} %), pointing to {}.",
+                t.signal,
+                100.0 * t.heldout_gain,
+                signature::causes(t.signal)
+            ),
+            None => " No signal of the library explains the leftover on held-out runs.".into(),
+        };
+        findings.push(Finding {
+            effect: UNEXPLAINED.into(),
+            evidence: format!("{explained}, but {}.{follows}", what.join("; ")),
+            residual_over_noise: Some(round_sig(ratio, 3)),
+            where_,
+            signature: signature_entries,
+            heldout_runs: run_ids.clone(),
+            heldout_misfit_baseline: round_sig(final_m, 4),
+            heldout_misfit_extended: round_sig(overall(&ext_ms), 4),
+            relative_gain: round_sig(1.0 - overall(&ext_ms) / final_m, 4),
+            relative_gain_fold_sd: round_sig(compare(&cur_ms, &ext_ms, runs, folds).gain_fold_sd, 2),
+            criterion: None,
+            ..Default::default()
+        });
+        detail.signature = terms;
+        verdict = UNEXPLAINED.into();
     }
-    if let Some(fit) = scored[0].fit.as_ref() {
-        detail.freq_scan = fit.scan.iter().map(|&(f, r)| (f, 1.0 - r / coul.rss_w)).collect();
+
+    let base_m = overall(&base_ms);
+    let mut candidates = Vec::new();
+    for (e, c, _) in &first_step {
+        candidates.push(CandidateScore {
+            effect: e.id().into(),
+            heldout_misfit_extended: round_sig(c.after, 4),
+            relative_gain: round_sig(c.gain, 4),
+            relative_gain_fold_sd: round_sig(c.gain_fold_sd, 2),
+            criterion: round_sig(-c.t, 4),
+        });
+        detail.scores.push((e.id().into(), -c.t, c.after, c.gain, significant(c), String::new()));
     }
-    for s in runs {
-        let mb = run_misfit(&base, s, supply_v).total();
-        let me = if chosen.is_some() { run_misfit(&ext_model, s, supply_v).total() } else { mb };
+
+    // Detail for the report.
+    detail.steps = steps;
+    detail.heldout_misfit_baseline = base_m;
+    detail.heldout_misfit_noise_floor = floor_m;
+    detail.lines = line_text;
+    detail.channel_over_noise = (ch_mu, ch_v);
+    detail.baseline_text = format!(
+        "μk = {:.4} (Coulomb, all slip samples); voltage predictor kp = {:.3} V·s/rad, ki = {:.3} V/rad, limit {:.1} V \
+         (supply). These gains are the best teacher-forced predictor of the recorded voltage from the measured, \
+         differentiated motor speed: speed noise biases kp low (errors in variables), so they are not the drive's \
+         physical gains, which estimation.md gives with that bias corrected",
+        coulomb.model.mu_k, pi_base.kp_v_s_rad, pi_base.ki_v_rad, supply_v
+    );
+    if let Some(c) = full.scan.first().map(|_| &full.scan) {
+        let worst = c.iter().map(|x| x.1).fold(f64::NEG_INFINITY, f64::max);
+        detail.freq_scan = c.iter().map(|&(f, r)| (f, 1.0 - r / worst)).collect();
+    } else if let Some(fr) = composite::fit_composite(
+        &d_all,
+        FrictionSet::default().with(EffectId::NormalForceModulation),
+        &cv.freqs,
+        opts.max_order,
+    ) {
+        let worst = fr.scan.iter().map(|x| x.1).fold(f64::NEG_INFINITY, f64::max);
+        detail.freq_scan = fr.scan.iter().map(|&(f, r)| (f, 1.0 - r / worst)).collect();
+    }
+    for (r, s) in runs.iter().enumerate() {
         detail.runs.push(RunRow {
             id: s.id.clone(),
-            heldout: s.heldout,
+            fold: s.fold,
             normal_force_n: s.normal_force_n,
             motor_rpm_setpoint: s.setpoint_rad_s * 60.0 / (2.0 * PI),
             slip_samples: s.slip_idx.len(),
-            misfit_baseline: mb,
-            misfit_extended: me,
-            misfit_noise_floor: noise_floor(s, supply_v),
+            misfit_baseline: base_ms[r],
+            misfit_extended: cur_ms[r],
+            misfit_noise_floor: floor_ms[r],
             force_noise_n: s.force_noise_n,
             voltage_noise_v: s.voltage_noise_v,
             measured: measured_features(s, opts.slip_speed_rad_s),
             simulated: None,
         });
     }
-    detail.mu_vs_speed = mu_vs_speed(&d, &coul.model, &ext_model.friction, chosen.and_then(|c| c.fit.as_ref()));
-    detail.residual_vs_angle = residual_vs_angle(&train, coul.params[0].1);
+    detail.mu_vs_speed = mu_vs_speed(&d_all, &coulomb.model, &full.model, &full.phases);
+    detail.residual_vs_angle = residual_vs_angle(&all, coulomb.model.mu_k);
     if let Some(mu_dyn) = thesis_mu_dynamic {
-        let thesis = Model { friction: FrictionModel::Coulomb { mu_k: mu_dyn }, pi: pi_base };
-        let tm = overall(&held.iter().map(|s| run_misfit(&thesis, s, supply_v).total()).collect::<Vec<_>>());
+        let thesis = Composite::coulomb(mu_dyn);
+        let tm: Vec<f64> = runs
+            .iter()
+            .enumerate()
+            .map(|(r, s)| {
+                let dr = SlipData::from_runs(&[s]);
+                combine(composite::relative_mu_error(&thesis, &dr, (0.0, 0.0)), dr_cache[&false].e_v[r])
+            })
+            .collect();
         detail.rungs.push((
             "thesis model as published".into(),
-            tm,
+            overall(&tm),
             format!("Table 4.7 μ_dyn = {mu_dyn} in slip, drive saturating at the supply"),
         ));
     }
     detail.rungs.push((
         "rig model recalibrated".into(),
         base_m,
-        format!("μk = {:.4} fitted on the campaign's slip samples", coul.params[0].1),
+        format!("μk = {:.4} fitted on the campaign's slip samples", coulomb.model.mu_k),
     ));
-    if let Some(c) = chosen {
-        detail.rungs.push(("extended model".into(), c.misfit, format!("+ {}", c.effect)));
+    let mut names = Vec::new();
+    for (e, c) in &accepted {
+        names.push(e.id());
+        detail.rungs.push(("extended model".into(), c.after, format!("+ {}", names.join(" + "))));
     }
-    Ok(Diagnosis { campaign: campaign.into(), verdict, findings, candidates, detail })
+    if verdict == UNEXPLAINED {
+        detail.rungs.push((
+            "data-driven extension".into(),
+            overall(&ext_ms),
+            format!(
+                "+ sparse regression of the residual on {}",
+                detail.signature.iter().take(2).map(|t| t.signal).collect::<Vec<_>>().join(", ")
+            ),
+        ));
+    }
+    Ok(Diagnosis { campaign: campaign.into(), verdict, findings, candidates, adequacy, detail })
 }
 
-fn evidence(effect: &str, params: &[(&str, f64, f64)], dbic: f64, base_m: f64, ext_m: f64) -> String {
+fn evidence(effect: EffectId, params: &[(&str, f64)], c: &Comparison) -> String {
     let p = |k: &str| params.iter().find(|x| x.0 == k).map(|x| x.1).unwrap_or(f64::NAN);
     let what = match effect {
-        "normal_force_modulation" => format!(
+        EffectId::NormalForceModulation => format!(
             "The friction coefficient in slip oscillates in time at {:.3} Hz with relative amplitude {:.3} (own phase per run)",
             p("frequency_hz"),
             p("amplitude_ratio")
         ),
-        "angle_periodic_friction" => format!(
+        EffectId::AnglePeriodicFriction => format!(
             "The friction coefficient in slip varies {} times per rotor revolution with relative amplitude {:.3}",
             p("order"),
             p("amplitude_ratio")
         ),
-        "velocity_weakening_friction" => format!(
+        EffectId::VelocityWeakeningFriction => format!(
             "The friction coefficient falls from {:.3} at low slip speed to {:.3} over {:.2} rad/s",
             p("mu_static"),
             p("mu_kinetic"),
             p("stribeck_speed_rad_s")
         ),
-        "viscous_brake_friction" => format!(
+        EffectId::ViscousBrakeFriction => format!(
             "The friction coefficient grows with slip speed by {:.4} per rad/s from {:.3}",
             p("viscous_per_rad_s"),
             p("mu_kinetic")
         ),
-        _ => format!("The recorded drive voltage saturates at {:.2} V, below the supply", p("limit_v")),
+        EffectId::DriveVoltageLimit => {
+            format!("The recorded drive voltage saturates at {:.2} V, below the supply", p("limit_v"))
+        }
     };
-    format!("{what}; ΔBIC = {:.0} on the training runs, held-out misfit {:.3} → {:.3}.", dbic, base_m, ext_m)
+    format!(
+        "{what}; cross-validated misfit {:.4} → {:.4} (gain {:.1} % ± {:.1} % across folds, paired t = {:.1}).",
+        c.before,
+        c.after,
+        100.0 * c.gain,
+        100.0 * c.gain_fold_sd,
+        c.t
+    )
 }
 
-fn mu_vs_speed(
-    d: &SlipData,
-    base: &FrictionModel,
-    ext: &FrictionModel,
-    ext_fit: Option<&FrictionFit>,
-) -> Vec<(f64, f64, f64, f64)> {
+fn mu_vs_speed(d: &SlipData, base: &Composite, ext: &Composite, phases: &[Phases]) -> Vec<(f64, f64, f64, f64)> {
     let wmax = d.omega.iter().copied().fold(0.0_f64, f64::max);
     if wmax <= 0.0 {
         return vec![];
@@ -429,10 +744,10 @@ fn mu_vs_speed(
     let mut acc = vec![(0.0, 0.0, 0.0, 0usize); nb];
     for i in 0..d.len() {
         let b = ((d.omega[i] / wmax * nb as f64) as usize).min(nb - 1);
-        let th = ext_fit.and_then(|f| f.phases.get(d.run[i]).copied()).unwrap_or(0.0);
+        let ph = phases.get(d.run[i]).copied().unwrap_or((0.0, 0.0));
         acc[b].0 += d.mu[i];
-        acc[b].1 += base.mu(d.t[i], d.phi[i], d.omega[i], 0.0);
-        acc[b].2 += ext.mu(d.t[i], d.phi[i], d.omega[i], th);
+        acc[b].1 += base.mu(d.t[i], d.phi[i], d.omega[i], (0.0, 0.0));
+        acc[b].2 += ext.mu(d.t[i], d.phi[i], d.omega[i], ph);
         acc[b].3 += 1;
     }
     acc.iter()
@@ -442,8 +757,8 @@ fn mu_vs_speed(
         .collect()
 }
 
-fn residual_vs_angle(train: &[&RunSignals], mu_k: f64) -> Vec<(f64, f64)> {
-    let Some(s) = train.iter().max_by_key(|s| s.slip_idx.len()) else { return vec![] };
+fn residual_vs_angle(runs: &[&RunSignals], mu_k: f64) -> Vec<(f64, f64)> {
+    let Some(s) = runs.iter().max_by_key(|s| s.slip_idx.len()) else { return vec![] };
     let nb = 72;
     let mut acc = vec![(0.0, 0usize); nb];
     for (j, &k) in s.slip_idx.iter().enumerate() {

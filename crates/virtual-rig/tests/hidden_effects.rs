@@ -11,6 +11,11 @@
 use rig_virtual_rig::confusion::{confusion_table, run_confusion, tolerance};
 use rig_virtual_rig::{Protocol, draw_truth, generate, write_campaign};
 
+/// The diagnosis options of pipeline.toml (their one home).
+fn opts() -> rig_diagnose::DiagnoseOptions {
+    rig_diagnose::DiagnoseOptions::from_pipeline_toml(include_str!("../../../pipeline.toml")).expect("pipeline.toml")
+}
+
 /// Generates a campaign of `class` with `seed`, writes it, reads it back,
 /// diagnoses it and checks verdict and parameters.
 fn check(class: &str, seed: u64) {
@@ -20,7 +25,7 @@ fn check(class: &str, seed: u64) {
     let dir = tempfile::tempdir().expect("tempdir");
     write_campaign(dir.path(), &c).expect("write");
     let read = rig_ingest::read_campaign(dir.path()).expect("the generated campaign is valid rig-campaign/1");
-    let d = rig_diagnose::diagnose_campaign(&read, None, &Default::default()).expect("diagnosis");
+    let d = rig_diagnose::diagnose_campaign(&read, None, &opts()).expect("diagnosis");
     let scores: Vec<String> =
         d.detail.scores.iter().map(|s| format!("{} ΔBIC {:.1} gain {:.3} [{}]", s.0, s.1, s.3, s.5)).collect();
     assert_eq!(d.verdict, truth.hidden.id(), "truth {:?}; candidates:\n{}", truth.hidden, scores.join("\n"));
@@ -71,7 +76,7 @@ fn motor_cogging_is_unexplained() {
 fn confusion_matrix_full() {
     let draws = std::env::var("DRAWS").ok().and_then(|s| s.parse().ok()).unwrap_or(5);
     let out = run_confusion(draws, &Protocol::full(), 5000, |c| {
-        let d = rig_diagnose::diagnose_campaign(c, None, &Default::default()).map_err(|e| e.to_string())?;
+        let d = rig_diagnose::diagnose_campaign(c, None, &opts()).map_err(|e| e.to_string())?;
         Ok((d.verdict.clone(), d.findings.first().map(|f| f.params.clone()).unwrap_or_default()))
     });
     let t = confusion_table(&out);

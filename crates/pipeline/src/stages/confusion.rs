@@ -18,9 +18,10 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
         "full" => Protocol::full(),
         other => bail!("pipeline.toml: stage {}: protocol = {other:?} must be \"small\" or \"full\"", ctx.name),
     };
+    // The diagnosis stage's options as it ran them (pipeline.toml is their one home).
     // The thesis values are not needed for a verdict; without them no baseline
-    // is estimated (free_run needs Table 4.4's start values), which keeps this stage fast.
-    let opts = DiagnoseOptions { free_run: false, ..DiagnoseOptions::default() };
+    // is estimated for the free-run comparison, which keeps this stage fast.
+    let opts: DiagnoseOptions = ctx.read_json("data/diagnose-options.json")?;
     let out = run_confusion(draws, &protocol, seed, |c| {
         let d = diagnose_campaign(c, None, &opts).map_err(|e| e.to_string())?;
         Ok((d.verdict.clone(), d.findings.first().map(|f| f.params.clone()).unwrap_or_default()))
