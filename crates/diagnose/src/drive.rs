@@ -62,7 +62,16 @@ pub fn voltage_rss(pi: &Pi, runs: &[&RunSignals]) -> (f64, usize) {
 /// Fits kp, ki for a fixed limit: alternate (clamp pattern and integral from
 /// the current gains) → (linear least squares on the unclamped samples).
 pub fn fit_gains(runs: &[&RunSignals], limit_v: f64) -> Option<Pi> {
-    let mut pi = Pi { kp_v_s_rad: 0.0, ki_v_rad: 0.0, limit_v: f64::INFINITY };
+    fit_gains_from(runs, limit_v, None)
+}
+
+/// [`fit_gains`] started from `start`'s gains (the same fixed point, reached in
+/// fewer passes when the start is near it); `None` starts unclamped from zero.
+fn fit_gains_from(runs: &[&RunSignals], limit_v: f64, start: Option<&Pi>) -> Option<Pi> {
+    let mut pi = match start {
+        Some(p) => Pi { limit_v, ..*p },
+        None => Pi { kp_v_s_rad: 0.0, ki_v_rad: 0.0, limit_v: f64::INFINITY },
+    };
     for it in 0..8 {
         let mut ne = Normal::new(2);
         for s in runs {
@@ -91,7 +100,9 @@ pub fn fit_gains(runs: &[&RunSignals], limit_v: f64) -> Option<Pi> {
 /// at every trial limit), searched between 5 % of the supply and the supply.
 /// Returns (Pi, rss, n, stderr of Vmax from the RSS curvature).
 pub fn fit_limit(runs: &[&RunSignals], supply_v: f64) -> Option<(Pi, f64, usize, f64)> {
-    let eval = |l: f64| fit_gains(runs, l).map(|p| voltage_rss(&p, runs).0).unwrap_or(f64::INFINITY);
+    // Every trial limit refits the gains from the unlimited fit (warm start).
+    let p0 = fit_gains(runs, supply_v)?;
+    let eval = |l: f64| fit_gains_from(runs, l, Some(&p0)).map(|p| voltage_rss(&p, runs).0).unwrap_or(f64::INFINITY);
     // Coarse grid first (the RSS is not unimodal far from the optimum), then golden section.
     let grid: Vec<f64> = (0..=38).map(|j| supply_v * (0.05 + 0.025 * j as f64)).collect();
     let scores: Vec<f64> = {
@@ -101,8 +112,8 @@ pub fn fit_limit(runs: &[&RunSignals], supply_v: f64) -> Option<(Pi, f64, usize,
     let best = (0..grid.len()).min_by(|&a, &b| scores[a].total_cmp(&scores[b]))?;
     let lo = grid[best.saturating_sub(1)];
     let hi = grid[(best + 1).min(grid.len() - 1)];
-    let l = golden(lo, hi, 30, eval);
-    let pi = fit_gains(runs, l)?;
+    let l = golden(lo, hi, 24, eval);
+    let pi = fit_gains_from(runs, l, Some(&p0))?;
     let (rss, n) = voltage_rss(&pi, runs);
     // Profile-likelihood curvature: Var(Vmax) ≈ 2σ²/RSS''; RSS is in noise units (σ² = rss/n).
     let h = (1e-3 * supply_v).max(1e-4);

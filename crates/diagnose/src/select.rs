@@ -59,13 +59,17 @@ struct Cv<'a> {
     max_order: u32,
 }
 
+/// One fold's friction fit: the model fitted on its training runs and, per
+/// held-out run, (run index, relative μ error, phases fitted on that run).
+type FoldFriction = (Option<Composite>, Vec<(usize, Option<f64>, Phases)>);
+
 impl Cv<'_> {
     fn train(&self, f: usize) -> Vec<&RunSignals> {
         self.runs.iter().filter(|r| r.fold != f).collect()
     }
 
     fn friction(&self, set: FrictionSet) -> FrictionCv {
-        let per_fold: Vec<(Option<Composite>, Vec<(usize, Option<f64>, Phases)>)> = (0..self.folds)
+        let per_fold: Vec<FoldFriction> = (0..self.folds)
             .into_par_iter()
             .map(|f| {
                 let train = self.train(f);
@@ -448,7 +452,13 @@ pub fn diagnose_signals(
         .into_iter()
         .flatten()
         .collect();
-    let consistent = lines::consistent_lines(&all_lines, opts.line_ratio);
+    // A found angle-periodic friction of order n drives the rotor speed at
+    // order n and its harmonics: those rotor lines are explained, not left over.
+    let explained_order = full.model.angle_mod.map(|(_, n)| n);
+    let consistent: Vec<lines::ConsistentLine> = lines::consistent_lines(&all_lines, opts.line_ratio)
+        .into_iter()
+        .filter(|l| !(l.channel == "rotor" && explained_order.is_some_and(|n| l.order % n == 0)))
+        .collect();
     let line_text: Vec<String> = consistent
         .iter()
         .map(|l| {
