@@ -41,6 +41,7 @@
 //! `criterion` in diagnosis.json is `BIC(candidate) − BIC(baseline)` on the
 //! training runs (negative favours the candidate).
 
+pub mod channels;
 pub mod composite;
 pub mod drive;
 pub mod features;
@@ -54,6 +55,7 @@ mod select;
 pub mod signature;
 pub mod vocab;
 
+pub use channels::{ChannelCheck, ChannelOptions, extended_params};
 pub use prepare::{ForceCal, RunSignals};
 pub use report::{Adequacy, CandidateScore, Diagnosis, Finding, RunRow, SignatureEntry, StepRow, round_sig};
 pub use select::diagnose_signals;
