@@ -114,8 +114,11 @@ pub struct ChannelOptions {
     pub rotor_min_ratio: f64,
     pub fundamental_ratio: f64,
     pub torque_balance_ratio: f64,
-    /// Window of the step residual and of the torque balance, samples.
+    /// Window of the step residual, samples (the estimate's 50 ms).
     pub window_samples: usize,
+    /// Window of the torque balance, samples (long enough that the
+    /// quantisation of Ω̇1 does not swamp the balance).
+    pub balance_window_samples: usize,
     /// Steady-state seconds of each free-run simulation (after ramp + settle).
     pub free_run_steady_s: f64,
 }
@@ -137,6 +140,7 @@ impl ChannelOptions {
             fundamental_ratio: 4.0,
             torque_balance_ratio: 4.0,
             window_samples: 25,
+            balance_window_samples: 50,
             free_run_steady_s: 16.0,
         }
     }

@@ -48,11 +48,11 @@ fn rows(phi1: &[f64], phi2: &[f64], force_n: &[f64], dt: f64, w: usize, r_m: f64
 /// damping C acts on the twist rate): J1 Ω̇1 = K(φ2 − φ1) + C(Ω2 − Ω1) − T1,
 /// with T1 = r·F measured by the force sensor (Eq. 4-10's r). It departs from
 /// the thesis by adding an absolute drag d·Ω1 and a constant (force-sensor
-/// offset drift), and by fitting J1, K, C, d and the constant to the records
+/// offset drift), and by fitting K, C, d and the constant to the records
 /// themselves (one least squares over all runs): a bearing drag or a slightly
 /// wrong calibration is then no finding, and what is left is what no linear
 /// rotor equation explains (a torque that follows angle, time or stick/slip).
-/// Terms are triangle-weighted window means (window `window_samples`).
+/// Terms are triangle-weighted window means (window `balance_window_samples`).
 /// Statistic: per run the RMS residual, over runs their RMS, N·m. Floor: the
 /// same expression under sensor noise alone: force noise (measured per run by
 /// first differences) and one-tick quantisation of both encoders propagated
@@ -65,7 +65,7 @@ pub fn torque_balance_check(
     o: &ChannelOptions,
 ) -> ChannelCheck {
     let name = "operating_point.torque_balance";
-    let w = o.window_samples.max(2);
+    let w = o.balance_window_samples.max(2);
     let dt = 1.0 / c.rig.sample_rate_hz;
     let rad = TAU / c.rig.encoder_ticks_per_rev as f64;
     let r_m = c.rig.brake_disc_radius_m;
@@ -97,18 +97,23 @@ pub fn torque_balance_check(
         });
     }
     let ids: Vec<String> = per_run.iter().map(|r| r.id.clone()).collect();
+    // J1 is the calibration's (Eqs. 4-4/4-5): fitted here it would be
+    // attenuated towards 0 by the quantisation noise of Ω̇1 (errors in variables).
+    let j1 = cal.rotor_inertia_kgm2;
     let mut ne = crate::linalg::Normal::new(5);
     for r in &per_run {
         for (x, y) in &r.rows {
-            let row: Vec<(usize, f64)> = x.iter().copied().enumerate().collect();
-            ne.add_sparse(&row, *y);
+            let row: Vec<(usize, f64)> = x.iter().copied().enumerate().skip(1).collect();
+            ne.add_sparse(&row, y + j1 * x[0]);
         }
     }
-    let Some(beta) = ne.solve() else {
+    ne.add_sparse(&[(0, 1.0)], 0.0);
+    let Some(mut beta) = ne.solve() else {
         return ChannelCheck::not_testable(name, ids, "the rotor balance regression is singular".into());
     };
+    beta[0] = -j1;
     // r·F = −J1 Ω̇1 + K tw + C tẇ − d Ω1 + c0.
-    let (j1, k, cc, drag) = (-beta[0], beta[1], beta[2], -beta[3]);
+    let (k, cc, drag) = (beta[1], beta[2], -beta[3]);
     let run_rms: Vec<f64> = per_run
         .iter()
         .filter(|r| !r.rows.is_empty())
@@ -152,7 +157,7 @@ pub fn torque_balance_check(
         floor,
         o.torque_balance_ratio,
         format!(
-            "rotor balance fitted on the records: J1 {j1:.4} kg·m² (baseline {:.4}), K {k:.4} N·m/rad ({:.4}), C {cc:.2e} N·m·s/rad ({:.2e}), drag d {drag:.2e} N·m·s/rad, offset {:.2e} N·m; RMS residual {stat:.2e} N·m; worst run {worst}",
+            "rotor balance fitted on the records (J1 held): J1 {j1:.4} kg·m² (calibration; baseline {:.4}), K {k:.4} N·m/rad ({:.4}), C {cc:.2e} N·m·s/rad ({:.2e}), drag d {drag:.2e} N·m·s/rad, offset {:.2e} N·m; RMS residual {stat:.2e} N·m; worst run {worst}",
             baseline.rotor_inertia_kgm2, baseline.shaft_stiffness_nm_rad, baseline.shaft_damping_nm_s_rad, beta[4]
         ),
     )
