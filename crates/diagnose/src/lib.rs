@@ -67,6 +67,7 @@
 //! `calibration` numbers are in README.md and the `confusion` stage's tables):
 //! the false-alarm rate on null draws is published by the confusion stage.
 
+pub mod channels;
 pub mod composite;
 pub mod drive;
 pub mod features;
@@ -80,6 +81,7 @@ mod select;
 pub mod signature;
 pub mod vocab;
 
+pub use channels::{ChannelCheck, ChannelOptions, extended_params};
 pub use prepare::{ForceCal, RunSignals};
 pub use report::{Adequacy, CandidateScore, Diagnosis, Finding, RunRow, SignatureEntry, StepRow, round_sig};
 pub use select::diagnose_signals;

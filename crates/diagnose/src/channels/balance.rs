@@ -1,0 +1,164 @@
+//! Torque balance of rotor 1 in the measured channels of the operating
+//! points: encoders and force sensor must satisfy the rotor equation.
+
+use super::{ChannelCheck, ChannelOptions, rms};
+use crate::DiagnoseOptions;
+use crate::prepare::diff_noise;
+use rig_calibrate::CampaignCalibration;
+use rig_types::{Campaign, RigParams, RunKind};
+use std::f64::consts::TAU;
+
+/// Regressors of one window boundary: [⟨Ω̇1⟩, ⟨φ2−φ1⟩, ⟨Ω2−Ω1⟩, ⟨Ω1⟩, 1] and r⟨F⟩.
+type Row = ([f64; 5], f64);
+
+/// Triangle-weighted means around every boundary b = jw (weights w − |k − b|),
+/// the kernel for which (mean speed of the next window − of the previous) / T
+/// is exactly the weighted mean of the acceleration, so no derivative of a
+/// quantised angle is taken.
+fn rows(phi1: &[f64], phi2: &[f64], force_n: &[f64], dt: f64, w: usize, r_m: f64, from: usize) -> Vec<Row> {
+    let n = phi1.len();
+    let tw = |k: usize| phi2[k] - phi1[k];
+    let big_t = w as f64 * dt;
+    let mut out = Vec::new();
+    let mut b = from.max(w);
+    while b + w < n {
+        let (mut s_tw, mut s_f, mut s_k) = (0.0, 0.0, 0.0);
+        for k in b - w..=b + w {
+            let wt = (w - k.abs_diff(b)) as f64;
+            s_tw += wt * tw(k);
+            s_f += wt * force_n[k];
+            s_k += wt;
+        }
+        let w1_prev = (phi1[b] - phi1[b - w]) / big_t;
+        let w1_next = (phi1[b + w] - phi1[b]) / big_t;
+        let tw_prev = (tw(b) - tw(b - w)) / big_t;
+        let tw_next = (tw(b + w) - tw(b)) / big_t;
+        out.push((
+            [(w1_next - w1_prev) / big_t, s_tw / s_k, 0.5 * (tw_prev + tw_next), 0.5 * (w1_prev + w1_next), 1.0],
+            r_m * s_f / s_k,
+        ));
+        b += w;
+    }
+    out
+}
+
+/// Rotor-1 torque balance over the steady state of every operating point.
+///
+/// Eq. 4-7, first row, in the rig model's reading (rig-model docs: the
+/// damping C acts on the twist rate): J1 Ω̇1 = K(φ2 − φ1) + C(Ω2 − Ω1) − T1,
+/// with T1 = r·F measured by the force sensor (Eq. 4-10's r). It departs from
+/// the thesis by adding an absolute drag d·Ω1 and a constant (force-sensor
+/// offset drift), and by fitting K, C, d and the constant to the records
+/// themselves (one least squares over all runs): a bearing drag or a slightly
+/// wrong calibration is then no finding, and what is left is what no linear
+/// rotor equation explains (a torque that follows angle, time or stick/slip).
+/// Terms are triangle-weighted window means (window `balance_window_samples`).
+/// Statistic: per run the RMS residual, over runs their RMS, N·m. Floor: the
+/// same expression under sensor noise alone: force noise (measured per run by
+/// first differences) and one-tick quantisation of both encoders propagated
+/// through the fitted coefficients.
+pub fn torque_balance_check(
+    c: &Campaign,
+    cal: &CampaignCalibration,
+    baseline: &RigParams,
+    opts: &DiagnoseOptions,
+    o: &ChannelOptions,
+) -> ChannelCheck {
+    let name = "operating_point.torque_balance";
+    let w = o.balance_window_samples.max(2);
+    let dt = 1.0 / c.rig.sample_rate_hz;
+    let rad = TAU / c.rig.encoder_ticks_per_rev as f64;
+    let r_m = c.rig.brake_disc_radius_m;
+    struct RunRows {
+        id: String,
+        rows: Vec<Row>,
+        force_noise_n: f64,
+        kernel_gain: f64,
+    }
+    let mut per_run = Vec::new();
+    for run in c.runs_of("operating_point") {
+        let RunKind::OperatingPoint { ramp_s, .. } = run.kind else { continue };
+        let d = &run.data;
+        let (Some(t1), Some(t2), Some(mv)) = (&d.rotor_ticks, &d.motor_ticks, &d.brake_force_mv) else { continue };
+        let phi1: Vec<f64> = t1.iter().map(|&k| k as f64 * rad).collect();
+        let phi2: Vec<f64> = t2.iter().map(|&k| k as f64 * rad).collect();
+        let f: Vec<f64> = mv.iter().map(|m| (m - cal.force_offset_mv) / cal.force_factor_mv_per_n).collect();
+        let from = d.time_s.partition_point(|&x| x < ramp_s + opts.settle_s);
+        // Σk²/(Σk)² of the triangle kernel: the variance gain of white noise.
+        let kernel_gain = {
+            let ks: Vec<f64> = (0..=2 * w).map(|k| (w - k.abs_diff(w)) as f64).collect();
+            ks.iter().map(|k| k * k).sum::<f64>() / ks.iter().sum::<f64>().powi(2)
+        };
+        per_run.push(RunRows {
+            id: run.id.clone(),
+            rows: rows(&phi1, &phi2, &f, dt, w, r_m, from),
+            force_noise_n: diff_noise(&f),
+            kernel_gain,
+        });
+    }
+    let ids: Vec<String> = per_run.iter().map(|r| r.id.clone()).collect();
+    // J1 is the calibration's (Eqs. 4-4/4-5): fitted here it would be
+    // attenuated towards 0 by the quantisation noise of Ω̇1 (errors in variables).
+    let j1 = cal.rotor_inertia_kgm2;
+    let mut ne = crate::linalg::Normal::new(5);
+    for r in &per_run {
+        for (x, y) in &r.rows {
+            let row: Vec<(usize, f64)> = x.iter().copied().enumerate().skip(1).collect();
+            ne.add_sparse(&row, y + j1 * x[0]);
+        }
+    }
+    ne.add_sparse(&[(0, 1.0)], 0.0);
+    let Some(mut beta) = ne.solve() else {
+        return ChannelCheck::not_testable(name, ids, "the rotor balance regression is singular".into());
+    };
+    beta[0] = -j1;
+    // r·F = −J1 Ω̇1 + K tw + C tẇ − d Ω1 + c0.
+    let (k, cc, drag) = (beta[1], beta[2], -beta[3]);
+    let run_rms: Vec<f64> = per_run
+        .iter()
+        .filter(|r| !r.rows.is_empty())
+        .map(|r| {
+            let e: Vec<f64> =
+                r.rows.iter().map(|(x, y)| y - x.iter().zip(&beta).map(|(a, b)| a * b).sum::<f64>()).collect();
+            rms(&e)
+        })
+        .collect();
+    let big_t = w as f64 * dt;
+    // Quantisation: uniform error tick²/12 per angle sample. Ω̇1 = second
+    // difference of three boundary angles / T² (variance 6·tick²/12 / T⁴);
+    // the twist (two encoders) under the kernel; the rates, difference of
+    // two-boundary twists / 2T (variance 2·2·tick²/12 / 4T²).
+    let q2 = rad * rad / 12.0;
+    let floors: Vec<f64> = per_run
+        .iter()
+        .filter(|r| !r.rows.is_empty())
+        .map(|r| {
+            let var = (r_m * r.force_noise_n).powi(2) * r.kernel_gain
+                + j1.powi(2) * 6.0 * q2 / big_t.powi(4)
+                + k.powi(2) * 2.0 * q2 * r.kernel_gain
+                + cc.powi(2) * q2 / big_t.powi(2)
+                + drag.powi(2) * 0.5 * q2 / big_t.powi(2);
+            var.sqrt()
+        })
+        .collect();
+    let stat = rms(&run_rms);
+    let floor = rms(&floors);
+    let worst = ids
+        .iter()
+        .zip(&run_rms)
+        .zip(&floors)
+        .max_by(|a, b| (a.0.1 / a.1).total_cmp(&(b.0.1 / b.1)))
+        .map(|((id, e), f)| format!("{id} {:.1}×", e / f))
+        .unwrap_or_default();
+    ChannelCheck::new(
+        name,
+        ids,
+        stat,
+        floor,
+        o.torque_balance_ratio,
+        format!(
+            "rotor balance fitted on the records (J1 held): J1 {j1:.4} kg·m² (calibration; baseline {:.4}), K {k:.4} N·m/rad ({:.4}), C {cc:.2e} N·m·s/rad ({:.2e}), drag d {drag:.2e} N·m·s/rad, offset {:.2e} N·m; RMS residual {stat:.2e} N·m; worst run {worst}",
+            baseline.rotor_inertia_kgm2, baseline.shaft_stiffness_nm_rad, baseline.shaft_damping_nm_s_rad, beta[4]
+        ),
+    )
+}
