@@ -166,7 +166,9 @@ pub fn generate(name: &str, truth: &Truth, protocol: &Protocol, seed: u64) -> Re
             match e {
                 Effect::NormalForceModulation { phase_rad, .. }
                 | Effect::AnglePeriodicFriction { phase_rad, .. }
-                | Effect::MotorCogging { phase_rad, .. } => *phase_rad = th,
+                | Effect::MotorCogging { phase_rad, .. }
+                | Effect::RotorImbalance { phase_rad, .. } => *phase_rad = th,
+                _ => {}
             }
         }
         let seed_j: u64 = rng.random();
