@@ -32,9 +32,11 @@ fn backlash_is_a_dead_zone_of_the_twist() {
     // contact, so the swing decays until it ends up inside the gap, |φ1| ≤ b.
     let late = tr.rotor_angle_rad[tr.len() - 1000..].iter().fold(0.0f64, |m, a| m.max(a.abs()));
     assert!(late <= 0.2 + 1e-9, "{late}");
-    assert!(tr.rotor_angle_rad.iter().cloned().fold(f64::MAX, f64::min) < -0.2, "it crossed the gap");
-    assert_eq!(static_twist_rad(&p, 0.3), 0.3 / p.shaft_stiffness_nm_rad + 0.2);
-    assert_eq!(static_twist_rad(&p, -0.3), -(0.3 / p.shaft_stiffness_nm_rad + 0.2));
+    let min = tr.rotor_angle_rad.iter().cloned().fold(f64::MAX, f64::min);
+    assert!(min < -0.2, "it crossed the gap: {min}");
+    let expect = 0.3 / p.shaft_stiffness_nm_rad + 0.2;
+    assert!((static_twist_rad(&p, 0.3) - expect).abs() < 1e-12);
+    assert!((static_twist_rad(&p, -0.3) + expect).abs() < 1e-12);
 }
 
 /// Cubic shaft: the static twist solves K δ (1 + β δ²) = T; a hardening shaft
