@@ -9,6 +9,7 @@
 //! writes campaign.toml + runs/*.csv so tests read it back through rig-ingest
 //! like a user's data. No analysis crate may depend on this crate.
 
+pub mod battery;
 pub mod confusion;
 mod draw;
 mod write;
