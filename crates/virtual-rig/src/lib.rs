@@ -1,13 +1,34 @@
 //! A campaign generator for tests only (truth model with hidden effects, sensor chain).
 //!
-//! The virtual rig draws plausible rig parameters (seeded), hides one effect
-//! in the truth model (any vocabulary effect of ../shared/spec/diagnosis.md,
-//! or [`Hidden::MotorCogging`], which is outside the vocabulary), simulates a
-//! whole `rig-campaign/1` campaign with `rig_model` and passes it through a
-//! sensor chain: encoders quantised to 1000 ticks/rev (floor), a force sensor
-//! with gain, offset and noise in mV, and voltage noise. [`write_campaign`]
-//! writes campaign.toml + runs/*.csv so tests read it back through rig-ingest
-//! like a user's data. No analysis crate may depend on this crate.
+//! The virtual rig draws plausible rig parameters (seeded, [`draw_rig`]),
+//! hides one or several effects in the truth model ([`Truth::with_hidden`]:
+//! any vocabulary effect of ../shared/spec/diagnosis.md, or one of
+//! [`Hidden::OUTSIDE`]), simulates a whole `rig-campaign/1` campaign with
+//! `rig_model` and passes it through a sensor chain: encoders quantised to
+//! 1000 ticks/rev (floor), a force sensor with gain, offset and noise in mV,
+//! and voltage noise. [`write_campaign`] writes campaign.toml + runs/*.csv so
+//! tests read it back through rig-ingest like a user's data. No analysis
+//! crate may depend on this crate.
+//!
+//! Effects outside the vocabulary and where they live:
+//! - simulator ([`rig_types::Effect`], equations in its docs): motor cogging,
+//!   coupling backlash, cubic shaft, rotor imbalance, brake fade, drive
+//!   current limit. Those that act with the brake open (backlash, cubic
+//!   shaft, imbalance, current limit) also act in the voltage steps; the
+//!   static-twist runs hold the twist of the shaft law
+//!   ([`rig_model::static_twist_rad`]);
+//! - generator, per run: [`Hidden::MotorWarmUp`] (R and k_e = k_T follow the
+//!   winding temperature along the campaign's recorded time);
+//! - sensor chain: [`Hidden::ForceSensorNonlinearity`] (q F²),
+//!   [`Hidden::ForceOffsetDrift`] (d·t from each run's start),
+//!   [`Hidden::EncoderMissingTicks`] (rotor encoder, own RNG per run so the
+//!   campaign's other noise is unchanged).
+//!
+//! Draw ranges ([`draw_hidden`]): fade C 4–10 J/K, τ 20–60 s, ϑ_fade
+//! 30–80 K; backlash 0.02–0.08 rad; cubic β +0.01…+0.04 or −0.002…−0.004
+//! 1/rad²; imbalance m·e 0.005–0.015 kg·m (0.05–0.15 N·m); current limit
+//! 2.5–4 A; warm-up ΔT 30–60 K, τ 200–600 s; force q 0.3–0.8 mV/N²;
+//! offset drift ±0.5–1.5 mV/s; missed ticks p 0.002–0.01.
 
 pub mod battery;
 pub mod confusion;

@@ -8,7 +8,6 @@ use rig_virtual_rig::battery::{
     detection_table, false_alarm_table, judge, wrong_table,
 };
 use rig_virtual_rig::{Hidden, Protocol, draw_hidden, draw_rig, generate};
-use std::collections::BTreeMap;
 
 fn tiny() -> Protocol {
     Protocol {
