@@ -20,6 +20,17 @@
 //! - `outside`: one effect outside the vocabulary ([`Hidden::OUTSIDE`]): `unexplained`;
 //! - `ladder`: each vocabulary effect at six sizes down to where it should
 //!   be lost in the noise ([`LADDER_STEPS`]): the effect, or a miss.
+//!
+//! Confounds to expect (physics, to be checked with numbers once the
+//! diagnosis runs on the battery): brake fade lowers μ most where friction
+//! power T1·Ω1 is largest, i.e. at high slip speed, and can pass for
+//! velocity weakening; rotor imbalance is periodic in φ1 like
+//! `angle_periodic_friction` of order 1, but additive (not ∝ N) and present
+//! with the brake open; force-offset drift is slow like a low-frequency
+//! `normal_force_modulation`; the force sensor's q F² makes the measured μ
+//! grow with N; motor warm-up changes R and k_e between runs, which no
+//! vocabulary effect does; the current limit only shows where the current
+//! would exceed I_max (start-up, break-away).
 
 use crate::confusion::VERDICTS;
 use crate::{Hidden, Protocol, Truth, VirtualRigError, draw_hidden, draw_rig, generate, write_campaign};
@@ -652,4 +663,48 @@ pub fn wrong_table(outcomes: &[Outcome]) -> Table {
         ]);
     }
     t
+}
+
+/// A table as a Markdown table.
+pub fn markdown_table(t: &Table) -> String {
+    let mut s = format!("| {} |\n|{}\n", t.columns.join(" | "), "---|".repeat(t.columns.len()));
+    for r in &t.rows {
+        s.push_str(&format!("| {} |\n", r.join(" | ")));
+    }
+    s
+}
+
+/// The battery's report (Markdown): what was run, the false-alarm rate, the
+/// confusion matrix, the detection curves and every wrong answer with its reason.
+pub fn report_markdown(battery: &Battery, outcomes: &[Outcome]) -> String {
+    let right = outcomes.iter().filter(|o| o.judgement.right).count();
+    let p = &battery.protocol;
+    let mut s = format!(
+        "# Virtual-rig battery `{}`\n\n{} campaigns (protocol: {} operating points of {} s at {} Hz), each diagnosed \
+         blind. Right = the expected verdict (any effect of a compound; `unexplained` when an effect outside the \
+         vocabulary is hidden), every hidden vocabulary effect among the findings with its parameters within 25 % \
+         (frequencies 5 %, order exact), and no other vocabulary effect. {} of {} answers are right.\n\n",
+        battery.name,
+        outcomes.len(),
+        p.op_points.len(),
+        p.op_duration_s,
+        p.sample_rate_hz,
+        right,
+        outcomes.len()
+    );
+    s.push_str("## False alarms on effect-free rigs (95 % Clopper–Pearson interval)\n\n");
+    s.push_str(&markdown_table(&false_alarm_table(outcomes)));
+    s.push_str("\n## Confusion matrix (truth class × verdict)\n\n");
+    s.push_str(&markdown_table(&confusion_table(outcomes)));
+    let det = detection_table(outcomes);
+    if !det.rows.is_empty() {
+        s.push_str("\n## Detection limit per vocabulary effect (probability of the right answer vs size)\n\n");
+        s.push_str(&markdown_table(&det));
+    }
+    let wrong = wrong_table(outcomes);
+    if !wrong.rows.is_empty() {
+        s.push_str("\n## Wrong answers\n\n");
+        s.push_str(&markdown_table(&wrong));
+    }
+    s
 }

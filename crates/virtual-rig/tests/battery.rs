@@ -177,6 +177,8 @@ fn tables_count_what_they_should() {
     assert_eq!(det.rows.len(), 5 * LADDER_STEPS);
     assert!(det.rows.iter().all(|r| r[6] == "0" && r[4] == "3"));
     assert_eq!(wrong_table(&outcomes).rows.len(), b.cases.iter().filter(|c| c.group != Group::Null).count());
+    let md = rig_virtual_rig::battery::report_markdown(&b, &outcomes);
+    assert!(md.contains("| 20 | 0 | 0.000 | 0.000 | 0.168 |"), "{md}");
 }
 
 /// Largest change between two recordings of the same protocol, per channel
