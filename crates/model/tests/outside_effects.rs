@@ -1,7 +1,6 @@
 //! Proof tests of the effects outside the diagnosis vocabulary against
 //! closed-form consequences of their equations (rig_types::Effect docs).
 
-#[allow(dead_code)]
 mod common;
 
 use common::*;

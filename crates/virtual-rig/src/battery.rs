@@ -479,7 +479,7 @@ pub fn judge(case: &Case, result: &Result<DiagnosisResult, String>) -> Judgement
                 Some(&est) => {
                     let rel = (est - truth).abs() / truth.abs();
                     let tol = battery_tolerance(k);
-                    if !(rel <= tol + 1e-12) {
+                    if rel.is_nan() || rel > tol + 1e-12 {
                         why.push(format!(
                             "{}.{k} = {} vs truth {} ({:.1} % off, tolerance {:.0} %)",
                             h.id(),

@@ -227,7 +227,7 @@ pub struct Truth {
 /// random parameters in ranges where it matters on this rig. `mu_kinetic` is
 /// the rig's slip coefficient (the laws are built around it).
 pub fn draw_hidden(class: &str, mu_kinetic: f64, max_setpoint_rpm: f64, seed: u64) -> Hidden {
-    let mut r = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_0f_4e55);
+    let mut r = ChaCha8Rng::seed_from_u64(seed ^ 0x005e_ed0f_4e55);
     match class {
         "normal_force_modulation" => Hidden::NormalForceModulation {
             amplitude_ratio: r.random_range(0.08..0.3),
