@@ -248,3 +248,46 @@ fn every_full_battery_campaign_with_new_physics_generates() {
         cases.iter().filter_map(|c| c.generate(&b.protocol).err().map(|e| format!("{}: {e}", c.id))).collect();
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// An oracle that answers from the truth is judged right on every case, through
+/// both runners (in memory, and written folders read back by the closure).
+#[test]
+fn runners_hand_each_campaign_to_the_diagnosis_and_judge_it() {
+    let mut b = Battery::ci();
+    b.protocol = tiny();
+    assert_eq!(Battery::full().cases.len(), 183);
+    let oracle = |case: &Case| {
+        let findings: Vec<Finding> = case
+            .truth
+            .hidden_all()
+            .iter()
+            .filter(|h| !h.is_outside())
+            .map(|h| Finding {
+                effect: h.id().into(),
+                params: h.params().into_iter().map(|(k, v)| (k.into(), v)).collect(),
+            })
+            .collect();
+        let verdict = match case.expected() {
+            Expected::None => "none".to_string(),
+            Expected::Effects(e) => e[0].to_string(),
+            Expected::Unexplained { .. } => "unexplained".to_string(),
+        };
+        Ok(DiagnosisResult { verdict, findings })
+    };
+    let out = b.run(|case, campaign| {
+        assert_eq!(campaign.name, case.id);
+        assert_eq!(campaign.runs.len(), 5 + 5 + 1 + 3);
+        oracle(case)
+    });
+    assert_eq!(out.len(), b.cases.len());
+    assert!(out.iter().all(|o| o.judgement.right), "{:?}", wrong_table(&out).rows);
+    let root = tempfile::tempdir().unwrap();
+    let out_dirs = b.run_dirs(root.path(), |case, dir| {
+        assert!(dir.join("campaign.toml").is_file() && dir.ends_with(&case.id));
+        oracle(case)
+    });
+    assert_eq!(out, out_dirs);
+    // A diagnosis that fails is a wrong answer carrying its error.
+    let failing = b.run(|_, _| Err("no".into()));
+    assert!(failing.iter().all(|o| !o.judgement.right && o.verdict() == "error"));
+}
