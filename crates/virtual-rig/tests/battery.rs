@@ -55,6 +55,8 @@ fn batteries_are_deterministic_and_cover_every_group() {
     assert_ne!(nulls[0].truth.params, nulls[1].truth.params);
     let ci = Battery::ci();
     assert_eq!(ci, Battery::ci());
+    assert_ne!(Battery::ci_seeded(1).cases[0].truth, ci.cases[0].truth, "another seed, other rigs");
+    assert_eq!(Battery::full_seeded(rig_virtual_rig::battery::BATTERY_SEED), full);
     assert!((10..=15).contains(&ci.cases.len()), "{}", ci.cases.len());
     for g in [Group::Null, Group::Single, Group::Compound, Group::VocabularyPlusOutside, Group::Outside] {
         assert!(ci.cases.iter().any(|c| c.group == g), "{g:?}");
