@@ -257,7 +257,7 @@ impl Battery {
             "ci",
             Protocol::small(),
             sizes,
-            BATTERY_SEED,
+            seed,
             &["brake_fade", "coupling_backlash", "encoder_missing_ticks"],
         );
         let max_rpm = max_rpm(&b.protocol);
