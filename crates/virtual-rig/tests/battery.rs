@@ -293,3 +293,28 @@ fn runners_hand_each_campaign_to_the_diagnosis_and_judge_it() {
     let failing = b.run(|_, _| Err("no".into()));
     assert!(failing.iter().all(|o| !o.judgement.right && o.verdict() == "error"));
 }
+
+/// Down each detection ladder the effect's mark on the recording shrinks:
+/// the change against the same rig without it is larger on the first rung
+/// than on the last (force mV for the friction effects, drive volts for the
+/// voltage limit).
+#[test]
+fn ladders_shrink_the_effect_towards_the_noise() {
+    let full = Battery::full();
+    let proto = tiny();
+    for effect in Hidden::VOCABULARY {
+        let mark = |step: usize| {
+            let case = full
+                .cases
+                .iter()
+                .find(|c| c.rung.as_ref().is_some_and(|r| r.effect == effect && r.step == step))
+                .unwrap();
+            let with = generate("with", &case.truth, &proto, case.seed).unwrap();
+            let without = generate("with", &draw_rig(case.seed), &proto, case.seed).unwrap();
+            let (ticks, mv, volts) = change(&with, &without);
+            if effect == "drive_voltage_limit" { volts + ticks } else { mv }
+        };
+        let (first, last) = (mark(0), mark(LADDER_STEPS - 1));
+        assert!(first > 2.0 * last && first > 1.0, "{effect}: first rung {first}, last {last}");
+    }
+}
