@@ -91,7 +91,7 @@ pub fn false_alarm_table(outcomes: &[Outcome]) -> Table {
 }
 
 /// Per vocabulary effect and ladder rung: the probability that the answer is
-/// right (judged as [`judge`]) against the effect's size, with its 95 %
+/// right (judged as [`super::judge`]) against the effect's size, with its 95 %
 /// Clopper–Pearson interval, and how often the effect was named at all.
 pub fn detection_table(outcomes: &[Outcome]) -> Table {
     let mut t =
