@@ -132,3 +132,29 @@ fn current_limit_caps_the_step_current_not_the_steady_speed() {
     assert!((lim.motor_speed_rad_s[n - 1] - free.motor_speed_rad_s[n - 1]).abs() < 1e-3);
     assert!(lim.motor_speed_rad_s[n / 20] < free.motor_speed_rad_s[n / 20]);
 }
+
+/// The new variants serialise under their snake_case names next to the old ones.
+#[test]
+fn outside_effects_have_stable_serde_names() {
+    let effects = vec![
+        Effect::NormalForceModulation { amplitude_ratio: 0.1, frequency_hz: 1.0, phase_rad: 0.0 },
+        Effect::CouplingBacklash { gap_rad: 0.05 },
+        Effect::ShaftCubicStiffness { cubic_per_rad2: 0.02 },
+        Effect::RotorImbalance { imbalance_kg_m: 0.01, phase_rad: 0.0 },
+        Effect::BrakeFade { heat_capacity_j_k: 5.0, cooling_time_s: 30.0, fade_temperature_k: 40.0 },
+        Effect::DriveCurrentLimit { current_limit_a: 3.0 },
+    ];
+    let json = serde_json::to_string(&effects).unwrap();
+    for name in [
+        "\"normal_force_modulation\"",
+        "\"coupling_backlash\"",
+        "\"shaft_cubic_stiffness\"",
+        "\"rotor_imbalance\"",
+        "\"brake_fade\"",
+        "\"drive_current_limit\"",
+    ] {
+        assert!(json.contains(name), "{name} in {json}");
+    }
+    let back: Vec<Effect> = serde_json::from_str(&json).unwrap();
+    assert_eq!(back, effects);
+}
