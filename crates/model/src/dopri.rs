@@ -5,7 +5,9 @@
 //! event, truncates the step and restarts with [`Dopri::reset`].
 
 /// Dimension of the rig state [φ1, φ2, Ω1, Ω2, i, ∫e].
-pub(crate) const DIM: usize = 6;
+/// State size: the six states of the crate docs plus the pad temperature
+/// rise of [`rig_types::Effect::BrakeFade`] (identically 0 without it).
+pub(crate) const DIM: usize = 7;
 pub(crate) type Vector = [f64; DIM];
 
 // Butcher tableau of Dormand & Prince (1980), as in Hairer's dopri5.
@@ -99,6 +101,10 @@ pub(crate) struct Dopri {
     /// Step size proposed for the next step (0 = choose one).
     h: f64,
     fac_old: f64,
+    /// Number of components in the RMS error norm: the leading `norm_dim`
+    /// states (6 unless the thermal state is in use, so that a run without
+    /// it steps exactly as it did before the state existed).
+    norm_dim: f64,
     /// f(t, y) at the current point when still valid (first-same-as-last).
     k1: Option<Vector>,
     /// Number of right-hand-side evaluations, accepted and rejected steps.
@@ -127,7 +133,25 @@ fn finite(v: &Vector) -> bool {
 
 impl Dopri {
     pub fn new(rtol: f64, atol: f64, max_step: f64) -> Self {
-        Dopri { rtol, atol, max_step, h: 0.0, fac_old: 1e-4, k1: None, n_eval: 0, n_accept: 0, n_reject: 0 }
+        Dopri {
+            rtol,
+            atol,
+            max_step,
+            h: 0.0,
+            fac_old: 1e-4,
+            norm_dim: DIM as f64,
+            k1: None,
+            n_eval: 0,
+            n_accept: 0,
+            n_reject: 0,
+        }
+    }
+
+    /// Error norm over the first `n` states only (the others must then have
+    /// zero derivative, so they add exactly 0 to the sum).
+    pub fn with_norm_dim(mut self, n: usize) -> Self {
+        self.norm_dim = n.min(DIM) as f64;
+        self
     }
 
     /// Forget the FSAL derivative: the right-hand side changed (new mode) or
@@ -146,13 +170,14 @@ impl Dopri {
         f: &mut impl FnMut(f64, &Vector) -> Vector,
     ) -> f64 {
         let sc = |j: usize| self.atol + self.rtol * y[j].abs();
-        let d0 = (y.iter().enumerate().map(|(j, v)| (v / sc(j)).powi(2)).sum::<f64>() / DIM as f64).sqrt();
-        let d1 = (k1.iter().enumerate().map(|(j, v)| (v / sc(j)).powi(2)).sum::<f64>() / DIM as f64).sqrt();
+        let d0 = (y.iter().enumerate().map(|(j, v)| (v / sc(j)).powi(2)).sum::<f64>() / self.norm_dim).sqrt();
+        let d1 = (k1.iter().enumerate().map(|(j, v)| (v / sc(j)).powi(2)).sum::<f64>() / self.norm_dim).sqrt();
         let h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
         let h0 = h0.min(self.max_step).min(span);
         let y1 = axpy(y, h0, [1.0], [k1]);
         let k2 = f(t + h0, &y1);
-        let d2 = (k2.iter().zip(k1).enumerate().map(|(j, (a, b))| ((a - b) / sc(j)).powi(2)).sum::<f64>() / DIM as f64)
+        let d2 = (k2.iter().zip(k1).enumerate().map(|(j, (a, b))| ((a - b) / sc(j)).powi(2)).sum::<f64>()
+            / self.norm_dim)
             .sqrt()
             / h0;
         let h1 = if d1.max(d2) <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { (0.01 / d1.max(d2)).powf(0.2) };
@@ -208,7 +233,7 @@ impl Dopri {
                 let sc = self.atol + self.rtol * y[j].abs().max(y1[j].abs());
                 err += (e / sc).powi(2);
             }
-            let err = (err / DIM as f64).sqrt();
+            let err = (err / self.norm_dim).sqrt();
             if !err.is_finite() || !finite(&y1) {
                 // A non-finite trial: shrink hard and retry; give up below round-off.
                 self.n_reject += 1;
@@ -289,11 +314,11 @@ mod tests {
 
     /// y'' = −y in three copies with different phases: exact solution known.
     fn rhs(_t: f64, y: &Vector) -> Vector {
-        [y[1], -y[0], y[3], -y[2], y[5], -y[4]]
+        [y[1], -y[0], y[3], -y[2], y[5], -y[4], 1.0]
     }
 
     fn exact(t: f64) -> Vector {
-        [t.cos(), -t.sin(), t.sin(), t.cos(), (t + 1.0).cos(), -(t + 1.0).sin()]
+        [t.cos(), -t.sin(), t.sin(), t.cos(), (t + 1.0).cos(), -(t + 1.0).sin(), t]
     }
 
     /// Steps of fixed size h (tolerance so loose no step is rejected, max_step = h):

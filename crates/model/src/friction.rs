@@ -62,7 +62,7 @@ pub fn normal_force_n(n0: f64, effects: &[Effect], harmonic: Option<&HarmonicFri
             Effect::AnglePeriodicFriction { amplitude_ratio, order, phase_rad } => {
                 n *= 1.0 + amplitude_ratio * (f64::from(*order) * phi1 + phase_rad).sin();
             }
-            Effect::MotorCogging { .. } => {}
+            _ => {}
         }
     }
     if let Some(HarmonicFriction::NormalForce { omega_p_rad_s, amplitude_ratio }) = harmonic {
@@ -86,6 +86,23 @@ pub fn cogging_nm(effects: &[Effect], phi2: f64) -> f64 {
         .map(|e| match e {
             Effect::MotorCogging { amplitude_nm, order, phase_rad } => {
                 amplitude_nm * (f64::from(*order) * phi2 + phase_rad).sin()
+            }
+            _ => 0.0,
+        })
+        .sum()
+}
+
+/// Standard gravity, m/s² (CGPM 1901), for [`Effect::RotorImbalance`].
+pub const STANDARD_GRAVITY_M_S2: f64 = 9.80665;
+
+/// Gravity torque on rotor 1 from its imbalance, Σ m·e·g·sin(φ1 + θ), N·m
+/// (positive acts like friction: it is subtracted from the shaft torque).
+pub fn imbalance_torque_nm(effects: &[Effect], phi1: f64) -> f64 {
+    effects
+        .iter()
+        .map(|e| match e {
+            Effect::RotorImbalance { imbalance_kg_m, phase_rad } => {
+                imbalance_kg_m * STANDARD_GRAVITY_M_S2 * (phi1 + phase_rad).sin()
             }
             _ => 0.0,
         })

@@ -88,6 +88,20 @@
 //! sin(ω_p t) as published (in the rig model the stick threshold by
 //! |sin(ω_p t)|); `NormalForce` multiplies N by 1 + a sin(ω_p t).
 //!
+//! **Effects outside the vocabulary** (test campaigns of the virtual rig; each
+//! variant's doc in [`rig_types::Effect`] gives its equation and source):
+//! `CouplingBacklash` and `ShaftCubicStiffness` replace the linear shaft by
+//! K·δe(1 + β δe²) with δe the twist outside a dead zone of half-width b
+//! (damping only in contact); `RotorImbalance` subtracts m·e·g·sin(φ1 + θ)
+//! from the torque on rotor 1, which static friction must then also hold;
+//! `BrakeFade` adds a seventh state, the pad temperature rise ϑ with
+//! C dϑ/dt = T1 Ω1 − C ϑ/τ, and divides N (so μs and μ alike) by
+//! 1 + ϑ/ϑ_fade; the error norm covers ϑ only when the effect is present, so
+//! every run without it takes exactly the steps it took before; it is not
+//! part of [`State`] (a continuation starts cold). `DriveCurrentLimit` clamps
+//! the terminal voltage to n k_e Ω2 ± R I_max after the PI loop, whose
+//! integral does not see it (windup), and in voltage steps too.
+//!
 //! # Drive
 //!
 //! Operating points: a PI loop on Ω2 (rad/s at the shaft), reference ramping
@@ -214,7 +228,7 @@ pub fn simulate_with_stats(
         }
     };
     let sys = System::new(params, drive, n0);
-    let y0 = [0.0; 6];
+    let y0 = [0.0; dopri::DIM];
     let mode0 = sys.mode_at_rest(0.0, &y0);
     let (traj, _, stats) = sim::run(&sys, 0.0, y0, mode0, sample_times_s, &breakpoints, opts)?;
     Ok((traj, stats))
@@ -241,6 +255,8 @@ pub fn simulate_from(
         state.motor_speed_rad_s,
         state.current_a,
         state.pi_integral_rad,
+        // The pad temperature of Effect::BrakeFade is not part of State: a continuation starts cold.
+        0.0,
     ];
     for (name, v) in [("state.time_s", state.time_s)].into_iter().chain(
         [
@@ -310,6 +326,43 @@ pub fn friction_coefficient(law: &FrictionLaw, omega_rad_s: f64) -> f64 {
         FrictionLaw::Thesis(f) => friction::thesis_lookup(f, omega_rad_s),
         other => friction::slip_mu(other, omega_rad_s),
     }
+}
+
+/// Twist φ2 − φ1 (rad) at which the shaft holds `torque_nm` statically
+/// (a `static_twist` run): torque/K for the linear shaft; with
+/// [`Effect::CouplingBacklash`] and [`Effect::ShaftCubicStiffness`] the root
+/// of K·δe(1 + β δe²) = T plus the half gap on the side of T (bisection; a
+/// softening shaft that cannot carry T returns NaN).
+pub fn static_twist_rad(params: &RigParams, torque_nm: f64) -> f64 {
+    let k = params.shaft_stiffness_nm_rad;
+    let (mut half_gap, mut beta) = (0.0, 0.0);
+    for e in &params.effects {
+        match *e {
+            Effect::CouplingBacklash { gap_rad } => half_gap += 0.5 * gap_rad,
+            Effect::ShaftCubicStiffness { cubic_per_rad2 } => beta += cubic_per_rad2,
+            _ => {}
+        }
+    }
+    if half_gap == 0.0 && beta == 0.0 {
+        return torque_nm / k;
+    }
+    let target = torque_nm.abs();
+    let f = |d: f64| k * d * (1.0 + beta * d * d) - target;
+    // Bracket: grow until f > 0; a softening spring peaks at d = 1/√(−3β).
+    let d_max = if beta < 0.0 { 1.0 / (-3.0 * beta).sqrt() } else { f64::INFINITY };
+    let mut hi = (target / k).max(1e-12);
+    while f(hi) < 0.0 {
+        if hi >= d_max {
+            return f64::NAN;
+        }
+        hi = (2.0 * hi).min(d_max);
+    }
+    let mut lo = 0.0;
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if f(mid) < 0.0 { lo = mid } else { hi = mid }
+    }
+    torque_nm.signum() * (0.5 * (lo + hi) + half_gap)
 }
 
 fn rpm_to_rad_s(rpm: f64) -> f64 {
@@ -422,6 +475,18 @@ fn validate(p: &RigParams, o: &SimOptions) -> Result<(), ModelError> {
                 finite("effects.amplitude_nm", *amplitude_nm)?;
                 finite("effects.phase_rad", *phase_rad)?;
             }
+            Effect::CouplingBacklash { gap_rad } => non_negative("effects.gap_rad", *gap_rad)?,
+            Effect::ShaftCubicStiffness { cubic_per_rad2 } => finite("effects.cubic_per_rad2", *cubic_per_rad2)?,
+            Effect::RotorImbalance { imbalance_kg_m, phase_rad } => {
+                finite("effects.imbalance_kg_m", *imbalance_kg_m)?;
+                finite("effects.phase_rad", *phase_rad)?;
+            }
+            Effect::BrakeFade { heat_capacity_j_k, cooling_time_s, fade_temperature_k } => {
+                positive("effects.heat_capacity_j_k", *heat_capacity_j_k)?;
+                positive("effects.cooling_time_s", *cooling_time_s)?;
+                positive("effects.fade_temperature_k", *fade_temperature_k)?;
+            }
+            Effect::DriveCurrentLimit { current_limit_a } => positive("effects.current_limit_a", *current_limit_a)?,
         }
     }
     match &p.harmonic {

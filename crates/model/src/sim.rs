@@ -2,7 +2,7 @@
 //! the dense output with a restart after each, and sampling of every
 //! trajectory channel at the requested times.
 
-use crate::dopri::{Dopri, StepFailure, Vector, locate_root};
+use crate::dopri::{DIM, Dopri, StepFailure, Vector, locate_root};
 use crate::system::{CUR, INT, Mode, PHI1, PHI2, System, W1, W2};
 use crate::{ModelError, SimOptions, State};
 use rig_types::{FrictionLaw, ModelKind, Trajectory};
@@ -95,7 +95,11 @@ pub(crate) fn run(
         push_sample(&mut out, sys, mode, samples[idx], &y);
         idx += 1;
     }
-    let mut dp = Dopri::new(opts.rtol, opts.atol, opts.max_step_s);
+    let mut dp = Dopri::new(opts.rtol, opts.atol, opts.max_step_s).with_norm_dim(if sys.has_thermal_state() {
+        DIM
+    } else {
+        DIM - 1
+    });
     let mut stats = SimStats::default();
     let mut zeno = 0u32;
     let budget = MAX_STEPS + (MAX_STEPS_PER_S * (t_end - t0)) as u64;
@@ -144,7 +148,7 @@ pub(crate) fn run(
             stats.events += 1;
             mode = match old {
                 // Break-away: slip in the direction the shaft pulls.
-                Mode::Stick => Mode::Slip { sign: sys.shaft_torque_nm(&y).signum() },
+                Mode::Stick => Mode::Slip { sign: sys.rotor_torque_nm(&y).signum() },
                 // Ω1 reached zero: stick if static friction can hold the shaft, else reverse.
                 _ => {
                     y[W1] = 0.0;

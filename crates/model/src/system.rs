@@ -3,8 +3,10 @@
 //! the drive, and the stick/slip modes with their event functions.
 
 use crate::dopri::{DIM, Vector};
-use crate::friction::{cogging_nm, normal_force_n, slip_mu, static_mu, thesis_lookup, torque_factor};
-use rig_types::{FrictionLaw, ModelKind, RigParams};
+use crate::friction::{
+    cogging_nm, imbalance_torque_nm, normal_force_n, slip_mu, static_mu, thesis_lookup, torque_factor,
+};
+use rig_types::{Effect, FrictionLaw, ModelKind, RigParams};
 
 // State layout.
 pub(crate) const PHI1: usize = 0;
@@ -13,6 +15,8 @@ pub(crate) const W1: usize = 2;
 pub(crate) const W2: usize = 3;
 pub(crate) const CUR: usize = 4;
 pub(crate) const INT: usize = 5;
+/// Pad temperature rise ϑ of [`Effect::BrakeFade`], K (0 without it).
+pub(crate) const TEMP: usize = 6;
 
 /// Armature speed scale of the rig model's motor friction, rad/s: T_f acts as
 /// T_f·tanh(n Ω2 / this). The chapter's T_f is a constant torque (Eq. 4-6b),
@@ -69,11 +73,37 @@ pub(crate) struct System<'a> {
     cm_shaft: f64,
     /// Whether any effect, harmonic term or cogging is present (skips their loops).
     plain: bool,
+    /// Half the backlash gap b, rad (0: no backlash).
+    half_gap_rad: f64,
+    /// β of the cubic shaft, 1/rad² (0: linear).
+    cubic_per_rad2: f64,
+    /// No backlash and no cubic term: the shaft is Eq. 4-7's linear one.
+    linear_shaft: bool,
+    /// Whether the rotor carries an imbalance.
+    imbalance: bool,
+    /// Brake fade (C in J/K, τ in s, ϑ_fade in K), if any.
+    fade: Option<(f64, f64, f64)>,
+    /// Current limit I_max of the amplifier, A, if any.
+    current_limit_a: Option<f64>,
 }
 
 impl<'a> System<'a> {
     pub fn new(p: &'a RigParams, drive: Drive, n0: f64) -> Self {
         let gear = p.motor.gear_ratio;
+        let (mut half_gap_rad, mut cubic_per_rad2, mut imbalance, mut fade, mut current_limit_a) =
+            (0.0, 0.0, false, None, None);
+        for e in &p.effects {
+            match *e {
+                Effect::CouplingBacklash { gap_rad } => half_gap_rad += 0.5 * gap_rad,
+                Effect::ShaftCubicStiffness { cubic_per_rad2: b } => cubic_per_rad2 += b,
+                Effect::RotorImbalance { .. } => imbalance = true,
+                Effect::BrakeFade { heat_capacity_j_k, cooling_time_s, fade_temperature_k } => {
+                    fade = Some((heat_capacity_j_k, cooling_time_s, fade_temperature_k))
+                }
+                Effect::DriveCurrentLimit { current_limit_a: i } => current_limit_a = Some(i),
+                _ => {}
+            }
+        }
         System {
             p,
             kind: p.kind,
@@ -86,7 +116,19 @@ impl<'a> System<'a> {
             ke_shaft: gear * p.motor.voltage_constant_v_s_rad,
             cm_shaft: gear * gear * p.motor.speed_regulation_nm_s_rad,
             plain: p.effects.is_empty() && p.harmonic.is_none(),
+            half_gap_rad,
+            cubic_per_rad2,
+            linear_shaft: half_gap_rad == 0.0 && cubic_per_rad2 == 0.0,
+            imbalance,
+            fade,
+            current_limit_a,
         }
+    }
+
+    /// Whether the state has the thermal component (brake fade): the error
+    /// norm then covers it.
+    pub fn has_thermal_state(&self) -> bool {
+        self.fade.is_some()
     }
 
     /// Whether friction can act at all (brake closed).
@@ -118,6 +160,21 @@ impl<'a> System<'a> {
     /// the integral then slides along it and the step size collapsed to
     /// round-off (20 million steps in 3.5 s of a saturated start-up).
     pub fn voltage(&self, t: f64, y: &Vector) -> (f64, f64) {
+        let (v, rate) = self.pi_voltage(t, y);
+        match self.current_limit_a {
+            None => (v, rate),
+            // Effect::DriveCurrentLimit: the amplifier keeps the terminal voltage
+            // within ±R·I_max of the back-EMF (Eq. 4-6a at di/dt = 0 and |i| = I_max).
+            // The PI integral keeps its own rate: the loop does not see the limit.
+            Some(i_max) => {
+                let emf = self.ke_shaft * y[W2];
+                let r_i = self.p.motor.resistance_ohm * i_max;
+                (v.clamp(emf - r_i, emf + r_i), rate)
+            }
+        }
+    }
+
+    fn pi_voltage(&self, t: f64, y: &Vector) -> (f64, f64) {
         match self.drive {
             Drive::Voltage { voltage_v } => (voltage_v, 0.0),
             Drive::Pi { .. } => {
@@ -134,7 +191,13 @@ impl<'a> System<'a> {
     /// Torque the shaft applies to rotor 1 (and, reacted, to the motor side).
     /// Thesis (Eq. 4-7): k(φ2 − φ1); its damping C acts on Ω1 alone.
     /// Rig: k(φ2 − φ1) + C(Ω2 − Ω1): material damping of the twist rate.
+    /// With backlash and/or a cubic shaft ([`Effect::CouplingBacklash`],
+    /// [`Effect::ShaftCubicStiffness`]): K·δe(1 + β δe²) with δe the twist
+    /// outside the dead zone, and the damping only in contact.
     pub fn shaft_torque_nm(&self, y: &Vector) -> f64 {
+        if !self.linear_shaft {
+            return self.nonlinear_shaft_torque_nm(y);
+        }
         let twist = self.p.shaft_stiffness_nm_rad * (y[PHI2] - y[PHI1]);
         match self.kind {
             ModelKind::Thesis => twist,
@@ -142,11 +205,42 @@ impl<'a> System<'a> {
         }
     }
 
+    fn nonlinear_shaft_torque_nm(&self, y: &Vector) -> f64 {
+        let delta = y[PHI2] - y[PHI1];
+        let b = self.half_gap_rad;
+        if delta.abs() <= b {
+            return 0.0;
+        }
+        let de = delta - delta.clamp(-b, b);
+        let elastic = self.p.shaft_stiffness_nm_rad * de * (1.0 + self.cubic_per_rad2 * de * de);
+        match self.kind {
+            ModelKind::Thesis => elastic,
+            ModelKind::Rig => elastic + self.p.shaft_damping_nm_s_rad * (y[W2] - y[W1]),
+        }
+    }
+
+    /// Net torque on rotor 1 other than brake friction: the shaft torque minus
+    /// the gravity torque of an imbalance ([`Effect::RotorImbalance`]). Static
+    /// friction must hold this torque in stick.
+    pub fn rotor_torque_nm(&self, y: &Vector) -> f64 {
+        if self.imbalance {
+            self.shaft_torque_nm(y) - imbalance_torque_nm(&self.p.effects, y[PHI1])
+        } else {
+            self.shaft_torque_nm(y)
+        }
+    }
+
+    /// N(t, φ1) with its effects; under [`Effect::BrakeFade`] the fade factor
+    /// 1/(1 + ϑ/ϑ_fade) is folded in here (it scales μs and μ alike).
     pub fn normal_force_n(&self, t: f64, y: &Vector) -> f64 {
         if self.plain {
             return self.n0;
         }
-        normal_force_n(self.n0, &self.p.effects, self.p.harmonic.as_ref(), t, y[PHI1])
+        let n = normal_force_n(self.n0, &self.p.effects, self.p.harmonic.as_ref(), t, y[PHI1]);
+        match self.fade {
+            Some((_, _, fade_k)) => n / (1.0 + y[TEMP].max(0.0) / fade_k),
+            None => n,
+        }
     }
 
     fn torque_factor(&self, t: f64) -> f64 {
@@ -172,8 +266,8 @@ impl<'a> System<'a> {
                 // A vocabulary law in the thesis model: symmetric slip law, no stick phase.
                 law => slip_mu(law, y[W1]) * nr * sign_or_zero(y[W1]),
             },
-            // Static friction balances the shaft exactly (Ω̇1 = 0).
-            (ModelKind::Rig, Mode::Stick) => self.shaft_torque_nm(y),
+            // Static friction balances the shaft (and gravity) exactly (Ω̇1 = 0).
+            (ModelKind::Rig, Mode::Stick) => self.rotor_torque_nm(y),
             (ModelKind::Rig, Mode::Slip { sign }) => sign * slip_mu(&self.p.friction, y[W1]) * nr,
             (ModelKind::Rig, Mode::Continuous) => 0.0,
         }
@@ -212,6 +306,10 @@ impl<'a> System<'a> {
         dy[PHI2] = y[W2];
         dy[W2] = (self.motor_drive_torque_nm(y) - ts) * self.inv_j_motor;
         if mode == Mode::Stick {
+            if let Some((_, tau, _)) = self.fade {
+                // Stuck: no friction power, the pad cools.
+                dy[TEMP] = -y[TEMP] / tau;
+            }
             return dy;
         }
         // Eq. 4-7, first row: J1 Ω̇1 = T_shaft − C Ω1 (thesis only) − T1.
@@ -219,8 +317,18 @@ impl<'a> System<'a> {
             ModelKind::Thesis => p.shaft_damping_nm_s_rad * y[W1],
             ModelKind::Rig => 0.0,
         };
+        let t1 = self.friction_torque_nm(mode, t, y);
+        let gravity = if self.imbalance { imbalance_torque_nm(&p.effects, y[PHI1]) } else { 0.0 };
         dy[PHI1] = y[W1];
-        dy[W1] = (ts - absolute_damping - self.friction_torque_nm(mode, t, y)) * self.inv_j1;
+        dy[W1] = if self.imbalance {
+            (ts - absolute_damping - t1 - gravity) * self.inv_j1
+        } else {
+            (ts - absolute_damping - t1) * self.inv_j1
+        };
+        if let Some((c, tau, _)) = self.fade {
+            // C dϑ/dt = T1·Ω1 − C ϑ/τ: friction power heats the pad, Newton cooling.
+            dy[TEMP] = t1 * y[W1] / c - y[TEMP] / tau;
+        }
         dy
     }
 
@@ -229,7 +337,7 @@ impl<'a> System<'a> {
     pub fn event(&self, mode: Mode, t: f64, y: &Vector) -> Option<f64> {
         match mode {
             Mode::Continuous => None,
-            Mode::Stick => Some(self.shaft_torque_nm(y).abs() - self.stick_limit_nm(t, y)),
+            Mode::Stick => Some(self.rotor_torque_nm(y).abs() - self.stick_limit_nm(t, y)),
             Mode::Slip { sign } => Some(sign * y[W1]),
         }
     }
@@ -239,7 +347,7 @@ impl<'a> System<'a> {
         if self.kind == ModelKind::Thesis || !self.brake_closed() {
             return Mode::Continuous;
         }
-        let ts = self.shaft_torque_nm(y);
+        let ts = self.rotor_torque_nm(y);
         if ts.abs() <= self.stick_limit_nm(t, y) { Mode::Stick } else { Mode::Slip { sign: ts.signum() } }
     }
 

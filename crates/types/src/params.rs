@@ -71,6 +71,35 @@ pub enum Effect {
     AnglePeriodicFriction { amplitude_ratio: f64, order: u32, phase_rad: f64 },
     /// Not in the vocabulary: motor-side cogging torque τ sin(n φ2 + θ) at the shaft.
     MotorCogging { amplitude_nm: f64, order: u32, phase_rad: f64 },
+    /// Not in the vocabulary (mechanics): backlash of total width `gap_rad` in
+    /// the coupling of the string to the rotor, a dead zone in the twist
+    /// δ = φ2 − φ1: with b = gap/2, δe = δ − clamp(δ, −b, b) and the shaft
+    /// transmits K·δe + C·(Ω2 − Ω1) in contact (|δ| > b), nothing in the gap
+    /// (the standard dead-zone backlash model, e.g. Nordin & Gutman,
+    /// Automatica 38 (2002) 1633, "dead-zone model").
+    CouplingBacklash { gap_rad: f64 },
+    /// Not in the vocabulary (mechanics): a non-linear shaft, elastic torque
+    /// K·δe·(1 + β·δe²) (Duffing spring; β > 0 hardening, β < 0 softening),
+    /// β = `cubic_per_rad2` in 1/rad².
+    ShaftCubicStiffness { cubic_per_rad2: f64 },
+    /// Not in the vocabulary (mechanics): static imbalance of rotor 1 on a
+    /// horizontal axis, gravity torque −m·e·g·sin(φ1 + θ) on the rotor
+    /// (m·e = `imbalance_kg_m`, g = 9.80665 m/s²; a mass m at radius e).
+    RotorImbalance { imbalance_kg_m: f64, phase_rad: f64 },
+    /// Not in the vocabulary (tribology): friction fade with frictional
+    /// heating. A lumped pad temperature rise ϑ (K) obeys
+    /// C·dϑ/dt = T1·Ω1 − C·ϑ/τ (friction power in, Newton cooling out) and
+    /// both coefficients fall as μ(ϑ) = μ / (1 + ϑ/ϑ_fade): fade grows with
+    /// accumulated friction work and recovers when slip stops (Newcomb &
+    /// Spurr, "Braking of road vehicles", ch. 5: μ falls with lining
+    /// temperature). Each run starts cold (ϑ = 0).
+    BrakeFade { heat_capacity_j_k: f64, cooling_time_s: f64, fade_temperature_k: f64 },
+    /// Not in the vocabulary (drive): a current-limited amplifier. The
+    /// terminal voltage is held in [n·k_e·Ω2 − R·I_max, n·k_e·Ω2 + R·I_max],
+    /// the voltage that drives the steady armature current I_max (Eq. 4-6a
+    /// with di/dt = 0); the PI loop does not know and winds up. Applies to
+    /// voltage steps too (the amplifier is always in the path).
+    DriveCurrentLimit { current_limit_a: f64 },
 }
 
 /// Eq. 4-11 and its physically consistent alternative (issue 4).

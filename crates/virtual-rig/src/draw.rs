@@ -34,6 +34,55 @@ pub enum Hidden {
         amplitude_nm: f64,
         order: u32,
     },
+    /// Outside (tribology): [`Effect::BrakeFade`], μ/(1 + ϑ/ϑ_fade) with the
+    /// pad heated by friction power and cooling with time constant τ.
+    BrakeFade {
+        heat_capacity_j_k: f64,
+        cooling_time_s: f64,
+        fade_temperature_k: f64,
+    },
+    /// Outside (mechanics): [`Effect::CouplingBacklash`], a dead zone of `gap_rad` in the twist.
+    CouplingBacklash {
+        gap_rad: f64,
+    },
+    /// Outside (mechanics): [`Effect::ShaftCubicStiffness`], K δ (1 + β δ²).
+    ShaftCubicStiffness {
+        cubic_per_rad2: f64,
+    },
+    /// Outside (mechanics): [`Effect::RotorImbalance`], gravity torque m e g sin(φ1 + θ).
+    RotorImbalance {
+        imbalance_kg_m: f64,
+    },
+    /// Outside (drive): [`Effect::DriveCurrentLimit`], terminal voltage within n k_e Ω2 ± R I_max.
+    DriveCurrentLimit {
+        current_limit_a: f64,
+    },
+    /// Outside (motor/drive): the motor warms up over the campaign. Before run
+    /// j the winding is ΔT(1 − exp(−t_j/τ)) above its start (t_j: recorded
+    /// time of the runs before it); R grows by α_Cu = 0.00393 1/K (annealed
+    /// copper, IEC 60028) and k_T = k_e fall by α_B = 0.002 1/K (ferrite
+    /// magnets, remanence −0.2 %/K), so the voltage constant drifts with
+    /// temperature. Applied per run by the virtual rig.
+    MotorWarmUp {
+        temperature_rise_k: f64,
+        time_constant_s: f64,
+    },
+    /// Outside (sensor): force-sensor gain nonlinearity, mV = offset + g F + q F²
+    /// (bridge/load-cell nonlinearity, quadratic in the load), in every run
+    /// that records `brake_force_mv`, calibration included.
+    ForceSensorNonlinearity {
+        quadratic_mv_per_n2: f64,
+    },
+    /// Outside (sensor): the force sensor's offset drifts from the start of
+    /// each run, mV = offset + d·t + g F (thermal zero drift of the bridge amplifier).
+    ForceOffsetDrift {
+        drift_mv_per_s: f64,
+    },
+    /// Outside (sensor): the rotor encoder misses each tick with probability
+    /// p (independently; dirt on the code disc), so its count falls behind.
+    EncoderMissingTicks {
+        miss_probability: f64,
+    },
 }
 
 impl Hidden {
@@ -46,14 +95,64 @@ impl Hidden {
             Hidden::VelocityWeakening { .. } => "velocity_weakening_friction",
             Hidden::ViscousBrake { .. } => "viscous_brake_friction",
             Hidden::DriveVoltageLimit { .. } => "drive_voltage_limit",
-            Hidden::MotorCogging { .. } => "unexplained",
+            _ => "unexplained",
+        }
+    }
+
+    /// Name of the hidden class: the verdict id for a vocabulary effect and
+    /// `none`, the effect's own name for one outside the vocabulary.
+    pub fn class(&self) -> &'static str {
+        match self {
+            Hidden::MotorCogging { .. } => "motor_cogging",
+            Hidden::BrakeFade { .. } => "brake_fade",
+            Hidden::CouplingBacklash { .. } => "coupling_backlash",
+            Hidden::ShaftCubicStiffness { .. } => "shaft_cubic_stiffness",
+            Hidden::RotorImbalance { .. } => "rotor_imbalance",
+            Hidden::DriveCurrentLimit { .. } => "drive_current_limit",
+            Hidden::MotorWarmUp { .. } => "motor_warm_up",
+            Hidden::ForceSensorNonlinearity { .. } => "force_sensor_nonlinearity",
+            Hidden::ForceOffsetDrift { .. } => "force_offset_drift",
+            Hidden::EncoderMissingTicks { .. } => "encoder_missing_ticks",
+            other => other.id(),
+        }
+    }
+
+    /// Whether this effect is outside the diagnosis vocabulary.
+    pub fn is_outside(&self) -> bool {
+        self.id() == "unexplained"
+    }
+
+    /// All parameters of the truth, outside effects included (for reports).
+    pub fn truth_params(&self) -> Vec<(&'static str, f64)> {
+        match *self {
+            Hidden::MotorCogging { amplitude_nm, order } => {
+                vec![("amplitude_nm", amplitude_nm), ("order", f64::from(order))]
+            }
+            Hidden::BrakeFade { heat_capacity_j_k, cooling_time_s, fade_temperature_k } => vec![
+                ("heat_capacity_j_k", heat_capacity_j_k),
+                ("cooling_time_s", cooling_time_s),
+                ("fade_temperature_k", fade_temperature_k),
+            ],
+            Hidden::CouplingBacklash { gap_rad } => vec![("gap_rad", gap_rad)],
+            Hidden::ShaftCubicStiffness { cubic_per_rad2 } => vec![("cubic_per_rad2", cubic_per_rad2)],
+            Hidden::RotorImbalance { imbalance_kg_m } => vec![("imbalance_kg_m", imbalance_kg_m)],
+            Hidden::DriveCurrentLimit { current_limit_a } => vec![("current_limit_a", current_limit_a)],
+            Hidden::MotorWarmUp { temperature_rise_k, time_constant_s } => {
+                vec![("temperature_rise_k", temperature_rise_k), ("time_constant_s", time_constant_s)]
+            }
+            Hidden::ForceSensorNonlinearity { quadratic_mv_per_n2 } => {
+                vec![("quadratic_mv_per_n2", quadratic_mv_per_n2)]
+            }
+            Hidden::ForceOffsetDrift { drift_mv_per_s } => vec![("drift_mv_per_s", drift_mv_per_s)],
+            Hidden::EncoderMissingTicks { miss_probability } => vec![("miss_probability", miss_probability)],
+            _ => self.params(),
         }
     }
 
     /// True parameters under the JSON keys of diagnosis.md.
     pub fn params(&self) -> Vec<(&'static str, f64)> {
         match *self {
-            Hidden::None | Hidden::MotorCogging { .. } => vec![],
+            Hidden::None => vec![],
             Hidden::NormalForceModulation { amplitude_ratio, frequency_hz } => {
                 vec![("amplitude_ratio", amplitude_ratio), ("frequency_hz", frequency_hz)]
             }
@@ -69,6 +168,8 @@ impl Hidden {
                 vec![("mu_kinetic", mu_kinetic), ("viscous_per_rad_s", viscous_per_rad_s)]
             }
             Hidden::DriveVoltageLimit { limit_v } => vec![("limit_v", limit_v)],
+            // Outside the vocabulary: nothing the diagnosis must recover.
+            _ => vec![],
         }
     }
 
@@ -82,13 +183,39 @@ impl Hidden {
         "drive_voltage_limit",
         "motor_cogging",
     ];
+
+    /// The vocabulary effects (diagnosis.md), in the matrix's order.
+    pub const VOCABULARY: [&'static str; 5] = [
+        "normal_force_modulation",
+        "angle_periodic_friction",
+        "velocity_weakening_friction",
+        "viscous_brake_friction",
+        "drive_voltage_limit",
+    ];
+
+    /// The effects outside the vocabulary ([`Hidden::class`] names).
+    pub const OUTSIDE: [&'static str; 10] = [
+        "motor_cogging",
+        "brake_fade",
+        "coupling_backlash",
+        "shaft_cubic_stiffness",
+        "rotor_imbalance",
+        "drive_current_limit",
+        "motor_warm_up",
+        "force_sensor_nonlinearity",
+        "force_offset_drift",
+        "encoder_missing_ticks",
+    ];
 }
 
 /// Everything the virtual rig knows and the diagnosis must not.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Truth {
     pub params: RigParams,
+    /// The (first) hidden effect; `Hidden::None` for an effect-free rig.
     pub hidden: Hidden,
+    /// Further hidden effects of a compound campaign (empty for one effect).
+    pub more_hidden: Vec<Hidden>,
     pub supply_voltage_v: f64,
     pub force_factor_mv_per_n: f64,
     pub force_offset_mv: f64,
@@ -100,7 +227,7 @@ pub struct Truth {
 /// random parameters in ranges where it matters on this rig. `mu_kinetic` is
 /// the rig's slip coefficient (the laws are built around it).
 pub fn draw_hidden(class: &str, mu_kinetic: f64, max_setpoint_rpm: f64, seed: u64) -> Hidden {
-    let mut r = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_0f_4e55);
+    let mut r = ChaCha8Rng::seed_from_u64(seed ^ 0x005e_ed0f_4e55);
     match class {
         "normal_force_modulation" => Hidden::NormalForceModulation {
             amplitude_ratio: r.random_range(0.08..0.3),
@@ -128,12 +255,45 @@ pub fn draw_hidden(class: &str, mu_kinetic: f64, max_setpoint_rpm: f64, seed: u6
         "motor_cogging" => {
             Hidden::MotorCogging { amplitude_nm: r.random_range(0.08..0.2), order: r.random_range(2..=6) }
         }
+        // Outside the vocabulary, sizes where each matters on this rig (see the crate docs).
+        "brake_fade" => Hidden::BrakeFade {
+            heat_capacity_j_k: r.random_range(4.0..10.0),
+            cooling_time_s: r.random_range(20.0..60.0),
+            fade_temperature_k: r.random_range(30.0..80.0),
+        },
+        "coupling_backlash" => Hidden::CouplingBacklash { gap_rad: r.random_range(0.02..0.08) },
+        "shaft_cubic_stiffness" => Hidden::ShaftCubicStiffness {
+            // Twists reach ~3.5 rad: a softening shaft must still carry ~1.5 N·m,
+            // (2K/3)/√(3|β|) > 1.5 N·m ⇒ |β| < 0.005 1/rad².
+            cubic_per_rad2: if r.random_bool(0.5) { r.random_range(0.01..0.04) } else { -r.random_range(0.002..0.004) },
+        },
+        "rotor_imbalance" => Hidden::RotorImbalance { imbalance_kg_m: r.random_range(0.005..0.015) },
+        "drive_current_limit" => Hidden::DriveCurrentLimit { current_limit_a: r.random_range(2.5..4.0) },
+        "motor_warm_up" => Hidden::MotorWarmUp {
+            temperature_rise_k: r.random_range(30.0..60.0),
+            time_constant_s: r.random_range(200.0..600.0),
+        },
+        "force_sensor_nonlinearity" => {
+            Hidden::ForceSensorNonlinearity { quadratic_mv_per_n2: r.random_range(0.3..0.8) }
+        }
+        "force_offset_drift" => Hidden::ForceOffsetDrift {
+            drift_mv_per_s: if r.random_bool(0.5) { 1.0 } else { -1.0 } * r.random_range(0.5..1.5),
+        },
+        "encoder_missing_ticks" => Hidden::EncoderMissingTicks { miss_probability: r.random_range(0.002..0.01) },
         _ => Hidden::None,
     }
 }
 
 /// Draws the rig (seeded, plausible ranges) and builds the truth model with `class` hidden.
 pub fn draw_truth(class: &str, max_setpoint_rpm: f64, seed: u64) -> Truth {
+    let base = draw_rig(seed);
+    let hidden = draw_hidden(class, base.mu_kinetic(), max_setpoint_rpm, seed);
+    base.with_hidden(vec![hidden])
+}
+
+/// Draws the rig alone (seeded; the same draw as [`draw_truth`] with the same
+/// seed), with no hidden effect.
+pub fn draw_rig(seed: u64) -> Truth {
     let mut r = ChaCha8Rng::seed_from_u64(seed);
     let mut u = |lo: f64, hi: f64| r.random_range(lo..hi);
     let j1 = 0.0298 * u(0.9, 1.1);
@@ -153,8 +313,7 @@ pub fn draw_truth(class: &str, max_setpoint_rpm: f64, seed: u64) -> Truth {
     };
     let drive = DriveParams { kp_v_s_rad: u(1.5, 3.0), ki_v_rad: u(6.0, 15.0), limit_v: 24.0 };
     let truth_extra = (u(190.0, 240.0), u(-8.0, 8.0), u(1.0, 3.0), u(0.01, 0.04));
-    let hidden = draw_hidden(class, mu_k, max_setpoint_rpm, seed);
-    let mut params = RigParams {
+    let params = RigParams {
         kind: ModelKind::Rig,
         rotor_inertia_kgm2: j1,
         shaft_stiffness_nm_rad: k,
@@ -166,32 +325,88 @@ pub fn draw_truth(class: &str, max_setpoint_rpm: f64, seed: u64) -> Truth {
         effects: vec![],
         harmonic: None,
     };
-    match hidden {
-        Hidden::None => {}
-        Hidden::NormalForceModulation { amplitude_ratio, frequency_hz } => {
-            params.effects.push(Effect::NormalForceModulation { amplitude_ratio, frequency_hz, phase_rad: 0.0 })
-        }
-        Hidden::AnglePeriodicFriction { amplitude_ratio, order } => {
-            params.effects.push(Effect::AnglePeriodicFriction { amplitude_ratio, order, phase_rad: 0.0 })
-        }
-        Hidden::VelocityWeakening { mu_static, mu_kinetic, stribeck_speed_rad_s } => {
-            params.friction = FrictionLaw::Stribeck { mu_static, mu_kinetic, stribeck_speed_rad_s }
-        }
-        Hidden::ViscousBrake { mu_kinetic, viscous_per_rad_s } => {
-            params.friction = FrictionLaw::Viscous { mu_static: mu_s, mu_kinetic, viscous_per_rad_s }
-        }
-        Hidden::DriveVoltageLimit { limit_v } => params.drive.limit_v = limit_v,
-        Hidden::MotorCogging { amplitude_nm, order } => {
-            params.effects.push(Effect::MotorCogging { amplitude_nm, order, phase_rad: 0.0 })
-        }
-    }
     Truth {
         params,
-        hidden,
+        hidden: Hidden::None,
+        more_hidden: vec![],
         supply_voltage_v: 24.0,
         force_factor_mv_per_n: truth_extra.0,
         force_offset_mv: truth_extra.1,
         force_noise_mv: truth_extra.2,
         voltage_noise_v: truth_extra.3,
+    }
+}
+
+impl Truth {
+    /// Every hidden effect (the first, then the others), `Hidden::None` left out.
+    pub fn hidden_all(&self) -> Vec<&Hidden> {
+        std::iter::once(&self.hidden).chain(&self.more_hidden).filter(|h| **h != Hidden::None).collect()
+    }
+
+    /// The rig's slip coefficient μk (of its Coulomb law before any effect).
+    pub fn mu_kinetic(&self) -> f64 {
+        match self.params.friction {
+            FrictionLaw::Coulomb { mu_kinetic, .. }
+            | FrictionLaw::Stribeck { mu_kinetic, .. }
+            | FrictionLaw::Viscous { mu_kinetic, .. } => mu_kinetic,
+            FrictionLaw::Thesis(ref f) => f.mu_dynamic,
+        }
+    }
+
+    /// This rig with `hidden` added to the truth model (in order; the first
+    /// becomes [`Truth::hidden`]). Friction-law effects replace the Coulomb
+    /// law, so `velocity_weakening_friction` and `viscous_brake_friction`
+    /// cannot be combined (the later one wins).
+    pub fn with_hidden(mut self, hidden: Vec<Hidden>) -> Truth {
+        let mu_s = match self.params.friction {
+            FrictionLaw::Coulomb { mu_static, .. }
+            | FrictionLaw::Stribeck { mu_static, .. }
+            | FrictionLaw::Viscous { mu_static, .. } => mu_static,
+            FrictionLaw::Thesis(ref f) => f.mu_static,
+        };
+        let params = &mut self.params;
+        for h in &hidden {
+            match *h {
+                Hidden::None => {}
+                Hidden::NormalForceModulation { amplitude_ratio, frequency_hz } => {
+                    params.effects.push(Effect::NormalForceModulation { amplitude_ratio, frequency_hz, phase_rad: 0.0 })
+                }
+                Hidden::AnglePeriodicFriction { amplitude_ratio, order } => {
+                    params.effects.push(Effect::AnglePeriodicFriction { amplitude_ratio, order, phase_rad: 0.0 })
+                }
+                Hidden::VelocityWeakening { mu_static, mu_kinetic, stribeck_speed_rad_s } => {
+                    params.friction = FrictionLaw::Stribeck { mu_static, mu_kinetic, stribeck_speed_rad_s }
+                }
+                Hidden::ViscousBrake { mu_kinetic, viscous_per_rad_s } => {
+                    params.friction = FrictionLaw::Viscous { mu_static: mu_s, mu_kinetic, viscous_per_rad_s }
+                }
+                Hidden::DriveVoltageLimit { limit_v } => params.drive.limit_v = limit_v,
+                Hidden::MotorCogging { amplitude_nm, order } => {
+                    params.effects.push(Effect::MotorCogging { amplitude_nm, order, phase_rad: 0.0 })
+                }
+                Hidden::BrakeFade { heat_capacity_j_k, cooling_time_s, fade_temperature_k } => {
+                    params.effects.push(Effect::BrakeFade { heat_capacity_j_k, cooling_time_s, fade_temperature_k })
+                }
+                Hidden::CouplingBacklash { gap_rad } => params.effects.push(Effect::CouplingBacklash { gap_rad }),
+                Hidden::ShaftCubicStiffness { cubic_per_rad2 } => {
+                    params.effects.push(Effect::ShaftCubicStiffness { cubic_per_rad2 })
+                }
+                Hidden::RotorImbalance { imbalance_kg_m } => {
+                    params.effects.push(Effect::RotorImbalance { imbalance_kg_m, phase_rad: 0.0 })
+                }
+                Hidden::DriveCurrentLimit { current_limit_a } => {
+                    params.effects.push(Effect::DriveCurrentLimit { current_limit_a })
+                }
+                // Applied by the campaign generator (per run, or in the sensor chain).
+                Hidden::MotorWarmUp { .. }
+                | Hidden::ForceSensorNonlinearity { .. }
+                | Hidden::ForceOffsetDrift { .. }
+                | Hidden::EncoderMissingTicks { .. } => {}
+            }
+        }
+        let mut it = hidden.into_iter().filter(|h| *h != Hidden::None);
+        self.hidden = it.next().unwrap_or(Hidden::None);
+        self.more_hidden = it.collect();
+        self
     }
 }

@@ -1,19 +1,41 @@
 //! A campaign generator for tests only (truth model with hidden effects, sensor chain).
 //!
-//! The virtual rig draws plausible rig parameters (seeded), hides one effect
-//! in the truth model (any vocabulary effect of ../shared/spec/diagnosis.md,
-//! or [`Hidden::MotorCogging`], which is outside the vocabulary), simulates a
-//! whole `rig-campaign/1` campaign with `rig_model` and passes it through a
-//! sensor chain: encoders quantised to 1000 ticks/rev (floor), a force sensor
-//! with gain, offset and noise in mV, and voltage noise. [`write_campaign`]
-//! writes campaign.toml + runs/*.csv so tests read it back through rig-ingest
-//! like a user's data. No analysis crate may depend on this crate.
+//! The virtual rig draws plausible rig parameters (seeded, [`draw_rig`]),
+//! hides one or several effects in the truth model ([`Truth::with_hidden`]:
+//! any vocabulary effect of ../shared/spec/diagnosis.md, or one of
+//! [`Hidden::OUTSIDE`]), simulates a whole `rig-campaign/1` campaign with
+//! `rig_model` and passes it through a sensor chain: encoders quantised to
+//! 1000 ticks/rev (floor), a force sensor with gain, offset and noise in mV,
+//! and voltage noise. [`write_campaign`] writes campaign.toml + runs/*.csv so
+//! tests read it back through rig-ingest like a user's data. No analysis
+//! crate may depend on this crate.
+//!
+//! Effects outside the vocabulary and where they live:
+//! - simulator ([`rig_types::Effect`], equations in its docs): motor cogging,
+//!   coupling backlash, cubic shaft, rotor imbalance, brake fade, drive
+//!   current limit. Those that act with the brake open (backlash, cubic
+//!   shaft, imbalance, current limit) also act in the voltage steps; the
+//!   static-twist runs hold the twist of the shaft law
+//!   ([`rig_model::static_twist_rad`]);
+//! - generator, per run: [`Hidden::MotorWarmUp`] (R and k_e = k_T follow the
+//!   winding temperature along the campaign's recorded time);
+//! - sensor chain: [`Hidden::ForceSensorNonlinearity`] (q F²),
+//!   [`Hidden::ForceOffsetDrift`] (d·t from each run's start),
+//!   [`Hidden::EncoderMissingTicks`] (rotor encoder, own RNG per run so the
+//!   campaign's other noise is unchanged).
+//!
+//! Draw ranges ([`draw_hidden`]): fade C 4–10 J/K, τ 20–60 s, ϑ_fade
+//! 30–80 K; backlash 0.02–0.08 rad; cubic β +0.01…+0.04 or −0.002…−0.004
+//! 1/rad²; imbalance m·e 0.005–0.015 kg·m (0.05–0.15 N·m); current limit
+//! 2.5–4 A; warm-up ΔT 30–60 K, τ 200–600 s; force q 0.3–0.8 mV/N²;
+//! offset drift ±0.5–1.5 mV/s; missed ticks p 0.002–0.01.
 
+pub mod battery;
 pub mod confusion;
 mod draw;
 mod write;
 
-pub use draw::{Hidden, Truth, draw_hidden, draw_truth};
+pub use draw::{Hidden, Truth, draw_hidden, draw_rig, draw_truth};
 pub use write::write_campaign;
 
 use rand::{Rng, SeedableRng};
@@ -108,6 +130,9 @@ fn ticks(angle_rad: &[f64], per_rev: u32) -> Vec<i64> {
 /// noise and the per-run phases come from `seed`.
 pub fn generate(name: &str, truth: &Truth, protocol: &Protocol, seed: u64) -> Result<Campaign, VirtualRigError> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let faults = SensorFaults::of(truth, seed);
+    // Recorded time before each run (motor warm-up follows it).
+    let mut clock_s = 0.0;
     let per_rev = 1000u32;
     let rate = protocol.sample_rate_hz;
     let mv_noise = Normal::new(0.0, truth.force_noise_mv).expect("finite σ");
@@ -115,10 +140,8 @@ pub fn generate(name: &str, truth: &Truth, protocol: &Protocol, seed: u64) -> Re
     let mut runs = Vec::new();
     for (j, &load) in protocol.force_loads_n.iter().enumerate() {
         let t = times(2.0, rate);
-        let mv = t
-            .iter()
-            .map(|_| truth.force_offset_mv + truth.force_factor_mv_per_n * load + mv_noise.sample(&mut rng))
-            .collect();
+        let mv = t.iter().map(|&tk| faults.force_mv(truth, load, tk) + mv_noise.sample(&mut rng)).collect();
+        clock_s += 2.0;
         runs.push(run(
             format!("cal-{}", j + 1),
             RunKind::ForceCalibration { load_n: load },
@@ -127,31 +150,40 @@ pub fn generate(name: &str, truth: &Truth, protocol: &Protocol, seed: u64) -> Re
     }
     for (j, &torque) in protocol.twist_torques_nm.iter().enumerate() {
         let t = times(2.0, rate);
-        let angle = torque / truth.params.shaft_stiffness_nm_rad;
+        // torque/K for the linear shaft; the inverse of the shaft law with backlash or a cubic shaft.
+        let angle = rig_model::static_twist_rad(&truth.params, torque);
         // The held angle wanders by a fraction of a tick (hand-held torque).
         let a: Vec<f64> = t.iter().map(|_| angle + rng.random_range(-0.004..0.004)).collect();
+        let id = format!("twist-{}", j + 1);
+        let rotor = faults.rotor_ticks(ticks(&a, per_rev), &id);
         runs.push(run(
-            format!("twist-{}", j + 1),
+            id,
             RunKind::StaticTwist { torque_nm: torque },
-            RunData { time_s: t, rotor_ticks: Some(ticks(&a, per_rev)), ..Default::default() },
+            RunData { time_s: t, rotor_ticks: Some(rotor), ..Default::default() },
         ));
+        clock_s += 2.0;
     }
     let sim_opts = SimOptions::default();
     for &v in &protocol.step_voltages_v {
         let t = times(protocol.step_duration_s, rate);
         let id = format!("step-{}v", v);
         let mut p = truth.params.clone();
-        p.effects.clear();
+        // Brake open: only effects that act without brake contact stay (the
+        // vocabulary effects and cogging were always left out of the steps).
+        p.effects.retain(acts_with_brake_open);
+        faults.warm_motor(&mut p, clock_s);
+        clock_s += protocol.step_duration_s;
         let tr = rig_model::simulate(&p, &RunInput::VoltageStep { voltage_v: v }, &t, &sim_opts)
             .map_err(|source| VirtualRigError::Model { run: id.clone(), source })?;
         let volt = tr.voltage_v.iter().map(|x| x + v_noise.sample(&mut rng)).collect();
+        let rotor = faults.rotor_ticks(ticks(&tr.rotor_angle_rad, per_rev), &id);
         runs.push(run(
             id,
             RunKind::VoltageStep { voltage_v: v },
             RunData {
                 motor_voltage_v: Some(volt),
                 motor_ticks: Some(ticks(&tr.motor_angle_rad, per_rev)),
-                rotor_ticks: Some(ticks(&tr.rotor_angle_rad, per_rev)),
+                rotor_ticks: Some(rotor),
                 time_s: t,
                 ..Default::default()
             },
@@ -166,9 +198,13 @@ pub fn generate(name: &str, truth: &Truth, protocol: &Protocol, seed: u64) -> Re
             match e {
                 Effect::NormalForceModulation { phase_rad, .. }
                 | Effect::AnglePeriodicFriction { phase_rad, .. }
-                | Effect::MotorCogging { phase_rad, .. } => *phase_rad = th,
+                | Effect::MotorCogging { phase_rad, .. }
+                | Effect::RotorImbalance { phase_rad, .. } => *phase_rad = th,
+                _ => {}
             }
         }
+        faults.warm_motor(&mut p, clock_s);
+        clock_s += protocol.op_duration_s;
         let seed_j: u64 = rng.random();
         ops.push((format!("op-{:02}", j + 1), rpm, n0, p, seed_j));
     }
@@ -186,7 +222,8 @@ pub fn generate(name: &str, truth: &Truth, protocol: &Protocol, seed: u64) -> Re
                 let mv = tr
                     .friction_torque_nm
                     .iter()
-                    .map(|tq| truth.force_offset_mv + truth.force_factor_mv_per_n * tq / r + mv_noise.sample(&mut rng))
+                    .zip(&t)
+                    .map(|(tq, &tk)| faults.force_mv(truth, tq / r, tk) + mv_noise.sample(&mut rng))
                     .collect();
                 let volt = tr.voltage_v.iter().map(|x| x + v_noise.sample(&mut rng)).collect();
                 Ok(run(
@@ -195,7 +232,7 @@ pub fn generate(name: &str, truth: &Truth, protocol: &Protocol, seed: u64) -> Re
                     RunData {
                         motor_voltage_v: Some(volt),
                         motor_ticks: Some(ticks(&tr.motor_angle_rad, per_rev)),
-                        rotor_ticks: Some(ticks(&tr.rotor_angle_rad, per_rev)),
+                        rotor_ticks: Some(faults.rotor_ticks(ticks(&tr.rotor_angle_rad, per_rev), id)),
                         brake_force_mv: Some(mv),
                         time_s: t,
                     },
@@ -217,6 +254,95 @@ pub fn generate(name: &str, truth: &Truth, protocol: &Protocol, seed: u64) -> Re
         },
         runs,
     })
+}
+
+/// Effects of the truth model that act with the brake open (voltage steps).
+fn acts_with_brake_open(e: &Effect) -> bool {
+    matches!(
+        e,
+        Effect::CouplingBacklash { .. }
+            | Effect::ShaftCubicStiffness { .. }
+            | Effect::RotorImbalance { .. }
+            | Effect::DriveCurrentLimit { .. }
+    )
+}
+
+/// The hidden effects that live in the sensor chain or act per run, not in
+/// the simulated equations.
+#[derive(Debug, Clone, Default)]
+struct SensorFaults {
+    quadratic_mv_per_n2: f64,
+    drift_mv_per_s: f64,
+    miss_probability: f64,
+    /// (ΔT in K, τ in s) of the motor warm-up.
+    warm_up: Option<(f64, f64)>,
+    seed: u64,
+}
+
+/// Temperature coefficient of copper resistance, 1/K (IEC 60028, annealed copper at 20 °C).
+const COPPER_TEMPCO_PER_K: f64 = 0.00393;
+/// Reversible temperature coefficient of ferrite-magnet remanence, 1/K (k_T = k_e ∝ B_r).
+const FERRITE_TEMPCO_PER_K: f64 = -0.002;
+
+impl SensorFaults {
+    fn of(truth: &Truth, seed: u64) -> Self {
+        let mut f = SensorFaults { seed, ..Default::default() };
+        for h in truth.hidden_all() {
+            match *h {
+                Hidden::ForceSensorNonlinearity { quadratic_mv_per_n2 } => f.quadratic_mv_per_n2 += quadratic_mv_per_n2,
+                Hidden::ForceOffsetDrift { drift_mv_per_s } => f.drift_mv_per_s += drift_mv_per_s,
+                Hidden::EncoderMissingTicks { miss_probability } => f.miss_probability = miss_probability,
+                Hidden::MotorWarmUp { temperature_rise_k, time_constant_s } => {
+                    f.warm_up = Some((temperature_rise_k, time_constant_s))
+                }
+                _ => {}
+            }
+        }
+        f
+    }
+
+    /// Sensor voltage for force `force_n` at `t_s` into the run, before noise:
+    /// offset + g F, plus q F² and d t when those faults are hidden.
+    fn force_mv(&self, truth: &Truth, force_n: f64, t_s: f64) -> f64 {
+        let linear = truth.force_offset_mv + truth.force_factor_mv_per_n * force_n;
+        if self.quadratic_mv_per_n2 == 0.0 && self.drift_mv_per_s == 0.0 {
+            return linear;
+        }
+        linear + self.quadratic_mv_per_n2 * force_n * force_n + self.drift_mv_per_s * t_s
+    }
+
+    /// The rotor encoder's count with each tick missed with probability p
+    /// (its own RNG per run, so the rest of the campaign's noise is unchanged).
+    fn rotor_ticks(&self, ticks: Vec<i64>, run_id: &str) -> Vec<i64> {
+        let p = self.miss_probability;
+        if p <= 0.0 || ticks.is_empty() {
+            return ticks;
+        }
+        let run_hash =
+            run_id.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3));
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed ^ 0x7e11_c0de ^ run_hash);
+        let mut out = Vec::with_capacity(ticks.len());
+        let mut count = ticks[0];
+        out.push(count);
+        for w in ticks.windows(2) {
+            let d = w[1] - w[0];
+            let kept = (0..d.abs()).filter(|_| !rng.random_bool(p)).count() as i64;
+            count += d.signum() * kept;
+            out.push(count);
+        }
+        out
+    }
+
+    /// Motor constants after `clock_s` of recorded campaign time under
+    /// [`Hidden::MotorWarmUp`]: ϑ = ΔT(1 − e^(−t/τ)), R(1 + α_Cu ϑ), k(1 + α_B ϑ).
+    fn warm_motor(&self, p: &mut rig_types::RigParams, clock_s: f64) {
+        if let Some((rise_k, tau_s)) = self.warm_up {
+            let theta = rise_k * (1.0 - (-clock_s / tau_s).exp());
+            p.motor.resistance_ohm *= 1.0 + COPPER_TEMPCO_PER_K * theta;
+            p.motor.torque_constant_nm_a *= 1.0 + FERRITE_TEMPCO_PER_K * theta;
+            p.motor.voltage_constant_v_s_rad *= 1.0 + FERRITE_TEMPCO_PER_K * theta;
+        }
+    }
 }
 
 fn run(id: String, kind: RunKind, data: RunData) -> Run {

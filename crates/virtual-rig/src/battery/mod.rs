@@ -1,0 +1,539 @@
+//! The battery: a deterministic, seeded list of hidden-effect campaigns that
+//! tests the open-world diagnosis (issue 9, item 7), the successor of
+//! [`crate::confusion`]. Each [`Case`] carries its truth and the answer a
+//! right diagnosis gives ([`Case::expected`]); [`Battery::run`] generates each
+//! campaign and hands it to a caller-supplied diagnosis (this crate does not
+//! depend on the diagnosis), [`judge`] scores the answer, and three tables
+//! summarise it: the confusion matrix ([`confusion_table`]), the false-alarm
+//! rate on effect-free rigs with its binomial 95 % interval
+//! ([`false_alarm_table`]) and the detection limit of each vocabulary effect
+//! ([`detection_table`]).
+//!
+//! Groups of cases ([`Group`]):
+//! - `null`: the rig drawn (±8–10 % around Table 4.5, as [`crate::draw_rig`]) with nothing hidden: `none`;
+//! - `single`: each vocabulary effect alone, drawn as [`crate::draw_hidden`]: that effect;
+//! - `compound`: two vocabulary effects at once (every pair except
+//!   velocity weakening + viscous brake, which are two friction laws and
+//!   cannot both be the brake's law): both must be found, the verdict is either;
+//! - `vocabulary_plus_outside`: a vocabulary effect and one outside the
+//!   vocabulary: `unexplained`, with the vocabulary effect found as a partial explanation;
+//! - `outside`: one effect outside the vocabulary ([`Hidden::OUTSIDE`]): `unexplained`;
+//! - `ladder`: each vocabulary effect at six sizes down to where it should
+//!   be lost in the noise ([`LADDER_STEPS`]): the effect, or a miss.
+//!
+//! Confounds to expect (physics, to be checked with numbers once the
+//! diagnosis runs on the battery): brake fade lowers μ most where friction
+//! power T1·Ω1 is largest, i.e. at high slip speed, and can pass for
+//! velocity weakening; rotor imbalance is periodic in φ1 like
+//! `angle_periodic_friction` of order 1, but additive (not ∝ N) and present
+//! with the brake open; force-offset drift is slow like a low-frequency
+//! `normal_force_modulation`; the force sensor's q F² makes the measured μ
+//! grow with N; motor warm-up changes R and k_e between runs, which no
+//! vocabulary effect does; the current limit only shows where the current
+//! would exceed I_max (start-up, break-away).
+
+use crate::{Hidden, Protocol, Truth, VirtualRigError, draw_hidden, draw_rig, generate, write_campaign};
+use rig_types::{Campaign, fmt_fixed};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+mod tables;
+pub use tables::{
+    clopper_pearson, confusion_table, detection_table, false_alarm_table, markdown_table, report_markdown, wrong_table,
+};
+
+/// One finding of a diagnosis, as diagnosis.md's `findings[]` (effect id and
+/// its parameters under their JSON keys).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Finding {
+    pub effect: String,
+    pub params: BTreeMap<String, f64>,
+}
+
+/// What a blind diagnosis returned for one campaign: `verdict` and every
+/// finding in order (diagnosis.md). The caller converts the diagnosis's own
+/// type into this one.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct DiagnosisResult {
+    pub verdict: String,
+    pub findings: Vec<Finding>,
+}
+
+/// The kind of a case.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Group {
+    Null,
+    Single,
+    Compound,
+    VocabularyPlusOutside,
+    Outside,
+    Ladder,
+}
+
+impl Group {
+    pub fn name(self) -> &'static str {
+        match self {
+            Group::Null => "null",
+            Group::Single => "single",
+            Group::Compound => "compound",
+            Group::VocabularyPlusOutside => "vocabulary_plus_outside",
+            Group::Outside => "outside",
+            Group::Ladder => "ladder",
+        }
+    }
+}
+
+/// The rung of a detection-limit ladder a case stands on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rung {
+    pub effect: &'static str,
+    /// 0 = largest effect.
+    pub step: usize,
+    /// What `size` measures (see [`LADDER_STEPS`]).
+    pub size_name: &'static str,
+    pub size: f64,
+}
+
+/// Number of rungs of each detection ladder.
+pub const LADDER_STEPS: usize = 6;
+
+/// The ladder of one vocabulary effect: what its size measures and the sizes,
+/// largest effect first, halving down to where the effect should be lost in
+/// the sensor noise. Sizes:
+/// - `normal_force_modulation`, `angle_periodic_friction`: the modulation depth a;
+/// - `velocity_weakening_friction`: (μs − μk)/μk, the friction excess at rest;
+/// - `viscous_brake_friction`: c·(10 rad/s)/μk, the friction excess at 10 rad/s of slip;
+/// - `drive_voltage_limit`: the limit over the back-EMF n·k_e·Ω at the
+///   highest set-point (above 1 the limit only bites under load, at 1.15 hardly).
+pub fn ladder(effect: &str) -> (&'static str, [f64; LADDER_STEPS]) {
+    match effect {
+        "normal_force_modulation" | "angle_periodic_friction" => {
+            ("amplitude_ratio", [0.16, 0.08, 0.04, 0.02, 0.01, 0.005])
+        }
+        "velocity_weakening_friction" => ("static_excess_ratio", [0.4, 0.2, 0.1, 0.05, 0.025, 0.0125]),
+        "viscous_brake_friction" => ("excess_at_10_rad_s_ratio", [0.3, 0.15, 0.075, 0.0375, 0.019, 0.0094]),
+        "drive_voltage_limit" => ("limit_over_back_emf", [0.55, 0.7, 0.8, 0.9, 1.0, 1.15]),
+        _ => ("", [0.0; LADDER_STEPS]),
+    }
+}
+
+/// What a right diagnosis answers.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Expected {
+    /// `none`: the baseline explains the data.
+    None,
+    /// Every listed vocabulary effect among the findings (with its parameters),
+    /// no other, and the verdict one of them.
+    Effects(Vec<&'static str>),
+    /// `unexplained`, with the listed vocabulary effects found as a partial explanation.
+    Unexplained { partial: Vec<&'static str> },
+}
+
+/// One campaign of the battery.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Case {
+    /// Unique, also the campaign's name.
+    pub id: String,
+    pub group: Group,
+    /// Seed of the rig draw and of the campaign's noise.
+    pub seed: u64,
+    pub truth: Truth,
+    pub rung: Option<Rung>,
+}
+
+impl Case {
+    /// The answer a right diagnosis gives.
+    pub fn expected(&self) -> Expected {
+        let hidden = self.truth.hidden_all();
+        let vocab: Vec<&'static str> = hidden.iter().filter(|h| !h.is_outside()).map(|h| h.id()).collect();
+        if hidden.is_empty() {
+            Expected::None
+        } else if hidden.iter().any(|h| h.is_outside()) {
+            Expected::Unexplained { partial: vocab }
+        } else {
+            Expected::Effects(vocab)
+        }
+    }
+
+    /// The expected verdict as one string: `none`, the effect id, the ids of a
+    /// compound joined by `+` (any of them is a right verdict), or `unexplained`.
+    pub fn expected_verdict(&self) -> String {
+        match self.expected() {
+            Expected::None => "none".into(),
+            Expected::Effects(e) => e.join("+"),
+            Expected::Unexplained { .. } => "unexplained".into(),
+        }
+    }
+
+    /// Row of the confusion matrix: `none`, the effect, `a+b`, `a+outside:x`,
+    /// `outside:x` or `ladder:a`.
+    pub fn truth_class(&self) -> String {
+        let names: Vec<String> = self
+            .truth
+            .hidden_all()
+            .iter()
+            .map(|h| if h.is_outside() { format!("outside:{}", h.class()) } else { h.class().to_string() })
+            .collect();
+        match (self.group, &self.rung) {
+            (_, Some(r)) => format!("ladder:{}", r.effect),
+            _ if names.is_empty() => "none".into(),
+            _ => names.join("+"),
+        }
+    }
+
+    /// The case's campaign under `protocol`. The description says nothing of
+    /// what is hidden (a blind diagnosis must not read it there).
+    pub fn generate(&self, protocol: &Protocol) -> Result<Campaign, VirtualRigError> {
+        let mut c = generate(&self.id, &self.truth, protocol, self.seed)?;
+        c.description = "virtual rig battery campaign".into();
+        Ok(c)
+    }
+}
+
+/// A list of cases under one protocol.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Battery {
+    pub name: &'static str,
+    pub protocol: Protocol,
+    pub cases: Vec<Case>,
+}
+
+/// Seed of [`Battery::full`] and [`Battery::ci`].
+pub const BATTERY_SEED: u64 = 90_000;
+
+/// How many cases of each group a battery has.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sizes {
+    pub nulls: usize,
+    pub singles_per_effect: usize,
+    /// Seeds per compound pair (0: no compounds).
+    pub compound_seeds: usize,
+    /// Outside effects paired with a vocabulary effect (at most 10).
+    pub vocabulary_plus_outside: usize,
+    pub outside_seeds: usize,
+    pub ladder_seeds: usize,
+}
+
+impl Battery {
+    /// The full battery under [`Protocol::full`]: 20 nulls, 3 draws of each
+    /// vocabulary effect, every compound pair twice, each outside effect once
+    /// with a vocabulary effect and 3 times alone, each ladder rung 3 times
+    /// (183 campaigns).
+    pub fn full() -> Battery {
+        Battery::full_seeded(BATTERY_SEED)
+    }
+
+    /// [`Battery::full`] with its case seeds starting at `seed`.
+    pub fn full_seeded(seed: u64) -> Battery {
+        let sizes = Sizes {
+            nulls: 20,
+            singles_per_effect: 3,
+            compound_seeds: 2,
+            vocabulary_plus_outside: 10,
+            outside_seeds: 3,
+            ladder_seeds: 3,
+        };
+        Battery::build("full", Protocol::full(), sizes, seed, &Hidden::OUTSIDE)
+    }
+
+    /// The seeded CI subset under [`Protocol::small`] (13 campaigns): 3 nulls,
+    /// each vocabulary effect once, one compound, one vocabulary + outside,
+    /// three outside effects (a tribological, a mechanical and a sensor fault).
+    pub fn ci() -> Battery {
+        Battery::ci_seeded(BATTERY_SEED)
+    }
+
+    /// [`Battery::ci`] with its case seeds starting at `seed`.
+    pub fn ci_seeded(seed: u64) -> Battery {
+        let sizes = Sizes {
+            nulls: 3,
+            singles_per_effect: 1,
+            compound_seeds: 0,
+            vocabulary_plus_outside: 0,
+            outside_seeds: 1,
+            ladder_seeds: 0,
+        };
+        let mut b = Battery::build(
+            "ci",
+            Protocol::small(),
+            sizes,
+            seed,
+            &["brake_fade", "coupling_backlash", "encoder_missing_ticks"],
+        );
+        let max_rpm = max_rpm(&b.protocol);
+        let seed = seed + 20_000;
+        b.cases.push(compound(
+            "compound-normal_force_modulation+viscous_brake_friction-0",
+            Group::Compound,
+            seed,
+            ["normal_force_modulation", "viscous_brake_friction"],
+            max_rpm,
+        ));
+        b.cases.push(compound(
+            "mixed-angle_periodic_friction+brake_fade-0",
+            Group::VocabularyPlusOutside,
+            seed + 1,
+            ["angle_periodic_friction", "brake_fade"],
+            max_rpm,
+        ));
+        b.cases.sort_by(|a, b| a.group.cmp(&b.group).then(a.id.cmp(&b.id)));
+        b
+    }
+
+    /// A battery of the given sizes; case seeds are `seed + 10 000·group + index`.
+    pub fn build(name: &'static str, protocol: Protocol, sizes: Sizes, seed: u64, outside: &[&'static str]) -> Battery {
+        let max_rpm = max_rpm(&protocol);
+        let mut cases = Vec::new();
+        for j in 0..sizes.nulls {
+            let s = seed + j as u64;
+            cases.push(Case {
+                id: format!("null-{j:02}"),
+                group: Group::Null,
+                seed: s,
+                truth: draw_rig(s),
+                rung: None,
+            });
+        }
+        let mut k = 0u64;
+        for effect in Hidden::VOCABULARY {
+            for j in 0..sizes.singles_per_effect {
+                let s = seed + 10_000 + k;
+                k += 1;
+                let base = draw_rig(s);
+                let h = draw_hidden(effect, base.mu_kinetic(), max_rpm, s);
+                cases.push(Case {
+                    id: format!("single-{effect}-{j}"),
+                    group: Group::Single,
+                    seed: s,
+                    truth: base.with_hidden(vec![h]),
+                    rung: None,
+                });
+            }
+        }
+        k = 0;
+        for (a, ea) in Hidden::VOCABULARY.iter().enumerate() {
+            for eb in &Hidden::VOCABULARY[a + 1..] {
+                if *ea == "velocity_weakening_friction" && *eb == "viscous_brake_friction" {
+                    continue;
+                }
+                for j in 0..sizes.compound_seeds {
+                    let s = seed + 20_000 + k;
+                    k += 1;
+                    cases.push(compound(&format!("compound-{ea}+{eb}-{j}"), Group::Compound, s, [ea, eb], max_rpm));
+                }
+            }
+        }
+        for (i, out) in outside.iter().take(sizes.vocabulary_plus_outside).enumerate() {
+            let ea = Hidden::VOCABULARY[i % Hidden::VOCABULARY.len()];
+            let s = seed + 30_000 + i as u64;
+            cases.push(compound(&format!("mixed-{ea}+{out}-0"), Group::VocabularyPlusOutside, s, [ea, out], max_rpm));
+        }
+        k = 0;
+        for out in outside {
+            for j in 0..sizes.outside_seeds {
+                let s = seed + 40_000 + k;
+                k += 1;
+                let base = draw_rig(s);
+                let h = draw_hidden(out, base.mu_kinetic(), max_rpm, s);
+                cases.push(Case {
+                    id: format!("outside-{out}-{j}"),
+                    group: Group::Outside,
+                    seed: s,
+                    truth: base.with_hidden(vec![h]),
+                    rung: None,
+                });
+            }
+        }
+        k = 0;
+        for effect in Hidden::VOCABULARY {
+            let (size_name, sizes_of) = ladder(effect);
+            for (step, &size) in sizes_of.iter().enumerate() {
+                for j in 0..sizes.ladder_seeds {
+                    let s = seed + 50_000 + k;
+                    k += 1;
+                    let base = draw_rig(s);
+                    let h = ladder_hidden(effect, size, &base, max_rpm, s);
+                    cases.push(Case {
+                        id: format!("ladder-{effect}-{step}-{j}"),
+                        group: Group::Ladder,
+                        seed: s,
+                        truth: base.with_hidden(vec![h]),
+                        rung: Some(Rung { effect, step, size_name, size }),
+                    });
+                }
+            }
+        }
+        Battery { name, protocol, cases }
+    }
+
+    /// Generates each campaign in memory, in order, and diagnoses it with
+    /// `diagnose`; a generation error is a wrong answer with its text.
+    pub fn run(&self, diagnose: impl Fn(&Case, &Campaign) -> Result<DiagnosisResult, String>) -> Vec<Outcome> {
+        self.cases
+            .iter()
+            .map(|case| {
+                let result = case.generate(&self.protocol).map_err(|e| e.to_string()).and_then(|c| diagnose(case, &c));
+                Outcome::new(case.clone(), result)
+            })
+            .collect()
+    }
+
+    /// As [`Battery::run`], but each campaign is written to `root/<case id>`
+    /// (rig-campaign/1, read back like a user's data) and `diagnose` gets that
+    /// folder. The folders are left in place.
+    pub fn run_dirs(
+        &self,
+        root: &Path,
+        diagnose: impl Fn(&Case, &Path) -> Result<DiagnosisResult, String>,
+    ) -> Vec<Outcome> {
+        self.cases
+            .iter()
+            .map(|case| {
+                let dir = root.join(&case.id);
+                let result = case
+                    .generate(&self.protocol)
+                    .and_then(|c| write_campaign(&dir, &c))
+                    .map_err(|e| e.to_string())
+                    .and_then(|()| diagnose(case, &dir));
+                Outcome::new(case.clone(), result)
+            })
+            .collect()
+    }
+}
+
+fn max_rpm(p: &Protocol) -> f64 {
+    p.op_points.iter().map(|x| x.0).fold(0.0, f64::max)
+}
+
+/// A case with two hidden effects, the second drawn with its own seed.
+fn compound(id: &str, group: Group, seed: u64, effects: [&str; 2], max_rpm: f64) -> Case {
+    let base = draw_rig(seed);
+    let mu_k = base.mu_kinetic();
+    let a = draw_hidden(effects[0], mu_k, max_rpm, seed);
+    let b = draw_hidden(effects[1], mu_k, max_rpm, seed.wrapping_add(0x5151_5151));
+    Case { id: id.to_string(), group, seed, truth: base.with_hidden(vec![a, b]), rung: None }
+}
+
+/// The vocabulary effect `effect` at ladder size `size` (see [`ladder`]);
+/// its other parameters (frequency, order, Stribeck speed) drawn as usual.
+fn ladder_hidden(effect: &str, size: f64, base: &Truth, max_rpm: f64, seed: u64) -> Hidden {
+    let mu_k = base.mu_kinetic();
+    match draw_hidden(effect, mu_k, max_rpm, seed) {
+        Hidden::NormalForceModulation { frequency_hz, .. } => {
+            Hidden::NormalForceModulation { amplitude_ratio: size, frequency_hz }
+        }
+        Hidden::AnglePeriodicFriction { order, .. } => Hidden::AnglePeriodicFriction { amplitude_ratio: size, order },
+        Hidden::VelocityWeakening { stribeck_speed_rad_s, .. } => {
+            Hidden::VelocityWeakening { mu_static: mu_k * (1.0 + size), mu_kinetic: mu_k, stribeck_speed_rad_s }
+        }
+        Hidden::ViscousBrake { .. } => Hidden::ViscousBrake { mu_kinetic: mu_k, viscous_per_rad_s: mu_k * size / 10.0 },
+        Hidden::DriveVoltageLimit { .. } => {
+            let m = &base.truth_motor();
+            let back_emf_v = m.0 * m.1 * max_rpm * 2.0 * std::f64::consts::PI / 60.0;
+            Hidden::DriveVoltageLimit { limit_v: size * back_emf_v }
+        }
+        other => other,
+    }
+}
+
+impl Truth {
+    /// (k_e in V·s/rad, gear ratio n) of the drawn motor.
+    fn truth_motor(&self) -> (f64, f64) {
+        (self.params.motor.voltage_constant_v_s_rad, self.params.motor.gear_ratio)
+    }
+}
+
+/// Relative tolerance on a recovered parameter (issue 9: 25 %, frequencies
+/// 5 %, the order exact).
+pub fn battery_tolerance(param: &str) -> f64 {
+    match param {
+        "order" => 0.0,
+        "frequency_hz" => 0.05,
+        _ => 0.25,
+    }
+}
+
+/// Whether the answer is right, and why not.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Judgement {
+    pub right: bool,
+    /// Empty when right; otherwise every reason, `; `-separated.
+    pub reason: String,
+}
+
+/// Scores a diagnosis of `case`: the verdict must be the expected one (any
+/// effect of a compound), every vocabulary effect of the truth must be among
+/// the findings with every parameter within [`battery_tolerance`], and no
+/// vocabulary effect that is not in the truth may be found.
+pub fn judge(case: &Case, result: &Result<DiagnosisResult, String>) -> Judgement {
+    let d = match result {
+        Ok(d) => d,
+        Err(e) => return Judgement { right: false, reason: format!("error: {e}") },
+    };
+    let mut why = Vec::new();
+    let (required, verdict_ok) = match case.expected() {
+        Expected::None => (vec![], d.verdict == "none"),
+        Expected::Effects(e) => {
+            let ok = e.iter().any(|x| *x == d.verdict);
+            (e, ok)
+        }
+        Expected::Unexplained { partial } => (partial, d.verdict == "unexplained"),
+    };
+    if !verdict_ok {
+        why.push(format!("verdict `{}`, expected `{}`", d.verdict, case.expected_verdict()));
+    }
+    for h in case.truth.hidden_all().into_iter().filter(|h| !h.is_outside()) {
+        let Some(f) = d.findings.iter().find(|f| f.effect == h.id()) else {
+            why.push(format!("{} not found", h.id()));
+            continue;
+        };
+        for (k, truth) in h.params() {
+            match f.params.get(k) {
+                None => why.push(format!("{}.{k} missing", h.id())),
+                Some(&est) => {
+                    let rel = (est - truth).abs() / truth.abs();
+                    let tol = battery_tolerance(k);
+                    if rel.is_nan() || rel > tol + 1e-12 {
+                        why.push(format!(
+                            "{}.{k} = {} vs truth {} ({:.1} % off, tolerance {:.0} %)",
+                            h.id(),
+                            fmt_fixed(est, 4),
+                            fmt_fixed(truth, 4),
+                            100.0 * rel,
+                            100.0 * tol
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    for f in &d.findings {
+        if f.effect != "unexplained" && !required.contains(&f.effect.as_str()) {
+            why.push(format!("spurious finding {}", f.effect));
+        }
+    }
+    Judgement { right: why.is_empty(), reason: why.join("; ") }
+}
+
+/// One judged case.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Outcome {
+    pub case: Case,
+    pub result: Result<DiagnosisResult, String>,
+    pub judgement: Judgement,
+}
+
+impl Outcome {
+    pub fn new(case: Case, result: Result<DiagnosisResult, String>) -> Outcome {
+        let judgement = judge(&case, &result);
+        Outcome { case, result, judgement }
+    }
+
+    /// The verdict, or `error`.
+    pub fn verdict(&self) -> &str {
+        match &self.result {
+            Ok(d) => &d.verdict,
+            Err(_) => "error",
+        }
+    }
+}

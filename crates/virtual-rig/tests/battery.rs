@@ -1,0 +1,320 @@
+//! The battery without the diagnosis: determinism, composition, expected
+//! verdicts, the judge, the interval and that every effect outside the
+//! vocabulary changes the recording beyond the noise.
+
+use rig_types::{Campaign, RunData};
+use rig_virtual_rig::battery::{
+    Battery, Case, DiagnosisResult, Expected, Finding, Group, LADDER_STEPS, Outcome, clopper_pearson, confusion_table,
+    detection_table, false_alarm_table, judge, wrong_table,
+};
+use rig_virtual_rig::{Hidden, Protocol, draw_hidden, draw_rig, generate};
+
+fn tiny() -> Protocol {
+    Protocol {
+        op_points: vec![(20.0, 4.0), (85.0, 10.0), (130.0, 25.0)],
+        op_duration_s: 12.0,
+        step_voltages_v: vec![8.0],
+        step_duration_s: 6.0,
+        ..Protocol::small()
+    }
+}
+
+#[test]
+fn batteries_are_deterministic_and_cover_every_group() {
+    let full = Battery::full();
+    assert_eq!(full, Battery::full(), "same seed, same campaigns");
+    let ids: std::collections::BTreeSet<&str> = full.cases.iter().map(|c| c.id.as_str()).collect();
+    assert_eq!(ids.len(), full.cases.len(), "case ids are unique");
+    let count = |g: Group| full.cases.iter().filter(|c| c.group == g).count();
+    assert!(count(Group::Null) >= 20);
+    for e in Hidden::VOCABULARY {
+        assert!(full.cases.iter().any(|c| c.group == Group::Single && c.expected_verdict() == e), "{e}");
+        let ladder: Vec<f64> = full
+            .cases
+            .iter()
+            .filter_map(|c| c.rung.as_ref().filter(|r| r.effect == e && c.id.ends_with("-0")).map(|r| r.size))
+            .collect();
+        assert_eq!(ladder.len(), LADDER_STEPS, "{e}");
+        // Every rung's truth carries its size.
+        for c in full.cases.iter().filter(|c| c.rung.as_ref().is_some_and(|r| r.effect == e)) {
+            assert_eq!(c.truth.hidden.id(), e);
+        }
+    }
+    // Every pair of vocabulary effects except the two friction laws.
+    let pairs: std::collections::BTreeSet<String> =
+        full.cases.iter().filter(|c| c.group == Group::Compound).map(|c| c.expected_verdict()).collect();
+    assert_eq!(pairs.len(), 9, "{pairs:?}");
+    for o in Hidden::OUTSIDE {
+        let n = full.cases.iter().filter(|c| c.group == Group::Outside && c.truth.hidden.class() == o).count();
+        assert!(n >= 2, "{o}: {n} seeds");
+        assert!(full.cases.iter().any(|c| c.group == Group::VocabularyPlusOutside
+            && c.truth.hidden_all().iter().any(|h| h.class() == o)));
+    }
+    // Null draws differ from each other (±8 % rig draws).
+    let nulls: Vec<&Case> = full.cases.iter().filter(|c| c.group == Group::Null).collect();
+    assert_ne!(nulls[0].truth.params, nulls[1].truth.params);
+    let ci = Battery::ci();
+    assert_eq!(ci, Battery::ci());
+    assert_ne!(Battery::ci_seeded(1).cases[0].truth, ci.cases[0].truth, "another seed, other rigs");
+    assert_eq!(Battery::full_seeded(rig_virtual_rig::battery::BATTERY_SEED), full);
+    assert!((10..=15).contains(&ci.cases.len()), "{}", ci.cases.len());
+    for g in [Group::Null, Group::Single, Group::Compound, Group::VocabularyPlusOutside, Group::Outside] {
+        assert!(ci.cases.iter().any(|c| c.group == g), "{g:?}");
+    }
+    // The ci subset's generated campaign is the same twice (tiny protocol to stay fast).
+    let c = &ci.cases[0];
+    assert_eq!(c.generate(&tiny()).unwrap(), c.generate(&tiny()).unwrap());
+    assert!(!c.generate(&tiny()).unwrap().description.contains("none"), "the description does not leak the truth");
+}
+
+#[test]
+fn expected_verdicts_follow_the_groups() {
+    for c in &Battery::full().cases {
+        let v = c.expected_verdict();
+        match c.group {
+            Group::Null => assert_eq!((v.as_str(), c.expected()), ("none", Expected::None)),
+            Group::Single | Group::Ladder => {
+                assert!(Hidden::VOCABULARY.contains(&v.as_str()), "{}: {v}", c.id);
+                assert_eq!(c.truth.hidden_all().len(), 1);
+            }
+            Group::Compound => {
+                let parts: Vec<&str> = v.split('+').collect();
+                assert_eq!(parts.len(), 2, "{v}");
+                assert!(parts.iter().all(|p| Hidden::VOCABULARY.contains(p)));
+                assert!(c.truth_class().contains('+'));
+            }
+            Group::VocabularyPlusOutside => {
+                assert_eq!(v, "unexplained");
+                let Expected::Unexplained { partial } = c.expected() else { panic!("{}", c.id) };
+                assert_eq!(partial.len(), 1);
+                assert!(c.truth_class().contains("+outside:"), "{}", c.truth_class());
+            }
+            Group::Outside => {
+                assert_eq!(v, "unexplained");
+                assert_eq!(c.expected(), Expected::Unexplained { partial: vec![] });
+                assert!(c.truth_class().starts_with("outside:"));
+            }
+        }
+    }
+}
+
+fn finding(effect: &str, params: &[(&str, f64)]) -> Finding {
+    Finding { effect: effect.into(), params: params.iter().map(|(k, v)| (k.to_string(), *v)).collect() }
+}
+
+fn answer(verdict: &str, findings: Vec<Finding>) -> Result<DiagnosisResult, String> {
+    Ok(DiagnosisResult { verdict: verdict.into(), findings })
+}
+
+#[test]
+fn judge_checks_verdict_every_effect_and_its_parameters() {
+    let full = Battery::full();
+    let find = |id: &str| full.cases.iter().find(|c| c.id == id).unwrap().clone();
+    let null = find("null-00");
+    assert!(judge(&null, &answer("none", vec![])).right);
+    assert!(!judge(&null, &answer("viscous_brake_friction", vec![])).right);
+    assert!(!judge(&null, &Err("boom".into())).right);
+
+    let single = find("single-normal_force_modulation-0");
+    let Hidden::NormalForceModulation { amplitude_ratio: a, frequency_hz: f } = single.truth.hidden else { panic!() };
+    let nfm = |a, f| finding("normal_force_modulation", &[("amplitude_ratio", a), ("frequency_hz", f)]);
+    assert!(judge(&single, &answer("normal_force_modulation", vec![nfm(a * 1.2, f * 1.04)])).right);
+    let j = judge(&single, &answer("normal_force_modulation", vec![nfm(a * 1.3, f)]));
+    assert!(!j.right && j.reason.contains("amplitude_ratio"), "{}", j.reason);
+    assert!(!judge(&single, &answer("normal_force_modulation", vec![nfm(a, f * 1.06)])).right, "frequency 5 %");
+    let spurious = answer("normal_force_modulation", vec![nfm(a, f), finding("drive_voltage_limit", &[])]);
+    assert!(!judge(&single, &spurious).right);
+
+    let comp = full.cases.iter().find(|c| c.group == Group::Compound).unwrap();
+    let all: Vec<Finding> = comp
+        .truth
+        .hidden_all()
+        .iter()
+        .map(|h| Finding {
+            effect: h.id().into(),
+            params: h.params().into_iter().map(|(k, v)| (k.into(), v)).collect(),
+        })
+        .collect();
+    let second = all[1].effect.clone();
+    assert!(judge(comp, &answer(&second, all.clone())).right, "either effect may be the verdict");
+    assert!(!judge(comp, &answer(&second, all[1..].to_vec())).right, "both must be found");
+
+    let mixed = full.cases.iter().find(|c| c.group == Group::VocabularyPlusOutside).unwrap();
+    let vocab = mixed.truth.hidden_all().into_iter().find(|h| !h.is_outside()).unwrap();
+    let partial =
+        Finding { effect: vocab.id().into(), params: vocab.params().into_iter().map(|(k, v)| (k.into(), v)).collect() };
+    let unexplained = finding("unexplained", &[]);
+    assert!(judge(mixed, &answer("unexplained", vec![partial.clone(), unexplained.clone()])).right);
+    assert!(!judge(mixed, &answer(vocab.id(), vec![partial])).right, "naming only the vocabulary effect is wrong");
+    let outside = full.cases.iter().find(|c| c.group == Group::Outside).unwrap();
+    assert!(judge(outside, &answer("unexplained", vec![unexplained])).right);
+    assert!(!judge(outside, &answer("none", vec![])).right);
+}
+
+#[test]
+fn clopper_pearson_matches_closed_forms() {
+    // k = 0: upper = 1 − 0.025^(1/n); k = n: lower = 0.025^(1/n).
+    let (lo, hi) = clopper_pearson(0, 20);
+    assert_eq!(lo, 0.0);
+    assert!((hi - (1.0 - 0.025f64.powf(1.0 / 20.0))).abs() < 1e-9, "{hi}");
+    let (lo, hi) = clopper_pearson(20, 20);
+    assert!((lo - 0.025f64.powf(1.0 / 20.0)).abs() < 1e-9 && hi == 1.0);
+    // 1 of 20: the textbook interval (0.0013, 0.2487).
+    let (lo, hi) = clopper_pearson(1, 20);
+    assert!((lo - 0.00127).abs() < 1e-4 && (hi - 0.24873).abs() < 1e-4, "{lo} {hi}");
+}
+
+#[test]
+fn tables_count_what_they_should() {
+    let b = Battery::full();
+    // A fake diagnosis: always `none`.
+    let outcomes: Vec<Outcome> = b.cases.iter().map(|c| Outcome::new(c.clone(), answer("none", vec![]))).collect();
+    let fa = false_alarm_table(&outcomes);
+    assert_eq!(fa.rows[0][..3], ["20".to_string(), "0".to_string(), "0.000".to_string()]);
+    let cm = confusion_table(&outcomes);
+    let none_row = cm.rows.iter().find(|r| r[0] == "none").unwrap();
+    assert_eq!(none_row[cm.columns.iter().position(|c| c == "right").unwrap()], "20");
+    assert!(cm.rows.iter().all(|r| !r[0].starts_with("ladder")));
+    let det = detection_table(&outcomes);
+    assert_eq!(det.rows.len(), 5 * LADDER_STEPS);
+    assert!(det.rows.iter().all(|r| r[6] == "0" && r[4] == "3"));
+    assert_eq!(wrong_table(&outcomes).rows.len(), b.cases.iter().filter(|c| c.group != Group::Null).count());
+    let md = rig_virtual_rig::battery::report_markdown(&b, &outcomes);
+    assert!(md.contains("| 20 | 0 | 0.000 | 0.000 | 0.168 |"), "{md}");
+}
+
+/// Largest change between two recordings of the same protocol, per channel
+/// kind, on 1 s block means (so the sensor noise averages out): encoder
+/// ticks, force-sensor mV, drive volts.
+fn change(a: &Campaign, b: &Campaign) -> (f64, f64, f64) {
+    let block = 500;
+    let d = |x: &[f64], y: &[f64]| -> f64 {
+        x.chunks(block)
+            .zip(y.chunks(block))
+            .map(|(p, q)| (p.iter().sum::<f64>() - q.iter().sum::<f64>()).abs() / p.len() as f64)
+            .fold(0.0, f64::max)
+    };
+    let f = |v: &Option<Vec<i64>>| v.as_ref().map(|v| v.iter().map(|&x| x as f64).collect::<Vec<_>>());
+    let (mut ticks, mut mv, mut volts) = (0.0f64, 0.0f64, 0.0f64);
+    for (ra, rb) in a.runs.iter().zip(&b.runs) {
+        let (x, y): (&RunData, &RunData) = (&ra.data, &rb.data);
+        for (p, q) in [(f(&x.motor_ticks), f(&y.motor_ticks)), (f(&x.rotor_ticks), f(&y.rotor_ticks))] {
+            if let (Some(p), Some(q)) = (p, q) {
+                ticks = ticks.max(d(&p, &q));
+            }
+        }
+        if let (Some(p), Some(q)) = (&x.brake_force_mv, &y.brake_force_mv) {
+            mv = mv.max(d(p, q));
+        }
+        if let (Some(p), Some(q)) = (&x.motor_voltage_v, &y.motor_voltage_v) {
+            volts = volts.max(d(p, q));
+        }
+    }
+    (ticks, mv, volts)
+}
+
+#[test]
+fn every_outside_effect_changes_the_recording_beyond_noise() {
+    let proto = tiny();
+    let seed = 424_242;
+    let base = draw_rig(seed);
+    let plain = generate("plain", &base, &proto, seed).unwrap();
+    // The same rig and noise seed twice: nothing changes (the measure's zero).
+    let again = generate("plain", &base, &proto, seed).unwrap();
+    assert_eq!(change(&plain, &again), (0.0, 0.0, 0.0));
+    let mut report = Vec::new();
+    for class in Hidden::OUTSIDE {
+        let h = draw_hidden(class, base.mu_kinetic(), 130.0, seed);
+        assert_eq!(h.class(), class);
+        let truth = base.clone().with_hidden(vec![h]);
+        let c = generate(class, &truth, &proto, seed).unwrap();
+        let (ticks, mv, volts) = change(&plain, &c);
+        report.push(format!("{class}: {ticks:.1} ticks, {mv:.2} mV, {volts:.3} V"));
+        // Beyond noise: 1 s means of the noise differ by < 0.5 mV and < 0.01 V
+        // (σ ≤ 3 mV and 0.04 V over 500 samples); ticks carry no noise but the
+        // twist runs' sub-tick wander.
+        assert!(ticks >= 10.0 || mv >= 3.0 || volts >= 0.05, "{class} changes nothing measurable: {report:?}");
+    }
+    println!("{}", report.join("\n"));
+}
+
+/// Every campaign of the full battery with an effect outside the vocabulary
+/// or a compound simulates under the full protocol (no integrator failure).
+/// Minutes in a debug build: `cargo test -p rig-virtual-rig --test battery -- --ignored`.
+#[test]
+#[ignore]
+fn every_full_battery_campaign_with_new_physics_generates() {
+    let b = Battery::full();
+    let cases: Vec<&Case> = b.cases.iter().filter(|c| !matches!(c.group, Group::Null | Group::Ladder)).collect();
+    let failures: Vec<String> =
+        cases.iter().filter_map(|c| c.generate(&b.protocol).err().map(|e| format!("{}: {e}", c.id))).collect();
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// An oracle that answers from the truth is judged right on every case, through
+/// both runners (in memory, and written folders read back by the closure).
+#[test]
+fn runners_hand_each_campaign_to_the_diagnosis_and_judge_it() {
+    let mut b = Battery::ci();
+    b.protocol = tiny();
+    assert_eq!(Battery::full().cases.len(), 183);
+    let oracle = |case: &Case| {
+        let findings: Vec<Finding> = case
+            .truth
+            .hidden_all()
+            .iter()
+            .filter(|h| !h.is_outside())
+            .map(|h| Finding {
+                effect: h.id().into(),
+                params: h.params().into_iter().map(|(k, v)| (k.into(), v)).collect(),
+            })
+            .collect();
+        let verdict = match case.expected() {
+            Expected::None => "none".to_string(),
+            Expected::Effects(e) => e[0].to_string(),
+            Expected::Unexplained { .. } => "unexplained".to_string(),
+        };
+        Ok(DiagnosisResult { verdict, findings })
+    };
+    let out = b.run(|case, campaign| {
+        assert_eq!(campaign.name, case.id);
+        assert_eq!(campaign.runs.len(), 5 + 5 + 1 + 3);
+        oracle(case)
+    });
+    assert_eq!(out.len(), b.cases.len());
+    assert!(out.iter().all(|o| o.judgement.right), "{:?}", wrong_table(&out).rows);
+    let root = tempfile::tempdir().unwrap();
+    let out_dirs = b.run_dirs(root.path(), |case, dir| {
+        assert!(dir.join("campaign.toml").is_file() && dir.ends_with(&case.id));
+        oracle(case)
+    });
+    assert_eq!(out, out_dirs);
+    // A diagnosis that fails is a wrong answer carrying its error.
+    let failing = b.run(|_, _| Err("no".into()));
+    assert!(failing.iter().all(|o| !o.judgement.right && o.verdict() == "error"));
+}
+
+/// Down each detection ladder the effect's mark on the recording shrinks:
+/// the change against the same rig without it is larger on the first rung
+/// than on the last (force mV for the friction effects, drive volts for the
+/// voltage limit).
+#[test]
+fn ladders_shrink_the_effect_towards_the_noise() {
+    let full = Battery::full();
+    let proto = tiny();
+    for effect in Hidden::VOCABULARY {
+        let mark = |step: usize| {
+            let case = full
+                .cases
+                .iter()
+                .find(|c| c.rung.as_ref().is_some_and(|r| r.effect == effect && r.step == step))
+                .unwrap();
+            let with = generate("with", &case.truth, &proto, case.seed).unwrap();
+            let without = generate("with", &draw_rig(case.seed), &proto, case.seed).unwrap();
+            let (ticks, mv, volts) = change(&with, &without);
+            if effect == "drive_voltage_limit" { volts + ticks } else { mv }
+        };
+        let (first, last) = (mark(0), mark(LADDER_STEPS - 1));
+        assert!(first > 2.0 * last && first > 1.0, "{effect}: first rung {first}, last {last}");
+    }
+}
