@@ -4,7 +4,7 @@
 //! Each check reduces one channel to a run-level statistic, divides it by a
 //! noise floor computed from the data's own sensor resolution, and flags the
 //! channel when the ratio exceeds a threshold calibrated on effect-free
-//! campaigns of the virtual rig ([`ChannelOptions::calibrated`], test
+//! campaigns of the virtual rig ([`ChannelOptions`], `[stage.params.channels]` of pipeline.toml; test
 //! `crates/virtual-rig/tests/channel_calibration.rs`). Run-level (never
 //! sample-level) statistics, because model-mismatch residuals are correlated
 //! over thousands of samples and a per-sample floor would be far too small.
@@ -32,7 +32,7 @@ mod step;
 mod twist;
 
 pub use balance::torque_balance_check;
-pub use free_run::{FreeRunSettings, free_run_checks};
+pub use free_run::{FreeRunSettings, Pair as FreeRunPair, free_run_checks, free_run_checks_of, free_run_pairs};
 pub use step::voltage_step_checks;
 pub use twist::static_twist_checks;
 
@@ -98,7 +98,19 @@ impl ChannelCheck {
 }
 
 /// Thresholds (ratio to the noise floor) of every check and the free-run
-/// settings. Calibrated values in [`ChannelOptions::calibrated`].
+/// settings: `[stage.params.channels]` of the diagnosis stage in pipeline.toml,
+/// their one home.
+///
+/// Calibration: thresholds set on effect-free virtual-rig campaigns so that all
+/// checks together flag at most 5 % of them
+/// (crates/virtual-rig/tests/channel_calibration.rs): 30 null draws (small
+/// protocol, seeds 9000–9029, blind baseline) gave maximum ratios rotor_max
+/// 1.88, rotor_min 1.64, torque_balance 1.05, dead_zone 1.06, linearity 0.43,
+/// step frequency 0.91, decay 0.18, step residual 1.12; 0/30 campaigns flagged
+/// (one-sided 95 % upper bound 9.5 %). Each threshold is about twice the null
+/// maximum. No null run of that protocol sticks and slips, so regime and
+/// fundamental were not exercised by the nulls (regime: 3 runs; fundamental:
+/// 4× the Rayleigh resolution).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ChannelOptions {
@@ -121,36 +133,6 @@ pub struct ChannelOptions {
     pub balance_window_samples: usize,
     /// Steady-state seconds of each free-run simulation (after ramp + settle).
     pub free_run_steady_s: f64,
-}
-
-impl ChannelOptions {
-    /// Thresholds set on effect-free virtual-rig campaigns so that all checks
-    /// together flag at most 5 % of them (crates/virtual-rig/tests/channel_calibration.rs):
-    /// 30 null draws (small protocol, seeds 9000–9029, blind baseline) gave
-    /// maximum ratios rotor_max 1.88, rotor_min 1.64, torque_balance 1.05,
-    /// dead_zone 1.06, linearity 0.43, step frequency 0.91, decay 0.18,
-    /// step residual 1.12; 0/30 campaigns flagged (one-sided 95 % upper bound
-    /// 9.5 %). Each threshold is about twice the null maximum. No null run
-    /// of that protocol sticks and slips, so regime and fundamental were not
-    /// exercised by the nulls (regime: 3 runs; fundamental: 4× the Rayleigh resolution).
-    pub fn calibrated() -> Self {
-        ChannelOptions {
-            twist_linearity_ratio: 4.0,
-            twist_dead_zone_ratio: 4.0,
-            twist_hysteresis_ratio: 4.0,
-            step_frequency_ratio: 4.0,
-            step_decay_ratio: 4.0,
-            step_residual_ratio: 4.0,
-            regime_ratio: 2.5,
-            rotor_max_ratio: 4.0,
-            rotor_min_ratio: 4.0,
-            fundamental_ratio: 4.0,
-            torque_balance_ratio: 4.0,
-            window_samples: 25,
-            balance_window_samples: 50,
-            free_run_steady_s: 16.0,
-        }
-    }
 }
 
 /// The extended model for the simulator: the baseline plus the vocabulary

@@ -398,8 +398,8 @@ fn time_scan(d: &SlipData, freqs_hz: &[f64]) -> Vec<(f64, f64)> {
 fn time_scan_at(d: &SlipData, freqs_hz: &[f64]) -> Vec<(f64, f64)> {
     use rayon::prelude::*;
     let yy = ywy(d);
-    let uniform = freqs_hz.len() > 1
-        && freqs_hz.windows(2).all(|w| ((w[1] - w[0]) - (freqs_hz[1] - freqs_hz[0])).abs() < 1e-9);
+    let uniform =
+        freqs_hz.len() > 1 && freqs_hz.windows(2).all(|w| ((w[1] - w[0]) - (freqs_hz[1] - freqs_hz[0])).abs() < 1e-9);
     if !uniform {
         return freqs_hz
             .par_iter()

@@ -1,7 +1,7 @@
 //! The diagnosis for people: diagnosis.md, the tables and the evidence
 //! figures (as rig_types data; the pipeline stage writes them).
 
-use crate::report::{Diagnosis, Features};
+use crate::report::{Diagnosis, Features, round_sig};
 use rig_types::{FigureSpec, Series, SeriesStyle, Table, fmt_fixed};
 use std::fmt::Write as _;
 
@@ -20,12 +20,16 @@ pub fn runs_table(d: &Diagnosis) -> Table {
         "slip_samples",
         "meas_stick_slip",
         "sim_stick_slip",
+        "ext_stick_slip",
         "meas_rotor_min_rad_s",
         "sim_rotor_min_rad_s",
+        "ext_rotor_min_rad_s",
         "meas_rotor_max_rad_s",
         "sim_rotor_max_rad_s",
+        "ext_rotor_max_rad_s",
         "meas_fundamental_hz",
         "sim_fundamental_hz",
+        "ext_fundamental_hz",
         "meas_motor_dip_rad_s",
         "sim_motor_dip_rad_s",
         "misfit_baseline",
@@ -42,17 +46,58 @@ pub fn runs_table(d: &Diagnosis) -> Table {
             r.slip_samples.to_string(),
             r.measured.stick_slip().to_string(),
             opt(&r.simulated, |f| f.stick_slip().to_string()),
+            opt(&r.extended, |f| f.stick_slip().to_string()),
             fmt_fixed(r.measured.rotor_min_rad_s, 2),
             opt(&r.simulated, |f| fmt_fixed(f.rotor_min_rad_s, 2)),
+            opt(&r.extended, |f| fmt_fixed(f.rotor_min_rad_s, 2)),
             fmt_fixed(r.measured.rotor_max_rad_s, 2),
             opt(&r.simulated, |f| fmt_fixed(f.rotor_max_rad_s, 2)),
+            opt(&r.extended, |f| fmt_fixed(f.rotor_max_rad_s, 2)),
             fmt_fixed(r.measured.fundamental_hz, 2),
             opt(&r.simulated, |f| fmt_fixed(f.fundamental_hz, 2)),
+            opt(&r.extended, |f| fmt_fixed(f.fundamental_hz, 2)),
             fmt_fixed(r.measured.motor_dip_rad_s, 2),
             opt(&r.simulated, |f| fmt_fixed(f.motor_dip_rad_s, 2)),
             f4(r.misfit_baseline),
             f4(r.misfit_extended),
             f4(r.misfit_noise_floor),
+        ]);
+    }
+    t
+}
+
+/// tables/diagnosis-checks.csv: every check of the other run kinds and the
+/// free-run checks of the baseline and the extended model.
+pub fn checks_table(d: &Diagnosis) -> Table {
+    let mut t = Table::new([
+        "model",
+        "channel",
+        "run_kind",
+        "statistic",
+        "noise_floor",
+        "ratio",
+        "threshold",
+        "flagged",
+        "in_adequacy",
+    ]);
+    let det = &d.detail;
+    let rows = det
+        .channel_checks
+        .iter()
+        .map(|k| ("baseline", k, true))
+        .chain(det.free_run_baseline.iter().map(|k| ("baseline", k, false)))
+        .chain(det.free_run_extended.iter().map(|k| ("extended", k, false)));
+    for (model, k, adequacy) in rows {
+        t.push([
+            model.to_string(),
+            k.channel.clone(),
+            k.run_kind.clone(),
+            format!("{}", round_sig(k.statistic, 4)),
+            format!("{}", round_sig(k.noise_floor, 4)),
+            fmt_fixed(k.ratio, 3),
+            if k.threshold.is_finite() { fmt_fixed(k.threshold, 2) } else { "".into() },
+            k.flagged.to_string(),
+            adequacy.to_string(),
         ]);
     }
     t
@@ -321,6 +366,32 @@ pub fn markdown(d: &Diagnosis) -> String {
             let _ = writeln!(s, "- {l}");
         }
     }
+    if !det.channel_checks.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n## Every run kind (tables/diagnosis-checks.csv)\n\nChecks of the runs the slip channels do not see, each a \
+             run-level statistic over its noise floor; a flagged check makes the final model inadequate.\n\n| check | \
+             ratio | threshold | flagged | detail |\n|---|---|---|---|---|"
+        );
+        for k in &det.channel_checks {
+            let _ =
+                writeln!(s, "| {} | {:.2} | {:.1} | {} | {} |", k.channel, k.ratio, k.threshold, k.flagged, k.detail);
+        }
+    }
+    if !det.free_run_baseline.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n## Free run: baseline and extended model\n\nEvery operating point simulated from rest with the baseline \
+             and with the extended model (baseline + findings, phases 0), compared with the record on phase-insensitive \
+             features. Reported, not part of the adequacy test: no null campaign of the calibration sticks and slips, \
+             so these ratios have no measured null distribution in the stick-slip regime (rig-diagnose `diagnose`).\n\n\
+             | check | baseline ratio | extended ratio | threshold | extended detail |\n|---|---|---|---|---|"
+        );
+        for (b, e) in det.free_run_baseline.iter().zip(&det.free_run_extended) {
+            let _ =
+                writeln!(s, "| {} | {:.2} | {:.2} | {:.1} | {} |", b.channel, b.ratio, e.ratio, e.threshold, e.detail);
+        }
+    }
     let _ = writeln!(
         s,
         "\n## The ladder (tables/diagnosis-rungs.csv)\n\n| rung | cross-validated misfit | cause |\n|---|---|---|"
@@ -331,14 +402,17 @@ pub fn markdown(d: &Diagnosis) -> String {
     let _ = writeln!(
         s,
         "\n## Per run (tables/diagnosis-runs.csv)\n\nMeasured features of the steady state against the free-run baseline \
-         simulation (empty when no baseline simulation was made), and the misfit per run.\n"
+         and extended simulations over the same window (empty when no baseline was given), and the misfit per run.\n"
     );
     let _ = writeln!(
         s,
-        "| run | fold | rpm | N0 | stick-slip meas/sim | Ω1 max meas/sim | f0 meas/sim [Hz] | misfit base | misfit ext | floor |\n|---|---|---|---|---|---|---|---|---|---|"
+        "| run | fold | rpm | N0 | stick-slip meas/base/ext | Ω1 max meas/base/ext | f0 meas/base/ext [Hz] | misfit base | misfit ext | floor |\n|---|---|---|---|---|---|---|---|---|---|"
     );
     for r in &det.runs {
-        let sim = r.simulated;
+        let (sim, ext) = (r.simulated, r.extended);
+        let both = |g: fn(&Features) -> String| {
+            format!("{}/{}", sim.as_ref().map(g).unwrap_or("–".into()), ext.as_ref().map(g).unwrap_or("–".into()))
+        };
         let _ = writeln!(
             s,
             "| {} | {} | {:.0} | {:.1} | {}/{} | {:.2}/{} | {:.2}/{} | {:.4} | {:.4} | {:.4} |",
@@ -347,11 +421,11 @@ pub fn markdown(d: &Diagnosis) -> String {
             r.motor_rpm_setpoint,
             r.normal_force_n,
             r.measured.stick_slip(),
-            sim.map(|f| f.stick_slip().to_string()).unwrap_or("–".into()),
+            both(|f| f.stick_slip().to_string()),
             r.measured.rotor_max_rad_s,
-            sim.map(|f| format!("{:.2}", f.rotor_max_rad_s)).unwrap_or("–".into()),
+            both(|f| format!("{:.2}", f.rotor_max_rad_s)),
             r.measured.fundamental_hz,
-            sim.map(|f| format!("{:.2}", f.fundamental_hz)).unwrap_or("–".into()),
+            both(|f| format!("{:.2}", f.fundamental_hz)),
             r.misfit_baseline,
             r.misfit_extended,
             r.misfit_noise_floor

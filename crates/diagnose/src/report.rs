@@ -116,6 +116,8 @@ pub struct RunRow {
     pub measured: Features,
     /// Features of the free-run baseline simulation, when one was made.
     pub simulated: Option<Features>,
+    /// Features of the free-run extended model (baseline + findings).
+    pub extended: Option<Features>,
 }
 
 /// Features of one run's steady state (measured or simulated).
@@ -169,6 +171,13 @@ pub struct Detail {
     pub baseline_text: String,
     /// Thesis ladder: (rung, held-out misfit, cause).
     pub rungs: Vec<(String, f64, String)>,
+    /// Checks of the other run kinds (static twist, voltage steps, torque
+    /// balance) that enter the adequacy test.
+    pub channel_checks: Vec<crate::ChannelCheck>,
+    /// Free-run checks of the operating points with the baseline and with the
+    /// extended model (reported; not part of the adequacy test, see `diagnose`).
+    pub free_run_baseline: Vec<crate::ChannelCheck>,
+    pub free_run_extended: Vec<crate::ChannelCheck>,
 }
 
 /// One effect tried in one forward-selection step.

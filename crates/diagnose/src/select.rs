@@ -664,6 +664,7 @@ pub fn diagnose_signals(
             voltage_noise_v: s.voltage_noise_v,
             measured: measured_features(s, opts.slip_speed_rad_s),
             simulated: None,
+            extended: None,
         });
     }
     detail.mu_vs_speed = mu_vs_speed(&d_all, &coulomb.model, &full.model, &full.phases);

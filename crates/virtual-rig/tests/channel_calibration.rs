@@ -6,7 +6,7 @@
 //! correct extended model). Run with `--nocapture` to see the distributions.
 
 use rig_diagnose::channels::{ChannelCheck, all_checks};
-use rig_diagnose::{ChannelOptions, DiagnoseOptions, EffectId, extended_params};
+use rig_diagnose::{DiagnoseOptions, EffectId, extended_params};
 use rig_types::{Campaign, RigParams, RunKind};
 use rig_virtual_rig::{Protocol, draw_truth, generate};
 use std::collections::BTreeMap;
@@ -31,7 +31,7 @@ fn calibrate(c: &Campaign, th: &rig_calibrate::ThesisData) -> (rig_calibrate::Ca
 
 /// The vocabulary findings of the blind diagnosis, for `extended_params`.
 fn findings(c: &Campaign, cal: &rig_calibrate::CampaignCalibration) -> Vec<(EffectId, BTreeMap<String, f64>)> {
-    let d = rig_diagnose::diagnose(c, cal, None, None, &[], &opts()).expect("diagnosis");
+    let d = rig_diagnose::diagnose(c, cal, None, None, &opts()).expect("diagnosis");
     d.findings.iter().filter_map(|f| EffectId::from_id(&f.effect).map(|e| (e, f.params.clone()))).collect()
 }
 
@@ -81,7 +81,7 @@ fn upper_95(k: usize, n: usize) -> f64 {
 fn null_campaigns_false_alarm_rate() {
     let n: u64 = std::env::var("NULLS").ok().and_then(|s| s.parse().ok()).unwrap_or(30);
     let th = thesis();
-    let o = ChannelOptions::calibrated();
+    let o = opts().channels;
     let dopts = opts();
     let mut by_check: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let mut flagged_campaigns = Vec::new();
@@ -125,7 +125,7 @@ fn flagged(v: &[ChannelCheck], channel: &str) -> bool {
 /// retraces the loading one is not.
 #[test]
 fn static_twist_checks_fire_on_twist_defects() {
-    let o = ChannelOptions::calibrated();
+    let o = opts().channels;
     let base = null_campaign(77);
     let check = |c: &Campaign| {
         let cal = rig_calibrate::calibrate_campaign(c).expect("calibration");
@@ -177,7 +177,7 @@ fn static_twist_checks_fire_on_twist_defects() {
 #[test]
 fn free_run_sees_a_drive_limit_and_not_its_fix() {
     let th = thesis();
-    let o = ChannelOptions::calibrated();
+    let o = opts().channels;
     let dopts = opts();
     let truth = draw_truth("drive_voltage_limit", 130.0, 16);
     let c = generate("dvl", &truth, &Protocol::small(), 16).expect("generate");
@@ -208,7 +208,7 @@ fn free_run_sees_a_drive_limit_and_not_its_fix() {
 fn shipped_campaign_with_baseline_and_extended_model() {
     let c = rig_ingest::read_campaign(Path::new("../../data/emulated-rig-2026")).expect("shipped campaign");
     let th = thesis();
-    let o = ChannelOptions::calibrated();
+    let o = opts().channels;
     let dopts = opts();
     let (cal, base) = calibrate(&c, &th);
     let f = findings(&c, &cal);

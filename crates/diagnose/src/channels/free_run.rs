@@ -34,12 +34,22 @@ impl FreeRunSettings {
 }
 
 /// Measured and simulated features of one run over the same window, with
-/// the window length and the set-point.
-struct Pair {
-    id: String,
-    measured: Features,
-    simulated: Option<Features>,
-    window_s: f64,
+/// the window length.
+#[derive(Debug, Clone)]
+pub struct Pair {
+    pub id: String,
+    pub measured: Features,
+    pub simulated: Option<Features>,
+    pub window_s: f64,
+}
+
+/// One [`Pair`] per operating point of `c` with model `p` (one simulation per
+/// run over ramp + settle + `steady_s` only, in parallel, campaign order kept;
+/// `simulated` is `None` where the integrator failed — data, not an error).
+pub fn free_run_pairs(c: &Campaign, p: &RigParams, s: &FreeRunSettings) -> Vec<Pair> {
+    use rayon::prelude::*;
+    let runs: Vec<&rig_types::Run> = c.runs_of("operating_point").collect();
+    runs.par_iter().map(|r| pair(c, r, p, s)).collect::<Vec<_>>().into_iter().flatten().collect()
 }
 
 /// Features of one run: measured from the encoders and simulated with `p`,
@@ -89,10 +99,11 @@ fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) 
 /// Extrema and fundamental over a window of many cycles do not depend on the
 /// phases of a modulation, which [`super::extended_params`] sets to 0.
 pub fn free_run_checks(c: &Campaign, p: &RigParams, s: &FreeRunSettings, o: &ChannelOptions) -> Vec<ChannelCheck> {
-    use rayon::prelude::*;
-    let runs: Vec<&rig_types::Run> = c.runs_of("operating_point").collect();
-    let pairs: Vec<Pair> =
-        runs.par_iter().map(|r| pair(c, r, p, s)).collect::<Vec<_>>().into_iter().flatten().collect();
+    free_run_checks_of(c, &free_run_pairs(c, p, s), s, o)
+}
+
+/// The four free-run checks of pairs already simulated ([`free_run_pairs`]).
+pub fn free_run_checks_of(c: &Campaign, pairs: &[Pair], s: &FreeRunSettings, o: &ChannelOptions) -> Vec<ChannelCheck> {
     let names = [
         "operating_point.regime",
         "operating_point.rotor_max",

@@ -1,7 +1,7 @@
 //! Stage `diagnosis`: blind diagnosis of the campaign (rig_diagnose): what
 //! the rig model gets wrong, the cause, the extended model and its held-out
 //! gain; diagnosis.json exactly as ../shared/spec/diagnosis.md, diagnosis.md,
-//! tables/diagnosis-{runs,candidates,rungs}.csv and the evidence figures.
+//! tables/diagnosis-{runs,candidates,rungs,checks}.csv and the evidence figures.
 
 use crate::StageCtx;
 use anyhow::{Context, Result};
@@ -15,7 +15,7 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     let cal: CampaignCalibration = ctx.read_json("data/campaign-calibration.json")?;
     let rig: RigParams = ctx.read_json("data/rig-params.json")?;
     let thesis: ThesisData = ctx.read_json("data/thesis.json")?;
-    let d = diagnose(&campaign, &cal, Some(&rig), Some(thesis.friction.mu_dynamic), &[], &opts)
+    let d = diagnose(&campaign, &cal, Some(&rig), Some(thesis.friction.mu_dynamic), &opts)
         .with_context(|| format!("diagnosing campaign {}", campaign.name))?;
     ctx.write_json("diagnosis.json", &d)?;
     // The options as run: the confusion stage diagnoses with exactly these.
@@ -24,6 +24,7 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     ctx.write_table("tables/diagnosis-runs.csv", &render::runs_table(&d))?;
     ctx.write_table("tables/diagnosis-candidates.csv", &render::candidates_table(&d))?;
     ctx.write_table("tables/diagnosis-rungs.csv", &render::rungs_table(&d))?;
+    ctx.write_table("tables/diagnosis-checks.csv", &render::checks_table(&d))?;
     for f in render::figures(&d) {
         ctx.write_figure(&f)?;
     }
