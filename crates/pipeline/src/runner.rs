@@ -1,7 +1,8 @@
 //! The DAG runner: dependency order with independent stages in parallel, skip
 //! by content hash, atomic commits, the manifest, and a report of what ran and why.
 
-use crate::config::{Input, PipelineConfig, Registry, StageDecl};
+use crate::code::CodeIndex;
+use crate::config::{Input, PipelineConfig, Registry, Sources, StageDecl};
 use crate::error::PipelineError;
 use crate::hash::{canonical_params, hash_path};
 use crate::store::{self, CacheRecord, Fault, FileHash};
@@ -114,6 +115,7 @@ impl RunReport {
 pub struct Runner {
     config: PipelineConfig,
     registry: Registry,
+    sources: Sources,
     campaign: Option<PathBuf>,
     out: Option<PathBuf>,
     jobs: usize,
@@ -135,7 +137,7 @@ struct Dirs {
 impl Runner {
     /// The pipeline at `path` with the real stage bodies.
     pub fn new(path: &Path) -> Result<Self, PipelineError> {
-        Self::with_registry(path, crate::stages::lookup)
+        Ok(Self::with_registry(path, crate::stages::lookup)?.stage_sources(crate::stages::source))
     }
 
     /// The pipeline at `path` with another registry (tests use fake stages).
@@ -144,6 +146,7 @@ impl Runner {
         Ok(Runner {
             config,
             registry,
+            sources: |_| None,
             campaign: None,
             out: None,
             jobs: 2,
@@ -152,6 +155,14 @@ impl Runner {
             progress: false,
             faults: BTreeMap::new(),
         })
+    }
+
+    /// Where each stage's body is (relative to the pipeline.toml folder): its
+    /// code is computed from that file (see `crate::code`) and added to the
+    /// stage's declared `code`. Without it (fake registries) only declared code counts.
+    pub fn stage_sources(mut self, sources: Sources) -> Self {
+        self.sources = sources;
+        self
     }
 
     pub fn config(&self) -> &PipelineConfig {
@@ -266,6 +277,7 @@ impl Runner {
         } else {
             indicatif::ProgressBar::hidden()
         };
+        let index = CodeIndex::load(&self.config.root)?;
         let memo = Mutex::new(BTreeMap::new());
         let mut done: BTreeMap<String, StageReport> = BTreeMap::new();
         std::thread::scope(|scope| {
@@ -311,9 +323,10 @@ impl Runner {
                         .collect();
                     running.insert(name.clone());
                     bar.set_message(running.iter().cloned().collect::<Vec<_>>().join(", "));
-                    let (tx, pool, dirs, memo) = (tx.clone(), &pool, &dirs, &memo);
+                    let (tx, pool, dirs, memo, index) = (tx.clone(), &pool, &dirs, &memo, &index);
                     scope.spawn(move || {
-                        let report = pool.install(|| self.run_one(decl, dirs, memo, &upstream_runs, &after_outputs));
+                        let report =
+                            pool.install(|| self.run_one(decl, dirs, memo, index, &upstream_runs, &after_outputs));
                         // The receiver lives until every stage has reported.
                         let _ = tx.send(report);
                     });
@@ -340,6 +353,7 @@ impl Runner {
         decl: &StageDecl,
         dirs: &Dirs,
         memo: &Mutex<BTreeMap<PathBuf, String>>,
+        index: &CodeIndex,
         upstream_runs: &[String],
         after_outputs: &[(String, String)],
     ) -> StageReport {
@@ -372,7 +386,7 @@ impl Runner {
             }
             resolved.push((input.label(), path, memoise));
         }
-        let record = match self.fingerprint(decl, &resolved, memo) {
+        let record = match self.fingerprint(decl, &resolved, memo, index) {
             Ok(mut r) => {
                 if !after_outputs.is_empty() {
                     let mut key = blake3::Hasher::new();
@@ -411,12 +425,14 @@ impl Runner {
     }
 
     /// The key and component hashes of a stage: name, canonical params, every
-    /// input's content (directories recursively), every code path's content.
+    /// input's content (directories recursively), every code path's content
+    /// (computed from the stage's source, plus what pipeline.toml declares).
     fn fingerprint(
         &self,
         decl: &StageDecl,
         inputs: &[(String, PathBuf, bool)],
         memo: &Mutex<BTreeMap<PathBuf, String>>,
+        index: &CodeIndex,
     ) -> Result<CacheRecord, PipelineError> {
         let hashed = |path: &Path, memoise: bool| -> Result<String, PipelineError> {
             if memoise && let Some(h) = memo.lock().expect("memo lock").get(path) {
@@ -442,7 +458,7 @@ impl Runner {
             input_hashes.insert(label.clone(), h);
         }
         let mut code = BTreeMap::new();
-        for c in &decl.code {
+        for c in &index.stage_code((self.sources)(&decl.name), &decl.code)?.paths {
             let path = self.config.root.join(c);
             if !path.exists() {
                 return Err(PipelineError::Config {

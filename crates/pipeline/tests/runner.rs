@@ -547,3 +547,54 @@ write = ["e.txt"]
     assert_eq!(reasons(&r, "e"), ["input @d/d.txt changed"]);
     assert!(f.read_out("e.txt").contains("tag 2"));
 }
+
+/// Stage code is computed: in a small workspace where stage `s`'s body names
+/// `rig_a::` and rig-a depends on rig-b, appending a line to rig-b's source
+/// makes `--dry-run` re-run `s` and say why; a crate it does not use does not.
+#[test]
+fn stage_code_is_computed_from_the_crates_the_body_uses() {
+    let f = Fixture::new(
+        r#"
+[[stage]]
+name = "s"
+inputs = ["{campaign}/a.txt"]
+outputs = ["s.txt"]
+[stage.params]
+write = ["s.txt"]
+"#,
+    );
+    f.write(
+        "Cargo.toml",
+        "[workspace.dependencies]\nrig-a = { path = \"crates/a\" }\nrig-b = { path = \"crates/b\" }\nrig-c = { path = \"crates/c\" }\n",
+    );
+    f.write(
+        "crates/a/Cargo.toml",
+        "[dependencies]\nrig-b.workspace = true\n[dev-dependencies]\nrig-c.workspace = true\n",
+    );
+    f.write("crates/a/src/lib.rs", "//! a\n");
+    f.write("crates/b/Cargo.toml", "[dependencies]\n");
+    f.write("crates/b/src/lib.rs", "//! b\n");
+    f.write("crates/b/assets/x.txt", "data\n");
+    f.write("crates/b/src/data.rs", "//! b data\nstatic X: &str = include_str!(\"../assets/x.txt\");\n");
+    f.write("crates/c/Cargo.toml", "[dependencies]\n");
+    f.write("crates/c/src/lib.rs", "//! c\n");
+    f.write("stages/s.rs", "//! s\nuse crate::helper;\nfn run() { rig_a::go(); }\n");
+    f.write("src/helper.rs", "//! helper\n");
+    let runner = || f.runner().stage_sources(|n| (n == "s").then_some("stages/s.rs"));
+    runner().run().unwrap();
+    let code = &runner().run().unwrap().stage("s").unwrap().record.clone().unwrap().code;
+    let paths: Vec<&str> = code.keys().map(String::as_str).collect();
+    assert!(paths.contains(&"crates/a/src") && paths.contains(&"crates/b/src"), "{paths:?}");
+    assert!(paths.contains(&"crates/b/assets/x.txt") && paths.contains(&"stages/s.rs"), "{paths:?}");
+    assert!(!paths.contains(&"crates/c/src"), "a dev-dependency is not code the stage runs: {paths:?}");
+
+    f.write("crates/c/src/lib.rs", "//! c\n// unused by s\n");
+    assert_eq!(outcome(&runner().dry_run(true).run().unwrap(), "s"), "UpToDate");
+    f.write("crates/b/src/lib.rs", "//! b\n// one more line\n");
+    let r = runner().dry_run(true).run().unwrap();
+    assert_eq!(outcome(&r, "s"), "WouldRun");
+    assert_eq!(reasons(&r, "s"), ["code crates/b/src changed"]);
+    f.write("crates/b/assets/x.txt", "other data\n");
+    f.write("crates/b/src/lib.rs", "//! b\n");
+    assert_eq!(reasons(&runner().dry_run(true).run().unwrap(), "s"), ["code crates/b/assets/x.txt changed"]);
+}

@@ -15,22 +15,36 @@ mod thesis;
 
 use crate::StageFn;
 
+/// Every stage: its pipeline.toml name, its body, and the file holding the
+/// body (relative to the workspace root; the runner computes the stage's code
+/// from it, see `code.rs`). One line per stage.
+const STAGES: &[(&str, StageFn, &str)] = &[
+    ("thesis-tables", thesis::run, "crates/pipeline/src/stages/thesis.rs"),
+    ("campaign-calibration", campaign_cal::run, "crates/pipeline/src/stages/campaign_cal.rs"),
+    ("estimation", estimation::run, "crates/pipeline/src/stages/estimation.rs"),
+    ("simulation", simulation::run, "crates/pipeline/src/stages/simulation.rs"),
+    ("sweeps", sweeps::run, "crates/pipeline/src/stages/sweeps.rs"),
+    ("spectra", spectra::run, "crates/pipeline/src/stages/spectra.rs"),
+    ("harmonic", harmonic::run, "crates/pipeline/src/stages/harmonic.rs"),
+    ("diagnosis", diagnosis::run, "crates/pipeline/src/stages/diagnosis.rs"),
+    ("lavi", lavi::run, "crates/pipeline/src/stages/lavi.rs"),
+    ("confusion", confusion::run, "crates/pipeline/src/stages/confusion.rs"),
+    ("report", report::run, "crates/pipeline/src/stages/report.rs"),
+];
+
 /// The body of the stage called `name` in pipeline.toml.
 pub fn lookup(name: &str) -> Option<StageFn> {
-    Some(match name {
-        "thesis-tables" => thesis::run,
-        "campaign-calibration" => campaign_cal::run,
-        "estimation" => estimation::run,
-        "simulation" => simulation::run,
-        "sweeps" => sweeps::run,
-        "spectra" => spectra::run,
-        "harmonic" => harmonic::run,
-        "diagnosis" => diagnosis::run,
-        "lavi" => lavi::run,
-        "confusion" => confusion::run,
-        "report" => report::run,
-        _ => return None,
-    })
+    STAGES.iter().find(|s| s.0 == name).map(|s| s.1)
+}
+
+/// The file holding the body of the stage called `name`, relative to the workspace root.
+pub fn source(name: &str) -> Option<&'static str> {
+    STAGES.iter().find(|s| s.0 == name).map(|s| s.2)
+}
+
+/// The names of every registered stage, in registry order.
+pub fn names() -> Vec<&'static str> {
+    STAGES.iter().map(|s| s.0).collect()
 }
 
 /// The thesis model as published (Table 4.5, the chapter's printed ξ — its C —,
