@@ -13,6 +13,10 @@ pub type Registry = fn(&str) -> Option<StageFn>;
 /// relative to the pipeline.toml folder (the stage's code is computed from it).
 pub type Sources = fn(&str) -> Option<&'static str>;
 
+/// Checks the `[stage.params]` of the stage called by the first argument;
+/// `Err` is a reason naming the key (see `stages::check_params`).
+pub type ParamsCheck = fn(&str, &toml::Table) -> Result<(), String>;
+
 /// `[settings]`: folders relative to the directory holding pipeline.toml.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -54,13 +54,13 @@ impl StageCtx {
     /// crate that owns the knobs: an unknown, missing or mistyped key is then an
     /// error that names the stage and the key.
     pub fn typed_params<T: DeserializeOwned>(&self) -> Result<T> {
-        self.params
-            .clone()
-            .try_into::<T>()
-            .map_err(|e| anyhow!("pipeline.toml: stage {}: [stage.params]: {}", self.name, e.to_string().trim()))
+        parse_params(&self.params).map_err(|e| anyhow!("pipeline.toml: stage {}: {e}", self.name))
     }
 
     /// A numeric parameter from `[stage.params]` (integers are accepted as floats).
+    #[deprecated(
+        note = "declare a #[serde(deny_unknown_fields)] Params struct, read it with typed_params and register it in stages/mod.rs"
+    )]
     pub fn param_f64(&self, key: &str) -> Result<f64> {
         match self.params.get(key) {
             Some(toml::Value::Float(x)) => Ok(*x),
@@ -70,6 +70,9 @@ impl StageCtx {
         }
     }
 
+    #[deprecated(
+        note = "declare a #[serde(deny_unknown_fields)] Params struct, read it with typed_params and register it in stages/mod.rs"
+    )]
     pub fn param_usize(&self, key: &str) -> Result<usize> {
         match self.params.get(key) {
             Some(toml::Value::Integer(i)) if *i >= 0 => Ok(*i as usize),
@@ -80,6 +83,9 @@ impl StageCtx {
         }
     }
 
+    #[deprecated(
+        note = "declare a #[serde(deny_unknown_fields)] Params struct, read it with typed_params and register it in stages/mod.rs"
+    )]
     pub fn param_str(&self, key: &str) -> Result<String> {
         match self.params.get(key) {
             Some(toml::Value::String(s)) => Ok(s.clone()),
@@ -151,5 +157,60 @@ impl StageCtx {
 
     pub fn staged(&self) -> &BTreeMap<String, Vec<u8>> {
         &self.staged
+    }
+}
+
+/// `params` (a stage's `[stage.params]`) as `T`, or a one-line reason naming
+/// the key: `[stage.params] rtol: invalid type: …` (callers add the stage).
+/// The runner calls this for every stage before any stage runs
+/// (`stages::check_params`); `StageCtx::typed_params` calls it in the body.
+pub fn parse_params<T: DeserializeOwned>(params: &toml::Table) -> std::result::Result<T, String> {
+    // Through TOML text, so a type error carries a span that points at its key.
+    let text = toml::to_string(params).map_err(|e| format!("[stage.params]: {e}"))?;
+    toml::from_str::<T>(&text).map_err(|e| {
+        let key = e.span().and_then(|span| {
+            let line_start = text[..span.start.min(text.len())].rfind('\n').map_or(0, |i| i + 1);
+            let line = &text[line_start..];
+            let (k, _) = line.split_once('=')?;
+            Some(k.trim().trim_matches('"').to_string())
+        });
+        let msg = e.message().trim().to_string();
+        match key {
+            // "missing field `x`" and "unknown field `x`" name their key already.
+            Some(k) if !k.is_empty() && !msg.contains("field `") => format!("[stage.params] {k}: {msg}"),
+            _ => format!("[stage.params]: {msg}"),
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Debug, serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    #[allow(dead_code)]
+    struct P {
+        rtol: f64,
+        points: usize,
+        name: String,
+    }
+
+    fn err(text: &str) -> String {
+        parse_params::<P>(&toml::from_str(text).unwrap()).unwrap_err()
+    }
+
+    #[test]
+    fn parse_params_names_the_key() {
+        let ok = parse_params::<P>(&toml::from_str("rtol = 1e-8\npoints = 3\nname = \"a\"").unwrap()).unwrap();
+        assert_eq!(ok.points, 3);
+        let e = err("rtol = 1e-8\npoints = 3\nname = \"a\"\nrtoll = 2.0");
+        assert!(e.starts_with("[stage.params]") && e.contains("`rtoll`"), "{e}");
+        let e = err("rtol = \"x\"\npoints = 3\nname = \"a\"");
+        assert!(e.starts_with("[stage.params] rtol: "), "{e}");
+        let e = err("rtol = 1.0\npoints = -3\nname = \"a\"");
+        assert!(e.starts_with("[stage.params] points: "), "{e}");
+        let e = err("rtol = 1.0\nname = \"a\"");
+        assert_eq!(e, "[stage.params]: missing field `points`");
     }
 }

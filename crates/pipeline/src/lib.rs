@@ -24,8 +24,8 @@ mod runner;
 pub mod stages;
 mod store;
 
-pub use config::{Input, OutputPattern, PipelineConfig, Registry, Settings, Sources, StageDecl};
-pub use ctx::{StageCtx, StageFn};
+pub use config::{Input, OutputPattern, ParamsCheck, PipelineConfig, Registry, Settings, Sources, StageDecl};
+pub use ctx::{StageCtx, StageFn, parse_params};
 pub use error::PipelineError;
 pub use runner::{Outcome, RunReport, Runner, StageReport};
 pub use store::{CacheRecord, FileHash};

@@ -2,7 +2,7 @@
 //! by content hash, atomic commits, the manifest, and a report of what ran and why.
 
 use crate::code::CodeIndex;
-use crate::config::{Input, PipelineConfig, Registry, Sources, StageDecl};
+use crate::config::{Input, ParamsCheck, PipelineConfig, Registry, Sources, StageDecl};
 use crate::error::PipelineError;
 use crate::hash::{canonical_params, hash_path};
 use crate::store::{self, CacheRecord, Fault, FileHash};
@@ -116,6 +116,7 @@ pub struct Runner {
     config: PipelineConfig,
     registry: Registry,
     sources: Sources,
+    params_check: ParamsCheck,
     campaign: Option<PathBuf>,
     out: Option<PathBuf>,
     jobs: usize,
@@ -137,7 +138,9 @@ struct Dirs {
 impl Runner {
     /// The pipeline at `path` with the real stage bodies.
     pub fn new(path: &Path) -> Result<Self, PipelineError> {
-        Ok(Self::with_registry(path, crate::stages::lookup)?.stage_sources(crate::stages::source))
+        Ok(Self::with_registry(path, crate::stages::lookup)?
+            .stage_sources(crate::stages::source)
+            .params_check(crate::stages::check_params))
     }
 
     /// The pipeline at `path` with another registry (tests use fake stages).
@@ -147,6 +150,7 @@ impl Runner {
             config,
             registry,
             sources: |_| None,
+            params_check: |_, _| Ok(()),
             campaign: None,
             out: None,
             jobs: 2,
@@ -162,6 +166,14 @@ impl Runner {
     /// stage's declared `code`. Without it (fake registries) only declared code counts.
     pub fn stage_sources(mut self, sources: Sources) -> Self {
         self.sources = sources;
+        self
+    }
+
+    /// How each stage's `[stage.params]` is checked: every declared stage's
+    /// params, after `--set` overrides, before any stage runs (`run` refuses
+    /// the whole run, naming the stage and the key).
+    pub fn params_check(mut self, check: ParamsCheck) -> Self {
+        self.params_check = check;
         self
     }
 
@@ -251,6 +263,13 @@ impl Runner {
     /// Runs (or with `dry_run` only assesses) every selected stage.
     /// Stage failures are in the report; an `Err` means the run could not start.
     pub fn run(&self) -> Result<RunReport, PipelineError> {
+        for decl in &self.config.stages {
+            (self.params_check)(&decl.name, &decl.params).map_err(|reason| PipelineError::Config {
+                path: self.config.path.clone(),
+                stage: Some(decl.name.clone()),
+                reason,
+            })?;
+        }
         let dirs = self.dirs();
         let selected = if self.only.is_empty() {
             self.config.stages.iter().map(|s| s.name.clone()).collect()

@@ -598,3 +598,44 @@ write = ["s.txt"]
     f.write("crates/b/src/lib.rs", "//! b\n");
     assert_eq!(reasons(&runner().dry_run(true).run().unwrap(), "s"), ["code crates/b/assets/x.txt changed"]);
 }
+
+/// Params are checked for every stage before any stage runs: a stage whose
+/// check refuses its params stops the whole run, naming the stage and the key.
+#[test]
+fn params_are_checked_for_every_stage_before_any_runs() {
+    #[derive(serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    #[allow(dead_code)]
+    struct DParams {
+        write: Vec<String>,
+    }
+    fn check(name: &str, params: &toml::Table) -> Result<(), String> {
+        if name == "d" { rig_pipeline::parse_params::<DParams>(params).map(|_| ()) } else { Ok(()) }
+    }
+    let f = Fixture::new(DIAMOND);
+    f.edit_toml("write = [\"d.txt\"]", "write = [\"d.txt\"]\nwirte = 1");
+    let err = f.runner().params_check(check).run().unwrap_err().to_string();
+    assert!(err.contains("stage d") && err.contains("unknown field `wirte`"), "{err}");
+    assert!(!f.out().exists(), "nothing ran, not even the out dir was made");
+    f.edit_toml("wirte = 1", "");
+    assert_eq!(f.runner().params_check(check).run().unwrap().ran(), ["a", "b", "c", "d"]);
+}
+
+/// The repository's pipeline.toml with a misspelt key is refused up front,
+/// naming the stage and the key; a mistyped value names its key.
+#[test]
+fn the_repository_refuses_an_unknown_or_mistyped_param() {
+    let root = rig_pipeline::testing::workspace_root();
+    let text = std::fs::read_to_string(root.join("pipeline.toml")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("pipeline.toml");
+    let bad = text.replacen("limit_cycle_s = 20.0", "limit_cycle_s = 20.0\nlimit_cycle = 20.0", 1);
+    assert_ne!(bad, text);
+    std::fs::write(&path, &bad).unwrap();
+    let err = Runner::new(&path).unwrap().dry_run(true).run().unwrap_err().to_string();
+    assert!(err.contains("stage simulation") && err.contains("unknown field `limit_cycle`"), "{err}");
+    let bad = text.replacen("first_transient_s = 40.0", "first_transient_s = \"40 s\"", 1);
+    std::fs::write(&path, &bad).unwrap();
+    let err = Runner::new(&path).unwrap().dry_run(true).run().unwrap_err().to_string();
+    assert!(err.contains("stage sweeps: [stage.params] first_transient_s: invalid type"), "{err}");
+}

@@ -15,30 +15,26 @@ use rig_spectra::{
     spectral_peaks, thin_indices,
 };
 use rig_types::{HarmonicFriction, RigParams, RunInput, SeriesStyle, Table, Trajectory, fmt_fixed};
+use serde::Deserialize;
 use std::fmt::Write as _;
 
 const RAD_S_TO_RPM: f64 = 30.0 / std::f64::consts::PI;
 
-struct Params {
-    motor_rpm: f64,
-    normal_force_n: f64,
-    ramp_s: f64,
-    settle_s: f64,
-    window_s: f64,
-    sample_rate_hz: f64,
-    amplitude_ratio: f64,
-}
-
-fn params(ctx: &StageCtx) -> Result<Params> {
-    Ok(Params {
-        motor_rpm: ctx.param_f64("motor_rpm")?,
-        normal_force_n: ctx.param_f64("normal_force_n")?,
-        ramp_s: ctx.param_f64("ramp_s")?,
-        settle_s: ctx.param_f64("settle_s")?,
-        window_s: ctx.param_f64("window_s")?,
-        sample_rate_hz: ctx.param_f64("sample_rate_hz")?,
-        amplitude_ratio: ctx.param_f64("amplitude_ratio")?,
-    })
+/// `[stage.params]` of `harmonic`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Params {
+    /// Integrator tolerances and largest step (`rig_model::SimOptions`).
+    pub rtol: f64,
+    pub atol: f64,
+    pub max_step_s: f64,
+    pub motor_rpm: f64,
+    pub normal_force_n: f64,
+    pub ramp_s: f64,
+    pub settle_s: f64,
+    pub window_s: f64,
+    pub sample_rate_hz: f64,
+    pub amplitude_ratio: f64,
 }
 
 /// One simulated case and what the analysis found in its steady window.
@@ -98,7 +94,7 @@ fn analyse(
 }
 
 pub fn run(ctx: &mut StageCtx) -> Result<()> {
-    let p = params(ctx)?;
+    let p: Params = ctx.typed_params()?;
     let thesis: ThesisData = ctx.read_json("data/thesis.json")?;
     let rig: RigParams = ctx.read_json("data/rig-params.json")?;
     // The chapter publishes no PI gains: the rig's identified ones (estimation stage).
@@ -143,8 +139,9 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     let cases: Vec<Case> = jobs
         .par_iter()
         .map(|(model, prm, variant, w)| {
-            let tr = simulate(prm, &input, &times, &SimOptions::default())
-                .with_context(|| format!("simulating the {model} model, {variant} {w:?}"))?;
+            let tr =
+                simulate(prm, &input, &times, &SimOptions { rtol: p.rtol, atol: p.atol, max_step_s: p.max_step_s })
+                    .with_context(|| format!("simulating the {model} model, {variant} {w:?}"))?;
             analyse(model, variant.clone(), *w, &tr, from_s, p.sample_rate_hz)
         })
         .collect::<Result<Vec<_>>>()?;

@@ -31,6 +31,7 @@ use rig_model::{SimOptions, friction_coefficient, simulate};
 use rig_types::{
     FigureSpec, FrictionLaw, RigParams, Run, RunInput, RunKind, Series, SeriesStyle, Table, Trajectory, fmt_fixed,
 };
+use serde::Deserialize;
 use std::f64::consts::PI;
 
 const RAD_S_TO_RPM: f64 = 60.0 / (2.0 * PI);
@@ -64,13 +65,22 @@ struct RunResult {
     rig: Summary,
 }
 
+/// `[stage.params]` of `simulation`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Params {
+    /// Integrator tolerances and largest step (`rig_model::SimOptions`).
+    pub rtol: f64,
+    pub atol: f64,
+    pub max_step_s: f64,
+    /// Fig. 4.17 shows the last this many seconds of each run.
+    pub limit_cycle_s: f64,
+}
+
 pub fn run(ctx: &mut StageCtx) -> Result<()> {
-    let opts = SimOptions {
-        rtol: ctx.param_f64("rtol")?,
-        atol: ctx.param_f64("atol")?,
-        max_step_s: ctx.param_f64("max_step_s")?,
-    };
-    let limit_cycle_s = ctx.param_f64("limit_cycle_s")?;
+    let p: Params = ctx.typed_params()?;
+    let opts = SimOptions { rtol: p.rtol, atol: p.atol, max_step_s: p.max_step_s };
+    let limit_cycle_s = p.limit_cycle_s;
     let rig: RigParams = ctx.read_json("data/rig-params.json")?;
     let thesis = thesis_params(ctx, &rig)?;
     let cal: CampaignCalibration = ctx.read_json("data/campaign-calibration.json")?;

@@ -12,6 +12,7 @@ use rig_spectra::{
     amplitude_spectrum, analyse_lines, frf_h1, spectral_peaks, thin_indices,
 };
 use rig_types::{FigureSpec, RigParams, Run, RunInput, RunKind, Series, SeriesStyle, Table, Trajectory, fmt_fixed};
+use serde::Deserialize;
 
 /// A figure spec with no heat map.
 pub(super) fn fig(
@@ -39,33 +40,20 @@ pub(super) fn series(name: &str, x: Vec<f64>, y: Vec<f64>, style: SeriesStyle) -
     Series { name: name.to_string(), x, y, style }
 }
 
-/// Settings of the stage (pipeline.toml `[stage.params]`).
-struct Params {
-    settle_s: f64,
-    min_freq_hz: f64,
-    max_freq_hz: f64,
-    welch_segment_s: f64,
-    tolerance_bins: f64,
-    table_4_8_records_s: Vec<f64>,
-}
-
-fn params(ctx: &StageCtx) -> Result<Params> {
-    let recs = match ctx.params.get("table_4_8_records_s") {
-        Some(toml::Value::Array(a)) => a
-            .iter()
-            .map(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
-            .collect::<Option<Vec<f64>>>()
-            .context("pipeline.toml: stage spectra: table_4_8_records_s must be numbers")?,
-        _ => anyhow::bail!("pipeline.toml: stage spectra: param table_4_8_records_s (array of seconds) is missing"),
-    };
-    Ok(Params {
-        settle_s: ctx.param_f64("settle_s")?,
-        min_freq_hz: ctx.param_f64("min_freq_hz")?,
-        max_freq_hz: ctx.param_f64("max_freq_hz")?,
-        welch_segment_s: ctx.param_f64("welch_segment_s")?,
-        tolerance_bins: ctx.param_f64("tolerance_bins")?,
-        table_4_8_records_s: recs,
-    })
+/// `[stage.params]` of `spectra`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Params {
+    /// Integrator tolerances and largest step of the rig-model runs (`rig_model::SimOptions`).
+    pub rtol: f64,
+    pub atol: f64,
+    pub max_step_s: f64,
+    pub settle_s: f64,
+    pub min_freq_hz: f64,
+    pub max_freq_hz: f64,
+    pub welch_segment_s: f64,
+    pub tolerance_bins: f64,
+    pub table_4_8_records_s: Vec<f64>,
 }
 
 const RAD_S_TO_RPM: f64 = 30.0 / std::f64::consts::PI;
@@ -209,7 +197,7 @@ fn thin(s: &Signals, max_points: usize) -> Vec<usize> {
 }
 
 pub fn run(ctx: &mut StageCtx) -> Result<()> {
-    let p = params(ctx)?;
+    let p: Params = ctx.typed_params()?;
     let cal: CampaignCalibration = ctx.read_json("data/campaign-calibration.json")?;
     let rig_params: RigParams = ctx.read_json("data/rig-params.json")?;
     let campaign = ctx.campaign()?.clone();
@@ -230,8 +218,13 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
         .par_iter()
         .map(|(run, rpm, n, ramp)| {
             let input = RunInput::OperatingPoint { motor_rpm_setpoint: *rpm, normal_force_n: *n, ramp_s: *ramp };
-            simulate(&rig_params, &input, &run.data.time_s, &SimOptions::default())
-                .with_context(|| format!("simulating run {}", run.id))
+            simulate(
+                &rig_params,
+                &input,
+                &run.data.time_s,
+                &SimOptions { rtol: p.rtol, atol: p.atol, max_step_s: p.max_step_s },
+            )
+            .with_context(|| format!("simulating run {}", run.id))
         })
         .collect();
     let mut meas_tab = line_header();
