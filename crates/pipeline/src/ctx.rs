@@ -1,11 +1,13 @@
 //! The context a stage runs in: where its inputs are, its parameters, and a
-//! staging area for its outputs.
+//! staging area for its outputs. Its errors do not name the stage: the runner
+//! prefixes every stage error with `stage <name>:` once.
 
 use anyhow::{Context, Result, anyhow};
 use rig_types::{Campaign, FigureSpec, Table};
 use serde::{Serialize, de::DeserializeOwned};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// A stage body: reads through the context, writes through the context.
 pub type StageFn = fn(&mut StageCtx) -> Result<()>;
@@ -25,7 +27,7 @@ pub struct StageCtx {
     pub params: toml::Table,
     /// Relative path -> bytes, committed by the runner after success.
     staged: BTreeMap<String, Vec<u8>>,
-    campaign: Option<Campaign>,
+    campaign: Option<Arc<Campaign>>,
 }
 
 impl StageCtx {
@@ -54,7 +56,7 @@ impl StageCtx {
     /// crate that owns the knobs: an unknown, missing or mistyped key is then an
     /// error that names the stage and the key.
     pub fn typed_params<T: DeserializeOwned>(&self) -> Result<T> {
-        parse_params(&self.params).map_err(|e| anyhow!("pipeline.toml: stage {}: {e}", self.name))
+        parse_params(&self.params).map_err(|e| anyhow!("pipeline.toml: {e}"))
     }
 
     /// A numeric parameter from `[stage.params]` (integers are accepted as floats).
@@ -65,8 +67,8 @@ impl StageCtx {
         match self.params.get(key) {
             Some(toml::Value::Float(x)) => Ok(*x),
             Some(toml::Value::Integer(i)) => Ok(*i as f64),
-            Some(v) => Err(anyhow!("pipeline.toml: stage {}: param {key} = {v} is not a number", self.name)),
-            None => Err(anyhow!("pipeline.toml: stage {}: param {key} is missing", self.name)),
+            Some(v) => Err(anyhow!("pipeline.toml: param {key} = {v} is not a number")),
+            None => Err(anyhow!("pipeline.toml: param {key} is missing")),
         }
     }
 
@@ -76,10 +78,8 @@ impl StageCtx {
     pub fn param_usize(&self, key: &str) -> Result<usize> {
         match self.params.get(key) {
             Some(toml::Value::Integer(i)) if *i >= 0 => Ok(*i as usize),
-            Some(v) => {
-                Err(anyhow!("pipeline.toml: stage {}: param {key} = {v} is not a non-negative integer", self.name))
-            }
-            None => Err(anyhow!("pipeline.toml: stage {}: param {key} is missing", self.name)),
+            Some(v) => Err(anyhow!("pipeline.toml: param {key} = {v} is not a non-negative integer")),
+            None => Err(anyhow!("pipeline.toml: param {key} is missing")),
         }
     }
 
@@ -89,17 +89,23 @@ impl StageCtx {
     pub fn param_str(&self, key: &str) -> Result<String> {
         match self.params.get(key) {
             Some(toml::Value::String(s)) => Ok(s.clone()),
-            Some(v) => Err(anyhow!("pipeline.toml: stage {}: param {key} = {v} is not a string", self.name)),
-            None => Err(anyhow!("pipeline.toml: stage {}: param {key} is missing", self.name)),
+            Some(v) => Err(anyhow!("pipeline.toml: param {key} = {v} is not a string")),
+            None => Err(anyhow!("pipeline.toml: param {key} is missing")),
         }
     }
 
-    /// The campaign, loaded and validated once per stage by `rig-ingest`.
+    /// Gives the stage the campaign the runner has already read and validated
+    /// (once per run, before any stage), so `campaign()` does not read it again.
+    pub fn with_campaign(mut self, campaign: Option<Arc<Campaign>>) -> Self {
+        self.campaign = campaign;
+        self
+    }
+
+    /// The campaign: the runner's validated copy, or read and validated here by `rig-ingest`.
     pub fn campaign(&mut self) -> Result<&Campaign> {
         if self.campaign.is_none() {
-            let c = rig_ingest::read_campaign(&self.campaign_dir)
-                .with_context(|| format!("stage {}: reading campaign", self.name))?;
-            self.campaign = Some(c);
+            let c = rig_ingest::read_campaign(&self.campaign_dir).context("reading the campaign")?;
+            self.campaign = Some(Arc::new(c));
         }
         Ok(self.campaign.as_ref().expect("just loaded"))
     }
@@ -107,18 +113,17 @@ impl StageCtx {
     /// An upstream stage's JSON output, by path relative to the out dir.
     pub fn read_json<T: DeserializeOwned>(&self, rel: &str) -> Result<T> {
         let path = self.out_dir.join(rel);
-        let text = std::fs::read_to_string(&path)
-            .with_context(|| format!("stage {}: reading {}", self.name, path.display()))?;
-        serde_json::from_str(&text).with_context(|| format!("stage {}: parsing {}", self.name, path.display()))
+        let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+        serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))
     }
 
     /// Stages raw bytes for `rel` (relative to the out dir).
     pub fn write_bytes(&mut self, rel: &str, bytes: Vec<u8>) -> Result<()> {
         if rel.starts_with('/') || rel.split('/').any(|p| p == ".." || p.is_empty()) {
-            return Err(anyhow!("stage {}: output path {rel} must be relative and stay inside the out dir", self.name));
+            return Err(anyhow!("output path {rel} must be relative and stay inside the out dir"));
         }
         if self.staged.insert(rel.to_string(), bytes).is_some() {
-            return Err(anyhow!("stage {}: output {rel} written twice", self.name));
+            return Err(anyhow!("output {rel} written twice"));
         }
         Ok(())
     }

@@ -27,7 +27,7 @@ mod store;
 pub use config::{Input, OutputPattern, ParamsCheck, PipelineConfig, Registry, Settings, Sources, StageDecl};
 pub use ctx::{StageCtx, StageFn, parse_params};
 pub use error::PipelineError;
-pub use runner::{Outcome, RunReport, Runner, StageReport};
+pub use runner::{CampaignReader, Outcome, RunReport, Runner, StageReport};
 pub use store::{CacheRecord, FileHash};
 pub mod diff;
 pub mod shards;

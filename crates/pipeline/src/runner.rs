@@ -7,11 +7,15 @@ use crate::error::PipelineError;
 use crate::hash::{canonical_params, hash_path};
 use crate::store::{self, CacheRecord, Fault, FileHash};
 use crate::{StageCtx, graph, manifest};
+use rig_types::Campaign;
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
 use std::sync::mpsc;
+use std::sync::{Arc, Mutex};
+
+/// Reads and validates a campaign folder (`rig_ingest::read_campaign`).
+pub type CampaignReader = fn(&Path) -> Result<Campaign, rig_ingest::IngestError>;
 
 /// How a stage ended in one run.
 #[derive(Debug)]
@@ -117,6 +121,7 @@ pub struct Runner {
     registry: Registry,
     sources: Sources,
     params_check: ParamsCheck,
+    campaign_reader: Option<CampaignReader>,
     campaign: Option<PathBuf>,
     out: Option<PathBuf>,
     jobs: usize,
@@ -140,7 +145,8 @@ impl Runner {
     pub fn new(path: &Path) -> Result<Self, PipelineError> {
         Ok(Self::with_registry(path, crate::stages::lookup)?
             .stage_sources(crate::stages::source)
-            .params_check(crate::stages::check_params))
+            .params_check(crate::stages::check_params)
+            .campaign_reader(rig_ingest::read_campaign))
     }
 
     /// The pipeline at `path` with another registry (tests use fake stages).
@@ -151,6 +157,7 @@ impl Runner {
             registry,
             sources: |_| None,
             params_check: |_, _| Ok(()),
+            campaign_reader: None,
             campaign: None,
             out: None,
             jobs: 2,
@@ -174,6 +181,15 @@ impl Runner {
     /// the whole run, naming the stage and the key).
     pub fn params_check(mut self, check: ParamsCheck) -> Self {
         self.params_check = check;
+        self
+    }
+
+    /// Reads and validates the campaign once per run, before any stage, when a
+    /// selected stage has a `{campaign}` input: a bad campaign refuses the run
+    /// with the reader's one message (file, line, rule). Without it (fake
+    /// registries) stages read the campaign themselves.
+    pub fn campaign_reader(mut self, read: CampaignReader) -> Self {
+        self.campaign_reader = Some(read);
         self
     }
 
@@ -271,11 +287,23 @@ impl Runner {
             })?;
         }
         let dirs = self.dirs();
-        let selected = if self.only.is_empty() {
+        let selected: BTreeSet<String> = if self.only.is_empty() {
             self.config.stages.iter().map(|s| s.name.clone()).collect()
         } else {
             let names: Vec<&str> = self.only.iter().map(String::as_str).collect();
             graph::with_upstream(&self.config, &names)?
+        };
+        // The campaign is read and validated once, before any stage runs, when a
+        // selected stage reads it; stages share this copy.
+        let reads_campaign = self
+            .config
+            .stages
+            .iter()
+            .filter(|s| selected.contains(&s.name))
+            .any(|s| s.inputs.iter().any(|i| matches!(i, Input::Path(p) if p.starts_with("{campaign}"))));
+        let campaign = match self.campaign_reader {
+            Some(read) if reads_campaign && dirs.campaign.is_dir() => Some(Arc::new(read(&dirs.campaign)?)),
+            _ => None,
         };
         let order: Vec<String> =
             graph::topological_order(&self.config)?.into_iter().filter(|n| selected.contains(n)).collect();
@@ -343,9 +371,11 @@ impl Runner {
                     running.insert(name.clone());
                     bar.set_message(running.iter().cloned().collect::<Vec<_>>().join(", "));
                     let (tx, pool, dirs, memo, index) = (tx.clone(), &pool, &dirs, &memo, &index);
+                    let campaign = campaign.clone();
                     scope.spawn(move || {
-                        let report =
-                            pool.install(|| self.run_one(decl, dirs, memo, index, &upstream_runs, &after_outputs));
+                        let report = pool.install(|| {
+                            self.run_one(decl, dirs, memo, index, campaign, &upstream_runs, &after_outputs)
+                        });
                         // The receiver lives until every stage has reported.
                         let _ = tx.send(report);
                     });
@@ -373,6 +403,7 @@ impl Runner {
         dirs: &Dirs,
         memo: &Mutex<BTreeMap<PathBuf, String>>,
         index: &CodeIndex,
+        campaign: Option<Arc<Campaign>>,
         upstream_runs: &[String],
         after_outputs: &[(String, String)],
     ) -> StageReport {
@@ -434,7 +465,7 @@ impl Runner {
         if self.dry_run {
             return report(Outcome::WouldRun, reasons, None);
         }
-        match self.execute(decl, dirs, record) {
+        match self.execute(decl, dirs, campaign, record) {
             Ok(Some(record)) => report(Outcome::Ran, reasons, Some(record)),
             Ok(None) => {
                 report(Outcome::SkippedEmpty, vec!["the stage returned without writing any output".into()], None)
@@ -501,10 +532,17 @@ impl Runner {
     }
 
     /// Runs the body (a panic counts as a failure) and commits what it staged.
-    fn execute(&self, decl: &StageDecl, dirs: &Dirs, mut record: CacheRecord) -> anyhow::Result<Option<CacheRecord>> {
+    fn execute(
+        &self,
+        decl: &StageDecl,
+        dirs: &Dirs,
+        campaign: Option<Arc<Campaign>>,
+        mut record: CacheRecord,
+    ) -> anyhow::Result<Option<CacheRecord>> {
         let body = (self.registry)(&decl.name).expect("validated against the registry");
         let shared = dirs.shared.as_deref();
-        let mut ctx = StageCtx::new(&decl.name, &dirs.campaign, &dirs.thesis, shared, &dirs.out, decl.params.clone());
+        let mut ctx = StageCtx::new(&decl.name, &dirs.campaign, &dirs.thesis, shared, &dirs.out, decl.params.clone())
+            .with_campaign(campaign);
         let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| body(&mut ctx)));
         match result {
             Ok(Ok(())) => {}
@@ -515,7 +553,7 @@ impl Runner {
                     .map(|s| s.to_string())
                     .or_else(|| panic.downcast_ref::<String>().cloned())
                     .unwrap_or_else(|| "non-string panic".into());
-                anyhow::bail!("stage {} panicked: {msg}", decl.name);
+                anyhow::bail!("panicked: {msg}");
             }
         }
         let staged = ctx.into_staged();

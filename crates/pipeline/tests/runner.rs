@@ -639,3 +639,50 @@ fn the_repository_refuses_an_unknown_or_mistyped_param() {
     let err = Runner::new(&path).unwrap().dry_run(true).run().unwrap_err().to_string();
     assert!(err.contains("stage sweeps: [stage.params] first_transient_s: invalid type"), "{err}");
 }
+
+/// A bad campaign is refused once, before any stage runs, with the reader's
+/// one message (file, line, rule) and no repetition; stages never start.
+#[test]
+fn a_bad_campaign_is_refused_before_any_stage_runs() {
+    let root = rig_pipeline::testing::workspace_root();
+    let dir = tempfile::tempdir().unwrap();
+    let camp = dir.path().join("campaign");
+    std::fs::create_dir_all(camp.join("runs")).unwrap();
+    let src = root.join("data/emulated-rig-2026");
+    std::fs::copy(src.join("campaign.toml"), camp.join("campaign.toml")).unwrap();
+    for e in std::fs::read_dir(src.join("runs")).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), camp.join("runs").join(e.file_name())).unwrap();
+    }
+    let cal = camp.join("runs/cal-1.csv");
+    let text = std::fs::read_to_string(&cal).unwrap();
+    std::fs::write(&cal, text.replacen("0.0020,150.10", "0.0020,1e308", 1)).unwrap();
+    let out = dir.path().join("out");
+    let started = std::time::Instant::now();
+    let err = Runner::new(&root.join("pipeline.toml")).unwrap().campaign(&camp).out(&out).run().unwrap_err();
+    let took = started.elapsed();
+    let msg = err.to_string();
+    assert!(msg.starts_with("campaign refused: "), "{msg}");
+    assert!(msg.contains("runs/cal-1.csv:3: brake_force_mv = 1e308 mV is physically impossible"), "{msg}");
+    assert_eq!(msg.lines().count(), 1, "{msg}");
+    assert!(!out.exists(), "no stage ran, not even the out dir was made");
+    // Under a second on an idle machine (polars is optimised in dev builds); generous here for loaded CI.
+    assert!(took < Duration::from_secs(20), "refusal took {took:?}");
+}
+
+/// A stage's error is named once: `stage c: reading …`, not `stage c: stage c: …`.
+#[test]
+fn stage_errors_name_the_stage_once() {
+    fn reads_missing(ctx: &mut StageCtx) -> anyhow::Result<()> {
+        let _: serde_json::Value = ctx.read_json("nothing.json")?;
+        Ok(())
+    }
+    fn reg(_: &str) -> Option<StageFn> {
+        Some(reads_missing as StageFn)
+    }
+    let f = Fixture::new("[[stage]]\nname = \"c\"\noutputs = [\"c.txt\"]\n");
+    let r = Runner::with_registry(&f.root().join("pipeline.toml"), reg).unwrap().run().unwrap();
+    let msg = r.into_result().unwrap_err().to_string();
+    assert!(msg.starts_with("stage c: reading "), "{msg}");
+    assert_eq!(msg.matches("stage c").count(), 1, "{msg}");
+}

@@ -89,7 +89,7 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     let radius_m = campaign.rig.brake_disc_radius_m;
     let runs: Vec<&Run> = campaign.runs_of("operating_point").collect();
     if runs.is_empty() {
-        bail!("stage {}: campaign {} has no operating_point run to simulate", ctx.name, campaign.name);
+        bail!("campaign {} has no operating_point run to simulate", campaign.name);
     }
     // Parallel over runs; collect keeps campaign order, so outputs do not depend on threads.
     let results: Vec<RunResult> =

@@ -104,7 +104,7 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
         sim: SimOptions { rtol: p.rtol, atol: p.atol, max_step_s: p.max_step_s },
         classify: p.classify.clone(),
     };
-    let shard = Shard::parse(&p.shard).with_context(|| format!("pipeline.toml: stage {}: shard", ctx.name))?;
+    let shard = Shard::parse(&p.shard).context("pipeline.toml: [stage.params] shard")?;
     let map = MapSpec {
         speeds_rpm: linspace(p.map_rpm_min, p.map_rpm_max, p.map_rpm_points),
         forces_n: linspace(p.map_force_min_n, p.map_force_max_n, p.map_force_points),
@@ -159,16 +159,15 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     let tpr = campaign.rig.encoder_ticks_per_rev;
     let runs: Vec<&Run> = campaign.runs_of("operating_point").collect();
     if runs.is_empty() {
-        bail!("stage {}: campaign {} has no operating_point run", ctx.name, campaign.name);
+        bail!("campaign {} has no operating_point run", campaign.name);
     }
     let (th, rg) = (&models[0].params, &models[1].params);
     let ops: Vec<OpPoint> = {
         use rayon::prelude::*;
         runs.par_iter().map(|r| op_point(r, th, rg, &settings, tpr)).collect::<Result<_>>()?
     };
-    let labelled = rig_ingest::thesis::read_thesis_tables(&ctx.thesis_dir)
-        .with_context(|| format!("stage {}: reading the thesis tables", ctx.name))?
-        .labelled_points;
+    let labelled =
+        rig_ingest::thesis::read_thesis_tables(&ctx.thesis_dir).context("reading the thesis tables")?.labelled_points;
     let mut labels = Vec::new();
     for l in &labelled {
         let p = Point { motor_rpm: l.motor_rpm, normal_force_n: l.frict_n };
