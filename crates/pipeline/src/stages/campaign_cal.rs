@@ -6,34 +6,12 @@ use crate::StageCtx;
 use anyhow::Result;
 use rig_calibrate::{CalibrationSettings, calibrate_campaign_with, campaign_tables, figures, signal};
 use rig_types::{RunKind, SeriesStyle};
-use serde::Deserialize;
 
-/// `[stage.params]` of `campaign-calibration` (meanings: `CalibrationSettings`).
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Params {
-    pub confidence: f64,
-    pub smooth_half_s: f64,
-    pub peak_fit_half_s: f64,
-    pub twist_hysteresis_ticks: f64,
-    pub twist_min_swing_ticks: f64,
-    pub speed_hysteresis_rad_s: f64,
-    pub speed_min_swing_rad_s: f64,
-    pub skip_extrema: usize,
-}
+/// `[stage.params]` of `campaign-calibration`: the calibration's own settings.
+pub type Params = CalibrationSettings;
 
 pub fn run(ctx: &mut StageCtx) -> Result<()> {
-    let p: Params = ctx.typed_params()?;
-    let settings = CalibrationSettings {
-        confidence: p.confidence,
-        smooth_half_s: p.smooth_half_s,
-        peak_fit_half_s: p.peak_fit_half_s,
-        twist_hysteresis_ticks: p.twist_hysteresis_ticks,
-        twist_min_swing_ticks: p.twist_min_swing_ticks,
-        speed_hysteresis_rad_s: p.speed_hysteresis_rad_s,
-        speed_min_swing_rad_s: p.speed_min_swing_rad_s,
-        skip_extrema: p.skip_extrema,
-    };
+    let settings: Params = ctx.typed_params()?;
     let campaign = ctx.campaign()?.clone();
     let cal = calibrate_campaign_with(&campaign, &settings)?;
 

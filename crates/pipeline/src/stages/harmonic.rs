@@ -3,7 +3,6 @@
 //! for each ω_p of Table 4.8, at 122 rpm / 25 N, for the thesis model and the
 //! rig model: Figs. 4.27-4.29, their line analysis and harmonic.md.
 
-use super::spectra::{fig, series};
 use crate::StageCtx;
 use anyhow::{Context, Result};
 use rayon::prelude::*;
@@ -14,11 +13,11 @@ use rig_spectra::{
     Detrend, Line, LineAnalysis, LineClass, LineOptions, PeakOptions, Window, amplitude_spectrum, analyse_lines,
     spectral_peaks, thin_indices,
 };
+use rig_types::units::RAD_S_TO_RPM;
 use rig_types::{HarmonicFriction, RigParams, RunInput, SeriesStyle, Table, Trajectory, fmt_fixed};
+use rig_types::{figure as fig, series};
 use serde::Deserialize;
 use std::fmt::Write as _;
-
-const RAD_S_TO_RPM: f64 = 30.0 / std::f64::consts::PI;
 
 /// `[stage.params]` of `harmonic`.
 #[derive(Debug, Deserialize)]

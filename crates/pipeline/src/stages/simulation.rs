@@ -28,13 +28,13 @@ use rayon::prelude::*;
 use rig_calibrate::signal::SPEED_HALF_WINDOW_S;
 use rig_calibrate::{CampaignCalibration, ThesisData, friction_torque_nm, rotor_speed_rad_s};
 use rig_model::{SimOptions, friction_coefficient, simulate};
+use rig_types::units::RAD_S_TO_RPM;
 use rig_types::{
     FigureSpec, FrictionLaw, RigParams, Run, RunInput, RunKind, Series, SeriesStyle, Table, Trajectory, fmt_fixed,
 };
 use serde::Deserialize;
 use std::f64::consts::PI;
 
-const RAD_S_TO_RPM: f64 = 60.0 / (2.0 * PI);
 /// Most points a figure series gets (the common rules allow ~2000).
 const MAX_POINTS: usize = 2000;
 /// Overlays keep half that: 40 s at ≤ 1000 points is one point per ≤ 42 ms,

@@ -1,6 +1,5 @@
 //! Stage `spectra`: spectra, peaks and line analysis of every operating point
-//! (measured and simulated), Table 4.8's lines, Figs. 4.22-4.26. Also the small
-//! figure helpers the `harmonic` and `lavi` stages share.
+//! (measured and simulated), Table 4.8's lines, Figs. 4.22-4.26.
 
 use crate::StageCtx;
 use anyhow::{Context, Result};
@@ -11,34 +10,10 @@ use rig_spectra::{
     Detrend, Line, LineAnalysis, LineClass, LineOptions, Peak, PeakOptions, Spectrum, WelchOptions, Window,
     amplitude_spectrum, analyse_lines, frf_h1, spectral_peaks, thin_indices,
 };
-use rig_types::{FigureSpec, RigParams, Run, RunInput, RunKind, Series, SeriesStyle, Table, Trajectory, fmt_fixed};
+use rig_types::units::RAD_S_TO_RPM;
+use rig_types::{RigParams, Run, RunInput, RunKind, SeriesStyle, Table, Trajectory, fmt_fixed};
+use rig_types::{figure as fig, series};
 use serde::Deserialize;
-
-/// A figure spec with no heat map.
-pub(super) fn fig(
-    id: &str,
-    title: &str,
-    caption: &str,
-    x: (&str, usize),
-    y: (&str, usize),
-    series: Vec<Series>,
-) -> FigureSpec {
-    FigureSpec {
-        id: id.to_string(),
-        title: title.to_string(),
-        caption: caption.to_string(),
-        x_label: x.0.to_string(),
-        y_label: y.0.to_string(),
-        series,
-        x_decimals: x.1,
-        y_decimals: y.1,
-        heatmap: None,
-    }
-}
-
-pub(super) fn series(name: &str, x: Vec<f64>, y: Vec<f64>, style: SeriesStyle) -> Series {
-    Series { name: name.to_string(), x, y, style }
-}
 
 /// `[stage.params]` of `spectra`.
 #[derive(Debug, Deserialize)]
@@ -55,8 +30,6 @@ pub struct Params {
     pub tolerance_bins: f64,
     pub table_4_8_records_s: Vec<f64>,
 }
-
-const RAD_S_TO_RPM: f64 = 30.0 / std::f64::consts::PI;
 
 /// One operating point, measured or simulated, over its steady window.
 struct Signals {

@@ -24,12 +24,12 @@ use rig_sweep::{
     ChainResult, Classification, ClassifyOptions, MapSlice, MapSpec, Point, Shard, SweepSettings, WindowSpec,
     bifurcation_chains, chain_table, classify, hysteresis, linspace, map_table, run_chains, run_map_shard,
 };
+use rig_types::units::RAD_S_TO_RPM;
 use rig_types::{FigureSpec, Heatmap, RigParams, Run, RunInput, RunKind, Series, SeriesStyle, Table, fmt_fixed};
 use serde::Deserialize;
 use std::f64::consts::PI;
 use std::io::IsTerminal;
 
-const RAD_S_TO_RPM: f64 = 60.0 / (2.0 * PI);
 const MAX_POINTS: usize = 2000;
 /// Max and min of a window, for the diagrams' two series.
 type Extreme = (&'static str, fn(&Classification) -> f64);
