@@ -152,6 +152,7 @@ pub fn twist_runs(c: &Campaign) -> Result<Vec<TwistRun>, CalibrateError> {
 /// The knobs of the campaign calibration (pipeline.toml `[stage.params]` of
 /// `campaign-calibration`; [`Default`] holds the documented values).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct CalibrationSettings {
     /// Confidence of every interval (two-sided).
     pub confidence: f64,

@@ -42,7 +42,15 @@
 //!   went through floating-point processing. The spec's "zero at the start
 //!   of the run" is *not* enforced: a static-twist run starts with the shaft
 //!   already twisted, counted from the unloaded position (the shipped
-//!   campaign's `twist-1` starts at 70).
+//!   campaign's `twist-1` starts at 70);
+//! - values are physically possible for the rig ("physically possible" of the
+//!   metadata rule, applied to the samples): no signal exceeds what the rig's
+//!   supply can produce. `|motor_voltage_v| <= 1.05 · supply_voltage_v` (the
+//!   drive saturates at ± the supply; 5 % for measurement noise), and
+//!   `|brake_force_mv| <= 1000 · supply_voltage_v` (the force sensor's
+//!   amplifier cannot output more than the supply it runs on: 24 000 mV at
+//!   24 V; the shipped campaign peaks at ~9 100 mV). A sample of 1e308 mV is
+//!   refused with its line.
 //!
 //! Rules are checked in the order above and the first broken one is
 //! reported (campaign.toml entirely before any CSV; runs in file order).
@@ -89,7 +97,53 @@ pub fn read_campaign(dir: &Path) -> Result<Campaign, IngestError> {
                 (name, _) => unreachable!("column {name} of kind {} has no RunData field", spec.name),
             }
         }
+        check_plausible(&entry.resolved, &data, manifest.rig.supply_voltage_v)?;
         runs.push(Run { id: entry.id, kind: entry.kind, file: entry.file, data });
     }
     Ok(Campaign { name: manifest.name, description: manifest.description, rig: manifest.rig, runs })
+}
+
+/// Headroom over the supply for a measured armature voltage (noise on a saturated drive).
+pub const VOLTAGE_MARGIN: f64 = 1.05;
+/// Largest force-sensor output per volt of supply, mV/V (the amplifier runs on the supply).
+pub const FORCE_MV_PER_SUPPLY_V: f64 = 1000.0;
+
+/// The physical-range rule of the samples (crate docs): the first sample out
+/// of range, with its CSV line (data row i is line i + 2).
+fn check_plausible(file: &Path, data: &RunData, supply_v: f64) -> Result<(), IngestError> {
+    let limits = [
+        ("motor_voltage_v", data.motor_voltage_v.as_deref(), VOLTAGE_MARGIN * supply_v, "V", "the drive's supply"),
+        (
+            "brake_force_mv",
+            data.brake_force_mv.as_deref(),
+            FORCE_MV_PER_SUPPLY_V * supply_v,
+            "mV",
+            "what a sensor on the rig's supply can output",
+        ),
+    ];
+    for (name, values, limit, unit, why) in limits {
+        if let Some(i) = values.and_then(|v| v.iter().position(|x| x.abs() > limit)) {
+            let x = values.expect("found in it")[i];
+            return Err(IngestError::rule(
+                file,
+                Some(i + 2),
+                format!(
+                    "{name} = {} {unit} is physically impossible: |{name}| must be <= {} {unit} ({why}, supply_voltage_v = {})",
+                    show(x),
+                    show(limit),
+                    show(supply_v)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A number for a message: plain up to six decimals, scientific when huge or tiny.
+fn show(x: f64) -> String {
+    if x != 0.0 && !(1e-3..1e6).contains(&x.abs()) {
+        return format!("{x:e}");
+    }
+    let s = format!("{x:.6}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
 }

@@ -650,3 +650,19 @@ fn error_accessors_name_file_and_line() {
     assert_eq!(err.line(), Some(5));
     assert!(matches!(err, rig_ingest::IngestError::Rule { .. }));
 }
+
+#[test]
+fn force_sample_beyond_what_the_sensor_can_output() {
+    check(
+        |f| edit(f, "runs/cal-1.csv", "0.0020,150.10", "0.0020,1e308"),
+        "<c>/runs/cal-1.csv:3: brake_force_mv = 1e308 mV is physically impossible: |brake_force_mv| must be <= 24000 mV (what a sensor on the rig's supply can output, supply_voltage_v = 24)",
+    );
+}
+
+#[test]
+fn motor_voltage_beyond_the_supply() {
+    check(
+        |f| edit(f, "runs/op-01.csv", "0.0040,0.050,1,0,3.90", "0.0040,-25.5,1,0,3.90"),
+        "<c>/runs/op-01.csv:4: motor_voltage_v = -25.5 V is physically impossible: |motor_voltage_v| must be <= 25.2 V (the drive's supply, supply_voltage_v = 24)",
+    );
+}

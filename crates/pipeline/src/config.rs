@@ -9,6 +9,14 @@ use std::path::{Path, PathBuf};
 /// The stage registry: a pipeline.toml name -> its body (injectable for tests).
 pub type Registry = fn(&str) -> Option<StageFn>;
 
+/// Where a stage's body lives: a pipeline.toml name -> its source file,
+/// relative to the pipeline.toml folder (the stage's code is computed from it).
+pub type Sources = fn(&str) -> Option<&'static str>;
+
+/// Checks the `[stage.params]` of the stage called by the first argument;
+/// `Err` is a reason naming the key (see `stages::check_params`).
+pub type ParamsCheck = fn(&str, &toml::Table) -> Result<(), String>;
+
 /// `[settings]`: folders relative to the directory holding pipeline.toml.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -17,9 +25,8 @@ pub struct Settings {
     pub thesis: String,
     pub shared: String,
     pub out: String,
-    /// Code every stage depends on (shared types, the reader, the figure
-    /// renderer, the stage context, the lockfile): hashed into every stage's
-    /// key after its own `code`, so a change there re-runs every stage.
+    /// Code every stage depends on that no source names (the lockfile): hashed
+    /// into every stage's key with the code computed from its source (`crate::code`).
     #[serde(default)]
     pub common_code: Vec<String>,
 }
@@ -74,7 +81,9 @@ pub struct StageDecl {
     pub inputs: Vec<Input>,
     /// Stages that must finish first although no data flows (`after`).
     pub after: Vec<String>,
-    /// Paths (relative to the pipeline.toml directory) hashed as the stage's code.
+    /// Paths (relative to the pipeline.toml directory) hashed as the stage's code
+    /// in addition to the code computed from its source (data files it embeds
+    /// are found too; list here only what no source names).
     pub code: Vec<String>,
     pub outputs: Vec<OutputPattern>,
     /// Skipped with a message, not an error, when an input is missing.

@@ -1,11 +1,13 @@
 //! The context a stage runs in: where its inputs are, its parameters, and a
-//! staging area for its outputs.
+//! staging area for its outputs. Its errors do not name the stage: the runner
+//! prefixes every stage error with `stage <name>:` once.
 
 use anyhow::{Context, Result, anyhow};
 use rig_types::{Campaign, FigureSpec, Table};
 use serde::{Serialize, de::DeserializeOwned};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// A stage body: reads through the context, writes through the context.
 pub type StageFn = fn(&mut StageCtx) -> Result<()>;
@@ -25,7 +27,7 @@ pub struct StageCtx {
     pub params: toml::Table,
     /// Relative path -> bytes, committed by the runner after success.
     staged: BTreeMap<String, Vec<u8>>,
-    campaign: Option<Campaign>,
+    campaign: Option<Arc<Campaign>>,
 }
 
 impl StageCtx {
@@ -54,46 +56,56 @@ impl StageCtx {
     /// crate that owns the knobs: an unknown, missing or mistyped key is then an
     /// error that names the stage and the key.
     pub fn typed_params<T: DeserializeOwned>(&self) -> Result<T> {
-        self.params
-            .clone()
-            .try_into::<T>()
-            .map_err(|e| anyhow!("pipeline.toml: stage {}: [stage.params]: {}", self.name, e.to_string().trim()))
+        parse_params(&self.params).map_err(|e| anyhow!("pipeline.toml: {e}"))
     }
 
     /// A numeric parameter from `[stage.params]` (integers are accepted as floats).
+    #[deprecated(
+        note = "declare a #[serde(deny_unknown_fields)] Params struct, read it with typed_params and register it in stages/mod.rs"
+    )]
     pub fn param_f64(&self, key: &str) -> Result<f64> {
         match self.params.get(key) {
             Some(toml::Value::Float(x)) => Ok(*x),
             Some(toml::Value::Integer(i)) => Ok(*i as f64),
-            Some(v) => Err(anyhow!("pipeline.toml: stage {}: param {key} = {v} is not a number", self.name)),
-            None => Err(anyhow!("pipeline.toml: stage {}: param {key} is missing", self.name)),
+            Some(v) => Err(anyhow!("pipeline.toml: param {key} = {v} is not a number")),
+            None => Err(anyhow!("pipeline.toml: param {key} is missing")),
         }
     }
 
+    #[deprecated(
+        note = "declare a #[serde(deny_unknown_fields)] Params struct, read it with typed_params and register it in stages/mod.rs"
+    )]
     pub fn param_usize(&self, key: &str) -> Result<usize> {
         match self.params.get(key) {
             Some(toml::Value::Integer(i)) if *i >= 0 => Ok(*i as usize),
-            Some(v) => {
-                Err(anyhow!("pipeline.toml: stage {}: param {key} = {v} is not a non-negative integer", self.name))
-            }
-            None => Err(anyhow!("pipeline.toml: stage {}: param {key} is missing", self.name)),
+            Some(v) => Err(anyhow!("pipeline.toml: param {key} = {v} is not a non-negative integer")),
+            None => Err(anyhow!("pipeline.toml: param {key} is missing")),
         }
     }
 
+    #[deprecated(
+        note = "declare a #[serde(deny_unknown_fields)] Params struct, read it with typed_params and register it in stages/mod.rs"
+    )]
     pub fn param_str(&self, key: &str) -> Result<String> {
         match self.params.get(key) {
             Some(toml::Value::String(s)) => Ok(s.clone()),
-            Some(v) => Err(anyhow!("pipeline.toml: stage {}: param {key} = {v} is not a string", self.name)),
-            None => Err(anyhow!("pipeline.toml: stage {}: param {key} is missing", self.name)),
+            Some(v) => Err(anyhow!("pipeline.toml: param {key} = {v} is not a string")),
+            None => Err(anyhow!("pipeline.toml: param {key} is missing")),
         }
     }
 
-    /// The campaign, loaded and validated once per stage by `rig-ingest`.
+    /// Gives the stage the campaign the runner has already read and validated
+    /// (once per run, before any stage), so `campaign()` does not read it again.
+    pub fn with_campaign(mut self, campaign: Option<Arc<Campaign>>) -> Self {
+        self.campaign = campaign;
+        self
+    }
+
+    /// The campaign: the runner's validated copy, or read and validated here by `rig-ingest`.
     pub fn campaign(&mut self) -> Result<&Campaign> {
         if self.campaign.is_none() {
-            let c = rig_ingest::read_campaign(&self.campaign_dir)
-                .with_context(|| format!("stage {}: reading campaign", self.name))?;
-            self.campaign = Some(c);
+            let c = rig_ingest::read_campaign(&self.campaign_dir).context("reading the campaign")?;
+            self.campaign = Some(Arc::new(c));
         }
         Ok(self.campaign.as_ref().expect("just loaded"))
     }
@@ -101,18 +113,17 @@ impl StageCtx {
     /// An upstream stage's JSON output, by path relative to the out dir.
     pub fn read_json<T: DeserializeOwned>(&self, rel: &str) -> Result<T> {
         let path = self.out_dir.join(rel);
-        let text = std::fs::read_to_string(&path)
-            .with_context(|| format!("stage {}: reading {}", self.name, path.display()))?;
-        serde_json::from_str(&text).with_context(|| format!("stage {}: parsing {}", self.name, path.display()))
+        let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+        serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))
     }
 
     /// Stages raw bytes for `rel` (relative to the out dir).
     pub fn write_bytes(&mut self, rel: &str, bytes: Vec<u8>) -> Result<()> {
         if rel.starts_with('/') || rel.split('/').any(|p| p == ".." || p.is_empty()) {
-            return Err(anyhow!("stage {}: output path {rel} must be relative and stay inside the out dir", self.name));
+            return Err(anyhow!("output path {rel} must be relative and stay inside the out dir"));
         }
         if self.staged.insert(rel.to_string(), bytes).is_some() {
-            return Err(anyhow!("stage {}: output {rel} written twice", self.name));
+            return Err(anyhow!("output {rel} written twice"));
         }
         Ok(())
     }
@@ -151,5 +162,60 @@ impl StageCtx {
 
     pub fn staged(&self) -> &BTreeMap<String, Vec<u8>> {
         &self.staged
+    }
+}
+
+/// `params` (a stage's `[stage.params]`) as `T`, or a one-line reason naming
+/// the key: `[stage.params] rtol: invalid type: …` (callers add the stage).
+/// The runner calls this for every stage before any stage runs
+/// (`stages::check_params`); `StageCtx::typed_params` calls it in the body.
+pub fn parse_params<T: DeserializeOwned>(params: &toml::Table) -> std::result::Result<T, String> {
+    // Through TOML text, so a type error carries a span that points at its key.
+    let text = toml::to_string(params).map_err(|e| format!("[stage.params]: {e}"))?;
+    toml::from_str::<T>(&text).map_err(|e| {
+        let key = e.span().and_then(|span| {
+            let line_start = text[..span.start.min(text.len())].rfind('\n').map_or(0, |i| i + 1);
+            let line = &text[line_start..];
+            let (k, _) = line.split_once('=')?;
+            Some(k.trim().trim_matches('"').to_string())
+        });
+        let msg = e.message().trim().to_string();
+        match key {
+            // "missing field `x`" and "unknown field `x`" name their key already.
+            Some(k) if !k.is_empty() && !msg.contains("field `") => format!("[stage.params] {k}: {msg}"),
+            _ => format!("[stage.params]: {msg}"),
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Debug, serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    #[allow(dead_code)]
+    struct P {
+        rtol: f64,
+        points: usize,
+        name: String,
+    }
+
+    fn err(text: &str) -> String {
+        parse_params::<P>(&toml::from_str(text).unwrap()).unwrap_err()
+    }
+
+    #[test]
+    fn parse_params_names_the_key() {
+        let ok = parse_params::<P>(&toml::from_str("rtol = 1e-8\npoints = 3\nname = \"a\"").unwrap()).unwrap();
+        assert_eq!(ok.points, 3);
+        let e = err("rtol = 1e-8\npoints = 3\nname = \"a\"\nrtoll = 2.0");
+        assert!(e.starts_with("[stage.params]") && e.contains("`rtoll`"), "{e}");
+        let e = err("rtol = \"x\"\npoints = 3\nname = \"a\"");
+        assert!(e.starts_with("[stage.params] rtol: "), "{e}");
+        let e = err("rtol = 1.0\npoints = -3\nname = \"a\"");
+        assert!(e.starts_with("[stage.params] points: "), "{e}");
+        let e = err("rtol = 1.0\nname = \"a\"");
+        assert_eq!(e, "[stage.params]: missing field `points`");
     }
 }

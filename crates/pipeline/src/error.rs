@@ -29,6 +29,10 @@ pub enum PipelineError {
     #[error("no stage named {0} in pipeline.toml")]
     UnknownStage(String),
 
+    /// The campaign breaks a rule of the recording format (refused before any stage runs).
+    #[error("campaign refused: {0}")]
+    Campaign(#[from] rig_ingest::IngestError),
+
     /// A cache record or the manifest could not be (de)serialised.
     #[error("{}: {reason}", path.display())]
     Json { path: PathBuf, reason: String },

@@ -9,9 +9,11 @@
 //!
 //! The runner ([`Runner`]) reads pipeline.toml ([`PipelineConfig`]), runs the
 //! stages in dependency order (independent ones in parallel), skips a stage
-//! whose key (blake3 of name, params, inputs and code) and outputs are
-//! unchanged, and writes `<out>/manifest.json`.
+//! whose key (blake3 of name, params, inputs and code — computed from the
+//! stage's source, see [`code`]) and outputs are unchanged, and writes
+//! `<out>/manifest.json`.
 
+pub mod code;
 mod config;
 mod ctx;
 mod error;
@@ -22,10 +24,10 @@ mod runner;
 pub mod stages;
 mod store;
 
-pub use config::{Input, OutputPattern, PipelineConfig, Registry, Settings, StageDecl};
-pub use ctx::{StageCtx, StageFn};
+pub use config::{Input, OutputPattern, ParamsCheck, PipelineConfig, Registry, Settings, Sources, StageDecl};
+pub use ctx::{StageCtx, StageFn, parse_params};
 pub use error::PipelineError;
-pub use runner::{Outcome, RunReport, Runner, StageReport};
+pub use runner::{CampaignReader, Outcome, RunReport, Runner, StageReport};
 pub use store::{CacheRecord, FileHash};
 pub mod diff;
 pub mod shards;

@@ -1,16 +1,21 @@
 //! The DAG runner: dependency order with independent stages in parallel, skip
 //! by content hash, atomic commits, the manifest, and a report of what ran and why.
 
-use crate::config::{Input, PipelineConfig, Registry, StageDecl};
+use crate::code::CodeIndex;
+use crate::config::{Input, ParamsCheck, PipelineConfig, Registry, Sources, StageDecl};
 use crate::error::PipelineError;
 use crate::hash::{canonical_params, hash_path};
 use crate::store::{self, CacheRecord, Fault, FileHash};
 use crate::{StageCtx, graph, manifest};
+use rig_types::Campaign;
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
 use std::sync::mpsc;
+use std::sync::{Arc, Mutex};
+
+/// Reads and validates a campaign folder (`rig_ingest::read_campaign`).
+pub type CampaignReader = fn(&Path) -> Result<Campaign, rig_ingest::IngestError>;
 
 /// How a stage ended in one run.
 #[derive(Debug)]
@@ -114,6 +119,9 @@ impl RunReport {
 pub struct Runner {
     config: PipelineConfig,
     registry: Registry,
+    sources: Sources,
+    params_check: ParamsCheck,
+    campaign_reader: Option<CampaignReader>,
     campaign: Option<PathBuf>,
     out: Option<PathBuf>,
     jobs: usize,
@@ -135,7 +143,10 @@ struct Dirs {
 impl Runner {
     /// The pipeline at `path` with the real stage bodies.
     pub fn new(path: &Path) -> Result<Self, PipelineError> {
-        Self::with_registry(path, crate::stages::lookup)
+        Ok(Self::with_registry(path, crate::stages::lookup)?
+            .stage_sources(crate::stages::source)
+            .params_check(crate::stages::check_params)
+            .campaign_reader(rig_ingest::read_campaign))
     }
 
     /// The pipeline at `path` with another registry (tests use fake stages).
@@ -144,6 +155,9 @@ impl Runner {
         Ok(Runner {
             config,
             registry,
+            sources: |_| None,
+            params_check: |_, _| Ok(()),
+            campaign_reader: None,
             campaign: None,
             out: None,
             jobs: 2,
@@ -152,6 +166,31 @@ impl Runner {
             progress: false,
             faults: BTreeMap::new(),
         })
+    }
+
+    /// Where each stage's body is (relative to the pipeline.toml folder): its
+    /// code is computed from that file (see `crate::code`) and added to the
+    /// stage's declared `code`. Without it (fake registries) only declared code counts.
+    pub fn stage_sources(mut self, sources: Sources) -> Self {
+        self.sources = sources;
+        self
+    }
+
+    /// How each stage's `[stage.params]` is checked: every declared stage's
+    /// params, after `--set` overrides, before any stage runs (`run` refuses
+    /// the whole run, naming the stage and the key).
+    pub fn params_check(mut self, check: ParamsCheck) -> Self {
+        self.params_check = check;
+        self
+    }
+
+    /// Reads and validates the campaign once per run, before any stage, when a
+    /// selected stage has a `{campaign}` input: a bad campaign refuses the run
+    /// with the reader's one message (file, line, rule). Without it (fake
+    /// registries) stages read the campaign themselves.
+    pub fn campaign_reader(mut self, read: CampaignReader) -> Self {
+        self.campaign_reader = Some(read);
+        self
     }
 
     pub fn config(&self) -> &PipelineConfig {
@@ -240,12 +279,31 @@ impl Runner {
     /// Runs (or with `dry_run` only assesses) every selected stage.
     /// Stage failures are in the report; an `Err` means the run could not start.
     pub fn run(&self) -> Result<RunReport, PipelineError> {
+        for decl in &self.config.stages {
+            (self.params_check)(&decl.name, &decl.params).map_err(|reason| PipelineError::Config {
+                path: self.config.path.clone(),
+                stage: Some(decl.name.clone()),
+                reason,
+            })?;
+        }
         let dirs = self.dirs();
-        let selected = if self.only.is_empty() {
+        let selected: BTreeSet<String> = if self.only.is_empty() {
             self.config.stages.iter().map(|s| s.name.clone()).collect()
         } else {
             let names: Vec<&str> = self.only.iter().map(String::as_str).collect();
             graph::with_upstream(&self.config, &names)?
+        };
+        // The campaign is read and validated once, before any stage runs, when a
+        // selected stage reads it; stages share this copy.
+        let reads_campaign = self
+            .config
+            .stages
+            .iter()
+            .filter(|s| selected.contains(&s.name))
+            .any(|s| s.inputs.iter().any(|i| matches!(i, Input::Path(p) if p.starts_with("{campaign}"))));
+        let campaign = match self.campaign_reader {
+            Some(read) if reads_campaign && dirs.campaign.is_dir() => Some(Arc::new(read(&dirs.campaign)?)),
+            _ => None,
         };
         let order: Vec<String> =
             graph::topological_order(&self.config)?.into_iter().filter(|n| selected.contains(n)).collect();
@@ -266,6 +324,7 @@ impl Runner {
         } else {
             indicatif::ProgressBar::hidden()
         };
+        let index = CodeIndex::load(&self.config.root)?;
         let memo = Mutex::new(BTreeMap::new());
         let mut done: BTreeMap<String, StageReport> = BTreeMap::new();
         std::thread::scope(|scope| {
@@ -311,9 +370,12 @@ impl Runner {
                         .collect();
                     running.insert(name.clone());
                     bar.set_message(running.iter().cloned().collect::<Vec<_>>().join(", "));
-                    let (tx, pool, dirs, memo) = (tx.clone(), &pool, &dirs, &memo);
+                    let (tx, pool, dirs, memo, index) = (tx.clone(), &pool, &dirs, &memo, &index);
+                    let campaign = campaign.clone();
                     scope.spawn(move || {
-                        let report = pool.install(|| self.run_one(decl, dirs, memo, &upstream_runs, &after_outputs));
+                        let report = pool.install(|| {
+                            self.run_one(decl, dirs, memo, index, campaign, &upstream_runs, &after_outputs)
+                        });
                         // The receiver lives until every stage has reported.
                         let _ = tx.send(report);
                     });
@@ -340,6 +402,8 @@ impl Runner {
         decl: &StageDecl,
         dirs: &Dirs,
         memo: &Mutex<BTreeMap<PathBuf, String>>,
+        index: &CodeIndex,
+        campaign: Option<Arc<Campaign>>,
         upstream_runs: &[String],
         after_outputs: &[(String, String)],
     ) -> StageReport {
@@ -372,7 +436,7 @@ impl Runner {
             }
             resolved.push((input.label(), path, memoise));
         }
-        let record = match self.fingerprint(decl, &resolved, memo) {
+        let record = match self.fingerprint(decl, &resolved, memo, index) {
             Ok(mut r) => {
                 if !after_outputs.is_empty() {
                     let mut key = blake3::Hasher::new();
@@ -401,7 +465,7 @@ impl Runner {
         if self.dry_run {
             return report(Outcome::WouldRun, reasons, None);
         }
-        match self.execute(decl, dirs, record) {
+        match self.execute(decl, dirs, campaign, record) {
             Ok(Some(record)) => report(Outcome::Ran, reasons, Some(record)),
             Ok(None) => {
                 report(Outcome::SkippedEmpty, vec!["the stage returned without writing any output".into()], None)
@@ -411,12 +475,14 @@ impl Runner {
     }
 
     /// The key and component hashes of a stage: name, canonical params, every
-    /// input's content (directories recursively), every code path's content.
+    /// input's content (directories recursively), every code path's content
+    /// (computed from the stage's source, plus what pipeline.toml declares).
     fn fingerprint(
         &self,
         decl: &StageDecl,
         inputs: &[(String, PathBuf, bool)],
         memo: &Mutex<BTreeMap<PathBuf, String>>,
+        index: &CodeIndex,
     ) -> Result<CacheRecord, PipelineError> {
         let hashed = |path: &Path, memoise: bool| -> Result<String, PipelineError> {
             if memoise && let Some(h) = memo.lock().expect("memo lock").get(path) {
@@ -442,7 +508,7 @@ impl Runner {
             input_hashes.insert(label.clone(), h);
         }
         let mut code = BTreeMap::new();
-        for c in &decl.code {
+        for c in &index.stage_code((self.sources)(&decl.name), &decl.code)?.paths {
             let path = self.config.root.join(c);
             if !path.exists() {
                 return Err(PipelineError::Config {
@@ -466,10 +532,17 @@ impl Runner {
     }
 
     /// Runs the body (a panic counts as a failure) and commits what it staged.
-    fn execute(&self, decl: &StageDecl, dirs: &Dirs, mut record: CacheRecord) -> anyhow::Result<Option<CacheRecord>> {
+    fn execute(
+        &self,
+        decl: &StageDecl,
+        dirs: &Dirs,
+        campaign: Option<Arc<Campaign>>,
+        mut record: CacheRecord,
+    ) -> anyhow::Result<Option<CacheRecord>> {
         let body = (self.registry)(&decl.name).expect("validated against the registry");
         let shared = dirs.shared.as_deref();
-        let mut ctx = StageCtx::new(&decl.name, &dirs.campaign, &dirs.thesis, shared, &dirs.out, decl.params.clone());
+        let mut ctx = StageCtx::new(&decl.name, &dirs.campaign, &dirs.thesis, shared, &dirs.out, decl.params.clone())
+            .with_campaign(campaign);
         let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| body(&mut ctx)));
         match result {
             Ok(Ok(())) => {}
@@ -480,7 +553,7 @@ impl Runner {
                     .map(|s| s.to_string())
                     .or_else(|| panic.downcast_ref::<String>().cloned())
                     .unwrap_or_else(|| "non-string panic".into());
-                anyhow::bail!("stage {} panicked: {msg}", decl.name);
+                anyhow::bail!("panicked: {msg}");
             }
         }
         let staged = ctx.into_staged();

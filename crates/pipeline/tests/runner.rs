@@ -547,3 +547,142 @@ write = ["e.txt"]
     assert_eq!(reasons(&r, "e"), ["input @d/d.txt changed"]);
     assert!(f.read_out("e.txt").contains("tag 2"));
 }
+
+/// Stage code is computed: in a small workspace where stage `s`'s body names
+/// `rig_a::` and rig-a depends on rig-b, appending a line to rig-b's source
+/// makes `--dry-run` re-run `s` and say why; a crate it does not use does not.
+#[test]
+fn stage_code_is_computed_from_the_crates_the_body_uses() {
+    let f = Fixture::new(
+        r#"
+[[stage]]
+name = "s"
+inputs = ["{campaign}/a.txt"]
+outputs = ["s.txt"]
+[stage.params]
+write = ["s.txt"]
+"#,
+    );
+    f.write(
+        "Cargo.toml",
+        "[workspace.dependencies]\nrig-a = { path = \"crates/a\" }\nrig-b = { path = \"crates/b\" }\nrig-c = { path = \"crates/c\" }\n",
+    );
+    f.write(
+        "crates/a/Cargo.toml",
+        "[dependencies]\nrig-b.workspace = true\n[dev-dependencies]\nrig-c.workspace = true\n",
+    );
+    f.write("crates/a/src/lib.rs", "//! a\n");
+    f.write("crates/b/Cargo.toml", "[dependencies]\n");
+    f.write("crates/b/src/lib.rs", "//! b\n");
+    f.write("crates/b/assets/x.txt", "data\n");
+    f.write("crates/b/src/data.rs", "//! b data\nstatic X: &str = include_str!(\"../assets/x.txt\");\n");
+    f.write("crates/c/Cargo.toml", "[dependencies]\n");
+    f.write("crates/c/src/lib.rs", "//! c\n");
+    f.write("stages/s.rs", "//! s\nuse crate::helper;\nfn run() { rig_a::go(); }\n");
+    f.write("src/helper.rs", "//! helper\n");
+    let runner = || f.runner().stage_sources(|n| (n == "s").then_some("stages/s.rs"));
+    runner().run().unwrap();
+    let code = &runner().run().unwrap().stage("s").unwrap().record.clone().unwrap().code;
+    let paths: Vec<&str> = code.keys().map(String::as_str).collect();
+    assert!(paths.contains(&"crates/a/src") && paths.contains(&"crates/b/src"), "{paths:?}");
+    assert!(paths.contains(&"crates/b/assets/x.txt") && paths.contains(&"stages/s.rs"), "{paths:?}");
+    assert!(!paths.contains(&"crates/c/src"), "a dev-dependency is not code the stage runs: {paths:?}");
+
+    f.write("crates/c/src/lib.rs", "//! c\n// unused by s\n");
+    assert_eq!(outcome(&runner().dry_run(true).run().unwrap(), "s"), "UpToDate");
+    f.write("crates/b/src/lib.rs", "//! b\n// one more line\n");
+    let r = runner().dry_run(true).run().unwrap();
+    assert_eq!(outcome(&r, "s"), "WouldRun");
+    assert_eq!(reasons(&r, "s"), ["code crates/b/src changed"]);
+    f.write("crates/b/assets/x.txt", "other data\n");
+    f.write("crates/b/src/lib.rs", "//! b\n");
+    assert_eq!(reasons(&runner().dry_run(true).run().unwrap(), "s"), ["code crates/b/assets/x.txt changed"]);
+}
+
+/// Params are checked for every stage before any stage runs: a stage whose
+/// check refuses its params stops the whole run, naming the stage and the key.
+#[test]
+fn params_are_checked_for_every_stage_before_any_runs() {
+    #[derive(serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    #[allow(dead_code)]
+    struct DParams {
+        write: Vec<String>,
+    }
+    fn check(name: &str, params: &toml::Table) -> Result<(), String> {
+        if name == "d" { rig_pipeline::parse_params::<DParams>(params).map(|_| ()) } else { Ok(()) }
+    }
+    let f = Fixture::new(DIAMOND);
+    f.edit_toml("write = [\"d.txt\"]", "write = [\"d.txt\"]\nwirte = 1");
+    let err = f.runner().params_check(check).run().unwrap_err().to_string();
+    assert!(err.contains("stage d") && err.contains("unknown field `wirte`"), "{err}");
+    assert!(!f.out().exists(), "nothing ran, not even the out dir was made");
+    f.edit_toml("wirte = 1", "");
+    assert_eq!(f.runner().params_check(check).run().unwrap().ran(), ["a", "b", "c", "d"]);
+}
+
+/// The repository's pipeline.toml with a misspelt key is refused up front,
+/// naming the stage and the key; a mistyped value names its key.
+#[test]
+fn the_repository_refuses_an_unknown_or_mistyped_param() {
+    let root = rig_pipeline::testing::workspace_root();
+    let text = std::fs::read_to_string(root.join("pipeline.toml")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("pipeline.toml");
+    let bad = text.replacen("limit_cycle_s = 20.0", "limit_cycle_s = 20.0\nlimit_cycle = 20.0", 1);
+    assert_ne!(bad, text);
+    std::fs::write(&path, &bad).unwrap();
+    let err = Runner::new(&path).unwrap().dry_run(true).run().unwrap_err().to_string();
+    assert!(err.contains("stage simulation") && err.contains("unknown field `limit_cycle`"), "{err}");
+    let bad = text.replacen("first_transient_s = 40.0", "first_transient_s = \"40 s\"", 1);
+    std::fs::write(&path, &bad).unwrap();
+    let err = Runner::new(&path).unwrap().dry_run(true).run().unwrap_err().to_string();
+    assert!(err.contains("stage sweeps: [stage.params] first_transient_s: invalid type"), "{err}");
+}
+
+/// A bad campaign is refused once, before any stage runs, with the reader's
+/// one message (file, line, rule) and no repetition; stages never start.
+#[test]
+fn a_bad_campaign_is_refused_before_any_stage_runs() {
+    let root = rig_pipeline::testing::workspace_root();
+    let dir = tempfile::tempdir().unwrap();
+    let camp = dir.path().join("campaign");
+    std::fs::create_dir_all(camp.join("runs")).unwrap();
+    let src = root.join("data/emulated-rig-2026");
+    std::fs::copy(src.join("campaign.toml"), camp.join("campaign.toml")).unwrap();
+    for e in std::fs::read_dir(src.join("runs")).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), camp.join("runs").join(e.file_name())).unwrap();
+    }
+    let cal = camp.join("runs/cal-1.csv");
+    let text = std::fs::read_to_string(&cal).unwrap();
+    std::fs::write(&cal, text.replacen("0.0020,150.10", "0.0020,1e308", 1)).unwrap();
+    let out = dir.path().join("out");
+    let started = std::time::Instant::now();
+    let err = Runner::new(&root.join("pipeline.toml")).unwrap().campaign(&camp).out(&out).run().unwrap_err();
+    let took = started.elapsed();
+    let msg = err.to_string();
+    assert!(msg.starts_with("campaign refused: "), "{msg}");
+    assert!(msg.contains("runs/cal-1.csv:3: brake_force_mv = 1e308 mV is physically impossible"), "{msg}");
+    assert_eq!(msg.lines().count(), 1, "{msg}");
+    assert!(!out.exists(), "no stage ran, not even the out dir was made");
+    // Under a second on an idle machine (polars is optimised in dev builds); generous here for loaded CI.
+    assert!(took < Duration::from_secs(20), "refusal took {took:?}");
+}
+
+/// A stage's error is named once: `stage c: reading …`, not `stage c: stage c: …`.
+#[test]
+fn stage_errors_name_the_stage_once() {
+    fn reads_missing(ctx: &mut StageCtx) -> anyhow::Result<()> {
+        let _: serde_json::Value = ctx.read_json("nothing.json")?;
+        Ok(())
+    }
+    fn reg(_: &str) -> Option<StageFn> {
+        Some(reads_missing as StageFn)
+    }
+    let f = Fixture::new("[[stage]]\nname = \"c\"\noutputs = [\"c.txt\"]\n");
+    let r = Runner::with_registry(&f.root().join("pipeline.toml"), reg).unwrap().run().unwrap();
+    let msg = r.into_result().unwrap_err().to_string();
+    assert!(msg.starts_with("stage c: reading "), "{msg}");
+    assert_eq!(msg.matches("stage c").count(), 1, "{msg}");
+}

@@ -38,6 +38,7 @@ use serde::{Deserialize, Serialize};
 
 /// Thresholds of the classifier (see the module docs for where each is used).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ClassifyOptions {
     /// Peak-to-peak below which a window is an equilibrium, rad/s. 0.5 rad/s is
     /// about three ticks of the differentiator's resolution (2π/1000 rad over 40 ms).

@@ -8,13 +8,15 @@
 //!   previous point's end state), [`bifurcation_chains`] up and down;
 //! - [`MapSpec`], [`run_map_shard`], [`merge_slices`], [`Shard`]: severity
 //!   maps sharded by chain index and merged back, byte-identical to one run;
-//! - [`map_table`], [`chain_table`]: the CSV tables.
+//! - [`map_table`], [`chain_table`]: the CSV tables;
+//! - [`harmonic`]: Eq. 4-11 and the normal-force modulation (Figs. 4.27-4.29).
 //!
 //! Determinism: chains are independent and run in parallel, and `collect`
 //! keeps chain order; nothing reads a clock or a random source.
 
 mod classify;
 mod continuation;
+pub mod harmonic;
 mod tables;
 
 pub use classify::{Classification, ClassifyOptions, Regime, classify};
@@ -34,4 +36,7 @@ pub enum SweepError {
     /// Map slices that do not join into one map.
     #[error("cannot merge map slices: {rule}")]
     Merge { rule: &'static str },
+    /// A simulation or spectrum of a study failed (what, and why).
+    #[error("{0}")]
+    Analysis(String),
 }

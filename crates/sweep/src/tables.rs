@@ -2,9 +2,8 @@
 
 use crate::continuation::{ChainResult, MapSlice};
 use rig_types::{Table, fmt_fixed};
-use std::f64::consts::PI;
 
-const RAD_S_TO_RPM: f64 = 60.0 / (2.0 * PI);
+use rig_types::units::RAD_S_TO_RPM;
 
 const COLUMNS: [&str; 13] = [
     "direction",

@@ -48,3 +48,30 @@ pub struct Heatmap {
     pub z: Vec<Vec<f64>>,
     pub z_label: String,
 }
+
+/// A figure with no heat map: `x` and `y` are (axis label, decimals printed).
+pub fn figure(
+    id: &str,
+    title: &str,
+    caption: &str,
+    x: (&str, usize),
+    y: (&str, usize),
+    series: Vec<Series>,
+) -> FigureSpec {
+    FigureSpec {
+        id: id.to_string(),
+        title: title.to_string(),
+        caption: caption.to_string(),
+        x_label: x.0.to_string(),
+        y_label: y.0.to_string(),
+        series,
+        x_decimals: x.1,
+        y_decimals: y.1,
+        heatmap: None,
+    }
+}
+
+/// One named data series.
+pub fn series(name: &str, x: Vec<f64>, y: Vec<f64>, style: SeriesStyle) -> Series {
+    Series { name: name.to_string(), x, y, style }
+}

@@ -7,9 +7,10 @@ mod params;
 mod table;
 pub mod thesis;
 mod trajectory;
+pub mod units;
 
 pub use campaign::{Campaign, RigInfo, Run, RunData, RunKind};
-pub use figure::{FigureSpec, Heatmap, Series, SeriesStyle};
+pub use figure::{FigureSpec, Heatmap, Series, SeriesStyle, figure, series};
 pub use params::{
     DriveParams, Effect, FrictionLaw, HarmonicFriction, ModelKind, MotorParams, RigParams, RunInput, ThesisFriction,
 };

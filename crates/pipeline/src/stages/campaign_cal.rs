@@ -7,17 +7,11 @@ use anyhow::Result;
 use rig_calibrate::{CalibrationSettings, calibrate_campaign_with, campaign_tables, figures, signal};
 use rig_types::{RunKind, SeriesStyle};
 
+/// `[stage.params]` of `campaign-calibration`: the calibration's own settings.
+pub type Params = CalibrationSettings;
+
 pub fn run(ctx: &mut StageCtx) -> Result<()> {
-    let settings = CalibrationSettings {
-        confidence: ctx.param_f64("confidence")?,
-        smooth_half_s: ctx.param_f64("smooth_half_s")?,
-        peak_fit_half_s: ctx.param_f64("peak_fit_half_s")?,
-        twist_hysteresis_ticks: ctx.param_f64("twist_hysteresis_ticks")?,
-        twist_min_swing_ticks: ctx.param_f64("twist_min_swing_ticks")?,
-        speed_hysteresis_rad_s: ctx.param_f64("speed_hysteresis_rad_s")?,
-        speed_min_swing_rad_s: ctx.param_f64("speed_min_swing_rad_s")?,
-        skip_extrema: ctx.param_usize("skip_extrema")?,
-    };
+    let settings: Params = ctx.typed_params()?;
     let campaign = ctx.campaign()?.clone();
     let cal = calibrate_campaign_with(&campaign, &settings)?;
 

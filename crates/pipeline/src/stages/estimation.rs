@@ -3,55 +3,99 @@
 //! operating points (rig_estimate::estimate_rig), with its fit report.
 
 use crate::StageCtx;
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use rig_calibrate::{CampaignCalibration, ThesisData};
 use rig_estimate::{EstimateOptions, InitialValues, PiMethod, SolverKind, StepResidual, estimate_rig, output};
+use serde::Deserialize;
 
-/// Options from `[stage.params]`; every knob is explicit there.
-fn options(ctx: &StageCtx, thesis: &ThesisData) -> Result<EstimateOptions> {
+/// `[stage.params]` of `estimation`; every knob is explicit there.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Params {
+    pub solver: Solver,
+    pub max_iterations: usize,
+    pub ftol: f64,
+    pub xtol: f64,
+    pub gtol: f64,
+    pub fd_step: f64,
+    pub gear_ratio: f64,
+    pub window_samples: usize,
+    pub residual: Residual,
+    pub free_inductance: bool,
+    /// Comma-separated voltage-step ids; empty: the estimator's own split.
+    pub holdout: String,
+    pub whiteness_max_lag: usize,
+    pub pi_method: Pi,
+    pub pi_window_samples: usize,
+    pub saturation_margin_v: f64,
+    pub slip_threshold_rad_s: f64,
+    pub speed_half_window: usize,
+    pub min_stick_s: f64,
+}
+
+/// `solver = "lm" | "gauss_newton_ls"`.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Solver {
+    Lm,
+    GaussNewtonLs,
+}
+
+/// `residual = "speed" | "angle"`.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Residual {
+    Speed,
+    Angle,
+}
+
+/// `pi_method = "corrected_ls" | "iv"`.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Pi {
+    CorrectedLs,
+    Iv,
+}
+
+/// The estimator's options from the stage's params.
+fn options(p: &Params, thesis: &ThesisData) -> EstimateOptions {
     let mut o = EstimateOptions::new(InitialValues::from_thesis_data(thesis));
-    o.solver_kind = match ctx.param_str("solver")?.as_str() {
-        "lm" => SolverKind::LevenbergMarquardt,
-        "gauss_newton_ls" => SolverKind::GaussNewtonLineSearch,
-        other => bail!("pipeline.toml: stage {}: solver = {other:?} must be \"lm\" or \"gauss_newton_ls\"", ctx.name),
+    o.solver_kind = match p.solver {
+        Solver::Lm => SolverKind::LevenbergMarquardt,
+        Solver::GaussNewtonLs => SolverKind::GaussNewtonLineSearch,
     };
-    o.solver.max_iterations = ctx.param_usize("max_iterations")?;
-    o.solver.ftol = ctx.param_f64("ftol")?;
-    o.solver.xtol = ctx.param_f64("xtol")?;
-    o.solver.gtol = ctx.param_f64("gtol")?;
-    o.solver.fd_step = ctx.param_f64("fd_step")?;
-    o.gear_ratio = ctx.param_f64("gear_ratio")?;
-    o.speed_window_samples = ctx.param_usize("window_samples")?;
-    o.step_residual = match ctx.param_str("residual")?.as_str() {
-        "angle" => StepResidual::Angle,
-        "speed" => StepResidual::Speed,
-        other => bail!("pipeline.toml: stage {}: residual = {other:?} must be \"angle\" or \"speed\"", ctx.name),
+    o.solver.max_iterations = p.max_iterations;
+    o.solver.ftol = p.ftol;
+    o.solver.xtol = p.xtol;
+    o.solver.gtol = p.gtol;
+    o.solver.fd_step = p.fd_step;
+    o.gear_ratio = p.gear_ratio;
+    o.speed_window_samples = p.window_samples;
+    o.step_residual = match p.residual {
+        Residual::Angle => StepResidual::Angle,
+        Residual::Speed => StepResidual::Speed,
     };
-    o.free_inductance = match ctx.params.get("free_inductance") {
-        Some(toml::Value::Boolean(b)) => *b,
-        other => bail!("pipeline.toml: stage {}: free_inductance = {other:?} must be true or false", ctx.name),
+    o.free_inductance = p.free_inductance;
+    o.holdout = (!p.holdout.trim().is_empty()).then(|| p.holdout.split(',').map(|s| s.trim().to_string()).collect());
+    o.whiteness_max_lag = p.whiteness_max_lag;
+    o.pi.method = match p.pi_method {
+        Pi::CorrectedLs => PiMethod::CorrectedLs,
+        Pi::Iv => PiMethod::Iv,
     };
-    let holdout = ctx.param_str("holdout")?;
-    o.holdout = (!holdout.trim().is_empty()).then(|| holdout.split(',').map(|s| s.trim().to_string()).collect());
-    o.whiteness_max_lag = ctx.param_usize("whiteness_max_lag")?;
-    o.pi.method = match ctx.param_str("pi_method")?.as_str() {
-        "corrected_ls" => PiMethod::CorrectedLs,
-        "iv" => PiMethod::Iv,
-        other => bail!("pipeline.toml: stage {}: pi_method = {other:?} must be \"corrected_ls\" or \"iv\"", ctx.name),
-    };
-    o.pi.window_samples = ctx.param_usize("pi_window_samples")?;
-    o.pi.saturation_margin_v = ctx.param_f64("saturation_margin_v")?;
-    o.friction.slip_threshold_rad_s = ctx.param_f64("slip_threshold_rad_s")?;
-    o.friction.speed_half_window = ctx.param_usize("speed_half_window")?;
-    o.friction.min_stick_s = ctx.param_f64("min_stick_s")?;
-    Ok(o)
+    o.pi.window_samples = p.pi_window_samples;
+    o.pi.saturation_margin_v = p.saturation_margin_v;
+    o.friction.slip_threshold_rad_s = p.slip_threshold_rad_s;
+    o.friction.speed_half_window = p.speed_half_window;
+    o.friction.min_stick_s = p.min_stick_s;
+    o
 }
 
 pub fn run(ctx: &mut StageCtx) -> Result<()> {
+    let p: Params = ctx.typed_params()?;
     let campaign = ctx.campaign()?.clone();
     let thesis: ThesisData = ctx.read_json("data/thesis.json")?;
     let cal: CampaignCalibration = ctx.read_json("data/campaign-calibration.json")?;
-    let o = options(ctx, &thesis)?;
+    let o = options(&p, &thesis);
     let est = estimate_rig(&campaign, &cal, &o).with_context(|| format!("estimating campaign {}", campaign.name))?;
 
     ctx.write_json("data/rig-params.json", &est.params)?;

@@ -6,7 +6,6 @@
 //! Only derived numbers leave this stage: binned curves, fits, spectra and
 //! summary values. No figure or table carries the recording's samples.
 
-use super::spectra::{fig, series};
 use crate::StageCtx;
 use anyhow::{Context, Result};
 use rig_model::one_dof::{OneDofFriction, OneDofParams, fit_one_dof, simulate_one_dof};
@@ -15,6 +14,7 @@ use rig_spectra::{
     Detrend, Line, LineOptions, PeakOptions, Window, amplitude_spectrum, analyse_lines, lowpass_fft, spectral_peaks,
 };
 use rig_types::{SeriesStyle, Table, fmt_fixed};
+use rig_types::{figure as fig, series};
 use std::fmt::Write as _;
 
 const RPM_TO_RAD_S: f64 = std::f64::consts::PI / 30.0;

@@ -15,22 +15,87 @@ mod thesis;
 
 use crate::StageFn;
 
+/// Checks a stage's `[stage.params]` against its params type; `Err` is a
+/// reason naming the key (the runner adds file and stage).
+type TypedCheck = fn(&toml::Table) -> Result<(), String>;
+
+/// One registered stage.
+struct Entry {
+    /// Its name in pipeline.toml.
+    name: &'static str,
+    run: StageFn,
+    /// The file holding the body, relative to the workspace root: the runner
+    /// computes the stage's code from it (see `code.rs`).
+    source: &'static str,
+    /// Its `[stage.params]` type: `Some(typed::<T>)`, checked for every
+    /// stage before any stage runs. `None` only for stages not converted yet
+    /// (tidy.rs lists them; their bodies check their own params when they run).
+    params: Option<TypedCheck>,
+}
+
+/// `params` deserialise as `T` (a `#[serde(deny_unknown_fields)]` struct).
+fn typed<T: serde::de::DeserializeOwned>(params: &toml::Table) -> Result<(), String> {
+    crate::ctx::parse_params::<T>(params).map(|_| ())
+}
+
+/// Every stage, one line each. A stage owner converting its params adds
+/// `Some(typed::<its Params>)` in the last column.
+const STAGES: &[Entry] = &[
+    entry("thesis-tables", thesis::run, "thesis.rs", Some(typed::<thesis::Params>)),
+    entry("campaign-calibration", campaign_cal::run, "campaign_cal.rs", Some(typed::<campaign_cal::Params>)),
+    entry("estimation", estimation::run, "estimation.rs", Some(typed::<estimation::Params>)),
+    entry("simulation", simulation::run, "simulation.rs", Some(typed::<simulation::Params>)),
+    entry("sweeps", sweeps::run, "sweeps.rs", Some(typed::<sweeps::Params>)),
+    entry("spectra", spectra::run, "spectra.rs", Some(typed::<spectra::Params>)),
+    entry("harmonic", harmonic::run, "harmonic.rs", Some(typed::<harmonic::Params>)),
+    entry("diagnosis", diagnosis::run, "diagnosis.rs", Some(typed::<rig_diagnose::DiagnoseOptions>)),
+    // Not converted yet (their owners add the params type here).
+    entry("lavi", lavi::run, "lavi.rs", None),
+    entry("confusion", confusion::run, "confusion.rs", None),
+    entry("report", report::run, "report.rs", Some(typed::<report::Params>)),
+];
+
+const fn entry(name: &'static str, run: StageFn, file: &'static str, params: Option<TypedCheck>) -> Entry {
+    // `file` is relative to this folder; `source` below adds the folder.
+    Entry { name, run, source: file, params }
+}
+
+/// This folder, relative to the workspace root.
+const STAGES_DIR: &str = "crates/pipeline/src/stages";
+
+fn find(name: &str) -> Option<&'static Entry> {
+    STAGES.iter().find(|s| s.name == name)
+}
+
 /// The body of the stage called `name` in pipeline.toml.
 pub fn lookup(name: &str) -> Option<StageFn> {
-    Some(match name {
-        "thesis-tables" => thesis::run,
-        "campaign-calibration" => campaign_cal::run,
-        "estimation" => estimation::run,
-        "simulation" => simulation::run,
-        "sweeps" => sweeps::run,
-        "spectra" => spectra::run,
-        "harmonic" => harmonic::run,
-        "diagnosis" => diagnosis::run,
-        "lavi" => lavi::run,
-        "confusion" => confusion::run,
-        "report" => report::run,
-        _ => return None,
-    })
+    find(name).map(|s| s.run)
+}
+
+/// The file holding the body of the stage called `name`, relative to the workspace root.
+pub fn source(name: &str) -> Option<&'static str> {
+    static PATHS: std::sync::OnceLock<Vec<(&'static str, String)>> = std::sync::OnceLock::new();
+    let paths = PATHS.get_or_init(|| STAGES.iter().map(|s| (s.name, format!("{STAGES_DIR}/{}", s.source))).collect());
+    paths.iter().find(|(n, _)| *n == name).map(|(_, p)| p.as_str())
+}
+
+/// Checks `params` against the params type of the stage called `name`
+/// (Ok for a stage with no registered type).
+pub fn check_params(name: &str, params: &toml::Table) -> Result<(), String> {
+    match find(name).and_then(|s| s.params) {
+        Some(check) => check(params),
+        None => Ok(()),
+    }
+}
+
+/// The names of every registered stage, in registry order.
+pub fn names() -> Vec<&'static str> {
+    STAGES.iter().map(|s| s.name).collect()
+}
+
+/// The registered stages whose params are not typed yet.
+pub fn untyped() -> Vec<&'static str> {
+    STAGES.iter().filter(|s| s.params.is_none()).map(|s| s.name).collect()
 }
 
 /// The thesis model as published (Table 4.5, the chapter's printed ξ — its C —,

@@ -58,7 +58,13 @@ fn catalogue() -> Result<Vec<CatalogueEntry>> {
     Ok(c.figure)
 }
 
+/// `[stage.params]` of `report`: none.
+#[derive(Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Params {}
+
 pub fn run(ctx: &mut StageCtx) -> Result<()> {
+    let Params {} = ctx.typed_params()?;
     let entries = catalogue()?;
     let figures = FigureFiles::scan(&ctx.out_dir.join("figures"));
     let html = page(ctx, &entries, &figures)?;

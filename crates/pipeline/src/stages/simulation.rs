@@ -28,12 +28,13 @@ use rayon::prelude::*;
 use rig_calibrate::signal::SPEED_HALF_WINDOW_S;
 use rig_calibrate::{CampaignCalibration, ThesisData, friction_torque_nm, rotor_speed_rad_s};
 use rig_model::{SimOptions, friction_coefficient, simulate};
+use rig_types::units::RAD_S_TO_RPM;
 use rig_types::{
     FigureSpec, FrictionLaw, RigParams, Run, RunInput, RunKind, Series, SeriesStyle, Table, Trajectory, fmt_fixed,
 };
+use serde::Deserialize;
 use std::f64::consts::PI;
 
-const RAD_S_TO_RPM: f64 = 60.0 / (2.0 * PI);
 /// Most points a figure series gets (the common rules allow ~2000).
 const MAX_POINTS: usize = 2000;
 /// Overlays keep half that: 40 s at ≤ 1000 points is one point per ≤ 42 ms,
@@ -64,13 +65,22 @@ struct RunResult {
     rig: Summary,
 }
 
+/// `[stage.params]` of `simulation`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Params {
+    /// Integrator tolerances and largest step (`rig_model::SimOptions`).
+    pub rtol: f64,
+    pub atol: f64,
+    pub max_step_s: f64,
+    /// Fig. 4.17 shows the last this many seconds of each run.
+    pub limit_cycle_s: f64,
+}
+
 pub fn run(ctx: &mut StageCtx) -> Result<()> {
-    let opts = SimOptions {
-        rtol: ctx.param_f64("rtol")?,
-        atol: ctx.param_f64("atol")?,
-        max_step_s: ctx.param_f64("max_step_s")?,
-    };
-    let limit_cycle_s = ctx.param_f64("limit_cycle_s")?;
+    let p: Params = ctx.typed_params()?;
+    let opts = SimOptions { rtol: p.rtol, atol: p.atol, max_step_s: p.max_step_s };
+    let limit_cycle_s = p.limit_cycle_s;
     let rig: RigParams = ctx.read_json("data/rig-params.json")?;
     let thesis = thesis_params(ctx, &rig)?;
     let cal: CampaignCalibration = ctx.read_json("data/campaign-calibration.json")?;
@@ -79,7 +89,7 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     let radius_m = campaign.rig.brake_disc_radius_m;
     let runs: Vec<&Run> = campaign.runs_of("operating_point").collect();
     if runs.is_empty() {
-        bail!("stage {}: campaign {} has no operating_point run to simulate", ctx.name, campaign.name);
+        bail!("campaign {} has no operating_point run to simulate", campaign.name);
     }
     // Parallel over runs; collect keeps campaign order, so outputs do not depend on threads.
     let results: Vec<RunResult> =

@@ -1,6 +1,5 @@
 //! Stage `spectra`: spectra, peaks and line analysis of every operating point
-//! (measured and simulated), Table 4.8's lines, Figs. 4.22-4.26. Also the small
-//! figure helpers the `harmonic` and `lavi` stages share.
+//! (measured and simulated), Table 4.8's lines, Figs. 4.22-4.26.
 
 use crate::StageCtx;
 use anyhow::{Context, Result};
@@ -11,64 +10,26 @@ use rig_spectra::{
     Detrend, Line, LineAnalysis, LineClass, LineOptions, Peak, PeakOptions, Spectrum, WelchOptions, Window,
     amplitude_spectrum, analyse_lines, frf_h1, spectral_peaks, thin_indices,
 };
-use rig_types::{FigureSpec, RigParams, Run, RunInput, RunKind, Series, SeriesStyle, Table, Trajectory, fmt_fixed};
+use rig_types::units::RAD_S_TO_RPM;
+use rig_types::{RigParams, Run, RunInput, RunKind, SeriesStyle, Table, Trajectory, fmt_fixed};
+use rig_types::{figure as fig, series};
+use serde::Deserialize;
 
-/// A figure spec with no heat map.
-pub(super) fn fig(
-    id: &str,
-    title: &str,
-    caption: &str,
-    x: (&str, usize),
-    y: (&str, usize),
-    series: Vec<Series>,
-) -> FigureSpec {
-    FigureSpec {
-        id: id.to_string(),
-        title: title.to_string(),
-        caption: caption.to_string(),
-        x_label: x.0.to_string(),
-        y_label: y.0.to_string(),
-        series,
-        x_decimals: x.1,
-        y_decimals: y.1,
-        heatmap: None,
-    }
+/// `[stage.params]` of `spectra`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Params {
+    /// Integrator tolerances and largest step of the rig-model runs (`rig_model::SimOptions`).
+    pub rtol: f64,
+    pub atol: f64,
+    pub max_step_s: f64,
+    pub settle_s: f64,
+    pub min_freq_hz: f64,
+    pub max_freq_hz: f64,
+    pub welch_segment_s: f64,
+    pub tolerance_bins: f64,
+    pub table_4_8_records_s: Vec<f64>,
 }
-
-pub(super) fn series(name: &str, x: Vec<f64>, y: Vec<f64>, style: SeriesStyle) -> Series {
-    Series { name: name.to_string(), x, y, style }
-}
-
-/// Settings of the stage (pipeline.toml `[stage.params]`).
-struct Params {
-    settle_s: f64,
-    min_freq_hz: f64,
-    max_freq_hz: f64,
-    welch_segment_s: f64,
-    tolerance_bins: f64,
-    table_4_8_records_s: Vec<f64>,
-}
-
-fn params(ctx: &StageCtx) -> Result<Params> {
-    let recs = match ctx.params.get("table_4_8_records_s") {
-        Some(toml::Value::Array(a)) => a
-            .iter()
-            .map(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
-            .collect::<Option<Vec<f64>>>()
-            .context("pipeline.toml: stage spectra: table_4_8_records_s must be numbers")?,
-        _ => anyhow::bail!("pipeline.toml: stage spectra: param table_4_8_records_s (array of seconds) is missing"),
-    };
-    Ok(Params {
-        settle_s: ctx.param_f64("settle_s")?,
-        min_freq_hz: ctx.param_f64("min_freq_hz")?,
-        max_freq_hz: ctx.param_f64("max_freq_hz")?,
-        welch_segment_s: ctx.param_f64("welch_segment_s")?,
-        tolerance_bins: ctx.param_f64("tolerance_bins")?,
-        table_4_8_records_s: recs,
-    })
-}
-
-const RAD_S_TO_RPM: f64 = 30.0 / std::f64::consts::PI;
 
 /// One operating point, measured or simulated, over its steady window.
 struct Signals {
@@ -209,7 +170,7 @@ fn thin(s: &Signals, max_points: usize) -> Vec<usize> {
 }
 
 pub fn run(ctx: &mut StageCtx) -> Result<()> {
-    let p = params(ctx)?;
+    let p: Params = ctx.typed_params()?;
     let cal: CampaignCalibration = ctx.read_json("data/campaign-calibration.json")?;
     let rig_params: RigParams = ctx.read_json("data/rig-params.json")?;
     let campaign = ctx.campaign()?.clone();
@@ -230,8 +191,13 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
         .par_iter()
         .map(|(run, rpm, n, ramp)| {
             let input = RunInput::OperatingPoint { motor_rpm_setpoint: *rpm, normal_force_n: *n, ramp_s: *ramp };
-            simulate(&rig_params, &input, &run.data.time_s, &SimOptions::default())
-                .with_context(|| format!("simulating run {}", run.id))
+            simulate(
+                &rig_params,
+                &input,
+                &run.data.time_s,
+                &SimOptions { rtol: p.rtol, atol: p.atol, max_step_s: p.max_step_s },
+            )
+            .with_context(|| format!("simulating run {}", run.id))
         })
         .collect();
     let mut meas_tab = line_header();

@@ -24,11 +24,12 @@ use rig_sweep::{
     ChainResult, Classification, ClassifyOptions, MapSlice, MapSpec, Point, Shard, SweepSettings, WindowSpec,
     bifurcation_chains, chain_table, classify, hysteresis, linspace, map_table, run_chains, run_map_shard,
 };
+use rig_types::units::RAD_S_TO_RPM;
 use rig_types::{FigureSpec, Heatmap, RigParams, Run, RunInput, RunKind, Series, SeriesStyle, Table, fmt_fixed};
+use serde::Deserialize;
 use std::f64::consts::PI;
 use std::io::IsTerminal;
 
-const RAD_S_TO_RPM: f64 = 60.0 / (2.0 * PI);
 const MAX_POINTS: usize = 2000;
 /// Max and min of a window, for the diagrams' two series.
 type Extreme = (&'static str, fn(&Classification) -> f64);
@@ -63,40 +64,57 @@ struct Diagrams {
     forces_n: Vec<f64>,
 }
 
+/// `[stage.params]` of `sweeps` (meanings in pipeline.toml).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Params {
+    pub rtol: f64,
+    pub atol: f64,
+    pub max_step_s: f64,
+    pub first_transient_s: f64,
+    pub transient_s: f64,
+    pub window_s: f64,
+    pub sample_rate_hz: f64,
+    pub map_rpm_min: f64,
+    pub map_rpm_max: f64,
+    pub map_rpm_points: usize,
+    pub map_force_min_n: f64,
+    pub map_force_max_n: f64,
+    pub map_force_points: usize,
+    pub diagram_points: usize,
+    pub speed_sweep_force_n: f64,
+    pub friction_sweep_rpm: f64,
+    pub speed_sweep_campaign_force_n: f64,
+    pub friction_sweep_campaign_rpm: f64,
+    /// `"i/n"`: only chains of shard i of the maps.
+    pub shard: String,
+    /// The regime classifier's thresholds (`[stage.params.classify]`).
+    pub classify: ClassifyOptions,
+}
+
 pub fn run(ctx: &mut StageCtx) -> Result<()> {
+    let p: Params = ctx.typed_params()?;
     let settings = SweepSettings {
         window: WindowSpec {
-            first_transient_s: ctx.param_f64("first_transient_s")?,
-            transient_s: ctx.param_f64("transient_s")?,
-            window_s: ctx.param_f64("window_s")?,
-            sample_rate_hz: ctx.param_f64("sample_rate_hz")?,
+            first_transient_s: p.first_transient_s,
+            transient_s: p.transient_s,
+            window_s: p.window_s,
+            sample_rate_hz: p.sample_rate_hz,
         },
-        sim: SimOptions {
-            rtol: ctx.param_f64("rtol")?,
-            atol: ctx.param_f64("atol")?,
-            max_step_s: ctx.param_f64("max_step_s")?,
-        },
-        classify: ClassifyOptions::default(),
+        sim: SimOptions { rtol: p.rtol, atol: p.atol, max_step_s: p.max_step_s },
+        classify: p.classify.clone(),
     };
-    let shard = Shard::parse(&ctx.param_str("shard")?).with_context(|| format!("pipeline.toml: stage {}", ctx.name))?;
+    let shard = Shard::parse(&p.shard).context("pipeline.toml: [stage.params] shard")?;
     let map = MapSpec {
-        speeds_rpm: linspace(
-            ctx.param_f64("map_rpm_min")?,
-            ctx.param_f64("map_rpm_max")?,
-            ctx.param_usize("map_rpm_points")?,
-        ),
-        forces_n: linspace(
-            ctx.param_f64("map_force_min_n")?,
-            ctx.param_f64("map_force_max_n")?,
-            ctx.param_usize("map_force_points")?,
-        ),
+        speeds_rpm: linspace(p.map_rpm_min, p.map_rpm_max, p.map_rpm_points),
+        forces_n: linspace(p.map_force_min_n, p.map_force_max_n, p.map_force_points),
     };
-    let n_diag = ctx.param_usize("diagram_points")?;
+    let n_diag = p.diagram_points;
     let d = Diagrams {
-        speed_force_n: ctx.param_f64("speed_sweep_force_n")?,
-        friction_rpm: ctx.param_f64("friction_sweep_rpm")?,
-        campaign_force_n: ctx.param_f64("speed_sweep_campaign_force_n")?,
-        campaign_rpm: ctx.param_f64("friction_sweep_campaign_rpm")?,
+        speed_force_n: p.speed_sweep_force_n,
+        friction_rpm: p.friction_sweep_rpm,
+        campaign_force_n: p.speed_sweep_campaign_force_n,
+        campaign_rpm: p.friction_sweep_campaign_rpm,
         speeds_rpm: linspace(map.speeds_rpm[0], *map.speeds_rpm.last().expect("linspace is not empty"), n_diag),
         forces_n: linspace(map.forces_n[0], *map.forces_n.last().expect("linspace is not empty"), n_diag),
     };
@@ -141,16 +159,15 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     let tpr = campaign.rig.encoder_ticks_per_rev;
     let runs: Vec<&Run> = campaign.runs_of("operating_point").collect();
     if runs.is_empty() {
-        bail!("stage {}: campaign {} has no operating_point run", ctx.name, campaign.name);
+        bail!("campaign {} has no operating_point run", campaign.name);
     }
     let (th, rg) = (&models[0].params, &models[1].params);
     let ops: Vec<OpPoint> = {
         use rayon::prelude::*;
         runs.par_iter().map(|r| op_point(r, th, rg, &settings, tpr)).collect::<Result<_>>()?
     };
-    let labelled = rig_ingest::thesis::read_thesis_tables(&ctx.thesis_dir)
-        .with_context(|| format!("stage {}: reading the thesis tables", ctx.name))?
-        .labelled_points;
+    let labelled =
+        rig_ingest::thesis::read_thesis_tables(&ctx.thesis_dir).context("reading the thesis tables")?.labelled_points;
     let mut labels = Vec::new();
     for l in &labelled {
         let p = Point { motor_rpm: l.motor_rpm, normal_force_n: l.frict_n };

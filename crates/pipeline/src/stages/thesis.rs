@@ -5,9 +5,18 @@
 use crate::StageCtx;
 use anyhow::Result;
 use rig_calibrate::{audit, figures, thesis};
+use serde::Deserialize;
+
+/// `[stage.params]` of `thesis-tables`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Params {
+    /// A published value within this many units of its last printed digit is `rounding`.
+    pub rounding_tolerance: f64,
+}
 
 pub fn run(ctx: &mut StageCtx) -> Result<()> {
-    let tolerance = ctx.param_f64("rounding_tolerance")?;
+    let tolerance = ctx.typed_params::<Params>()?.rounding_tolerance;
     let tables = rig_ingest::thesis::read_thesis_tables(&ctx.thesis_dir)?;
     let o = thesis::thesis_outputs(&tables, tolerance)?;
 
