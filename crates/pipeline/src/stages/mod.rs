@@ -51,7 +51,7 @@ const STAGES: &[Entry] = &[
     entry("diagnosis", diagnosis::run, "diagnosis.rs", Some(typed::<rig_diagnose::DiagnoseOptions>)),
     // Not converted yet (their owners add the params type here).
     entry("lavi", lavi::run, "lavi.rs", None),
-    entry("confusion", confusion::run, "confusion.rs", None),
+    entry("confusion", confusion::run, "confusion.rs", Some(typed::<confusion::ConfusionParams>)),
     entry("report", report::run, "report.rs", Some(typed::<report::Params>)),
 ];
 
