@@ -1,5 +1,5 @@
-//! Criterion bench: the whole blind diagnosis (calibrate → diagnose) of a
-//! 30-run campaign. The campaign is the shipped data/emulated-rig-2026 (an
+//! Criterion bench: the whole blind diagnosis (calibrate → estimate the
+//! baseline → diagnose, with every check and both free runs) of a 30-run campaign. The campaign is the shipped data/emulated-rig-2026 (an
 //! emulated, i.e. generated, 30-operating-point campaign) or the folder in
 //! $RIG_BENCH_CAMPAIGN (e.g. one written by rig-virtual-rig's write_campaign).
 //! rig-diagnose may not depend on rig-virtual-rig (tidy test) and rig-ingest
@@ -69,10 +69,18 @@ fn bench(c: &mut Criterion) {
         .unwrap_or_else(|_| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/emulated-rig-2026"));
     let campaign = read(&dir);
     let opts = DiagnoseOptions::from_pipeline_toml(include_str!("../../../pipeline.toml")).expect("pipeline.toml");
+    // The thesis' published values as the thesis-tables stage wrote them
+    // (reports/data/thesis.json): with them the chain estimates the baseline
+    // and runs every check and both free runs, as the diagnosis stage does.
+    let thesis: rig_calibrate::ThesisData = serde_json::from_str(
+        &std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../reports/data/thesis.json"))
+            .expect("reports/data/thesis.json (run cargo xtask reproduce once)"),
+    )
+    .expect("thesis.json");
     let mut g = c.benchmark_group("diagnose");
     g.sample_size(10);
-    g.bench_function("30-run campaign, blind", |b| {
-        b.iter(|| diagnose_campaign(&campaign, None, &opts).expect("diagnosis"))
+    g.bench_function("30-run campaign, blind, with baseline estimate and every check", |b| {
+        b.iter(|| diagnose_campaign(&campaign, Some(&thesis), &opts).expect("diagnosis"))
     });
     g.finish();
 }
