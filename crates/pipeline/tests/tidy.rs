@@ -6,7 +6,7 @@ use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-const ANALYSIS: [&str; 9] = [
+const ANALYSIS: [&str; 10] = [
     "rig-types",
     "rig-ingest",
     "rig-calibrate",
@@ -16,6 +16,7 @@ const ANALYSIS: [&str; 9] = [
     "rig-sweep",
     "rig-diagnose",
     "rig-figures",
+    "rig-lavi",
 ];
 
 fn root() -> PathBuf {
