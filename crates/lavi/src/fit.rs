@@ -119,21 +119,31 @@ pub fn fit_candidate(
     let mut params = BTreeMap::new();
     let (model, evals) = match c {
         Candidate::WobNormalForce => {
+            // The law stays as the current model has it when a simulation fit chose it;
+            // a least-squares law is refitted as μ = T/W (torque = WOB·μ).
             let (m, _) = derive(ev.data, &ev.windows[cal], ev.slip_speed_rpm, true, current.sensor_inertia_kgm2)?;
-            let m = carry(m);
-            params.insert("reference_wob_n".into(), m.wob_ref_n.unwrap_or(f64::NAN));
-            params.insert("mu_static".into(), m.friction.static_nm / m.wob_ref_n.unwrap_or(1.0));
-            params.insert("mu_kinetic".into(), m.friction.kinetic_nm / m.wob_ref_n.unwrap_or(1.0));
+            let m = if law_is_derived(current, ev)? { carry(m) } else { Model { wob_ref_n: m.wob_ref_n, ..*current } };
+            let w_ref = m.wob_ref_n.unwrap_or(1.0);
+            params.insert("reference_wob_n".into(), w_ref);
+            params.insert("mu_static".into(), m.friction.static_nm / w_ref);
+            params.insert("mu_kinetic".into(), m.friction.kinetic_nm / w_ref);
             (m, 1)
         }
         Candidate::SensorInertia => {
             let wob = current.wob_ref_n.is_some();
+            let keep_law = !law_is_derived(current, ev)?;
             let build = |x: &[f64]| -> Option<Model> {
                 let js = j * x[0].exp();
-                derive(ev.data, &ev.windows[cal], ev.slip_speed_rpm, wob, js).ok().map(|(m, _)| carry(m))
+                derive(ev.data, &ev.windows[cal], ev.slip_speed_rpm, wob, js).ok().map(|(m, _)| {
+                    let m = carry(m);
+                    if keep_law { Model { friction: current.friction, ..m } } else { m }
+                })
             };
-            let (x, _, n) = nelder_mead(|x| build(x).map_or(1e9, |m| misfit(&m)), &[(-2.0f64).ln()], &[1.0], max_evals);
-            let m = build(&x).ok_or(LaviError::Input { what: "sensor_inertia", rule: "no fit".into() })?;
+            let (x, _, n) = nelder_mead(|x| build(x).map_or(1e9, |m| misfit(&m)), &[-2.0], &[1.0], max_evals);
+            let m = build(&x).ok_or(LaviError::Input {
+                what: "sensor_inertia",
+                rule: "no sensor inertia gives a valid least-squares fit of J, k, c on the calibration window".into(),
+            })?;
             params.insert("sensor_inertia_kgm2".into(), m.sensor_inertia_kgm2);
             (m, n)
         }
@@ -172,7 +182,8 @@ pub fn fit_candidate(
             (m, total)
         }
         Candidate::FrictionMemory => {
-            let build = |x: &[f64]| Model { friction_lag_s: x[0].exp(), ..*current };
+            // The lag is kept within 0.1 ms-1 s (longer than a cycle is no memory but a frozen friction).
+            let build = |x: &[f64]| Model { friction_lag_s: x[0].clamp(-9.2, 0.0).exp(), ..*current };
             let (x, _, n) = nelder_mead(|x| misfit(&build(x)), &[(0.02f64).ln()], &[1.0], max_evals);
             let m = build(&x);
             params.insert("lag_s".into(), m.friction_lag_s);
@@ -210,6 +221,13 @@ pub fn fit_candidate(
     };
     let calibration_misfit = misfit(&model);
     Ok(Fitted { model, params, calibration_misfit, evaluations: evals })
+}
+
+/// True when `current`'s law is still the least-squares one of [`derive`] (no simulation fit chose it).
+fn law_is_derived(current: &Model, ev: &Evaluator) -> Result<bool, LaviError> {
+    let (m, _) =
+        derive(ev.data, &ev.windows[ev.calibration()], ev.slip_speed_rpm, current.wob_ref_n.is_some(), current.sensor_inertia_kgm2)?;
+    Ok(m.friction == current.friction)
 }
 
 /// Nelder–Mead simplex (standard coefficients 1, 2, ½, ½), deterministic, at
