@@ -17,7 +17,12 @@ use rig_types::{SeriesStyle, Table, fmt_fixed};
 use std::fmt::Write as _;
 
 /// The description of the calibration window (tables and figures pushed to `out`); returns its markdown.
-pub fn describe(rec: &LaviRecording, d: &Prepared, p: &StudyParams, out: &mut StudyOutput) -> Result<String, LaviError> {
+pub fn describe(
+    rec: &LaviRecording,
+    d: &Prepared,
+    p: &StudyParams,
+    out: &mut StudyOutput,
+) -> Result<String, LaviError> {
     let n = rec.len();
     let fs_hz = d.fs_hz;
     let (top_fixed, glitches) = (&d.top_repaired_rpm, d.glitches);
@@ -27,7 +32,12 @@ pub fn describe(rec: &LaviRecording, d: &Prepared, p: &StudyParams, out: &mut St
     if win.len() <= 100 {
         return Err(LaviError::Params {
             key: "window_start_s",
-            rule: format!("the window {}-{} s holds {} samples, more than 100 needed", p.window_start_s, p.window_end_s, win.len()),
+            rule: format!(
+                "the window {}-{} s holds {} samples, more than 100 needed",
+                p.window_start_s,
+                p.window_end_s,
+                win.len()
+            ),
         });
     }
     let pick = |x: &[f64]| win.iter().map(|&i| x[i]).collect::<Vec<f64>>();

@@ -4,7 +4,9 @@
 //! mean torque–bit-speed loop area per cycle.
 
 use crate::LaviError;
-use rig_spectra::{Detrend, Line, LineOptions, PeakOptions, Window, amplitude_spectrum, analyse_lines, lowpass_fft, spectral_peaks};
+use rig_spectra::{
+    Detrend, Line, LineOptions, PeakOptions, Window, amplitude_spectrum, analyse_lines, lowpass_fft, spectral_peaks,
+};
 use serde::Serialize;
 use std::ops::Range;
 
@@ -33,7 +35,8 @@ pub struct Features {
 }
 
 /// Feature names in table order.
-pub const FEATURES: [&str; 5] = ["bit_speed_max_rpm", "bit_speed_min_rpm", "stick_fraction", "fundamental_hz", "loop_area"];
+pub const FEATURES: [&str; 5] =
+    ["bit_speed_max_rpm", "bit_speed_min_rpm", "stick_fraction", "fundamental_hz", "loop_area"];
 
 impl Features {
     pub fn get(&self, i: usize) -> f64 {
@@ -102,10 +105,8 @@ pub fn fundamental_hz(x: &[f64], fs_hz: f64, max_hz: f64) -> Result<Option<f64>,
 /// Indices of upward crossings of mean + h after the signal was below mean − h,
 /// h = 25 % of the half-range.
 fn cycle_starts(v: &[f64]) -> Vec<usize> {
-    let (lo, hi) = (
-        v.iter().cloned().fold(f64::INFINITY, f64::min),
-        v.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
-    );
+    let (lo, hi) =
+        (v.iter().cloned().fold(f64::INFINITY, f64::min), v.iter().cloned().fold(f64::NEG_INFINITY, f64::max));
     let m = mean(v);
     let h = 0.25 * 0.5 * (hi - lo);
     if h <= 0.0 {

@@ -101,12 +101,7 @@ fn logit(p: f64) -> f64 {
 }
 
 /// Fits candidate `c` on top of `current` on the calibration window of `ev`.
-pub fn fit_candidate(
-    c: Candidate,
-    current: &Model,
-    ev: &Evaluator,
-    max_evals: usize,
-) -> Result<Fitted, LaviError> {
+pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: usize) -> Result<Fitted, LaviError> {
     let cal = ev.calibration();
     let carry = |mut m: Model| {
         m.friction_lag_s = current.friction_lag_s;
@@ -207,7 +202,11 @@ pub fn fit_candidate(
             let kp0 = jm0 * 2.0 * std::f64::consts::TAU;
             let ki0 = kp0 * 0.5 * std::f64::consts::TAU;
             let build = |x: &[f64]| Model {
-                drive: Some(Drive { inertia_kgm2: jm0 * x[0].exp(), kp_nm_s_rad: kp0 * x[1].exp(), ki_nm_rad: ki0 * x[2].exp() }),
+                drive: Some(Drive {
+                    inertia_kgm2: jm0 * x[0].exp(),
+                    kp_nm_s_rad: kp0 * x[1].exp(),
+                    ki_nm_rad: ki0 * x[2].exp(),
+                }),
                 ..*current
             };
             let (x, _, n) = nelder_mead(|x| misfit(&build(x)), &[0.0, 0.0, 0.0], &[1.0, 1.0, 1.0], max_evals);
@@ -225,8 +224,13 @@ pub fn fit_candidate(
 
 /// True when `current`'s law is still the least-squares one of [`derive`] (no simulation fit chose it).
 fn law_is_derived(current: &Model, ev: &Evaluator) -> Result<bool, LaviError> {
-    let (m, _) =
-        derive(ev.data, &ev.windows[ev.calibration()], ev.slip_speed_rpm, current.wob_ref_n.is_some(), current.sensor_inertia_kgm2)?;
+    let (m, _) = derive(
+        ev.data,
+        &ev.windows[ev.calibration()],
+        ev.slip_speed_rpm,
+        current.wob_ref_n.is_some(),
+        current.sensor_inertia_kgm2,
+    )?;
     Ok(m.friction == current.friction)
 }
 
@@ -291,7 +295,8 @@ mod tests {
 
     #[test]
     fn nelder_mead_finds_a_quadratic_minimum() {
-        let (x, v, _) = nelder_mead(|x| (x[0] - 1.0).powi(2) + 3.0 * (x[1] + 2.0).powi(2), &[0.0, 0.0], &[1.0, 1.0], 500);
+        let (x, v, _) =
+            nelder_mead(|x| (x[0] - 1.0).powi(2) + 3.0 * (x[1] + 2.0).powi(2), &[0.0, 0.0], &[1.0, 1.0], 500);
         assert!((x[0] - 1.0).abs() < 1e-3 && (x[1] + 2.0).abs() < 1e-3 && v < 1e-6, "{x:?}");
     }
 }

@@ -2,13 +2,13 @@
 //! thinned series only), `lavi.md` (three rungs: baseline, cause, extension)
 //! and `lavi-diagnosis.json` in the schema of ../shared/spec/diagnosis.md.
 
+use crate::LaviError;
 use crate::data::{Prepared, RPM_TO_RAD_S};
 use crate::describe::describe;
 use crate::features::{FEATURES, Features};
 use crate::score::feature_errors;
 use crate::select::{mean, std};
 use crate::study::Study;
-use crate::LaviError;
 use rig_ingest::lavi::LaviRecording;
 use rig_spectra::lowpass_fft;
 use rig_types::{FigureSpec, Series, SeriesStyle, Table, fmt_fixed};
@@ -29,7 +29,14 @@ pub struct StudyOutput {
 }
 
 /// A figure spec with no heat map (as the pipeline's other stages build them).
-pub fn fig(id: &str, title: &str, caption: &str, x: (&str, usize), y: (&str, usize), series: Vec<Series>) -> FigureSpec {
+pub fn fig(
+    id: &str,
+    title: &str,
+    caption: &str,
+    x: (&str, usize),
+    y: (&str, usize),
+    series: Vec<Series>,
+) -> FigureSpec {
     FigureSpec {
         id: id.to_string(),
         title: title.to_string(),
@@ -48,7 +55,8 @@ pub fn series(name: &str, x: Vec<f64>, y: Vec<f64>, style: SeriesStyle) -> Serie
 }
 
 /// Issue 10's target for each feature, in words.
-const TARGETS: [&str; 5] = ["within 10 %", "within 10 rpm", "within 25 % (tolerance at least 0.01)", "within 3 %", "within 30 %"];
+const TARGETS: [&str; 5] =
+    ["within 10 %", "within 10 rpm", "within 25 % (tolerance at least 0.01)", "within 3 %", "within 30 %"];
 const DECIMALS: [usize; 5] = [2, 2, 4, 3, 2];
 
 fn met(meas: &Features, sim: &Features) -> [bool; 5] {
@@ -67,7 +75,14 @@ pub fn render(s: &Study, d: &Prepared, rec: &LaviRecording) -> Result<StudyOutpu
     for (wi, w) in s.windows.iter().enumerate() {
         for (fi, name) in FEATURES.iter().enumerate() {
             let f = |x: &Features| fmt_fixed(x.get(fi), DECIMALS[fi]);
-            ft.push([w.label.clone(), w.split.as_str().to_string(), name.to_string(), f(&s.measured[wi]), f(&s.baseline_features[wi]), f(&s.final_features[wi])]);
+            ft.push([
+                w.label.clone(),
+                w.split.as_str().to_string(),
+                name.to_string(),
+                f(&s.measured[wi]),
+                f(&s.baseline_features[wi]),
+                f(&s.final_features[wi]),
+            ]);
         }
     }
     out.tables.push(("tables/lavi-features.csv".into(), ft));
@@ -83,26 +98,61 @@ pub fn render(s: &Study, d: &Prepared, rec: &LaviRecording) -> Result<StudyOutpu
         c
     };
     let (met_base, met_ext) = (count(&s.baseline_features), count(&s.final_features));
-    let worst = |fi: usize, sim: &[Features]| held.iter().map(|&wi| feature_errors(&s.measured[wi], &sim[wi])[fi].abs()).fold(0.0, f64::max);
-    let mut tt = Table::new(["feature", "target", "heldout_windows", "met_baseline", "met_extended", "worst_error_over_tolerance_extended"]);
+    let worst = |fi: usize, sim: &[Features]| {
+        held.iter().map(|&wi| feature_errors(&s.measured[wi], &sim[wi])[fi].abs()).fold(0.0, f64::max)
+    };
+    let mut tt = Table::new([
+        "feature",
+        "target",
+        "heldout_windows",
+        "met_baseline",
+        "met_extended",
+        "worst_error_over_tolerance_extended",
+    ]);
     for (fi, name) in FEATURES.iter().enumerate() {
-        tt.push([name.to_string(), TARGETS[fi].to_string(), held.len().to_string(), met_base[fi].to_string(), met_ext[fi].to_string(), fmt_fixed(worst(fi, &s.final_features), 2)]);
+        tt.push([
+            name.to_string(),
+            TARGETS[fi].to_string(),
+            held.len().to_string(),
+            met_base[fi].to_string(),
+            met_ext[fi].to_string(),
+            fmt_fixed(worst(fi, &s.final_features), 2),
+        ]);
     }
     out.tables.push(("tables/lavi-targets.csv".into(), tt));
 
     // Candidates side by side: every trial of every step.
     let mut ct = Table::new([
-        "step", "effect", "calibration_misfit", "heldout_misfit_mean", "heldout_misfit_min", "heldout_misfit_max",
-        "relative_gain", "paired_t", "wins", "earns_place", "chosen", "params",
+        "step",
+        "effect",
+        "calibration_misfit",
+        "heldout_misfit_mean",
+        "heldout_misfit_min",
+        "heldout_misfit_max",
+        "relative_gain",
+        "paired_t",
+        "wins",
+        "earns_place",
+        "chosen",
+        "params",
     ]);
     for (i, t) in sel.trials.iter().enumerate() {
         let lo = t.heldout.iter().cloned().fold(f64::INFINITY, f64::min);
         let hi = t.heldout.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
         let params: Vec<String> = t.fitted.params.iter().map(|(k, v)| format!("{k}={}", sig(*v))).collect();
         ct.push([
-            t.step.to_string(), t.candidate.id().to_string(), fmt_fixed(t.fitted.calibration_misfit, 3), fmt_fixed(t.heldout_mean, 3),
-            fmt_fixed(lo, 3), fmt_fixed(hi, 3), fmt_fixed(t.relative_gain, 3), fmt_fixed(t.paired_t, 2),
-            format!("{}/{}", t.wins, t.heldout.len()), t.earns_place.to_string(), sel.chosen.contains(&i).to_string(), params.join(" "),
+            t.step.to_string(),
+            t.candidate.id().to_string(),
+            fmt_fixed(t.fitted.calibration_misfit, 3),
+            fmt_fixed(t.heldout_mean, 3),
+            fmt_fixed(lo, 3),
+            fmt_fixed(hi, 3),
+            fmt_fixed(t.relative_gain, 3),
+            fmt_fixed(t.paired_t, 2),
+            format!("{}/{}", t.wins, t.heldout.len()),
+            t.earns_place.to_string(),
+            sel.chosen.contains(&i).to_string(),
+            params.join(" "),
         ]);
     }
     out.tables.push(("tables/lavi-candidates.csv".into(), ct));
@@ -135,18 +185,31 @@ fn figures(s: &Study, d: &Prepared, out: &mut StudyOutput) -> Result<(), LaviErr
     let ev = crate::score::Evaluator::new(
         d,
         s.windows.clone(),
-        crate::FeatureOptions { fs_hz: d.fs_hz, cutoff_hz: s.params.cutoff_hz, transition_hz: s.params.transition_hz, stick_speed_rpm: s.params.stick_speed_rpm },
+        crate::FeatureOptions {
+            fs_hz: d.fs_hz,
+            cutoff_hz: s.params.cutoff_hz,
+            transition_hz: s.params.transition_hz,
+            stick_speed_rpm: s.params.stick_speed_rpm,
+        },
         s.params.substeps,
         s.params.slip_speed_rpm,
         s.params.drive_ref_window_s,
     )?;
-    let wi = s.windows.iter().position(|w| (w.start_s - s.params.figure_window_start_s).abs() < 1e-9 && w.split == crate::data::Split::Heldout).unwrap_or(1);
+    let wi = s
+        .windows
+        .iter()
+        .position(|w| {
+            (w.start_s - s.params.figure_window_start_s).abs() < 1e-9 && w.split == crate::data::Split::Heldout
+        })
+        .unwrap_or(1);
     let w = &s.windows[wi];
     let lp = |x: &[f64]| lowpass_fft(x, d.fs_hz, s.params.cutoff_hz, s.params.transition_hz);
     let meas_v = d.bit_rpm[w.span.clone()].to_vec();
     let meas_t = d.torque_nm[w.span.clone()].to_vec();
     let mut curves = vec![("measured".to_string(), meas_v, meas_t, SeriesStyle::Line)];
-    for (name, m, style) in [("baseline", &s.baseline, SeriesStyle::Dashed), ("extended", &s.selection.final_model, SeriesStyle::Line)] {
+    for (name, m, style) in
+        [("baseline", &s.baseline, SeriesStyle::Dashed), ("extended", &s.selection.final_model, SeriesStyle::Line)]
+    {
         let r = ev.simulate(m, wi)?;
         let v: Vec<f64> = r.bit_rad_s.iter().map(|x| x / RPM_TO_RAD_S).collect();
         curves.push((name.to_string(), lp(&v)?, lp(&r.torque_nm)?, style));
@@ -198,7 +261,8 @@ fn diagnosis_json(s: &Study) -> Value {
     let mut findings = Vec::new();
     for &i in &sel.chosen {
         let t = &sel.trials[i];
-        let before = if findings.is_empty() { mean(&sel.baseline_heldout) } else { t.heldout_mean / (1.0 - t.relative_gain) };
+        let before =
+            if findings.is_empty() { mean(&sel.baseline_heldout) } else { t.heldout_mean / (1.0 - t.relative_gain) };
         let stderr: BTreeMap<String, Value> = t.fitted.params.keys().map(|k| (k.clone(), Value::Null)).collect();
         findings.push(json!({
             "effect": t.candidate.id(),
@@ -291,10 +355,18 @@ fn markdown(s: &Study, met_base: &[usize; 5], met_ext: &[usize; 5], description:
         "1-DOF model J Ω' = k φ + c (Ω_top − Ω) − T(Ω) (Real et al. 2018) with J = {:.4} kg m², k = {:.3} N m/rad, c = {:.3} N m s/rad \
          (linear least squares on the equation of motion; the unconstrained c was {:.4}{}), friction T = {:.3} + {:.3} exp(−(Ω/{:.2} rad/s)^{}) N m \
          (fitted to the slip samples). Mean held-out misfit {:.3} (calibration window {:.3}). Held-out targets met by the baseline: {}.\n",
-        b.inertia_kgm2, b.stiffness_nm_rad, b.damping_nm_s_rad, s.derivation.damping_unconstrained_nm_s_rad,
+        b.inertia_kgm2,
+        b.stiffness_nm_rad,
+        b.damping_nm_s_rad,
+        s.derivation.damping_unconstrained_nm_s_rad,
         if s.derivation.damping_fixed { ", negative, so fixed at 0" } else { "" },
-        b.friction.kinetic_nm, b.friction.static_nm - b.friction.kinetic_nm, b.friction.stribeck_speed_rad_s, b.friction.shape_exponent,
-        mean(&sel.baseline_heldout), sel.baseline_calibration, met_list(met_base, nh)
+        b.friction.kinetic_nm,
+        b.friction.static_nm - b.friction.kinetic_nm,
+        b.friction.stribeck_speed_rad_s,
+        b.friction.shape_exponent,
+        mean(&sel.baseline_heldout),
+        sel.baseline_calibration,
+        met_list(met_base, nh)
     );
     let _ = writeln!(md, "{}", feature_summary(s, |i| &s.baseline_features[i]));
     let _ = writeln!(md, "## Rung 2: the cause\n");
@@ -304,9 +376,15 @@ fn markdown(s: &Study, met_base: &[usize; 5], met_ext: &[usize; 5], description:
          windows. An effect is added when it has the largest held-out gain of its step, lowers the mean held-out misfit by at least {:.0} %, passes \
          a one-sided paired t-test over the {} held-out windows (t > {:.3}, level {}) and is no worse on the calibration window \
          (tables/lavi-candidates.csv, tables/lavi-heldout-misfits.csv).\n",
-        100.0 * s.params.min_relative_gain, nh, sel.t_critical, s.params.significance
+        100.0 * s.params.min_relative_gain,
+        nh,
+        sel.t_critical,
+        s.params.significance
     );
-    let _ = writeln!(md, "| step | effect | calibration misfit | held-out misfit (mean, min-max) | gain | paired t | wins | earns its place |");
+    let _ = writeln!(
+        md,
+        "| step | effect | calibration misfit | held-out misfit (mean, min-max) | gain | paired t | wins | earns its place |"
+    );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
     for (i, t) in sel.trials.iter().enumerate() {
         let lo = t.heldout.iter().cloned().fold(f64::INFINITY, f64::min);
@@ -314,21 +392,48 @@ fn markdown(s: &Study, met_base: &[usize; 5], met_ext: &[usize; 5], description:
         let _ = writeln!(
             md,
             "| {} | {}{} | {:.3} | {:.3} ({:.3}-{:.3}) | {:.3} | {:.2} | {}/{} | {} |",
-            t.step, t.candidate.id(), if sel.chosen.contains(&i) { " **(added)**" } else { "" }, t.fitted.calibration_misfit,
-            t.heldout_mean, lo, hi, t.relative_gain, t.paired_t, t.wins, t.heldout.len(), if t.earns_place { "yes" } else { "no" }
+            t.step,
+            t.candidate.id(),
+            if sel.chosen.contains(&i) { " **(added)**" } else { "" },
+            t.fitted.calibration_misfit,
+            t.heldout_mean,
+            lo,
+            hi,
+            t.relative_gain,
+            t.paired_t,
+            t.wins,
+            t.heldout.len(),
+            if t.earns_place { "yes" } else { "no" }
         );
     }
     let _ = writeln!(md);
     match sel.chosen.first() {
         Some(&i) => {
             let t = &sel.trials[i];
-            let others = sel.trials.iter().filter(|o| o.step == 1 && o.candidate != t.candidate).map(|o| o.heldout_mean).fold(f64::INFINITY, f64::min);
+            let others = sel
+                .trials
+                .iter()
+                .filter(|o| o.step == 1 && o.candidate != t.candidate)
+                .map(|o| o.heldout_mean)
+                .fold(f64::INFINITY, f64::min);
             let _ = writeln!(
                 md,
                 "**Cause: `{}`** ({}). Held-out misfit {:.3} → {:.3} (gain {:.2}); the next best candidate of step 1 reaches {:.3}.\n",
                 t.candidate.id(),
                 t.fitted.params.iter().map(|(k, v)| format!("{k} = {}", sig(*v))).collect::<Vec<_>>().join(", "),
-                mean(&sel.baseline_heldout), t.heldout_mean, t.relative_gain, others
+                mean(&sel.baseline_heldout),
+                t.heldout_mean,
+                t.relative_gain,
+                others
+            );
+            let f = &sel.final_model.friction;
+            let _ = writeln!(
+                md,
+                "Note: the features are speeds, frequency and loop area, not the torque level. The extended model's friction law has \
+                 T_s = {:.3} N m and T_k = {:.3} N m at the reference normal force, while the least-squares law on the measured torque has \
+                 T_s = {:.3} N m: the simulation fit reproduces the bit-speed features with a friction torque well off the measured one, \
+                 so the named cause says which model structure reproduces the motion, not that the contact's torque is that small.\n",
+                f.static_nm, f.kinetic_nm, s.baseline.friction.static_nm
             );
         }
         None => {
@@ -340,9 +445,15 @@ fn markdown(s: &Study, met_base: &[usize; 5], met_ext: &[usize; 5], description:
         md,
         "Extended model: baseline + {}. Mean held-out misfit {:.3} (baseline {:.3}, relative gain {:.2}); spread over the windows {:.3}-{:.3}. \
          Held-out targets met: {} (baseline: {}). Verdict: **{}**.\n",
-        effects_label(s), mean(&sel.final_heldout), mean(&sel.baseline_heldout), 1.0 - mean(&sel.final_heldout) / mean(&sel.baseline_heldout),
-        sel.final_heldout.iter().cloned().fold(f64::INFINITY, f64::min), sel.final_heldout.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
-        met_list(met_ext, nh), met_list(met_base, nh), s.verdict()
+        effects_label(s),
+        mean(&sel.final_heldout),
+        mean(&sel.baseline_heldout),
+        1.0 - mean(&sel.final_heldout) / mean(&sel.baseline_heldout),
+        sel.final_heldout.iter().cloned().fold(f64::INFINITY, f64::min),
+        sel.final_heldout.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+        met_list(met_ext, nh),
+        met_list(met_base, nh),
+        s.verdict()
     );
     let _ = writeln!(md, "{}", feature_summary(s, |i| &s.final_features[i]));
     for (fi, name) in FEATURES.iter().enumerate() {
@@ -350,7 +461,13 @@ fn markdown(s: &Study, met_base: &[usize; 5], met_ext: &[usize; 5], description:
             let errs: Vec<String> = (1..s.windows.len())
                 .map(|wi| format!("{:.2}", feature_errors(&s.measured[wi], &s.final_features[wi])[fi]))
                 .collect();
-            let _ = writeln!(md, "- Target not reached: `{name}` ({}) on {} of {nh} held-out windows; error/tolerance per window: {}.", TARGETS[fi], nh - met_ext[fi], errs.join(", "));
+            let _ = writeln!(
+                md,
+                "- Target not reached: `{name}` ({}) on {} of {nh} held-out windows; error/tolerance per window: {}.",
+                TARGETS[fi],
+                nh - met_ext[fi],
+                errs.join(", ")
+            );
         }
     }
     let _ = writeln!(md);
@@ -360,7 +477,8 @@ fn markdown(s: &Study, met_base: &[usize; 5], met_ext: &[usize; 5], description:
             "**Adequacy.** The mean held-out misfit {:.3} is above the threshold {} (features within their targets in RMS): a significant \
              mismatch is left, so the verdict is `unexplained` with the effects above kept as a partial explanation. Residual signature \
              (STLSQ on the calibration window's leftover slip torque, each term scored alone on the held-out windows):\n",
-            mean(&sel.final_heldout), s.params.adequacy_threshold
+            mean(&sel.final_heldout),
+            s.params.adequacy_threshold
         );
         for t in &s.signature {
             let _ = writeln!(md, "- `{}`: held-out gain {:.2}: {}.", t.signal, t.heldout_gain, t.description);
@@ -368,11 +486,14 @@ fn markdown(s: &Study, met_base: &[usize; 5], met_ext: &[usize; 5], description:
         if s.signature.is_empty() {
             let _ = writeln!(md, "- no library signal lowers the held-out residual.");
         }
+        let missed: Vec<&str> = FEATURES.iter().zip(met_ext).filter(|(_, k)| **k < nh).map(|(f, _)| *f).collect();
         let _ = writeln!(
             md,
-            "\nWhat would reach the missed targets: the loop area and the stick fraction need the torque's dependence on the direction \
-             of acceleration (the loop) inside the simulated contact, which the signature names; a model term in the leading signal, fitted \
-             on the calibration window, is the next rung.\n"
+            "\nWhat would reach the missed targets ({}): the leftover torque follows `{}` most, so the next rung is a model term in that \
+             signal inside the simulated contact, fitted on the calibration window like the candidates above (and, for the torque level, a \
+             misfit that also scores the measured break-away torque: see rung 2's note).\n",
+            if missed.is_empty() { "none".to_string() } else { missed.join(", ") },
+            s.signature.first().map_or("no library signal", |t| t.signal.as_str())
         );
     }
     let h = &s.wob;
@@ -401,7 +522,9 @@ fn met_list(m: &[usize; 5], n: usize) -> String {
 }
 
 fn feature_summary<'a>(s: &'a Study, sim: impl Fn(usize) -> &'a Features) -> String {
-    let mut t = String::from("| feature | measured (held-out mean) | simulated (held-out mean) | calibration window measured / simulated |\n|---|---|---|---|\n");
+    let mut t = String::from(
+        "| feature | measured (held-out mean) | simulated (held-out mean) | calibration window measured / simulated |\n|---|---|---|---|\n",
+    );
     let held: Vec<usize> = (1..s.windows.len()).collect();
     for (fi, name) in FEATURES.iter().enumerate() {
         let m: Vec<f64> = held.iter().map(|&i| s.measured[i].get(fi)).collect();
@@ -410,8 +533,12 @@ fn feature_summary<'a>(s: &'a Study, sim: impl Fn(usize) -> &'a Features) -> Str
         let _ = writeln!(
             t,
             "| {name} | {} ± {} | {} ± {} | {} / {} |",
-            fmt_fixed(mean(&m), d), fmt_fixed(std(&m), d), fmt_fixed(mean(&x), d), fmt_fixed(std(&x), d),
-            fmt_fixed(s.measured[0].get(fi), d), fmt_fixed(sim(0).get(fi), d)
+            fmt_fixed(mean(&m), d),
+            fmt_fixed(std(&m), d),
+            fmt_fixed(mean(&x), d),
+            fmt_fixed(std(&x), d),
+            fmt_fixed(s.measured[0].get(fi), d),
+            fmt_fixed(sim(0).get(fi), d)
         );
     }
     t

@@ -10,10 +10,10 @@
 //! diverging feature cannot hide the others; M = √(mean e²). M ≤ 1 means the
 //! features are, in RMS, within their targets; a feature meets its target when |e| ≤ 1.
 
+use crate::LaviError;
 use crate::data::{Prepared, RPM_TO_RAD_S, WindowSpec, derivative};
 use crate::features::{FeatureOptions, Features, window_features};
 use crate::sim::{Inputs, Model, Run, Start, simulate};
-use crate::LaviError;
 
 /// Cap on one feature's normalised error.
 pub const ERROR_CAP: f64 = 10.0;
@@ -75,11 +75,22 @@ impl<'a> Evaluator<'a> {
             prefix[i + 1] = prefix[i] + v;
         }
         let n = top_rad_s.len();
-        let top_ref_rad_s =
-            (0..n).map(|i| (prefix[(i + half + 1).min(n)] - prefix[i.saturating_sub(half)]) / ((i + half + 1).min(n) - i.saturating_sub(half)) as f64).collect();
+        let top_ref_rad_s = (0..n)
+            .map(|i| {
+                (prefix[(i + half + 1).min(n)] - prefix[i.saturating_sub(half)])
+                    / ((i + half + 1).min(n) - i.saturating_sub(half)) as f64
+            })
+            .collect();
         let measured = windows
             .iter()
-            .map(|w| window_features(&data.bit_rpm[w.span.clone()], &data.torque_nm[w.span.clone()], w.window.clone(), &fopts))
+            .map(|w| {
+                window_features(
+                    &data.bit_rpm[w.span.clone()],
+                    &data.torque_nm[w.span.clone()],
+                    w.window.clone(),
+                    &fopts,
+                )
+            })
             .collect::<Result<Vec<_>, _>>()?;
         Ok(Evaluator {
             data,

@@ -77,7 +77,13 @@ pub fn forward_select(
             let heldout_mean = mean(&heldout);
             let d: Vec<f64> = current_held.iter().zip(&heldout).map(|(a, b)| a - b).collect();
             let (md, sd) = (mean(&d), std(&d));
-            let paired_t = if sd > 0.0 { md / (sd / (n as f64).sqrt()) } else if md > 0.0 { f64::INFINITY } else { 0.0 };
+            let paired_t = if sd > 0.0 {
+                md / (sd / (n as f64).sqrt())
+            } else if md > 0.0 {
+                f64::INFINITY
+            } else {
+                0.0
+            };
             let relative_gain = 1.0 - heldout_mean / mean(&current_held);
             let wins = d.iter().filter(|x| **x > 0.0).count();
             let earns_place = relative_gain >= min_relative_gain
@@ -128,8 +134,8 @@ pub(crate) fn std(x: &[f64]) -> f64 {
 /// Abramowitz & Stegun 26.10); df > 30 uses the normal quantile.
 pub fn t_quantile_one_sided(alpha: f64, df: usize) -> f64 {
     const T05: [f64; 30] = [
-        6.314, 2.920, 2.353, 2.132, 2.015, 1.943, 1.895, 1.860, 1.833, 1.812, 1.796, 1.782, 1.771, 1.761, 1.753,
-        1.746, 1.740, 1.734, 1.729, 1.725, 1.721, 1.717, 1.714, 1.711, 1.708, 1.706, 1.703, 1.701, 1.699, 1.697,
+        6.314, 2.920, 2.353, 2.132, 2.015, 1.943, 1.895, 1.860, 1.833, 1.812, 1.796, 1.782, 1.771, 1.761, 1.753, 1.746,
+        1.740, 1.734, 1.729, 1.725, 1.721, 1.717, 1.714, 1.711, 1.708, 1.706, 1.703, 1.701, 1.699, 1.697,
     ];
     const T01: [f64; 30] = [
         31.821, 6.965, 4.541, 3.747, 3.365, 3.143, 2.998, 2.896, 2.821, 2.764, 2.718, 2.681, 2.650, 2.624, 2.602,

@@ -151,7 +151,8 @@ pub fn simulate(m: &Model, u: &Inputs, start: Start, substeps: usize) -> Result<
     if stuck {
         om = 0.0;
     }
-    let mut out = Run { bit_rad_s: Vec::with_capacity(n), torque_nm: Vec::with_capacity(n), top_rad_s: Vec::with_capacity(n) };
+    let mut out =
+        Run { bit_rad_s: Vec::with_capacity(n), torque_nm: Vec::with_capacity(n), top_rad_s: Vec::with_capacity(n) };
     out.bit_rad_s.push(om);
     out.torque_nm.push(start.torque_nm);
     out.top_rad_s.push(om_top);

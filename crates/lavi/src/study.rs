@@ -56,13 +56,16 @@ impl Study {
 pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRecording), LaviError> {
     let (rec, d) = prepare(path, p)?;
     let wins = windows(&d, p)?;
-    let fopts =
-        FeatureOptions { fs_hz: d.fs_hz, cutoff_hz: p.cutoff_hz, transition_hz: p.transition_hz, stick_speed_rpm: p.stick_speed_rpm };
+    let fopts = FeatureOptions {
+        fs_hz: d.fs_hz,
+        cutoff_hz: p.cutoff_hz,
+        transition_hz: p.transition_hz,
+        stick_speed_rpm: p.stick_speed_rpm,
+    };
     let ev = Evaluator::new(&d, wins.clone(), fopts, p.substeps, p.slip_speed_rpm, p.drive_ref_window_s)?;
     let (baseline, derivation) = derive(&d, &wins[0], p.slip_speed_rpm, false, 0.0)?;
-    let sim_features = |m: &Model| -> Vec<Features> {
-        (0..wins.len()).map(|w| ev.features(m, w).unwrap_or(NAN_FEATURES)).collect()
-    };
+    let sim_features =
+        |m: &Model| -> Vec<Features> { (0..wins.len()).map(|w| ev.features(m, w).unwrap_or(NAN_FEATURES)).collect() };
     let baseline_features = sim_features(&baseline);
     let selection =
         forward_select(&ev, &baseline, &Candidate::ALL, p.fit_evaluations, p.min_relative_gain, p.significance)?;
@@ -118,7 +121,8 @@ fn wob_hypothesis(ev: &Evaluator, sel: &Selection) -> Result<WobHypothesis, Lavi
         let f = window_features(&d.bit_rpm[s], &pred, w.window.clone(), &ev.fopts)?;
         loop_fraction.push(f.loop_area / ev.measured[wi].loop_area);
     }
-    let cal = ev.windows[0].span.start + ev.windows[0].window.start..ev.windows[0].span.start + ev.windows[0].window.end;
+    let cal =
+        ev.windows[0].span.start + ev.windows[0].window.start..ev.windows[0].span.start + ev.windows[0].window.end;
     let wob = &d.wob_n[cal];
     let misfit_gain = sel
         .trials
