@@ -57,6 +57,35 @@ pub fn series(name: &str, x: Vec<f64>, y: Vec<f64>, style: SeriesStyle) -> Serie
 /// Issue 10's target for each feature, in words.
 const TARGETS: [&str; 5] =
     ["within 10 %", "within 10 rpm", "within 25 % (tolerance at least 0.01)", "within 3 %", "within 30 %"];
+/// The effect ids of this rig, as the crate docs list them.
+const EFFECT_IDS: [(&str, &str); 8] = [
+    ("none", "the baseline explains the held-out windows within the adequacy threshold."),
+    (
+        "friction_law",
+        "another law of the family T_k + (T_s − T_k) exp(−(|Ω|/v_s)^δ) + c_v |Ω|: Coulomb (a jump, `family` 0), exponential (1) or Gaussian (2) Stribeck, with a viscous term; refitted by simulation on the calibration window (`static_nm`, `kinetic_nm`, `stribeck_speed_rad_s`, `viscous_nm_s_rad`).",
+    ),
+    (
+        "wob_normal_force",
+        "the measured weight on bit as the contact's normal force, torque = WOB(t)·μ(Ω) (`reference_wob_n`, `mu_static`, `mu_kinetic`).",
+    ),
+    (
+        "sensor_inertia",
+        "an inertia between the torque sensor and the contact: the sensor reads T_f + J_s Ω' (`sensor_inertia_kgm2`).",
+    ),
+    ("friction_memory", "the slip friction follows its steady law with a first-order lag (`lag_s`)."),
+    (
+        "second_dof",
+        "a mid inertia on the shaft, a second torsional degree of freedom (`mid_inertia_kgm2`, `stiffness_split`).",
+    ),
+    (
+        "compliant_drive",
+        "the top speed is not imposed: a PI speed loop on a motor inertia follows the measured top speed's moving mean (`drive_inertia_kgm2`, `kp_nm_s_rad`, `ki_nm_rad`).",
+    ),
+    (
+        "unexplained",
+        "a significant mismatch is left after the selected effects (mean held-out misfit above the adequacy threshold).",
+    ),
+];
 const DECIMALS: [usize; 5] = [2, 2, 4, 3, 2];
 
 fn met(meas: &Features, sim: &Features) -> [bool; 5] {
@@ -381,6 +410,11 @@ fn markdown(s: &Study, met_base: &[usize; 5], met_ext: &[usize; 5], description:
         sel.t_critical,
         s.params.significance
     );
+    let _ = writeln!(md, "Effect ids of this rig (lavi-diagnosis.json; parameters as its JSON keys):\n");
+    for (id, what) in EFFECT_IDS {
+        let _ = writeln!(md, "- `{id}`: {what}");
+    }
+    let _ = writeln!(md);
     let _ = writeln!(
         md,
         "| step | effect | calibration misfit | held-out misfit (mean, min-max) | gain | paired t | wins | earns its place |"

@@ -73,6 +73,7 @@ fn lsq(x: &[[f64; 5]], y: &[f64], cols: &[usize]) -> Option<(f64, Vec<f64>)> {
         }
     }
     // Gaussian elimination with partial pivoting.
+    #[allow(clippy::needless_range_loop)]
     for col in 0..m {
         let piv = (col..m).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
         if a[piv][col].abs() < 1e-12 {

@@ -18,9 +18,9 @@
 //!   τ ṁ = |T_ss(Ω)| − m (a first-order frictional memory, Hess & Soom 1990);
 //! - `second_dof`: a mid inertia J_1 splits the shaft: k_1 = k/s, k_2 = k/(1−s)
 //!   (series stiffness k kept);
-//! - `compliant_drive`: the top speed is a state: J_m Ω̇_top = K_p (Ω_ref − Ω_top)
-//!   + K_i ∫(Ω_ref − Ω_top) − (torque into the shaft), Ω_ref the measured top
-//!   speed's moving mean.
+//! - `compliant_drive`: the top speed is a state, J_m Ω̇_top = K_p (Ω_ref − Ω_top)
+//!   plus K_i ∫(Ω_ref − Ω_top) minus the torque into the shaft, with Ω_ref the
+//!   measured top speed's moving mean (a PI speed loop; Newton on the motor).
 //!
 //! Integration: semi-implicit Euler with `substeps` steps per sample (0.2 ms
 //! at 1 kHz and 5 substeps; the compared band is below 10 Hz). Inputs are held
