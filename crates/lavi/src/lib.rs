@@ -25,6 +25,11 @@
 //! | `compliant_drive` | the top speed is not imposed: a PI speed loop on a motor inertia | J_m, K_p, K_i; set point = moving mean of the measured top speed | `drive_inertia_kgm2`, `kp_nm_s_rad`, `ki_nm_rad` |
 //! | `unexplained` | a significant mismatch is left (adequacy below) | — | — |
 //!
+//! `params_stderr` in `lavi-diagnosis.json` is `null` for every parameter:
+//! the candidates are fitted by simulation on one 4 s window, where no
+//! covariance worth the name exists; the spread of the held-out misfits is
+//! reported instead.
+//!
 //! # Adequacy
 //!
 //! The final model is adequate when its mean held-out misfit is at most

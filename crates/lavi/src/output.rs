@@ -452,13 +452,22 @@ fn markdown(s: &Study, met_base: &[usize; 5], met_ext: &[usize; 5], description:
                 .fold(f64::INFINITY, f64::min);
             let _ = writeln!(
                 md,
-                "**Cause: `{}`** ({}). Held-out misfit {:.3} → {:.3} (gain {:.2}); the next best candidate of step 1 reaches {:.3}.\n",
+                "**Cause: `{}`** ({}). Held-out misfit {:.3} → {:.3} (gain {:.2}); the next best candidate of step 1 reaches {:.3}. \
+                 Window by window it beats every other step-1 candidate on {} of {} held-out windows.\n",
                 t.candidate.id(),
                 t.fitted.params.iter().map(|(k, v)| format!("{k} = {}", sig(*v))).collect::<Vec<_>>().join(", "),
                 mean(&sel.baseline_heldout),
                 t.heldout_mean,
                 t.relative_gain,
-                others
+                others,
+                (0..t.heldout.len())
+                    .filter(|&k| sel
+                        .trials
+                        .iter()
+                        .filter(|o| o.step == 1 && o.candidate != t.candidate)
+                        .all(|o| t.heldout[k] < o.heldout[k]))
+                    .count(),
+                t.heldout.len()
             );
             let f = &sel.final_model.friction;
             let _ = writeln!(
