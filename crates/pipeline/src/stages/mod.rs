@@ -49,8 +49,7 @@ const STAGES: &[Entry] = &[
     entry("spectra", spectra::run, "spectra.rs", Some(typed::<spectra::Params>)),
     entry("harmonic", harmonic::run, "harmonic.rs", Some(typed::<harmonic::Params>)),
     entry("diagnosis", diagnosis::run, "diagnosis.rs", Some(typed::<rig_diagnose::DiagnoseOptions>)),
-    // Not converted yet (their owners add the params type here).
-    entry("lavi", lavi::run, "lavi.rs", None),
+    entry("lavi", lavi::run, "lavi.rs", Some(typed::<rig_lavi::StudyParams>)),
     entry("confusion", confusion::run, "confusion.rs", Some(typed::<confusion::ConfusionParams>)),
     entry("report", report::run, "report.rs", Some(typed::<report::Params>)),
 ];

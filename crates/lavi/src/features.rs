@@ -1,0 +1,199 @@
+//! The five window features, one function for measurement and simulation:
+//! bit-speed maximum and minimum (means over stick-slip cycles), stick
+//! fraction, stick-slip fundamental (line analysis of rig_spectra) and the
+//! mean torque–bit-speed loop area per cycle.
+
+use crate::LaviError;
+use rig_spectra::{
+    Detrend, Line, LineOptions, PeakOptions, Window, amplitude_spectrum, analyse_lines, lowpass_fft, spectral_peaks,
+};
+use serde::Serialize;
+use std::ops::Range;
+
+/// How features are measured (the same for every signal).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FeatureOptions {
+    pub fs_hz: f64,
+    /// Zero-phase low-pass applied to the whole span before the window is cut (10 Hz: Lobo et al. 2020).
+    pub cutoff_hz: f64,
+    pub transition_hz: f64,
+    /// Bit speed below which the bit counts as stuck, rpm (5 rpm: issue 10).
+    pub stick_speed_rpm: f64,
+}
+
+/// Features of one window. `fundamental_hz` is NaN when the line analysis finds no line.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Features {
+    pub bit_speed_max_rpm: f64,
+    pub bit_speed_min_rpm: f64,
+    pub stick_fraction: f64,
+    pub fundamental_hz: f64,
+    /// Mean |∮ T dΩ| per cycle, N m·rpm.
+    pub loop_area: f64,
+    /// Complete cycles found (0: the window is one pseudo-cycle).
+    pub cycles: usize,
+}
+
+/// Feature names in table order.
+pub const FEATURES: [&str; 5] =
+    ["bit_speed_max_rpm", "bit_speed_min_rpm", "stick_fraction", "fundamental_hz", "loop_area"];
+
+impl Features {
+    pub fn get(&self, i: usize) -> f64 {
+        [self.bit_speed_max_rpm, self.bit_speed_min_rpm, self.stick_fraction, self.fundamental_hz, self.loop_area][i]
+    }
+}
+
+/// Features of `window` inside the span (`bit_rpm`, `torque_nm` cover the whole
+/// span: warm-up and window), after the low-pass of the whole span. Cycles run
+/// between successive upward crossings of a Schmitt trigger at the window's
+/// mean ± 25 % of its half-range (so sensor noise makes no extra crossing).
+pub fn window_features(
+    bit_rpm: &[f64],
+    torque_nm: &[f64],
+    window: Range<usize>,
+    o: &FeatureOptions,
+) -> Result<Features, LaviError> {
+    if bit_rpm.len() != torque_nm.len() || window.end > bit_rpm.len() || window.len() < 16 {
+        return Err(LaviError::Input {
+            what: "window_features",
+            rule: format!(
+                "bit speed ({}) and torque ({}) must have equal lengths holding the window {:?} of >= 16 samples",
+                bit_rpm.len(),
+                torque_nm.len(),
+                window
+            ),
+        });
+    }
+    let v_all = lowpass_fft(bit_rpm, o.fs_hz, o.cutoff_hz, o.transition_hz)?;
+    let t_all = lowpass_fft(torque_nm, o.fs_hz, o.cutoff_hz, o.transition_hz)?;
+    let (v, t) = (&v_all[window.clone()], &t_all[window]);
+    let stick_fraction = v.iter().filter(|x| **x < o.stick_speed_rpm).count() as f64 / v.len() as f64;
+    let starts = cycle_starts(v);
+    let (mut maxs, mut mins, mut areas) = (Vec::new(), Vec::new(), Vec::new());
+    for w in starts.windows(2) {
+        let (seg_v, seg_t) = (&v[w[0]..=w[1]], &t[w[0]..=w[1]]);
+        maxs.push(seg_v.iter().cloned().fold(f64::NEG_INFINITY, f64::max));
+        mins.push(seg_v.iter().cloned().fold(f64::INFINITY, f64::min));
+        areas.push(shoelace(seg_v, seg_t).abs());
+    }
+    let cycles = maxs.len();
+    if cycles == 0 {
+        maxs.push(v.iter().cloned().fold(f64::NEG_INFINITY, f64::max));
+        mins.push(v.iter().cloned().fold(f64::INFINITY, f64::min));
+        areas.push(shoelace(v, t).abs());
+    }
+    Ok(Features {
+        bit_speed_max_rpm: mean(&maxs),
+        bit_speed_min_rpm: mean(&mins),
+        stick_fraction,
+        fundamental_hz: fundamental_hz(v, o.fs_hz, o.cutoff_hz)?.unwrap_or(f64::NAN),
+        loop_area: mean(&areas),
+        cycles,
+    })
+}
+
+/// The stick-slip fundamental by the line analysis of rig_spectra (Hann
+/// spectrum, mean removed, peaks between 0.2 Hz and the cut-off).
+pub fn fundamental_hz(x: &[f64], fs_hz: f64, max_hz: f64) -> Result<Option<f64>, LaviError> {
+    let s = amplitude_spectrum(x, fs_hz, Window::Hann, Detrend::Constant)?;
+    let peaks = spectral_peaks(&s, &PeakOptions { min_freq_hz: 0.2, max_freq_hz: max_hz, ..PeakOptions::default() });
+    let lines: Vec<Line> = peaks.iter().map(Line::from).collect();
+    Ok(analyse_lines(&lines, s.resolution_hz, &LineOptions::default()).f0_hz)
+}
+
+/// Indices of upward crossings of mean + h after the signal was below mean − h,
+/// h = 25 % of the half-range.
+fn cycle_starts(v: &[f64]) -> Vec<usize> {
+    let (lo, hi) =
+        (v.iter().cloned().fold(f64::INFINITY, f64::min), v.iter().cloned().fold(f64::NEG_INFINITY, f64::max));
+    let m = mean(v);
+    let h = 0.25 * 0.5 * (hi - lo);
+    if h <= 0.0 {
+        return Vec::new();
+    }
+    let mut armed = false;
+    let mut out = Vec::new();
+    for (i, x) in v.iter().enumerate() {
+        if *x < m - h {
+            armed = true;
+        } else if armed && *x > m + h {
+            out.push(i);
+            armed = false;
+        }
+    }
+    out
+}
+
+/// Signed area of the closed polygon (x, y) (shoelace formula, closing edge included).
+pub fn shoelace(x: &[f64], y: &[f64]) -> f64 {
+    let n = x.len();
+    let mut s = 0.0;
+    for i in 0..n {
+        let j = (i + 1) % n;
+        s += x[i] * y[j] - x[j] * y[i];
+    }
+    0.5 * s
+}
+
+pub(crate) fn mean(x: &[f64]) -> f64 {
+    x.iter().sum::<f64>() / x.len().max(1) as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const FS: f64 = 1000.0;
+
+    fn opts() -> FeatureOptions {
+        FeatureOptions { fs_hz: FS, cutoff_hz: 10.0, transition_hz: 2.0, stick_speed_rpm: 5.0 }
+    }
+
+    /// A sawtooth stick-slip record: per 0.5 s cycle (2 Hz), 30 % stuck at 0,
+    /// then a slip arc 100·sin(π s) rpm; 12 s, window 2–10 s.
+    fn sawtooth() -> (Vec<f64>, Vec<f64>) {
+        let period = 0.5;
+        let v: Vec<f64> = (0..12_000)
+            .map(|i| {
+                let ph = (i as f64 / FS / period).fract();
+                if ph < 0.3 { 0.0 } else { 100.0 * (std::f64::consts::PI * (ph - 0.3) / 0.7).sin() }
+            })
+            .collect();
+        let t = v.iter().map(|x| 1.0 + 0.002 * x).collect();
+        (v, t)
+    }
+
+    #[test]
+    fn sawtooth_stick_slip_has_its_known_features() {
+        let (v, t) = sawtooth();
+        let f = window_features(&v, &t, 2000..10_000, &opts()).unwrap();
+        // Exact values: max 100, min 0, f0 2 Hz; stick fraction 0.3 + 0.7·2·asin(0.05)/π = 0.3223.
+        let stick = 0.3 + 0.7 * 2.0 * (0.05f64).asin() / std::f64::consts::PI;
+        assert!((f.bit_speed_max_rpm - 100.0).abs() < 3.0, "{f:?}");
+        assert!(f.bit_speed_min_rpm.abs() < 3.0, "{f:?}");
+        assert!((f.stick_fraction - stick).abs() < 0.03, "{f:?} vs {stick}");
+        assert!((f.fundamental_hz - 2.0).abs() < 0.02, "{f:?}");
+        assert_eq!(f.cycles, 15);
+        // The torque is a single-valued function of speed: no loop.
+        assert!(f.loop_area < 1.0, "{f:?}");
+    }
+
+    #[test]
+    fn an_elliptic_loop_has_area_pi_a_b() {
+        // Ω = 50 + 40 sin(2π t), T = 1 + 0.2 cos(2π t): area π·40·0.2 = 25.13 N m·rpm.
+        let w = 2.0 * std::f64::consts::PI;
+        let v: Vec<f64> = (0..10_000).map(|i| 50.0 + 40.0 * (w * i as f64 / FS).sin()).collect();
+        let t: Vec<f64> = (0..10_000).map(|i| 1.0 + 0.2 * (w * i as f64 / FS).cos()).collect();
+        let f = window_features(&v, &t, 2000..8000, &opts()).unwrap();
+        let exact = std::f64::consts::PI * 40.0 * 0.2;
+        assert!((f.loop_area - exact).abs() < 0.01 * exact, "{f:?} vs {exact}");
+        assert!((f.fundamental_hz - 1.0).abs() < 0.02 && f.stick_fraction == 0.0, "{f:?}");
+    }
+
+    #[test]
+    fn refuses_mismatched_lengths() {
+        let e = window_features(&[0.0; 100], &[0.0; 99], 0..50, &opts()).unwrap_err();
+        assert!(e.to_string().contains("equal lengths"), "{e}");
+    }
+}

@@ -1,0 +1,147 @@
+//! The UFRJ LAVI 2018 stick-slip recording (run 175, Real et al. 2018): what
+//! the 1-DOF simulation gets wrong, why, and what the fix gains on held-out
+//! windows (issue 10).
+//!
+//! Pipeline of the study ([`run_study`]): read and repair the recording
+//! ([`data`]), cut the calibration window (37–41 s, Lobo et al. 2020) and the
+//! held-out windows, measure the five [`features`] (one function for
+//! measurement and simulation, 10 Hz low-pass), fit the baseline on the
+//! calibration window ([`fit::derive`]), fit every candidate cause on the
+//! calibration window and score it on the held-out windows with the
+//! phase-insensitive misfit of [`score`], select by forward selection
+//! ([`select`]), judge adequacy, and render tables, figures, `lavi.md` and
+//! `lavi-diagnosis.json` ([`output`]).
+//!
+//! # Effect ids of this rig (the `effect` field of `lavi-diagnosis.json`)
+//!
+//! | id | picture | model change ([`sim`]) | parameters |
+//! |---|---|---|---|
+//! | `none` | the baseline explains the windows | — | — |
+//! | `friction_law` | another law of the family: Coulomb (jump), Stribeck exponential or Gaussian, each with a viscous term | law refitted on the calibration window by simulation | `family` (0 Coulomb, 1 exponential, 2 Gaussian), `static_nm`, `kinetic_nm`, `stribeck_speed_rad_s`, `viscous_nm_s_rad` |
+//! | `wob_normal_force` | the measured weight on bit is the contact's normal force: torque = WOB·μ(Ω) | law fitted to T·W_ref/W; W(t) drives the run | `reference_wob_n`, `mu_static`, `mu_kinetic` |
+//! | `sensor_inertia` | an inertia between the torque sensor and the contact: the sensor reads T_f + J_s Ω̇ | J, k, c and the law refitted on T − J_s Ω̇ | `sensor_inertia_kgm2` |
+//! | `friction_memory` | the friction follows its steady law with a lag | τ ṁ = T_ss(Ω) − m in slip | `lag_s` |
+//! | `second_dof` | a second torsional degree of freedom (a mid inertia on the shaft) | J_1 between k_1 = k/s and k_2 = k/(1−s) | `mid_inertia_kgm2`, `stiffness_split` |
+//! | `compliant_drive` | the top speed is not imposed: a PI speed loop on a motor inertia | J_m, K_p, K_i; set point = moving mean of the measured top speed | `drive_inertia_kgm2`, `kp_nm_s_rad`, `ki_nm_rad` |
+//! | `unexplained` | a significant mismatch is left (adequacy below) | — | — |
+//!
+//! `params_stderr` in `lavi-diagnosis.json` is `null` for every parameter:
+//! the candidates are fitted by simulation on one 4 s window, where no
+//! covariance worth the name exists; the spread of the held-out misfits is
+//! reported instead.
+//!
+//! # Adequacy
+//!
+//! The final model is adequate when its mean held-out misfit is at most
+//! `adequacy_threshold` (1: the five features within their issue-10 targets in
+//! RMS, [`score`]). Otherwise the verdict is `unexplained`, the selected
+//! effects stay as a partial explanation, and the residual signature
+//! ([`signature`]) says what the leftover torque follows.
+
+pub mod data;
+pub mod describe;
+pub mod features;
+pub mod fit;
+pub mod output;
+pub mod score;
+pub mod select;
+pub mod signature;
+pub mod sim;
+pub mod study;
+
+pub use features::{FEATURES, FeatureOptions, Features, window_features};
+pub use output::StudyOutput;
+pub use study::{Study, run_study};
+
+use serde::{Deserialize, Serialize};
+
+/// Everything that can go wrong; each names what a person must fix.
+#[derive(Debug, thiserror::Error)]
+pub enum LaviError {
+    #[error(transparent)]
+    Ingest(#[from] rig_ingest::IngestError),
+    #[error("signal processing: {0}")]
+    Spectra(#[from] rig_spectra::SpectraError),
+    #[error("least squares of the 1-DOF model: {0}")]
+    Model(#[from] rig_model::ModelError),
+    #[error("{file}: {rule}")]
+    Data { file: String, rule: String },
+    #[error("pipeline.toml: stage lavi: param {key}: {rule}")]
+    Params { key: &'static str, rule: String },
+    #[error("{what}: {rule}")]
+    Input { what: &'static str, rule: String },
+    #[error("simulation diverged at sample {sample} of its span")]
+    Diverged { sample: usize },
+}
+
+/// The candidate causes (effect ids in the crate docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Candidate {
+    FrictionLaw,
+    WobNormalForce,
+    SensorInertia,
+    FrictionMemory,
+    SecondDof,
+    CompliantDrive,
+}
+
+impl Candidate {
+    pub const ALL: [Candidate; 6] = [
+        Candidate::FrictionLaw,
+        Candidate::WobNormalForce,
+        Candidate::SensorInertia,
+        Candidate::FrictionMemory,
+        Candidate::SecondDof,
+        Candidate::CompliantDrive,
+    ];
+
+    pub fn id(self) -> &'static str {
+        match self {
+            Candidate::FrictionLaw => "friction_law",
+            Candidate::WobNormalForce => "wob_normal_force",
+            Candidate::SensorInertia => "sensor_inertia",
+            Candidate::FrictionMemory => "friction_memory",
+            Candidate::SecondDof => "second_dof",
+            Candidate::CompliantDrive => "compliant_drive",
+        }
+    }
+}
+
+/// `[stage.params]` of the `lavi` stage (pipeline.toml), every key required.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StudyParams {
+    /// The authors' calibration window (Lobo et al. 2020), s.
+    pub window_start_s: f64,
+    pub window_end_s: f64,
+    /// Starts of the held-out windows, s.
+    pub heldout_starts_s: Vec<f64>,
+    pub heldout_length_s: f64,
+    /// Free runs start this long before each window, from the measured state.
+    pub warmup_s: f64,
+    pub cutoff_hz: f64,
+    pub transition_hz: f64,
+    pub glitch_median_window: usize,
+    pub glitch_threshold_rpm: f64,
+    pub glitch_floor_rpm: f64,
+    pub glitch_dilate: usize,
+    /// Bit speed above which the friction law is fitted, rpm.
+    pub slip_speed_rpm: f64,
+    /// Bins of the friction-vs-speed description.
+    pub bins: usize,
+    /// Bit speed below which a sample counts as stuck (`stick_fraction`), rpm.
+    pub stick_speed_rpm: f64,
+    /// Integration substeps per sample.
+    pub substeps: usize,
+    /// Nelder–Mead evaluations per candidate fit.
+    pub fit_evaluations: usize,
+    /// Moving mean of the measured top speed that the compliant drive follows, s.
+    pub drive_ref_window_s: f64,
+    pub min_relative_gain: f64,
+    /// One-sided level of the paired t-test (0.05 or 0.01).
+    pub significance: f64,
+    pub adequacy_threshold: f64,
+    /// Start of the held-out window shown in the figures, s.
+    pub figure_window_start_s: f64,
+}

@@ -1,0 +1,569 @@
+//! How the study becomes artifacts: tables, figures (derived, low-passed and
+//! thinned series only), `lavi.md` (three rungs: baseline, cause, extension)
+//! and `lavi-diagnosis.json` in the schema of ../shared/spec/diagnosis.md.
+
+use crate::LaviError;
+use crate::data::{Prepared, RPM_TO_RAD_S};
+use crate::describe::describe;
+use crate::features::{FEATURES, Features};
+use crate::score::feature_errors;
+use crate::select::{mean, std};
+use crate::study::Study;
+use rig_ingest::lavi::LaviRecording;
+use rig_spectra::lowpass_fft;
+use rig_types::{FigureSpec, SeriesStyle, Table, figure, fmt_fixed, series};
+use serde_json::{Value, json};
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+/// Everything the stage writes, in a fixed order.
+#[derive(Debug, Default)]
+pub struct StudyOutput {
+    /// (path under reports/, table).
+    pub tables: Vec<(String, Table)>,
+    pub figures: Vec<FigureSpec>,
+    /// `lavi.md`.
+    pub markdown: String,
+    /// `lavi-diagnosis.json`.
+    pub diagnosis: Value,
+}
+
+/// Issue 10's target for each feature, in words.
+const TARGETS: [&str; 5] =
+    ["within 10 %", "within 10 rpm", "within 25 % (tolerance at least 0.01)", "within 3 %", "within 30 %"];
+/// The effect ids of this rig, as the crate docs list them.
+const EFFECT_IDS: [(&str, &str); 8] = [
+    ("none", "the baseline explains the held-out windows within the adequacy threshold."),
+    (
+        "friction_law",
+        "another law of the family T_k + (T_s − T_k) exp(−(|Ω|/v_s)^δ) + c_v |Ω|: Coulomb (a jump, `family` 0), exponential (1) or Gaussian (2) Stribeck, with a viscous term; refitted by simulation on the calibration window (`static_nm`, `kinetic_nm`, `stribeck_speed_rad_s`, `viscous_nm_s_rad`).",
+    ),
+    (
+        "wob_normal_force",
+        "the measured weight on bit as the contact's normal force, torque = WOB(t)·μ(Ω) (`reference_wob_n`, `mu_static`, `mu_kinetic`).",
+    ),
+    (
+        "sensor_inertia",
+        "an inertia between the torque sensor and the contact: the sensor reads T_f + J_s Ω' (`sensor_inertia_kgm2`).",
+    ),
+    ("friction_memory", "the slip friction follows its steady law with a first-order lag (`lag_s`)."),
+    (
+        "second_dof",
+        "a mid inertia on the shaft, a second torsional degree of freedom (`mid_inertia_kgm2`, `stiffness_split`).",
+    ),
+    (
+        "compliant_drive",
+        "the top speed is not imposed: a PI speed loop on a motor inertia follows the measured top speed's moving mean (`drive_inertia_kgm2`, `kp_nm_s_rad`, `ki_nm_rad`).",
+    ),
+    (
+        "unexplained",
+        "a significant mismatch is left after the selected effects (mean held-out misfit above the adequacy threshold).",
+    ),
+];
+const DECIMALS: [usize; 5] = [2, 2, 4, 3, 2];
+
+fn met(meas: &Features, sim: &Features) -> [bool; 5] {
+    feature_errors(meas, sim).map(|e| e.abs() <= 1.0)
+}
+
+/// Renders the study (see the module docs).
+pub fn render(s: &Study, d: &Prepared, rec: &LaviRecording) -> Result<StudyOutput, LaviError> {
+    let mut out = StudyOutput::default();
+    let description = describe(rec, d, &s.params, &mut out)?;
+    let held: Vec<usize> = (1..s.windows.len()).collect();
+    let sel = &s.selection;
+
+    // Features, one row per window and feature.
+    let mut ft = Table::new(["window", "split", "feature", "measured", "baseline", "extended"]);
+    for (wi, w) in s.windows.iter().enumerate() {
+        for (fi, name) in FEATURES.iter().enumerate() {
+            let f = |x: &Features| fmt_fixed(x.get(fi), DECIMALS[fi]);
+            ft.push([
+                w.label.clone(),
+                w.split.as_str().to_string(),
+                name.to_string(),
+                f(&s.measured[wi]),
+                f(&s.baseline_features[wi]),
+                f(&s.final_features[wi]),
+            ]);
+        }
+    }
+    out.tables.push(("tables/lavi-features.csv".into(), ft));
+
+    // Targets met on the held-out windows.
+    let count = |sim: &[Features]| -> [usize; 5] {
+        let mut c = [0; 5];
+        for &wi in &held {
+            for (fi, ok) in met(&s.measured[wi], &sim[wi]).iter().enumerate() {
+                c[fi] += *ok as usize;
+            }
+        }
+        c
+    };
+    let (met_base, met_ext) = (count(&s.baseline_features), count(&s.final_features));
+    let worst = |fi: usize, sim: &[Features]| {
+        held.iter().map(|&wi| feature_errors(&s.measured[wi], &sim[wi])[fi].abs()).fold(0.0, f64::max)
+    };
+    let mut tt = Table::new([
+        "feature",
+        "target",
+        "heldout_windows",
+        "met_baseline",
+        "met_extended",
+        "worst_error_over_tolerance_extended",
+    ]);
+    for (fi, name) in FEATURES.iter().enumerate() {
+        tt.push([
+            name.to_string(),
+            TARGETS[fi].to_string(),
+            held.len().to_string(),
+            met_base[fi].to_string(),
+            met_ext[fi].to_string(),
+            fmt_fixed(worst(fi, &s.final_features), 2),
+        ]);
+    }
+    out.tables.push(("tables/lavi-targets.csv".into(), tt));
+
+    // Candidates side by side: every trial of every step.
+    let mut ct = Table::new([
+        "step",
+        "effect",
+        "calibration_misfit",
+        "heldout_misfit_mean",
+        "heldout_misfit_min",
+        "heldout_misfit_max",
+        "relative_gain",
+        "paired_t",
+        "wins",
+        "earns_place",
+        "chosen",
+        "params",
+    ]);
+    for (i, t) in sel.trials.iter().enumerate() {
+        let lo = t.heldout.iter().cloned().fold(f64::INFINITY, f64::min);
+        let hi = t.heldout.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        let params: Vec<String> = t.fitted.params.iter().map(|(k, v)| format!("{k}={}", sig(*v))).collect();
+        ct.push([
+            t.step.to_string(),
+            t.candidate.id().to_string(),
+            fmt_fixed(t.fitted.calibration_misfit, 3),
+            fmt_fixed(t.heldout_mean, 3),
+            fmt_fixed(lo, 3),
+            fmt_fixed(hi, 3),
+            fmt_fixed(t.relative_gain, 3),
+            fmt_fixed(t.paired_t, 2),
+            format!("{}/{}", t.wins, t.heldout.len()),
+            t.earns_place.to_string(),
+            sel.chosen.contains(&i).to_string(),
+            params.join(" "),
+        ]);
+    }
+    out.tables.push(("tables/lavi-candidates.csv".into(), ct));
+
+    // Held-out misfit per window: baseline, every step-1 candidate, final.
+    let step1: Vec<_> = sel.trials.iter().filter(|t| t.step == 1).collect();
+    let mut cols = vec!["window".to_string(), "baseline".to_string()];
+    cols.extend(step1.iter().map(|t| t.candidate.id().to_string()));
+    cols.push("extended".into());
+    let mut mt = Table::new(cols);
+    for (k, &wi) in held.iter().enumerate() {
+        let mut row = vec![s.windows[wi].label.clone(), fmt_fixed(sel.baseline_heldout[k], 3)];
+        row.extend(step1.iter().map(|t| fmt_fixed(t.heldout[k], 3)));
+        row.push(fmt_fixed(sel.final_heldout[k], 3));
+        mt.push(row);
+    }
+    out.tables.push(("tables/lavi-heldout-misfits.csv".into(), mt));
+
+    figures(s, d, &mut out)?;
+    out.diagnosis = diagnosis_json(s);
+    out.markdown = markdown(s, &met_base, &met_ext, &description);
+    Ok(out)
+}
+
+fn sig(x: f64) -> String {
+    format!("{x:.4e}")
+}
+
+fn figures(s: &Study, d: &Prepared, out: &mut StudyOutput) -> Result<(), LaviError> {
+    let ev = crate::score::Evaluator::new(
+        d,
+        s.windows.clone(),
+        crate::FeatureOptions {
+            fs_hz: d.fs_hz,
+            cutoff_hz: s.params.cutoff_hz,
+            transition_hz: s.params.transition_hz,
+            stick_speed_rpm: s.params.stick_speed_rpm,
+        },
+        s.params.substeps,
+        s.params.slip_speed_rpm,
+        s.params.drive_ref_window_s,
+    )?;
+    let wi = s
+        .windows
+        .iter()
+        .position(|w| {
+            (w.start_s - s.params.figure_window_start_s).abs() < 1e-9 && w.split == crate::data::Split::Heldout
+        })
+        .unwrap_or(1);
+    let w = &s.windows[wi];
+    let lp = |x: &[f64]| lowpass_fft(x, d.fs_hz, s.params.cutoff_hz, s.params.transition_hz);
+    let meas_v = d.bit_rpm[w.span.clone()].to_vec();
+    let meas_t = d.torque_nm[w.span.clone()].to_vec();
+    let mut curves = vec![("measured".to_string(), meas_v, meas_t, SeriesStyle::Line)];
+    for (name, m, style) in
+        [("baseline", &s.baseline, SeriesStyle::Dashed), ("extended", &s.selection.final_model, SeriesStyle::Line)]
+    {
+        let r = ev.simulate(m, wi)?;
+        let v: Vec<f64> = r.bit_rad_s.iter().map(|x| x / RPM_TO_RAD_S).collect();
+        curves.push((name.to_string(), lp(&v)?, lp(&r.torque_nm)?, style));
+    }
+    // Every 10th sample (100 Hz, ten times the cut-off) of the window.
+    let idx: Vec<usize> = w.window.clone().step_by(10).collect();
+    let t0 = d.time_s[w.span.start];
+    let time: Vec<f64> = idx.iter().map(|&i| t0 + i as f64 / d.fs_hz).collect();
+    let pick = |x: &[f64]| idx.iter().map(|&i| x[i]).collect::<Vec<f64>>();
+    let extended = effects_label(s);
+    out.figures.push(figure(
+        "lavi-bit-speed",
+        &format!("LAVI run 175: bit speed over the held-out window {} s", w.label),
+        &format!(
+            "Bit speed measured, simulated by the baseline 1-DOF model and by the extended model ({extended}), each run free from the \
+             measured state {} s before the window under the measured top speed{}; all low-passed at {} Hz, shown at 100 Hz. \
+             Neither model saw this window when it was fitted.",
+            s.params.warmup_s,
+            if s.selection.final_model.wob_ref_n.is_some() { " and weight on bit" } else { "" },
+            s.params.cutoff_hz
+        ),
+        ("time [s]", 2),
+        ("bit speed [rpm]", 1),
+        curves.iter().map(|(n, v, _, st)| series(n, time.clone(), pick(v), *st)).collect(),
+    ));
+    out.figures.push(figure(
+        "lavi-loops",
+        &format!("LAVI run 175: torque on bit against bit speed, held-out window {} s", w.label),
+        &format!(
+            "Torque-bit-speed trajectories of the measurement, the baseline and the extended model ({extended}) over the held-out \
+             window (low-passed at {} Hz, 100 Hz). Mean loop area per cycle: measured {:.1}, baseline {:.1}, extended {:.1} N m·rpm.",
+            s.params.cutoff_hz, s.measured[wi].loop_area, s.baseline_features[wi].loop_area, s.final_features[wi].loop_area
+        ),
+        ("bit speed [rpm]", 1),
+        ("torque on bit [N m]", 3),
+        curves.iter().map(|(n, v, t, st)| series(n, pick(v), pick(t), *st)).collect(),
+    ));
+    Ok(())
+}
+
+fn effects_label(s: &Study) -> String {
+    let ids: Vec<&str> = s.selection.chosen.iter().map(|&i| s.selection.trials[i].candidate.id()).collect();
+    if ids.is_empty() { "no effect added".into() } else { ids.join(" + ") }
+}
+
+fn diagnosis_json(s: &Study) -> Value {
+    let sel = &s.selection;
+    let held_labels: Vec<&str> = s.windows[1..].iter().map(|w| w.label.as_str()).collect();
+    let mut findings = Vec::new();
+    for &i in &sel.chosen {
+        let t = &sel.trials[i];
+        let before =
+            if findings.is_empty() { mean(&sel.baseline_heldout) } else { t.heldout_mean / (1.0 - t.relative_gain) };
+        let stderr: BTreeMap<String, Value> = t.fitted.params.keys().map(|k| (k.clone(), Value::Null)).collect();
+        findings.push(json!({
+            "effect": t.candidate.id(),
+            "params": t.fitted.params,
+            "params_stderr": stderr,
+            "evidence": format!(
+                "fitted on the calibration window {} only; mean held-out misfit {:.3} -> {:.3} over {} windows, better in {} of them (paired t = {:.2} > {:.2}); spread {:.3}-{:.3}",
+                s.windows[0].label, before, t.heldout_mean, t.heldout.len(), t.wins, t.paired_t, sel.t_critical,
+                t.heldout.iter().cloned().fold(f64::INFINITY, f64::min), t.heldout.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+            ),
+            "heldout_runs": held_labels,
+            "heldout_misfit_baseline": before,
+            "heldout_misfit_extended": t.heldout_mean,
+            "relative_gain": t.relative_gain,
+        }));
+    }
+    if !s.adequate {
+        let final_mean = mean(&sel.final_heldout);
+        let mut missed = Vec::new();
+        for (fi, name) in FEATURES.iter().enumerate() {
+            let n_met = (1..s.windows.len()).filter(|&wi| met(&s.measured[wi], &s.final_features[wi])[fi]).count();
+            if n_met < s.windows.len() - 1 {
+                missed.push(Value::from(*name));
+            }
+        }
+        let mut wh = vec![Value::from("heldout_windows")];
+        wh.extend(missed);
+        findings.push(json!({
+            "effect": "unexplained",
+            "evidence": format!(
+                "after the selected effects the mean held-out misfit is {:.3}, above the adequacy threshold {} (feature errors in units of issue 10's targets, RMS)",
+                final_mean, s.params.adequacy_threshold
+            ),
+            "residual_over_noise": final_mean / s.params.adequacy_threshold,
+            "where": wh,
+            "signature": s.signature,
+            "heldout_misfit_baseline": mean(&sel.baseline_heldout),
+            "heldout_misfit_extended": final_mean,
+        }));
+    }
+    let candidates: Vec<Value> = sel
+        .trials
+        .iter()
+        .map(|t| {
+            json!({
+                "effect": t.candidate.id(),
+                "step": t.step,
+                "heldout_misfit_extended": t.heldout_mean,
+                "relative_gain": t.relative_gain,
+                "criterion": t.paired_t,
+                "calibration_misfit": t.fitted.calibration_misfit,
+            })
+        })
+        .collect();
+    json!({
+        "campaign": "ufrj-lavi-2018/run-175",
+        "verdict": s.verdict(),
+        "findings": findings,
+        "candidates": candidates,
+        "misfit": "phase-insensitive: RMS over five window features of (simulated - measured) / target tolerance (rig_lavi::score); criterion = paired t over the held-out windows",
+    })
+}
+
+fn markdown(s: &Study, met_base: &[usize; 5], met_ext: &[usize; 5], description: &str) -> String {
+    let sel = &s.selection;
+    let nh = s.windows.len() - 1;
+    let b = &s.baseline;
+    let mut md = String::new();
+    let _ = writeln!(md, "# UFRJ LAVI 2018, run 175: what the simulation gets wrong, why, and the gain of the fix\n");
+    let _ = writeln!(
+        md,
+        "Data: Real, Lobo, Ritto, Pinto (2018), J. Petroleum Sci. Eng. 170, 755-762 (doi:10.1016/j.petrol.2018.07.008); read from \
+         ../shared, never copied. Models are fitted on the authors' window {} s only (Lobo et al. 2020, doi:10.1016/j.ijmecsci.2020.105578) \
+         and judged on {} held-out windows ({}), whose mean top speeds differ. Features (rig_lavi::features, one function for \
+         measurement and simulation, {} Hz low-pass): the mean over stick-slip cycles of the bit-speed maximum and minimum, the \
+         fraction of time below {} rpm, the fundamental from the line analysis, and the mean torque-bit-speed loop area per cycle. \
+         Every simulation runs free from the measured state {} s before its window. Misfit: RMS over the five features of the error \
+         in units of issue 10's target (10 %, 10 rpm, 25 %, 3 %, 30 %), each capped at 10 (rig_lavi::score); 1 means within the \
+         targets in RMS.\n",
+        s.windows[0].label,
+        nh,
+        s.windows[1..].iter().map(|w| w.label.as_str()).collect::<Vec<_>>().join(", "),
+        s.params.cutoff_hz,
+        s.params.stick_speed_rpm,
+        s.params.warmup_s
+    );
+    let _ = writeln!(md, "## Rung 1: the baseline and what it gets wrong\n");
+    let _ = writeln!(
+        md,
+        "1-DOF model J Ω' = k φ + c (Ω_top − Ω) − T(Ω) (Real et al. 2018) with J = {:.4} kg m², k = {:.3} N m/rad, c = {:.3} N m s/rad \
+         (linear least squares on the equation of motion; the unconstrained c was {:.4}{}), friction T = {:.3} + {:.3} exp(−(Ω/{:.2} rad/s)^{}) N m \
+         (fitted to the slip samples). Mean held-out misfit {:.3} (calibration window {:.3}). Held-out targets met by the baseline: {}.\n",
+        b.inertia_kgm2,
+        b.stiffness_nm_rad,
+        b.damping_nm_s_rad,
+        s.derivation.damping_unconstrained_nm_s_rad,
+        if s.derivation.damping_fixed { ", negative, so fixed at 0" } else { "" },
+        b.friction.kinetic_nm,
+        b.friction.static_nm - b.friction.kinetic_nm,
+        b.friction.stribeck_speed_rad_s,
+        b.friction.shape_exponent,
+        mean(&sel.baseline_heldout),
+        sel.baseline_calibration,
+        met_list(met_base, nh)
+    );
+    let _ = writeln!(md, "{}", feature_summary(s, |i| &s.baseline_features[i]));
+    let _ = writeln!(md, "## Rung 2: the cause\n");
+    let _ = writeln!(
+        md,
+        "Six candidate causes (rig_lavi crate docs), each fitted on the calibration window on top of the current model, scored on the held-out \
+         windows. An effect is added when it has the largest held-out gain of its step, lowers the mean held-out misfit by at least {:.0} %, passes \
+         a one-sided paired t-test over the {} held-out windows (t > {:.3}, level {}) and is no worse on the calibration window \
+         (tables/lavi-candidates.csv, tables/lavi-heldout-misfits.csv).\n",
+        100.0 * s.params.min_relative_gain,
+        nh,
+        sel.t_critical,
+        s.params.significance
+    );
+    let _ = writeln!(md, "Effect ids of this rig (lavi-diagnosis.json; parameters as its JSON keys):\n");
+    for (id, what) in EFFECT_IDS {
+        let _ = writeln!(md, "- `{id}`: {what}");
+    }
+    let _ = writeln!(md);
+    let _ = writeln!(
+        md,
+        "| step | effect | calibration misfit | held-out misfit (mean, min-max) | gain | paired t | wins | earns its place |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
+    for (i, t) in sel.trials.iter().enumerate() {
+        let lo = t.heldout.iter().cloned().fold(f64::INFINITY, f64::min);
+        let hi = t.heldout.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        let _ = writeln!(
+            md,
+            "| {} | {}{} | {:.3} | {:.3} ({:.3}-{:.3}) | {:.3} | {:.2} | {}/{} | {} |",
+            t.step,
+            t.candidate.id(),
+            if sel.chosen.contains(&i) { " **(added)**" } else { "" },
+            t.fitted.calibration_misfit,
+            t.heldout_mean,
+            lo,
+            hi,
+            t.relative_gain,
+            t.paired_t,
+            t.wins,
+            t.heldout.len(),
+            if t.earns_place { "yes" } else { "no" }
+        );
+    }
+    let _ = writeln!(md);
+    match sel.chosen.first() {
+        Some(&i) => {
+            let t = &sel.trials[i];
+            let others = sel
+                .trials
+                .iter()
+                .filter(|o| o.step == 1 && o.candidate != t.candidate)
+                .map(|o| o.heldout_mean)
+                .fold(f64::INFINITY, f64::min);
+            let _ = writeln!(
+                md,
+                "**Cause: `{}`** ({}). Held-out misfit {:.3} → {:.3} (gain {:.2}); the next best candidate of step 1 reaches {:.3}. \
+                 Window by window it beats every other step-1 candidate on {} of {} held-out windows.\n",
+                t.candidate.id(),
+                t.fitted.params.iter().map(|(k, v)| format!("{k} = {}", sig(*v))).collect::<Vec<_>>().join(", "),
+                mean(&sel.baseline_heldout),
+                t.heldout_mean,
+                t.relative_gain,
+                others,
+                (0..t.heldout.len())
+                    .filter(|&k| sel
+                        .trials
+                        .iter()
+                        .filter(|o| o.step == 1 && o.candidate != t.candidate)
+                        .all(|o| t.heldout[k] < o.heldout[k]))
+                    .count(),
+                t.heldout.len()
+            );
+            let f = &sel.final_model.friction;
+            let _ = writeln!(
+                md,
+                "Note: the features are speeds, frequency and loop area, not the torque level. The extended model's friction law has \
+                 T_s = {:.3} N m and T_k = {:.3} N m at the reference normal force, while the least-squares law on the measured torque has \
+                 T_s = {:.3} N m: the simulation fit reproduces the bit-speed features with a friction torque well off the measured one, \
+                 so the named cause says which model structure reproduces the motion, not that the contact's torque is that small. \
+                 Between 50 and 150 rpm the extended law changes by {:+.3} N m where the least-squares law on the measured torque changes \
+                 by {:+.3} N m (figure lavi-loops). A sixth feature scoring the slip torque (level and slope) would constrain this; it is \
+                 not in issue 10's list and was not added after looking at the held-out windows.\n",
+                f.static_nm,
+                f.kinetic_nm,
+                s.baseline.friction.static_nm,
+                f.slip_nm(150.0 * RPM_TO_RAD_S) - f.slip_nm(50.0 * RPM_TO_RAD_S),
+                s.baseline.friction.slip_nm(150.0 * RPM_TO_RAD_S) - s.baseline.friction.slip_nm(50.0 * RPM_TO_RAD_S)
+            );
+        }
+        None => {
+            let _ = writeln!(md, "No candidate earns its place.\n");
+        }
+    }
+    let _ = writeln!(md, "## Rung 3: the extension and its gain\n");
+    let _ = writeln!(
+        md,
+        "Extended model: baseline + {}. Mean held-out misfit {:.3} (baseline {:.3}, relative gain {:.2}); spread over the windows {:.3}-{:.3}. \
+         Held-out targets met: {} (baseline: {}). Verdict: **{}**.\n",
+        effects_label(s),
+        mean(&sel.final_heldout),
+        mean(&sel.baseline_heldout),
+        1.0 - mean(&sel.final_heldout) / mean(&sel.baseline_heldout),
+        sel.final_heldout.iter().cloned().fold(f64::INFINITY, f64::min),
+        sel.final_heldout.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+        met_list(met_ext, nh),
+        met_list(met_base, nh),
+        s.verdict()
+    );
+    let _ = writeln!(md, "{}", feature_summary(s, |i| &s.final_features[i]));
+    for (fi, name) in FEATURES.iter().enumerate() {
+        if met_ext[fi] < nh {
+            let errs: Vec<String> = (1..s.windows.len())
+                .map(|wi| format!("{:.2}", feature_errors(&s.measured[wi], &s.final_features[wi])[fi]))
+                .collect();
+            let _ = writeln!(
+                md,
+                "- Target not reached: `{name}` ({}) on {} of {nh} held-out windows; error/tolerance per window: {}.",
+                TARGETS[fi],
+                nh - met_ext[fi],
+                errs.join(", ")
+            );
+        }
+    }
+    let _ = writeln!(md);
+    if !s.adequate {
+        let _ = writeln!(
+            md,
+            "**Adequacy.** The mean held-out misfit {:.3} is above the threshold {} (features within their targets in RMS): a significant \
+             mismatch is left, so the verdict is `unexplained` with the effects above kept as a partial explanation. Residual signature \
+             (STLSQ on the calibration window's leftover slip torque, each term scored alone on the held-out windows):\n",
+            mean(&sel.final_heldout),
+            s.params.adequacy_threshold
+        );
+        for t in &s.signature {
+            let _ = writeln!(md, "- `{}`: held-out gain {:.2}: {}.", t.signal, t.heldout_gain, t.description);
+        }
+        if s.signature.is_empty() {
+            let _ = writeln!(md, "- no library signal lowers the held-out residual.");
+        }
+        let missed: Vec<&str> = FEATURES.iter().zip(met_ext).filter(|(_, k)| **k < nh).map(|(f, _)| *f).collect();
+        let _ = writeln!(
+            md,
+            "\nWhat would reach the missed targets ({}): the leftover torque follows `{}` most, so the next rung is a model term in that \
+             signal inside the simulated contact, fitted on the calibration window like the candidates above (and, for the torque level, a \
+             misfit that also scores the measured break-away torque: see rung 2's note).\n",
+            if missed.is_empty() { "none".to_string() } else { missed.join(", ") },
+            s.signature.first().map_or("no library signal", |t| t.signal.as_str())
+        );
+    }
+    let h = &s.wob;
+    let _ = writeln!(md, "## The chapter's hypothesis: a varying normal force\n");
+    let _ = writeln!(
+        md,
+        "The thesis blamed a vibrating normal force (Eq. 4-11). This rig measures it: in the calibration window the weight on bit varies by \
+         {:.1} % (std/mean). Teacher-forced, the torque WOB(t)·μ(Ω_meas(t)) with μ fitted on T/WOB draws a loop of {:.0} % of the measured \
+         loop area on the held-out windows (per window: {}; a single-valued T(Ω) draws none). In free simulation, adding the measured WOB \
+         to the baseline lowers the mean held-out misfit by {:.1} %. So the normal-force variation explains {} of the torque-speed \
+         loop but only {:.0} % of the simulation error.\n",
+        100.0 * h.wob_relative_std,
+        100.0 * h.loop_fraction_heldout_mean,
+        h.loop_fraction[1..].iter().map(|x| format!("{:.0} %", 100.0 * x)).collect::<Vec<_>>().join(", "),
+        100.0 * h.misfit_gain,
+        if h.loop_fraction_heldout_mean > 0.5 { "most" } else { "a minor part" },
+        100.0 * h.misfit_gain.max(0.0)
+    );
+    let _ = writeln!(md, "## Description of the calibration window\n");
+    md.push_str(description.trim_start_matches(|c| c != '\n').trim_start());
+    md
+}
+
+fn met_list(m: &[usize; 5], n: usize) -> String {
+    FEATURES.iter().zip(m).map(|(f, k)| format!("{f} {k}/{n}")).collect::<Vec<_>>().join(", ")
+}
+
+fn feature_summary<'a>(s: &'a Study, sim: impl Fn(usize) -> &'a Features) -> String {
+    let mut t = String::from(
+        "| feature | measured (held-out mean) | simulated (held-out mean) | calibration window measured / simulated |\n|---|---|---|---|\n",
+    );
+    let held: Vec<usize> = (1..s.windows.len()).collect();
+    for (fi, name) in FEATURES.iter().enumerate() {
+        let m: Vec<f64> = held.iter().map(|&i| s.measured[i].get(fi)).collect();
+        let x: Vec<f64> = held.iter().map(|&i| sim(i).get(fi)).collect();
+        let d = DECIMALS[fi];
+        let _ = writeln!(
+            t,
+            "| {name} | {} ± {} | {} ± {} | {} / {} |",
+            fmt_fixed(mean(&m), d),
+            fmt_fixed(std(&m), d),
+            fmt_fixed(mean(&x), d),
+            fmt_fixed(std(&x), d),
+            fmt_fixed(s.measured[0].get(fi), d),
+            fmt_fixed(sim(0).get(fi), d)
+        );
+    }
+    t
+}

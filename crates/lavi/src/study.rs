@@ -1,0 +1,138 @@
+//! The study in order: prepare, windows, features, baseline, candidates,
+//! selection, the chapter's hypothesis (WOB), adequacy and signature.
+
+use crate::data::{Prepared, RPM_TO_RAD_S, WindowSpec, prepare, windows};
+use crate::fit::{Derivation, derive};
+use crate::output::{StudyOutput, render};
+use crate::score::Evaluator;
+use crate::select::{Selection, forward_select, mean};
+use crate::signature::{SignatureTerm, residual_signature};
+use crate::sim::Model;
+use crate::{Candidate, FeatureOptions, Features, LaviError, StudyParams, window_features};
+use rig_ingest::lavi::LaviRecording;
+use serde::Serialize;
+use std::path::Path;
+
+/// The chapter's hypothesis (Eq. 4-11: a vibrating normal force) on a rig that measures it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct WobHypothesis {
+    /// Relative WOB variation in the calibration window: std / mean.
+    pub wob_relative_std: f64,
+    /// Per window (calibration first): loop area of W(t)·μ(Ω_meas(t)) over the measured loop area.
+    pub loop_fraction: Vec<f64>,
+    pub loop_fraction_heldout_mean: f64,
+    /// 1 − mean held-out misfit (baseline + WOB) / mean held-out misfit (baseline).
+    pub misfit_gain: f64,
+}
+
+/// Every number of the study.
+#[derive(Debug, Clone, Serialize)]
+pub struct Study {
+    pub params: StudyParams,
+    pub windows: Vec<WindowSpec>,
+    pub measured: Vec<Features>,
+    pub baseline: Model,
+    pub derivation: Derivation,
+    pub baseline_features: Vec<Features>,
+    pub selection: Selection,
+    pub final_features: Vec<Features>,
+    pub wob: WobHypothesis,
+    pub adequate: bool,
+    pub signature: Vec<SignatureTerm>,
+}
+
+impl Study {
+    /// The verdict: the first selected effect, `none`, or `unexplained`.
+    pub fn verdict(&self) -> &'static str {
+        if !self.adequate {
+            "unexplained"
+        } else {
+            self.selection.chosen.first().map_or("none", |&i| self.selection.trials[i].candidate.id())
+        }
+    }
+}
+
+/// Runs the study on a LAVI CSV.
+pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRecording), LaviError> {
+    let (rec, d) = prepare(path, p)?;
+    let wins = windows(&d, p)?;
+    let fopts = FeatureOptions {
+        fs_hz: d.fs_hz,
+        cutoff_hz: p.cutoff_hz,
+        transition_hz: p.transition_hz,
+        stick_speed_rpm: p.stick_speed_rpm,
+    };
+    let ev = Evaluator::new(&d, wins.clone(), fopts, p.substeps, p.slip_speed_rpm, p.drive_ref_window_s)?;
+    let (baseline, derivation) = derive(&d, &wins[0], p.slip_speed_rpm, false, 0.0)?;
+    let sim_features =
+        |m: &Model| -> Vec<Features> { (0..wins.len()).map(|w| ev.features(m, w).unwrap_or(NAN_FEATURES)).collect() };
+    let baseline_features = sim_features(&baseline);
+    let selection =
+        forward_select(&ev, &baseline, &Candidate::ALL, p.fit_evaluations, p.min_relative_gain, p.significance)?;
+    let final_features = sim_features(&selection.final_model);
+    let wob = wob_hypothesis(&ev, &selection)?;
+    let adequate = mean(&selection.final_heldout) <= p.adequacy_threshold;
+    let signature = if adequate { Vec::new() } else { residual_signature(&ev, &selection.final_model)? };
+    let study = Study {
+        params: p.clone(),
+        windows: wins,
+        measured: ev.measured.clone(),
+        baseline,
+        derivation,
+        baseline_features,
+        selection,
+        final_features,
+        wob,
+        adequate,
+        signature,
+    };
+    Ok((study, d, rec))
+}
+
+/// Runs the study and renders its outputs (tables, figures, lavi.md, lavi-diagnosis.json).
+pub fn run_study(path: &Path, p: &StudyParams) -> Result<StudyOutput, LaviError> {
+    let (study, d, rec) = analyse(path, p)?;
+    render(&study, &d, &rec)
+}
+
+const NAN_FEATURES: Features = Features {
+    bit_speed_max_rpm: f64::NAN,
+    bit_speed_min_rpm: f64::NAN,
+    stick_fraction: f64::NAN,
+    fundamental_hz: f64::NAN,
+    loop_area: f64::NAN,
+    cycles: 0,
+};
+
+fn wob_hypothesis(ev: &Evaluator, sel: &Selection) -> Result<WobHypothesis, LaviError> {
+    let d = ev.data;
+    let (m, _) = derive(d, &ev.windows[0], ev.slip_speed_rpm, true, 0.0)?;
+    let w_ref = m.wob_ref_n.unwrap_or(1.0);
+    let mut loop_fraction = Vec::new();
+    for (wi, w) in ev.windows.iter().enumerate() {
+        let s = w.span.clone();
+        let pred: Vec<f64> = s
+            .clone()
+            .map(|i| {
+                let om = d.bit_rpm[i] * RPM_TO_RAD_S;
+                om.signum() * d.wob_n[i] / w_ref * m.friction.slip_nm(om)
+            })
+            .collect();
+        let f = window_features(&d.bit_rpm[s], &pred, w.window.clone(), &ev.fopts)?;
+        loop_fraction.push(f.loop_area / ev.measured[wi].loop_area);
+    }
+    let cal =
+        ev.windows[0].span.start + ev.windows[0].window.start..ev.windows[0].span.start + ev.windows[0].window.end;
+    let wob = &d.wob_n[cal];
+    let misfit_gain = sel
+        .trials
+        .iter()
+        .find(|t| t.step == 1 && t.candidate == Candidate::WobNormalForce)
+        .map_or(f64::NAN, |t| 1.0 - t.heldout_mean / mean(&sel.baseline_heldout));
+    Ok(WobHypothesis {
+        wob_relative_std: crate::select::std(wob) / mean(wob),
+        loop_fraction_heldout_mean: mean(&loop_fraction[1..]),
+        loop_fraction,
+        misfit_gain,
+    })
+}

@@ -1,0 +1,36 @@
+//! Developer aid (ignored): runs the study on ../shared and prints the numbers.
+#[test]
+#[ignore]
+fn explore() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/ufrj-lavi-2018/run-175.csv");
+    let text =
+        std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../pipeline.toml")).unwrap();
+    let v: toml::Value = toml::from_str(&text).unwrap();
+    let st = v["stage"].as_array().unwrap().iter().find(|s| s["name"].as_str() == Some("lavi")).unwrap();
+    let p: rig_lavi::StudyParams = st["params"].clone().try_into().unwrap();
+    let (s, _, _) = rig_lavi::study::analyse(&path, &p).unwrap();
+    println!("baseline {:?}\n{:?}", s.baseline, s.derivation);
+    for (i, w) in s.windows.iter().enumerate() {
+        println!(
+            "{} meas {:?}\n   base {:?}\n   fin  {:?}",
+            w.label, s.measured[i], s.baseline_features[i], s.final_features[i]
+        );
+    }
+    println!("baseline held {:?} cal {}", s.selection.baseline_heldout, s.selection.baseline_calibration);
+    for t in &s.selection.trials {
+        println!(
+            "step {} {:?} cal {:.3} held {:.3} gain {:.3} t {:.2} wins {} earns {} {:?} evals {}",
+            t.step,
+            t.candidate,
+            t.fitted.calibration_misfit,
+            t.heldout_mean,
+            t.relative_gain,
+            t.paired_t,
+            t.wins,
+            t.earns_place,
+            t.fitted.params,
+            t.fitted.evaluations
+        );
+    }
+    println!("wob {:?} adequate {}", s.wob, s.adequate);
+}
