@@ -1,7 +1,8 @@
 //! Probe: diagnoses seeded virtual-rig campaigns (or a campaign folder) and
 //! prints verdict, findings, adequacy ratio and timing — the tool used to
 //! calibrate the diagnosis thresholds (rig-diagnose crate docs).
-//! `cargo run --release -p rig-virtual-rig --example probe -- CLASS SEED [small|full]`
+//! `cargo run -p rig-virtual-rig --example probe -- CLASS SEED [small|full]` (the dev
+//! profile optimises the numeric crates; never --release, which rebuilds polars)
 //! or `-- dir PATH`.
 
 use rig_virtual_rig::{Protocol, draw_truth, generate};
