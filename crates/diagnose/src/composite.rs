@@ -296,33 +296,8 @@ pub fn relative_mu_error(m: &Composite, d: &SlipData, ph: Phases) -> Option<f64>
 mod tests {
     use super::*;
 
-    fn noise(seed: &mut u64) -> f64 {
-        let mut acc = 0.0;
-        for _ in 0..12 {
-            *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            acc += (*seed >> 11) as f64 / (1u64 << 53) as f64;
-        }
-        acc - 6.0
-    }
-
     fn synth(runs: usize, law: impl Fn(usize, f64, f64, f64) -> f64) -> SlipData {
-        let mut d = SlipData { n_runs: runs, ..Default::default() };
-        let mut seed = 7u64;
-        for r in 0..runs {
-            d.run_weight.push(1.0);
-            let mut phi = 0.0;
-            for k in 0..10000 {
-                let t = k as f64 * 0.002;
-                let w = 0.6 + 14.4 * ((t + 0.37 * r as f64) % 2.0) / 2.0;
-                phi += w * 0.002;
-                d.run.push(r);
-                d.t.push(t);
-                d.phi.push(phi);
-                d.omega.push(w);
-                d.mu.push(law(r, t, phi, w) + 0.003 * noise(&mut seed));
-            }
-        }
-        d
+        crate::friction::tests::synth_noisy(runs, 7, 0.003, law)
     }
 
     #[test]

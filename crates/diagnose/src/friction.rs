@@ -692,11 +692,11 @@ pub fn relative_mu_error(m: &FrictionModel, d: &SlipData, theta: f64) -> Option<
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// Deterministic Gaussian-ish noise (sum of 12 LCG uniforms).
-    fn noise(seed: &mut u64) -> f64 {
+    pub(crate) fn noise(seed: &mut u64) -> f64 {
         let mut acc = 0.0;
         for _ in 0..12 {
             *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
@@ -708,8 +708,17 @@ mod tests {
     /// Slip data of `runs` runs: a saw-tooth slip speed 0..15 rad/s (period 2 s),
     /// angle its integral, and μ from `law` plus noise of σ = 0.005.
     fn synth(runs: usize, law: impl Fn(usize, f64, f64, f64) -> f64) -> SlipData {
+        synth_noisy(runs, 99, 0.005, law)
+    }
+
+    /// As [`synth`], with the noise seed and σ given (shared with composite's tests).
+    pub(crate) fn synth_noisy(
+        runs: usize,
+        mut seed: u64,
+        sigma: f64,
+        law: impl Fn(usize, f64, f64, f64) -> f64,
+    ) -> SlipData {
         let mut d = SlipData { n_runs: runs, ..Default::default() };
-        let mut seed = 99u64;
         for r in 0..runs {
             d.run_weight.push(1.0);
             let mut phi = 0.0;
@@ -721,7 +730,7 @@ mod tests {
                 d.t.push(t);
                 d.phi.push(phi);
                 d.omega.push(w);
-                d.mu.push(law(r, t, phi, w) + 0.005 * noise(&mut seed));
+                d.mu.push(law(r, t, phi, w) + sigma * noise(&mut seed));
             }
         }
         d

@@ -5,7 +5,7 @@
 //! thesis' published values. Prints battery.md.
 //! `cargo run -p rig-virtual-rig --example battery [SEED]`
 
-use rig_virtual_rig::battery::{Battery, DiagnosisResult, Finding, Sizes, report_markdown};
+use rig_virtual_rig::battery::{Battery, DiagnosisResult, Sizes, report_markdown};
 use rig_virtual_rig::{Hidden, Protocol};
 
 fn main() {
@@ -28,14 +28,7 @@ fn main() {
         let t0 = std::time::Instant::now();
         let d = rig_diagnose::diagnose_campaign(c, Some(&thesis), &opts).map_err(|e| e.to_string())?;
         eprintln!("{} -> {} ({:.1} s)", case.id, d.verdict, t0.elapsed().as_secs_f64());
-        Ok(DiagnosisResult {
-            verdict: d.verdict.clone(),
-            findings: d
-                .findings
-                .iter()
-                .map(|f| Finding { effect: f.effect.clone(), params: f.params.clone() })
-                .collect(),
-        })
+        serde_json::to_value(&d).and_then(serde_json::from_value::<DiagnosisResult>).map_err(|e| e.to_string())
     });
     println!("{}", report_markdown(&battery, &out));
 }

@@ -83,14 +83,7 @@ fn full_battery() {
     let battery = Battery::full();
     let out = battery.run(|_, c| {
         let d = rig_diagnose::diagnose_campaign(c, Some(&thesis), &opts()).map_err(|e| e.to_string())?;
-        Ok(DiagnosisResult {
-            verdict: d.verdict.clone(),
-            findings: d
-                .findings
-                .iter()
-                .map(|f| Finding { effect: f.effect.clone(), params: f.params.clone() })
-                .collect(),
-        })
+        serde_json::to_value(&d).and_then(serde_json::from_value::<DiagnosisResult>).map_err(|e| e.to_string())
     });
     let md = report_markdown(&battery, &out);
     println!("{md}");

@@ -10,8 +10,7 @@ use anyhow::{Result, bail};
 use rig_calibrate::ThesisData;
 use rig_diagnose::{DiagnoseOptions, diagnose_campaign};
 use rig_virtual_rig::battery::{
-    Battery, DiagnosisResult, Finding, confusion_table, detection_table, false_alarm_table, report_markdown,
-    wrong_table,
+    Battery, DiagnosisResult, confusion_table, detection_table, false_alarm_table, report_markdown, wrong_table,
 };
 
 /// `[stage.params]` of the confusion stage.
@@ -37,14 +36,7 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     let thesis: ThesisData = ctx.read_json("data/thesis.json")?;
     let out = battery.run(|_, c| {
         let d = diagnose_campaign(c, Some(&thesis), &opts).map_err(|e| e.to_string())?;
-        Ok(DiagnosisResult {
-            verdict: d.verdict.clone(),
-            findings: d
-                .findings
-                .iter()
-                .map(|f| Finding { effect: f.effect.clone(), params: f.params.clone() })
-                .collect(),
-        })
+        serde_json::to_value(&d).and_then(serde_json::from_value::<DiagnosisResult>).map_err(|e| e.to_string())
     });
     ctx.write_table("tables/confusion-matrix.csv", &confusion_table(&out))?;
     ctx.write_table("tables/confusion-false-alarms.csv", &false_alarm_table(&out))?;

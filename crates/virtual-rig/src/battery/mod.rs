@@ -44,16 +44,19 @@ pub use tables::{
 
 /// One finding of a diagnosis, as diagnosis.md's `findings[]` (effect id and
 /// its parameters under their JSON keys).
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default, serde::Deserialize)]
 pub struct Finding {
     pub effect: String,
+    /// Absent in the JSON of an `unexplained` finding (it has no parameters).
+    #[serde(default)]
     pub params: BTreeMap<String, f64>,
 }
 
 /// What a blind diagnosis returned for one campaign: `verdict` and every
-/// finding in order (diagnosis.md). The caller converts the diagnosis's own
-/// type into this one.
-#[derive(Debug, Clone, PartialEq, Default)]
+/// finding in order, read from diagnosis.json's schema
+/// (../shared/spec/diagnosis.md; other fields ignored), so any diagnosis that
+/// writes the spec's JSON converts with `serde_json::from_value`.
+#[derive(Debug, Clone, PartialEq, Default, serde::Deserialize)]
 pub struct DiagnosisResult {
     pub verdict: String,
     pub findings: Vec<Finding>,
