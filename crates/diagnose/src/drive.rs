@@ -19,31 +19,49 @@ pub struct Pi {
     pub limit_v: f64,
 }
 
-/// Predicted voltage, the PI integral ∫e and whether the clamp was active,
-/// sample by sample. Anti-windup by back-calculation exactly as rig-model's
-/// drive: d(∫e)/dt = e + (V − V_raw)/(ki·T_t), T_t = rig_model::ANTI_WINDUP_TRACKING_S
+/// Visits every sample of the teacher-forced PI loop with (k, e, V̂, ∫e,
+/// clamped): no allocation, so the fits below can call it thousands of times.
+/// Anti-windup by back-calculation exactly as rig-model's drive:
+/// d(∫e)/dt = e + (V − V_raw)/(ki·T_t), T_t = rig_model::ANTI_WINDUP_TRACKING_S
 /// (explicit Euler at the sample step; dt/T_t = 0.2 at 500 Hz is stable).
-pub fn predict_voltage(pi: &Pi, s: &RunSignals) -> (Vec<f64>, Vec<f64>, Vec<bool>) {
+#[inline]
+fn visit(pi: &Pi, s: &RunSignals, mut f: impl FnMut(usize, f64, f64, f64, bool)) {
     let n = s.time_s.len();
-    let mut v = Vec::with_capacity(n);
-    let mut integ = Vec::with_capacity(n);
-    let mut sat = Vec::with_capacity(n);
     let mut i_acc = 0.0;
     let tt = rig_model::ANTI_WINDUP_TRACKING_S;
     for k in 0..n {
         let e = s.reference_rad_s(s.time_s[k]) - s.motor_speed_rad_s[k];
         let u = pi.kp_v_s_rad * e + pi.ki_v_rad * i_acc;
         let clamped = u.clamp(-pi.limit_v, pi.limit_v);
-        v.push(clamped);
-        integ.push(i_acc);
-        sat.push(clamped != u);
+        f(k, e, clamped, i_acc, clamped != u);
         if k + 1 < n {
             let dt = s.time_s[k + 1] - s.time_s[k];
             let rate = if pi.ki_v_rad.abs() < 1e-9 { e } else { e + (clamped - u) / (pi.ki_v_rad * tt) };
             i_acc += rate * dt;
         }
     }
+}
+
+/// Predicted voltage, the PI integral ∫e and whether the clamp was active,
+/// sample by sample (see [`visit`] for the anti-windup).
+pub fn predict_voltage(pi: &Pi, s: &RunSignals) -> (Vec<f64>, Vec<f64>, Vec<bool>) {
+    let n = s.time_s.len();
+    let mut v = Vec::with_capacity(n);
+    let mut integ = Vec::with_capacity(n);
+    let mut sat = Vec::with_capacity(n);
+    visit(pi, s, |_, _, vk, ik, sk| {
+        v.push(vk);
+        integ.push(ik);
+        sat.push(sk);
+    });
     (v, integ, sat)
+}
+
+/// Sum of squared voltage errors of one run, V.
+fn run_sse(pi: &Pi, s: &RunSignals) -> f64 {
+    let mut sse = 0.0;
+    visit(pi, s, |k, _, vk, _, _| sse += (vk - s.voltage_v[k]).powi(2));
+    sse
 }
 
 /// Voltage RSS in noise units (each run weighted by 1/σ_V²) and sample count.
@@ -51,10 +69,9 @@ pub fn voltage_rss(pi: &Pi, runs: &[&RunSignals]) -> (f64, usize) {
     let mut rss = 0.0;
     let mut n = 0;
     for s in runs {
-        let (v, _, _) = predict_voltage(pi, s);
         let w = 1.0 / s.voltage_noise_v.max(1e-6).powi(2);
-        rss += w * v.iter().zip(&s.voltage_v).map(|(a, b)| (a - b).powi(2)).sum::<f64>();
-        n += v.len();
+        rss += w * run_sse(pi, s);
+        n += s.time_s.len();
     }
     (rss, n)
 }
@@ -68,22 +85,25 @@ pub fn fit_gains(runs: &[&RunSignals], limit_v: f64) -> Option<Pi> {
 /// [`fit_gains`] started from `start`'s gains (the same fixed point, reached in
 /// fewer passes when the start is near it); `None` starts unclamped from zero.
 fn fit_gains_from(runs: &[&RunSignals], limit_v: f64, start: Option<&Pi>) -> Option<Pi> {
+    fit_gains_path(runs, limit_v, start, |_| {})
+}
+
+/// [`fit_gains_from`], calling `visited` with the gains of every pass over the data.
+fn fit_gains_path(runs: &[&RunSignals], limit_v: f64, start: Option<&Pi>, mut visited: impl FnMut(&Pi)) -> Option<Pi> {
     let mut pi = match start {
         Some(p) => Pi { limit_v, ..*p },
         None => Pi { kp_v_s_rad: 0.0, ki_v_rad: 0.0, limit_v: f64::INFINITY },
     };
     for it in 0..8 {
+        visited(&pi);
         let mut ne = Normal::new(2);
         for s in runs {
-            let (_, integ, sat) = predict_voltage(&pi, s);
             let w = 1.0 / s.voltage_noise_v.max(1e-6);
-            for k in 0..s.time_s.len() {
-                if sat[k] || s.voltage_v[k].abs() >= 0.999 * limit_v {
-                    continue;
+            visit(&pi, s, |k, e, _, integ, sat| {
+                if !(sat || s.voltage_v[k].abs() >= 0.999 * limit_v) {
+                    ne.add_sparse(&[(0, w * e), (1, w * integ)], w * s.voltage_v[k]);
                 }
-                let e = s.reference_rad_s(s.time_s[k]) - s.motor_speed_rad_s[k];
-                ne.add_sparse(&[(0, w * e), (1, w * integ[k])], w * s.voltage_v[k]);
-            }
+            });
         }
         let p = ne.solve()?;
         let next = Pi { kp_v_s_rad: p[0], ki_v_rad: p[1], limit_v };
@@ -102,7 +122,15 @@ fn fit_gains_from(runs: &[&RunSignals], limit_v: f64, start: Option<&Pi>) -> Opt
 pub fn fit_limit(runs: &[&RunSignals], supply_v: f64) -> Option<(Pi, f64, usize, f64)> {
     // Every trial limit refits the gains from the unlimited fit (warm start).
     let p0 = fit_gains(runs, supply_v)?;
-    let eval = |l: f64| fit_gains_from(runs, l, Some(&p0)).map(|p| voltage_rss(&p, runs).0).unwrap_or(f64::INFINITY);
+    let eval_at = |l: f64| fit_gains_from(runs, l, Some(&p0)).map(|p| voltage_rss(&p, runs).0).unwrap_or(f64::INFINITY);
+    // A limit that binds nowhere gives the same arithmetic as any other such
+    // limit (the clamp and the exclusion of saturated samples are the only
+    // places the limit enters), so those trials reuse one evaluation.
+    let free = non_binding_from(runs, supply_v, &p0);
+    let eval = |l: f64| match free {
+        Some((l_free, rss)) if l >= l_free => rss,
+        _ => eval_at(l),
+    };
     // Coarse grid first (the RSS is not unimodal far from the optimum), then golden section.
     let grid: Vec<f64> = (0..=38).map(|j| supply_v * (0.05 + 0.025 * j as f64)).collect();
     let scores: Vec<f64> = {
@@ -122,9 +150,35 @@ pub fn fit_limit(runs: &[&RunSignals], supply_v: f64) -> Option<(Pi, f64, usize,
     Some((pi, rss, n, se))
 }
 
+/// The lowest limit from which on the drive-limit fit no longer depends on
+/// the limit, with the RSS there: the fit at the supply, traced, clamps no
+/// sample and excludes none; then every limit above both the largest
+/// |V̂| of its passes and the largest |V|/0.999 gives the same passes.
+/// `None` when the supply itself binds.
+fn non_binding_from(runs: &[&RunSignals], supply_v: f64, p0: &Pi) -> Option<(f64, f64)> {
+    let v_meas = runs.iter().flat_map(|s| s.voltage_v.iter()).fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut v_pred = 0.0f64;
+    let mut binds = false;
+    let mut passes = Vec::new();
+    let fitted = fit_gains_path(runs, supply_v, Some(p0), |pi| passes.push(*pi))?;
+    passes.push(fitted); // the RSS pass
+    for pi in &passes {
+        for s in runs {
+            visit(pi, s, |_, _, v, _, sat| {
+                v_pred = v_pred.max(v.abs());
+                binds |= sat;
+            });
+        }
+    }
+    let l_free = v_pred.max(v_meas / 0.999) * (1.0 + 1e-12);
+    if binds || v_meas >= 0.999 * supply_v || l_free > supply_v {
+        return None;
+    }
+    Some((l_free, voltage_rss(&fitted, runs).0))
+}
+
 /// Relative RMS voltage error of one run: sqrt(mean((V̂ − V)²)) / V_supply.
 pub fn relative_voltage_error(pi: &Pi, s: &RunSignals, supply_v: f64) -> f64 {
-    let (v, _, _) = predict_voltage(pi, s);
-    let ms = v.iter().zip(&s.voltage_v).map(|(a, b)| (a - b).powi(2)).sum::<f64>() / v.len().max(1) as f64;
+    let ms = run_sse(pi, s) / s.time_s.len().max(1) as f64;
     ms.sqrt() / supply_v
 }

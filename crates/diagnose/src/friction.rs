@@ -166,27 +166,33 @@ fn linear_fit(
     ncol: usize,
     /* ≤ 4 */ cols: impl Fn(usize, &mut [f64]),
 ) -> Option<(Vec<f64>, Vec<f64>, f64)> {
+    let (p, rss, ne) = linear_solve(d, ncol, cols)?;
+    let var = rss / (d.len().saturating_sub(ncol).max(1)) as f64;
+    let cov = ne.inverse()?.into_iter().map(|x| x * var).collect();
+    Some((p, cov, rss))
+}
+
+/// The solution and weighted RSS of [`linear_fit`] without the covariance
+/// (the searches only need the RSS). Each sample's columns are evaluated once.
+fn linear_solve(d: &SlipData, ncol: usize, cols: impl Fn(usize, &mut [f64])) -> Option<(Vec<f64>, f64, Normal)> {
     let mut ne = Normal::new(ncol);
-    let mut row = vec![0.0; ncol];
-    for i in 0..d.len() {
-        cols(i, &mut row);
+    let mut rows = vec![[0.0f64; 4]; d.len()];
+    for (i, row) in rows.iter_mut().enumerate() {
+        cols(i, &mut row[..ncol]);
         let sw = d.w(i).sqrt();
         let mut sparse = [(0usize, 0.0f64); 4];
-        for (j, &v) in row.iter().enumerate() {
+        for (j, &v) in row[..ncol].iter().enumerate() {
             sparse[j] = (j, v * sw);
         }
         ne.add_sparse(&sparse[..ncol], d.mu[i] * sw);
     }
     let p = ne.solve()?;
     let mut rss = 0.0;
-    for i in 0..d.len() {
-        cols(i, &mut row);
-        let e = d.mu[i] - row.iter().zip(&p).map(|(a, b)| a * b).sum::<f64>();
+    for (i, row) in rows.iter().enumerate() {
+        let e = d.mu[i] - row[..ncol].iter().zip(&p).map(|(a, b)| a * b).sum::<f64>();
         rss += d.w(i) * e * e;
     }
-    let var = rss / (d.len().saturating_sub(ncol).max(1)) as f64;
-    let cov = ne.inverse()?.into_iter().map(|x| x * var).collect();
-    Some((p, cov, rss))
+    Some((p, rss, ne))
 }
 
 /// μ = μk + c|Ω|: linear.
@@ -222,18 +228,29 @@ pub fn fit_stribeck(d: &SlipData, with_viscous: bool) -> Option<FrictionFit> {
         })
     };
     let grid: Vec<f64> = (0..41).map(|j| 0.05 * 10f64.powf(j as f64 * 3.0 / 40.0)).collect();
-    let rss_at = |lv: f64| lin(lv.exp()).map(|x| x.2).unwrap_or(f64::INFINITY);
+    let rss_at = |lv: f64| {
+        let vs = lv.exp();
+        linear_solve(d, ncol, |i, r| {
+            r[0] = 1.0;
+            r[1] = (-(d.omega[i] / vs).powi(2)).exp();
+            if with_viscous {
+                r[2] = d.omega[i];
+            }
+        })
+        .map(|x| x.1)
+        .unwrap_or(f64::INFINITY)
+    };
     // The grid on a subsample locates the basin; golden section on every sample.
     let ds = d.subsample(SEARCH_EVERY);
     let rss_coarse = |v: f64| {
-        linear_fit(&ds, ncol, |i, r| {
+        linear_solve(&ds, ncol, |i, r| {
             r[0] = 1.0;
             r[1] = (-(ds.omega[i] / v).powi(2)).exp();
             if with_viscous {
                 r[2] = ds.omega[i];
             }
         })
-        .map(|x| x.2)
+        .map(|x| x.1)
         .unwrap_or(f64::INFINITY)
     };
     let (best, _) = grid.iter().enumerate().map(|(j, &v)| (j, rss_coarse(v))).min_by(|a, b| a.1.total_cmp(&b.1))?;
