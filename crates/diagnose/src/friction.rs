@@ -345,12 +345,10 @@ fn sine_rss_from(d: &SlipData, sc: &[(f64, f64)], ywy: f64) -> Option<(f64, Vec<
 /// a rank-one update per sample. Same solution as [`sine_rss_from`] (a test
 /// checks); a run whose block is singular (no slip samples) drops out of the
 /// elimination as it would be a zero row of the dense system.
-fn sine_rss_scan(d: &SlipData, sc: &[(f64, f64)], ywy: f64) -> f64 {
+fn sine_rss_scan(d: &SlipData, sc: &[(f64, f64)], sums: &ScanSums) -> f64 {
     // Per run: Σs, Σc, Σs², Σc², Σsc, Σys, Σyc (unweighted; w is per run).
     let mut acc = vec![[0.0f64; 7]; d.n_runs];
-    for (i, &(s, c)) in sc.iter().enumerate().take(d.len()) {
-        let a = &mut acc[d.run[i]];
-        let y = d.mu[i];
+    let add = |a: &mut [f64; 7], (s, c): (f64, f64), y: f64| {
         a[0] += s;
         a[1] += c;
         a[2] += s * s;
@@ -358,12 +356,25 @@ fn sine_rss_scan(d: &SlipData, sc: &[(f64, f64)], ywy: f64) -> f64 {
         a[4] += s * c;
         a[5] += y * s;
         a[6] += y * c;
+    };
+    match &sums.runs {
+        // Contiguous runs: one local accumulator per run (same order of sums).
+        Some(ranges) => {
+            for (a, range) in acc.iter_mut().zip(ranges) {
+                let mut local = [0.0f64; 7];
+                for i in range.clone() {
+                    add(&mut local, sc[i], d.mu[i]);
+                }
+                *a = local;
+            }
+        }
+        None => {
+            for (i, &v) in sc.iter().enumerate().take(d.len()) {
+                add(&mut acc[d.run[i]], v, d.mu[i]);
+            }
+        }
     }
-    let (mut a00, mut g0) = (0.0, 0.0);
-    for i in 0..d.len() {
-        a00 += d.w(i);
-        g0 += d.w(i) * d.mu[i];
-    }
+    let (a00, g0, ywy) = (sums.a00, sums.g0, sums.ywy);
     // Eliminate the run blocks: S = a00 − Σ bᵀB⁻¹b, h = g0 − Σ bᵀB⁻¹g.
     let mut blocks = Vec::with_capacity(d.n_runs);
     let (mut schur, mut h) = (a00, g0);
@@ -394,6 +405,39 @@ fn sine_rss_scan(d: &SlipData, sc: &[(f64, f64)], ywy: f64) -> f64 {
         fitted += x1 * g1 + x2 * g2;
     }
     (ywy - fitted).max(0.0)
+}
+
+/// What [`sine_rss_scan`] needs besides the regressors, computed once per
+/// data set: yᵀWy, Σw, Σwy and the sample range of each run when runs are
+/// contiguous (as [`SlipData::from_runs`] and `subsample` build them).
+struct ScanSums {
+    ywy: f64,
+    a00: f64,
+    g0: f64,
+    runs: Option<Vec<std::ops::Range<usize>>>,
+}
+
+impl ScanSums {
+    fn of(d: &SlipData) -> Self {
+        let (mut a00, mut g0) = (0.0, 0.0);
+        for i in 0..d.len() {
+            a00 += d.w(i);
+            g0 += d.w(i) * d.mu[i];
+        }
+        let mut ranges: Vec<std::ops::Range<usize>> = (0..d.n_runs).map(|_| 0..0).collect();
+        let mut contiguous = true;
+        let mut i = 0;
+        while i < d.len() {
+            let r = d.run[i];
+            let start = i;
+            while i < d.len() && d.run[i] == r {
+                i += 1;
+            }
+            contiguous &= ranges[r].is_empty();
+            ranges[r] = start..i;
+        }
+        ScanSums { ywy: ywy(d), a00, g0, runs: contiguous.then_some(ranges) }
+    }
 }
 
 fn ywy(d: &SlipData) -> f64 {
@@ -448,7 +492,7 @@ fn time_scan(d: &SlipData, freqs_hz: &[f64]) -> Vec<(f64, f64)> {
 /// exactly at each chunk start.
 fn time_scan_at(d: &SlipData, freqs_hz: &[f64]) -> Vec<(f64, f64)> {
     use rayon::prelude::*;
-    let yy = ywy(d);
+    let sums = ScanSums::of(d);
     let uniform =
         freqs_hz.len() > 1 && freqs_hz.windows(2).all(|w| ((w[1] - w[0]) - (freqs_hz[1] - freqs_hz[0])).abs() < 1e-9);
     if !uniform {
@@ -456,7 +500,7 @@ fn time_scan_at(d: &SlipData, freqs_hz: &[f64]) -> Vec<(f64, f64)> {
             .par_iter()
             .map(|&f| {
                 let sc: Vec<(f64, f64)> = d.t.iter().map(|t| (2.0 * PI * f * t).sin_cos()).collect();
-                (f, sine_rss_scan(d, &sc, yy))
+                (f, sine_rss_scan(d, &sc, &sums))
             })
             .collect();
     }
@@ -469,7 +513,7 @@ fn time_scan_at(d: &SlipData, freqs_hz: &[f64]) -> Vec<(f64, f64)> {
             let mut sc: Vec<(f64, f64)> = d.t.iter().map(|t| (2.0 * PI * chunk[0] * t).sin_cos()).collect();
             let mut out = Vec::with_capacity(chunk.len());
             for &f in chunk.iter() {
-                out.push((f, sine_rss_scan(d, &sc, yy)));
+                out.push((f, sine_rss_scan(d, &sc, &sums)));
                 for (v, r) in sc.iter_mut().zip(&rot) {
                     *v = (v.0 * r.1 + v.1 * r.0, v.1 * r.1 - v.0 * r.0);
                 }
@@ -482,6 +526,26 @@ fn time_scan_at(d: &SlipData, freqs_hz: &[f64]) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// RSS of the angle-sine regression at every order 1..=`max_order`, in
+/// parallel over orders; sin/cos of n·φ by the multiple-angle recurrence from
+/// sin/cos φ (rounding grows by about one unit per order, far below the RSS
+/// differences the scan ranks).
+fn order_scan(d: &SlipData, max_order: u32) -> Vec<(f64, f64)> {
+    let sums = ScanSums::of(d);
+    let base: Vec<(f64, f64)> = d.phi.iter().map(|p| p.sin_cos()).collect();
+    let mut sc = base.clone();
+    let mut out = Vec::with_capacity(max_order as usize);
+    for n in 1..=max_order {
+        if n > 1 {
+            for (v, b) in sc.iter_mut().zip(&base) {
+                *v = (v.0 * b.1 + v.1 * b.0, v.1 * b.1 - v.0 * b.0);
+            }
+        }
+        out.push((f64::from(n), sine_rss_scan(d, &sc, &sums)));
+    }
+    out
+}
+
 /// Sine models: scan the frequency (time kind, grid of `freqs_hz`) or the
 /// order (angle kind, 1..=max_order), then Gauss–Newton on the shared
 /// (μk, a[, f]) and per-run θ_r. Returns the best fit.
@@ -491,20 +555,28 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], max_order: u32)
     }
     let cands: Vec<f64> = if time_kind { freqs_hz.to_vec() } else { (1..=max_order).map(f64::from).collect() };
     let xarg = |psi: f64, i: usize| if time_kind { 2.0 * PI * psi * d.t[i] } else { psi * d.phi[i] };
-    let scored: Vec<(f64, f64)> = if time_kind {
-        time_scan(&d.subsample(SEARCH_EVERY), &cands)
-    } else {
-        use rayon::prelude::*;
-        cands
-            .par_iter()
-            .map(|&psi| {
-                let sc: Vec<(f64, f64)> = (0..d.len()).map(|i| xarg(psi, i).sin_cos()).collect();
-                (psi, sine_rss_scan(d, &sc, ywy(d)))
-            })
-            .collect()
-    };
+    let scored: Vec<(f64, f64)> =
+        if time_kind { time_scan(&d.subsample(SEARCH_EVERY), &cands) } else { order_scan(d, max_order) };
     let (psi0, _) = scored.iter().copied().min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.total_cmp(&b.0)))?;
     let (_, p) = sine_scan_rss(d, |i| xarg(psi0, i))?;
+    // Angle kind: the regressor n·φ does not move during Gauss–Newton, so its
+    // sine and cosine are computed once and each run's phase enters by angle
+    // addition, sin(x + θ) = sin x cos θ + cos x sin θ (no trigonometry per sample).
+    let sc0: Vec<(f64, f64)> =
+        if time_kind { Vec::new() } else { (0..d.len()).map(|i| xarg(psi0, i).sin_cos()).collect() };
+    let sin_cos_at = |th: &[f64], i: usize, trig: &[(f64, f64)]| -> (f64, f64) {
+        let r = d.run[i];
+        if time_kind {
+            (xarg(th[2], i) + th[3 + r]).sin_cos()
+        } else {
+            let (sx, cx) = sc0[i];
+            let (st, ct) = trig[r];
+            (sx * ct + cx * st, cx * ct - sx * st)
+        }
+    };
+    let run_trig = |th: &[f64]| -> Vec<(f64, f64)> {
+        if time_kind { Vec::new() } else { th[2..].iter().map(|t| t.sin_cos()).collect() }
+    };
     let mu_k0 = p[0];
     // Shared amplitude: weighted mean of per-run amplitudes (start of GN).
     let mut amp_sum = 0.0;
@@ -530,16 +602,27 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], max_order: u32)
             FrictionModel::AngleSine { mu_k: th[0], a: th[1], order: psi0 as u32 }
         }
     };
-    let rss_of = |th: &[f64]| weighted_rss(d, &model_of(th), &th[2 + nf..]);
+    let rss_of = |th: &[f64]| {
+        if time_kind {
+            return weighted_rss(d, &model_of(th), &th[2 + nf..]);
+        }
+        let trig = run_trig(th);
+        (0..d.len())
+            .map(|i| {
+                let e = d.mu[i] - th[0] * (1.0 + th[1] * sin_cos_at(th, i, &trig).0);
+                d.w(i) * e * e
+            })
+            .sum::<f64>()
+    };
     let mut rss = rss_of(&theta);
     let mut converged = false;
     let mut ne_last = None;
     for _ in 0..30 {
         let mut ne = Normal::new(np);
+        let trig = run_trig(&theta);
         for i in 0..d.len() {
             let r = d.run[i];
-            let x = xarg(if time_kind { theta[2] } else { psi0 }, i) + theta[2 + nf + r];
-            let (s, c) = x.sin_cos();
+            let (s, c) = sin_cos_at(&theta, i, &trig);
             let (mk, a) = (theta[0], theta[1]);
             let sw = d.w(i).sqrt();
             let e = d.mu[i] - mk * (1.0 + a * s);
@@ -763,7 +846,7 @@ pub(crate) mod tests {
         for f in [0.3, 0.9, 2.71] {
             let sc: Vec<(f64, f64)> = d.t.iter().map(|t| (2.0 * PI * f * t).sin_cos()).collect();
             let dense = sine_rss_from(&d, &sc, yy).unwrap().0;
-            let fast = sine_rss_scan(&d, &sc, yy);
+            let fast = sine_rss_scan(&d, &sc, &ScanSums::of(&d));
             assert!((dense - fast).abs() <= 1e-9 * yy, "f = {f}: dense {dense} fast {fast}");
         }
     }
