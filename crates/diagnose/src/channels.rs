@@ -21,17 +21,20 @@
 //! | `operating_point.rotor_max`, `.rotor_min` | operating_point | RMS over runs, rad/s | speed resolution |
 //! | `operating_point.fundamental` | operating_point | RMS relative error | frequency resolution |
 //! | `operating_point.torque_balance` | operating_point | RMS of the rotor torque balance, N·m | sensor noise |
+//! | `operating_point.drive_balance` | operating_point | RMS the motor-constant drift explains in ⟨V⟩, V | √(2σ̂²/n) of the drift fit (ratio² = F) |
 //!
 //! σ_θ, the uncertainty of a held angle's mean, is the encoder quantisation
 //! tick/√12 (the held angle is arbitrary within a tick) plus the measured
 //! in-run wander over √samples.
 
 mod balance;
+mod drive_balance;
 mod free_run;
 mod step;
 mod twist;
 
 pub use balance::torque_balance_check;
+pub use drive_balance::drive_balance_check;
 pub use free_run::{FreeRunSettings, Pair as FreeRunPair, free_run_checks, free_run_checks_of, free_run_pairs};
 pub use step::voltage_step_checks;
 pub use twist::static_twist_checks;
@@ -106,7 +109,8 @@ impl ChannelCheck {
 /// (crates/virtual-rig/tests/channel_calibration.rs): 30 null draws (small
 /// protocol, seeds 9000–9029, blind baseline) gave maximum ratios rotor_max
 /// 1.88, rotor_min 1.64, torque_balance 1.05, dead_zone 1.06, linearity 0.43,
-/// step frequency 0.91, decay 0.18, step residual 1.12; 0/30 campaigns flagged
+/// step frequency 0.91, decay 0.18, step residual 1.12, drive balance 1.97;
+/// 0/30 campaigns flagged
 /// (one-sided 95 % upper bound 9.5 %). Each threshold is about twice the null
 /// maximum. No null run of that protocol sticks and slips, so regime and
 /// fundamental were not exercised by the nulls (regime: 3 runs; fundamental:
@@ -126,6 +130,8 @@ pub struct ChannelOptions {
     pub rotor_min_ratio: f64,
     pub fundamental_ratio: f64,
     pub torque_balance_ratio: f64,
+    /// The drive-balance drift test (ratio² is its F statistic).
+    pub drive_balance_ratio: f64,
     /// Window of the step residual, samples (the estimate's 50 ms).
     pub window_samples: usize,
     /// Window of the torque balance, samples (long enough that the
@@ -197,6 +203,7 @@ pub fn all_checks(
     v.extend(voltage_step_checks(c, cal, baseline, o));
     v.extend(free_run_checks(c, model, &FreeRunSettings::of(opts, o), o));
     v.push(torque_balance_check(c, cal, baseline, opts, o));
+    v.push(drive_balance_check(c, opts, o));
     v
 }
 

@@ -200,6 +200,8 @@ pub fn diagnose(
         checks.extend(channels::voltage_step_checks(c, cal, p, o));
         checks.push(channels::torque_balance_check(c, cal, p, opts, o));
     }
+    // The drive balance needs no baseline: it fits its coefficients to the records.
+    checks.push(channels::drive_balance_check(c, opts, o));
     let flagged: Vec<(String, String)> = checks.iter().filter(|k| k.flagged).map(ChannelCheck::as_pair).collect();
     let mut d = diagnose_signals(
         &c.name,

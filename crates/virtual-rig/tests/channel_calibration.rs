@@ -112,6 +112,33 @@ fn null_campaigns_false_alarm_rate() {
     assert!(k as f64 <= 0.05 * n as f64, "false-alarm rate {k}/{n} above 5 %");
 }
 
+/// Drive balance: a motor that warms over the campaign (R up, k_T = k_e
+/// down, the virtual rig's physics) is seen; the same rig cold is not, nor a
+/// rig with an in-vocabulary friction or drive effect (the balance holds
+/// whatever the friction law and whatever clamps the voltage). Small
+/// protocol, `draw_truth` seeds 9000+: 30 null draws (the calibration's) gave
+/// ratios 0.55–1.97, 8 warm-up draws 40–107, 5 draws of each vocabulary
+/// effect 0.40–1.29.
+#[test]
+fn drive_balance_sees_a_motor_that_warms_up() {
+    let o = opts();
+    let ratio = |class: &str, seed: u64| {
+        let truth = draw_truth(class, 130.0, seed);
+        let c = generate(class, &truth, &Protocol::small(), seed).expect("generate");
+        let ch = rig_diagnose::channels::drive_balance_check(&c, &o, &o.channels);
+        (ch.ratio, ch.flagged, ch.detail)
+    };
+    for seed in [9000, 9001] {
+        let (r, f, detail) = ratio("motor_warm_up", seed);
+        assert!(f && r > 4.0 * o.channels.drive_balance_ratio, "warm-up seed {seed}: ratio {r:.2} ({detail})");
+        assert!(detail.contains("a +"), "a warming winding raises a: {detail}");
+        for class in ["none", "drive_voltage_limit", "velocity_weakening_friction"] {
+            let (r, f, detail) = ratio(class, seed);
+            assert!(!f, "{class} seed {seed}: ratio {r:.2} flagged ({detail})");
+        }
+    }
+}
+
 fn twist_runs_mut(c: &mut Campaign) -> impl Iterator<Item = &mut rig_types::Run> {
     c.runs.iter_mut().filter(|r| matches!(r.kind, RunKind::StaticTwist { .. }))
 }
