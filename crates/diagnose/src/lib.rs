@@ -172,9 +172,11 @@ pub enum DiagnoseError {
 
 /// Diagnosis of a campaign whose calibration is done: prepares the signals
 /// with the campaign's force calibration, selects the effects and tests the
-/// final model's adequacy. When a baseline `RigParams` is given, the other
-/// run kinds are checked too ([`channels`]): static twist, voltage steps and
-/// the rotor torque balance enter the adequacy test; every operating point is
+/// final model's adequacy. The drive's steady-state balance across the
+/// operating points needs no model and always enters the adequacy test. When
+/// a baseline `RigParams` is given, the other run kinds are checked too
+/// ([`channels`]): static twist, voltage steps and the rotor torque balance
+/// enter the adequacy test; every operating point is
 /// simulated free-run with the baseline and with the extended model (the
 /// baseline plus the findings, [`extended_params`]) for the per-run feature
 /// table and the free-run checks.
