@@ -5,7 +5,7 @@
 use crate::signal::{self, DecayAnalysis, DecaySettings};
 use crate::stats::{self, LineFit};
 use crate::{CalibrateError, formulas};
-use rig_types::{Campaign, Run, RunKind};
+use rig_types::{Campaign, Run, RunKind, sensor};
 use serde::{Deserialize, Serialize};
 
 /// Default confidence level of every interval reported here.
@@ -133,7 +133,7 @@ pub fn twist_runs(c: &Campaign) -> Result<Vec<TwistRun>, CalibrateError> {
     for run in c.runs_of("static_twist") {
         let RunKind::StaticTwist { torque_nm } = run.kind else { continue };
         let ticks = column(run, &run.data.rotor_ticks, "rotor_ticks")?;
-        let angle = signal::ticks_to_rad(ticks, c.rig.encoder_ticks_per_rev);
+        let angle = sensor::ticks_to_rad(ticks, c.rig.encoder_ticks_per_rev);
         let angle_rad = stats::mean(&angle).ok_or_else(|| CalibrateError::MissingColumn {
             run: run.id.clone(),
             column: "rotor_ticks (no samples)".into(),
@@ -261,7 +261,7 @@ pub fn calibrate_campaign_with(c: &Campaign, s: &CalibrationSettings) -> Result<
         let mt = column(run, &run.data.motor_ticks, "motor_ticks")?;
         let rt = column(run, &run.data.rotor_ticks, "rotor_ticks")?;
         let twist_ticks: Vec<i64> = mt.iter().zip(rt).map(|(m, r)| m - r).collect();
-        let twist = signal::ticks_to_rad(&twist_ticks, c.rig.encoder_ticks_per_rev);
+        let twist = sensor::ticks_to_rad(&twist_ticks, c.rig.encoder_ticks_per_rev);
         let td = match signal::decay_analysis(&format!("run {} twist", run.id), t, &twist, &tset) {
             Ok(a) => a,
             // A step without a measurable decay is data: it is listed, and the others still calibrate.
@@ -271,7 +271,7 @@ pub fn calibrate_campaign_with(c: &Campaign, s: &CalibrationSettings) -> Result<
             }
             Err(e) => return Err(e),
         };
-        let w1 = signal::rotor_speed_rad_s(t, rt, c.rig.encoder_ticks_per_rev);
+        let w1 = sensor::encoder_speed_rad_s(t, rt, c.rig.encoder_ticks_per_rev);
         let sd = signal::decay_analysis(&format!("run {} rotor speed", run.id), t, &w1, &sset).ok();
         let j = formulas::inertia_from_frequency_kgm2(k, td.natural_rad_s_mean);
         steps.push(StepDecay { id: run.id.clone(), voltage_v, twist: td, rotor_speed: sd, rotor_inertia_kgm2: j });
@@ -339,5 +339,6 @@ pub fn calibrate_campaign_with(c: &Campaign, s: &CalibrationSettings) -> Result<
 /// Friction torque on rotor 1 from the raw force-sensor voltage:
 /// F = (mV − offset) / factor, T1 = F · r (the spec: "force * brake_disc_radius_m").
 pub fn friction_torque_nm(force_mv: &[f64], cal: &CampaignCalibration, radius_m: f64) -> Vec<f64> {
-    force_mv.iter().map(|mv| (mv - cal.force_offset_mv) / cal.force_factor_mv_per_n * radius_m).collect()
+    let line = sensor::ForceCal { factor_mv_per_n: cal.force_factor_mv_per_n, offset_mv: cal.force_offset_mv };
+    sensor::force_n(force_mv, line).iter().map(|f| f * radius_m).collect()
 }

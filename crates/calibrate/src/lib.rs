@@ -18,7 +18,7 @@ pub use campaign::{
     calibrate_campaign_with, friction_torque_nm,
 };
 pub use published::ThesisTables;
-pub use signal::{DecayAnalysis, DecayPair, DecaySettings, rotor_speed_rad_s};
+pub use signal::{DecayAnalysis, DecayPair, DecaySettings};
 pub use stats::LineFit;
 pub use thesis::{ThesisData, ThesisOutputs, thesis_data, thesis_outputs};
 

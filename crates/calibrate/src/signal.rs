@@ -1,80 +1,11 @@
-//! Encoder signals: angle from ticks, the documented speed differentiator,
-//! a zero-phase moving average, and the free-decay analysis (log decrement
-//! from successive extrema, Eqs. 4-2a/b and 4-3).
+//! The free-decay analysis (log decrement from successive extrema, Eqs.
+//! 4-2a/b and 4-3). Encoder signals (angle from ticks, the speed
+//! differentiator, the zero-phase moving average) are `rig_types::sensor`.
 
 use crate::{CalibrateError, formulas};
+use rig_types::sensor::{centred_moving_average, half_window_samples};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
-
-/// Half-width of the speed differentiator, seconds.
-///
-/// Why 20 ms: one encoder tick is 2π/1000 rad; a plain first difference at
-/// 500 Hz turns one tick into 3.14 rad/s of noise. A central difference over
-/// ±20 ms (a 40 ms baseline) shrinks that to 0.157 rad/s, and its frequency
-/// response (a 40 ms boxcar of the true speed) still passes 0.5 Hz torsional
-/// oscillations with 0.05 % loss and stick-slip harmonics up to ≈ 10 Hz with
-/// < 10 % loss. Followed by the same-width centred moving average, the total
-/// kernel is a triangle (side lobes −27 dB instead of −13 dB), still zero phase.
-pub const SPEED_HALF_WINDOW_S: f64 = 0.020;
-
-/// Cumulative ticks → angle in rad.
-pub fn ticks_to_rad(ticks: &[i64], ticks_per_rev: u32) -> Vec<f64> {
-    let k = 2.0 * PI / ticks_per_rev as f64;
-    ticks.iter().map(|&t| t as f64 * k).collect()
-}
-
-/// Samples in a half window of `half_s` seconds, from the median sample step
-/// (the time column is authoritative; the nominal rate is not trusted).
-fn half_window_samples(time_s: &[f64], half_s: f64) -> usize {
-    if time_s.len() < 2 {
-        return 0;
-    }
-    let mut dt: Vec<f64> = time_s.windows(2).map(|w| w[1] - w[0]).collect();
-    dt.sort_by(f64::total_cmp);
-    let med = dt[dt.len() / 2];
-    if med <= 0.0 { 0 } else { ((half_s / med).round() as usize).max(1) }
-}
-
-/// Centred moving average over ±`half` samples; the window shrinks
-/// symmetrically near the ends so the filter stays zero-phase everywhere.
-pub fn centred_moving_average(x: &[f64], half: usize) -> Vec<f64> {
-    let n = x.len();
-    let mut prefix = Vec::with_capacity(n + 1);
-    prefix.push(0.0);
-    for v in x {
-        prefix.push(prefix.last().copied().unwrap_or(0.0) + v);
-    }
-    (0..n)
-        .map(|i| {
-            let h = half.min(i).min(n - 1 - i);
-            (prefix[i + h + 1] - prefix[i - h]) / (2 * h + 1) as f64
-        })
-        .collect()
-}
-
-/// Shaft speed from cumulative encoder ticks, rad/s (rotor 1 or motor side).
-///
-/// The differentiator (see [`SPEED_HALF_WINDOW_S`]): central difference
-/// (θ[i+h] − θ[i−h]) / (t[i+h] − t[i−h]) with h ≈ 20 ms of samples, shrunk
-/// symmetrically at the ends (one-sided at the very first and last sample),
-/// then a centred moving average of the same half-width. Zero phase, so speed
-/// peaks keep their times. Returns one value per sample.
-pub fn rotor_speed_rad_s(time_s: &[f64], ticks: &[i64], ticks_per_rev: u32) -> Vec<f64> {
-    let n = time_s.len().min(ticks.len());
-    if n < 2 {
-        return vec![0.0; n];
-    }
-    let angle = ticks_to_rad(&ticks[..n], ticks_per_rev);
-    let h = half_window_samples(&time_s[..n], SPEED_HALF_WINDOW_S);
-    let raw: Vec<f64> = (0..n)
-        .map(|i| {
-            let k = h.min(i).min(n - 1 - i);
-            let (a, b) = if k == 0 { if i == 0 { (0, 1) } else { (n - 2, n - 1) } } else { (i - k, i + k) };
-            (angle[b] - angle[a]) / (time_s[b] - time_s[a])
-        })
-        .collect();
-    centred_moving_average(&raw, h)
-}
 
 /// One extremum of a decaying oscillation.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -322,7 +253,7 @@ mod tests {
                 (phi / (2.0 * PI / 1000.0)).round() as i64
             })
             .collect();
-        let x = ticks_to_rad(&ticks, 1000);
+        let x = rig_types::sensor::ticks_to_rad(&ticks, 1000);
         let a = decay_analysis("synthetic", &t, &x, &settings()).unwrap();
         assert!(a.pairs.len() >= 8, "{} pairs", a.pairs.len());
         assert!((a.log_decrement_mean - delta).abs() < 0.01, "δ = {}", a.log_decrement_mean);
@@ -337,30 +268,5 @@ mod tests {
         let t: Vec<f64> = (0..1000).map(|i| i as f64 * 0.002).collect();
         let x = vec![1.0; 1000];
         assert!(matches!(decay_analysis("flat", &t, &x, &settings()), Err(CalibrateError::NoDecay { .. })));
-    }
-
-    /// A constant speed of 16 rad/s quantised to 1000-tick encoder counts:
-    /// the differentiator's noise must stay far below one tick per sample (3.14 rad/s).
-    #[test]
-    fn differentiator_on_constant_speed() {
-        let t: Vec<f64> = (0..5000).map(|i| i as f64 * 0.002).collect();
-        let ticks: Vec<i64> = t.iter().map(|&t| (16.0 * t / (2.0 * PI / 1000.0)).floor() as i64).collect();
-        let w = rotor_speed_rad_s(&t, &ticks, 1000);
-        let worst = w[20..4980].iter().map(|v| (v - 16.0).abs()).fold(0.0, f64::max);
-        assert!(worst < 0.16, "worst error {worst} rad/s");
-    }
-
-    /// A sinusoidal speed 10 + 5 sin(2π·0.5 t): zero phase, amplitude kept to 0.5 %.
-    #[test]
-    fn differentiator_keeps_phase_and_amplitude() {
-        let t: Vec<f64> = (0..5000).map(|i| i as f64 * 0.002).collect();
-        let w0 = 2.0 * PI * 0.5;
-        let theta = |t: f64| 10.0 * t - 5.0 / w0 * (w0 * t).cos();
-        let ticks: Vec<i64> = t.iter().map(|&t| (theta(t) / (2.0 * PI / 1000.0)).round() as i64).collect();
-        let w = rotor_speed_rad_s(&t, &ticks, 1000);
-        // Peak of 10 + 5 sin at t = 0.5 + 2k s.
-        let i = 2250; // t = 4.5 s
-        assert!((w[i] - 15.0).abs() < 0.1, "{}", w[i]);
-        assert!((w[i - 25] - w[i + 25]).abs() < 0.1, "asymmetric about the peak");
     }
 }

@@ -3,15 +3,12 @@
 //! reference, the usable slip samples and the sensor noise measured in the data.
 
 use crate::{DiagnoseError, DiagnoseOptions};
+use rig_types::sensor::{force_n, ticks_to_rad};
 use rig_types::{Campaign, Run, RunKind};
 use std::f64::consts::PI;
 
-/// Force-sensor calibration used to turn mV into N (Table 4.6 style: mV = factor · N + offset).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ForceCal {
-    pub factor_mv_per_n: f64,
-    pub offset_mv: f64,
-}
+/// Force-sensor calibration used to turn mV into N (the sensor model's, one definition).
+pub use rig_types::sensor::ForceCal;
 
 /// One operating-point run as the diagnosis sees it. All vectors have `time_s.len()` entries.
 #[derive(Debug, Clone)]
@@ -50,19 +47,10 @@ impl RunSignals {
     }
 }
 
-/// Zero-lag speed from cumulative angle: centred difference over ±`half` samples
-/// (one-sided at the ends). Quantisation of one encoder tick gives a speed
-/// resolution of 2π/(ticks · 2·half·dt).
-pub fn centred_speed(time_s: &[f64], angle_rad: &[f64], half: usize) -> Vec<f64> {
-    let n = time_s.len();
-    (0..n)
-        .map(|k| {
-            let lo = k.saturating_sub(half);
-            let hi = (k + half).min(n - 1);
-            if hi == lo { 0.0 } else { (angle_rad[hi] - angle_rad[lo]) / (time_s[hi] - time_s[lo]) }
-        })
-        .collect()
-}
+/// Zero-lag speed from cumulative angle: the plain centred difference of
+/// the sensor model (`rig_types::sensor`, one definition), under the name the
+/// diagnosis's modules use.
+pub use rig_types::sensor::central_difference_rad_s as centred_speed;
 
 /// Noise standard deviation of a smooth signal plus white noise, from first differences.
 /// The median absolute difference (scaled for a Gaussian) keeps rare jumps
@@ -129,12 +117,12 @@ fn prepare_run(
     };
     let d = &run.data;
     let t = d.time_s.clone();
-    let rad_per_tick = 2.0 * PI / c.rig.encoder_ticks_per_rev as f64;
-    let phi1: Vec<f64> = column(run, "rotor_ticks", &d.rotor_ticks)?.iter().map(|&k| k as f64 * rad_per_tick).collect();
-    let phi2: Vec<f64> = column(run, "motor_ticks", &d.motor_ticks)?.iter().map(|&k| k as f64 * rad_per_tick).collect();
+    let tpr = c.rig.encoder_ticks_per_rev;
+    let phi1 = ticks_to_rad(column(run, "rotor_ticks", &d.rotor_ticks)?, tpr);
+    let phi2 = ticks_to_rad(column(run, "motor_ticks", &d.motor_ticks)?, tpr);
     let volt = column(run, "motor_voltage_v", &d.motor_voltage_v)?.clone();
     let mv = column(run, "brake_force_mv", &d.brake_force_mv)?;
-    let force: Vec<f64> = mv.iter().map(|m| (m - cal.offset_mv) / cal.factor_mv_per_n).collect();
+    let force = force_n(mv, cal);
     let w1 = centred_speed(&t, &phi1, opts.rotor_speed_half_window);
     let w2 = centred_speed(&t, &phi2, opts.motor_speed_half_window);
 
@@ -207,14 +195,6 @@ mod tests {
         for k in 0..3 {
             assert_eq!(f.iter().filter(|&&x| x == k).count(), 2);
         }
-    }
-
-    #[test]
-    fn centred_speed_is_exact_on_a_ramp() {
-        let t: Vec<f64> = (0..100).map(|k| k as f64 * 0.002).collect();
-        let a: Vec<f64> = t.iter().map(|x| 3.0 * x).collect();
-        let w = centred_speed(&t, &a, 5);
-        assert!(w.iter().all(|v| (v - 3.0).abs() < 1e-9));
     }
 
     #[test]

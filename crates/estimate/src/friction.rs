@@ -8,7 +8,10 @@
 //! median over episodes (robust to a missed or truncated episode).
 
 use crate::EstimateError;
-use crate::signals::{central_speed, mean_sd, median, speed_resolution_rad_s, ticks_to_rad};
+use crate::signals::{mean_sd, median};
+use rig_types::sensor::{
+    ForceCal, central_difference_rad_s as central_speed, force_n, speed_resolution_rad_s, ticks_to_rad,
+};
 use rig_types::{Campaign, RunKind};
 use serde::{Deserialize, Serialize};
 
@@ -128,7 +131,7 @@ pub fn estimate_friction(
         let ticks = d.rotor_ticks.as_ref().ok_or_else(|| missing("rotor_ticks"))?;
         let mv = d.brake_force_mv.as_ref().ok_or_else(|| missing("brake_force_mv"))?;
         let phi1 = ticks_to_rad(ticks, c.rig.encoder_ticks_per_rev);
-        let force: Vec<f64> = mv.iter().map(|m| (m - force_offset_mv) / force_factor_mv_per_n).collect();
+        let force = force_n(mv, ForceCal { factor_mv_per_n: force_factor_mv_per_n, offset_mv: force_offset_mv });
         let rf = analyse_trace(&d.time_s, &phi1, &force, normal_force_n, opts);
         if let Some((m, k)) = rf.mu_slip {
             slip_means.push((m, k));

@@ -14,8 +14,8 @@
 //! kp by 20 % in the round-trip test if not absorbed. ki stays identified by
 //! the variation of ∫e within a segment.
 
-use crate::signals::ticks_to_rad;
 use crate::{EstimateError, linreg};
+use rig_types::sensor::ticks_to_rad;
 use rig_types::{Campaign, RunKind};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::TAU;

@@ -1,14 +1,8 @@
-//! Encoder counts to angles and speeds. Speeds are differences of angles over
-//! a window, so the same linear operator can be applied to a simulated angle
-//! (no differentiation bias between measurement and model).
-
-use std::f64::consts::TAU;
-
-/// Cumulative counts → angle, rad (1 revolution = `ticks_per_rev` counts).
-pub fn ticks_to_rad(ticks: &[i64], ticks_per_rev: u32) -> Vec<f64> {
-    let k = TAU / ticks_per_rev as f64;
-    ticks.iter().map(|&n| n as f64 * k).collect()
-}
+//! Window-mean speeds for the voltage-step fit, and small statistics. Speeds
+//! are differences of angles over a window, so the same linear operator can
+//! be applied to a simulated angle (no differentiation bias between
+//! measurement and model). Ticks → angle, the centred difference and the
+//! speed resolution are `rig_types::sensor`.
 
 /// Mean speed over consecutive non-overlapping windows of `w` samples:
 /// Ω_k = (φ[(k+1)w] − φ[kw]) / (t[(k+1)w] − t[kw]), stamped at the window centre.
@@ -26,25 +20,6 @@ pub fn window_speed(time_s: &[f64], angle_rad: &[f64], w: usize) -> (Vec<f64>, V
         i += w;
     }
     (t, v)
-}
-
-/// Centred difference speed at every sample over ±`half` samples (shortened
-/// at the ends): Ω_i = (φ[i+h] − φ[i−h]) / (t[i+h] − t[i−h]).
-pub fn central_speed(time_s: &[f64], angle_rad: &[f64], half: usize) -> Vec<f64> {
-    let n = time_s.len().min(angle_rad.len());
-    let half = half.max(1);
-    (0..n)
-        .map(|i| {
-            let a = i.saturating_sub(half);
-            let b = (i + half).min(n.saturating_sub(1));
-            if b > a { (angle_rad[b] - angle_rad[a]) / (time_s[b] - time_s[a]) } else { 0.0 }
-        })
-        .collect()
-}
-
-/// Speed resolution of a window of `w` samples at `dt` s: one count per window, rad/s.
-pub fn speed_resolution_rad_s(ticks_per_rev: u32, w: usize, dt_s: f64) -> f64 {
-    TAU / ticks_per_rev as f64 / (w as f64 * dt_s)
 }
 
 /// Median of a slice (NaN for an empty one); sorts a copy with total order.

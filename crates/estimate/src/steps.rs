@@ -24,9 +24,10 @@
 
 use crate::EstimateError;
 use crate::lsq::LsqProblem;
-use crate::signals::{ticks_to_rad, window_speed};
+use crate::signals::window_speed;
 use rayon::prelude::*;
 use rig_model::SimOptions;
+use rig_types::sensor::ticks_to_rad;
 use rig_types::{Campaign, RigParams, RunInput, RunKind};
 
 /// The parameters the steps estimate, in solver order.

@@ -9,7 +9,10 @@
 //! - [`MapSpec`], [`run_map_shard`], [`merge_slices`], [`Shard`]: severity
 //!   maps sharded by chain index and merged back, byte-identical to one run;
 //! - [`map_table`], [`chain_table`]: the CSV tables;
-//! - [`harmonic`]: Eq. 4-11 and the normal-force modulation (Figs. 4.27-4.29).
+//! - [`harmonic`]: Eq. 4-11 and the normal-force modulation (Figs. 4.27-4.29);
+//! - [`sweeps_study`] the `sweeps` stage's study (both models' maps and
+//!   diagrams, the campaign's operating points and the chapter's labelled
+//!   points through [`operating`]), rendered by [`output::outputs`].
 //!
 //! Determinism: chains are independent and run in parallel, and `collect`
 //! keeps chain order; nothing reads a clock or a random source.
@@ -17,6 +20,10 @@
 mod classify;
 mod continuation;
 pub mod harmonic;
+pub mod misfit;
+pub mod operating;
+pub mod output;
+mod study;
 mod tables;
 
 pub use classify::{Classification, ClassifyOptions, Regime, classify};
@@ -24,6 +31,7 @@ pub use continuation::{
     Chain, ChainResult, Direction, MapSlice, MapSpec, Point, PointOutcome, Shard, SweepSettings, WindowSpec,
     bifurcation_chains, hysteresis, linspace, merge_slices, run_chain, run_chains, run_map_shard,
 };
+pub use study::{ModelSweeps, SweepsParams, SweepsStudy, map_shards, sweeps_study};
 pub use tables::{chain_table, map_table};
 
 /// Errors of this crate; simulation failures at a point are data

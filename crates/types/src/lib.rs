@@ -1,9 +1,13 @@
 //! Plain data shared by every rig-lab crate; serde only, no behaviour beyond
-//! trivial accessors. Units are in field names (`_rad_s`, `_nm`, `_v`).
+//! trivial accessors, the unit conversions ([`units`]) and the sensor model
+//! ([`sensor`]: encoder quantisation and the speed differentiators, the one
+//! home every crate that reads or simulates an encoder uses). Units are in
+//! field names (`_rad_s`, `_nm`, `_v`).
 
 mod campaign;
 mod figure;
 mod params;
+pub mod sensor;
 mod table;
 pub mod thesis;
 mod trajectory;

@@ -42,6 +42,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use rig_model::SimOptions;
+use rig_types::sensor::encoder_ticks;
 use rig_types::{Campaign, Effect, RigInfo, Run, RunData, RunInput, RunKind};
 use std::f64::consts::PI;
 use std::path::PathBuf;
@@ -122,10 +123,6 @@ fn times(duration_s: f64, rate_hz: f64) -> Vec<f64> {
     (0..n).map(|k| k as f64 / rate_hz).collect()
 }
 
-fn ticks(angle_rad: &[f64], per_rev: u32) -> Vec<i64> {
-    angle_rad.iter().map(|a| (a * per_rev as f64 / (2.0 * PI)).floor() as i64).collect()
-}
-
 /// Generates a whole campaign (in memory) from `truth` under `protocol`; the
 /// noise and the per-run phases come from `seed`.
 pub fn generate(name: &str, truth: &Truth, protocol: &Protocol, seed: u64) -> Result<Campaign, VirtualRigError> {
@@ -155,7 +152,7 @@ pub fn generate(name: &str, truth: &Truth, protocol: &Protocol, seed: u64) -> Re
         // The held angle wanders by a fraction of a tick (hand-held torque).
         let a: Vec<f64> = t.iter().map(|_| angle + rng.random_range(-0.004..0.004)).collect();
         let id = format!("twist-{}", j + 1);
-        let rotor = faults.rotor_ticks(ticks(&a, per_rev), &id);
+        let rotor = faults.rotor_ticks(encoder_ticks(&a, per_rev), &id);
         runs.push(run(
             id,
             RunKind::StaticTwist { torque_nm: torque },
@@ -176,13 +173,13 @@ pub fn generate(name: &str, truth: &Truth, protocol: &Protocol, seed: u64) -> Re
         let tr = rig_model::simulate(&p, &RunInput::VoltageStep { voltage_v: v }, &t, &sim_opts)
             .map_err(|source| VirtualRigError::Model { run: id.clone(), source })?;
         let volt = tr.voltage_v.iter().map(|x| x + v_noise.sample(&mut rng)).collect();
-        let rotor = faults.rotor_ticks(ticks(&tr.rotor_angle_rad, per_rev), &id);
+        let rotor = faults.rotor_ticks(encoder_ticks(&tr.rotor_angle_rad, per_rev), &id);
         runs.push(run(
             id,
             RunKind::VoltageStep { voltage_v: v },
             RunData {
                 motor_voltage_v: Some(volt),
-                motor_ticks: Some(ticks(&tr.motor_angle_rad, per_rev)),
+                motor_ticks: Some(encoder_ticks(&tr.motor_angle_rad, per_rev)),
                 rotor_ticks: Some(rotor),
                 time_s: t,
                 ..Default::default()
@@ -231,8 +228,8 @@ pub fn generate(name: &str, truth: &Truth, protocol: &Protocol, seed: u64) -> Re
                     RunKind::OperatingPoint { motor_rpm_setpoint: *rpm, normal_force_n: *n0, ramp_s: protocol.ramp_s },
                     RunData {
                         motor_voltage_v: Some(volt),
-                        motor_ticks: Some(ticks(&tr.motor_angle_rad, per_rev)),
-                        rotor_ticks: Some(faults.rotor_ticks(ticks(&tr.rotor_angle_rad, per_rev), id)),
+                        motor_ticks: Some(encoder_ticks(&tr.motor_angle_rad, per_rev)),
+                        rotor_ticks: Some(faults.rotor_ticks(encoder_ticks(&tr.rotor_angle_rad, per_rev), id)),
                         brake_force_mv: Some(mv),
                         time_s: t,
                     },

@@ -3,9 +3,9 @@
 
 use super::{ChannelCheck, ChannelOptions, rms};
 use rig_calibrate::CampaignCalibration;
-use rig_estimate::signals::speed_resolution_rad_s;
 use rig_estimate::steps::{simulate_step, step_data};
 use rig_model::SimOptions;
+use rig_types::sensor::speed_resolution_rad_s;
 use rig_types::{Campaign, RigParams};
 
 /// Spread of per-step values around their mean, and the RMS of their

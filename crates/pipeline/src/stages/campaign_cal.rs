@@ -4,7 +4,8 @@
 
 use crate::StageCtx;
 use anyhow::Result;
-use rig_calibrate::{CalibrationSettings, calibrate_campaign_with, campaign_tables, figures, signal};
+use rig_calibrate::{CalibrationSettings, calibrate_campaign_with, campaign_tables, figures};
+use rig_types::sensor as signal;
 use rig_types::{RunKind, SeriesStyle};
 
 /// `[stage.params]` of `campaign-calibration`: the calibration's own settings.
@@ -36,8 +37,8 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
         let tpr = campaign.rig.encoder_ticks_per_rev;
         let t = &run.data.time_s;
         let (rt, mt) = (run.data.rotor_ticks.as_deref().unwrap_or(&[]), run.data.motor_ticks.as_deref().unwrap_or(&[]));
-        let w1 = signal::rotor_speed_rad_s(t, rt, tpr);
-        let w2 = signal::rotor_speed_rad_s(t, mt, tpr);
+        let w1 = signal::encoder_speed_rad_s(t, rt, tpr);
+        let w2 = signal::encoder_speed_rad_s(t, mt, tpr);
         let twist_ticks: Vec<i64> = mt.iter().zip(rt).map(|(m, r)| m - r).collect();
         let twist = signal::ticks_to_rad(&twist_ticks, tpr);
         let speed_note = match &dec.rotor_speed {

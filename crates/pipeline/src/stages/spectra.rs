@@ -4,12 +4,13 @@
 use crate::StageCtx;
 use anyhow::{Context, Result};
 use rayon::prelude::*;
-use rig_calibrate::{CampaignCalibration, friction_torque_nm, rotor_speed_rad_s};
+use rig_calibrate::{CampaignCalibration, friction_torque_nm};
 use rig_model::{SimOptions, simulate};
 use rig_spectra::{
     Detrend, Line, LineAnalysis, LineClass, LineOptions, Peak, PeakOptions, Spectrum, WelchOptions, Window,
     amplitude_spectrum, analyse_lines, frf_h1, spectral_peaks, thin_indices,
 };
+use rig_types::sensor::encoder_speed_rad_s as rotor_speed_rad_s;
 use rig_types::units::RAD_S_TO_RPM;
 use rig_types::{RigParams, Run, RunInput, RunKind, SeriesStyle, Table, Trajectory, fmt_fixed};
 use rig_types::{figure as fig, series};

@@ -1,0 +1,169 @@
+//! Operating points: a campaign run (or a labelled point of the chapter)
+//! classified from its recording and from both models simulated from rest
+//! with the recording's ramp at the recording's sample times.
+//!
+//! Signal path: measured ticks and simulated angles go through the same
+//! sensor chain (`rig_types::sensor`: encoder quantisation to
+//! `encoder_ticks_per_rev`, then the documented ±20 ms differentiator), so
+//! measured and simulated windows see the same quantisation and filter before
+//! the same classifier. The window is the last `window_s` of the record minus
+//! the differentiator's 40 ms edge (18 s after a 2 s ramp in a 40 s record).
+
+use crate::{Classification, Point, SweepError, SweepSettings, classify};
+use rig_model::simulate;
+use rig_types::sensor::{SPEED_HALF_WINDOW_S, encoder_speed_rad_s, quantised_speed_rad_s};
+use rig_types::{RigParams, Run, RunInput, RunKind};
+
+/// A campaign run classified from its recording and from both models.
+#[derive(Debug, Clone)]
+pub struct OpPoint {
+    pub id: String,
+    pub point: Point,
+    pub measured: Classification,
+    pub thesis: Classification,
+    pub rig: Classification,
+}
+
+/// A labelled point of the chapter (Figs. 4.17, 4.19, 4.21–4.24), as read
+/// from the thesis tables.
+#[derive(Debug, Clone)]
+pub struct LabelledPoint {
+    /// `fig-<figure><panel>`.
+    pub id: String,
+    pub point: Point,
+    /// `vibrating` or `quiet`.
+    pub label: String,
+    pub source: String,
+}
+
+/// A labelled point with both models simulated from rest.
+#[derive(Debug, Clone)]
+pub struct Labelled {
+    pub point: LabelledPoint,
+    pub thesis: Classification,
+    pub rig: Classification,
+}
+
+/// Samples of the classification window: last `window_s` before the differentiator's edge.
+fn window_range(time_s: &[f64], window_s: f64) -> std::ops::Range<usize> {
+    let t_end = time_s.last().copied().unwrap_or(0.0) - 2.0 * SPEED_HALF_WINDOW_S;
+    let start = time_s.partition_point(|&t| t < t_end - window_s);
+    let end = time_s.partition_point(|&t| t <= t_end);
+    start..end.max(start)
+}
+
+/// Classifies the window of a speed record sampled at `time_s`.
+pub fn classify_record(time_s: &[f64], speed_rad_s: &[f64], s: &SweepSettings) -> Classification {
+    let w = window_range(time_s, s.window.window_s);
+    let fs = (time_s.len().max(2) - 1) as f64 / (time_s[time_s.len() - 1] - time_s[0]).max(f64::MIN_POSITIVE);
+    classify(&speed_rad_s[w], fs, &s.classify)
+}
+
+fn simulated(
+    p: &RigParams,
+    input: &RunInput,
+    time_s: &[f64],
+    s: &SweepSettings,
+    tpr: u32,
+) -> Result<Classification, rig_model::ModelError> {
+    let tr = simulate(p, input, time_s, &s.sim)?;
+    Ok(classify_record(time_s, &quantised_speed_rad_s(time_s, &tr.rotor_angle_rad, tpr), s))
+}
+
+/// One `operating_point` run: measured, thesis model and rig model, classified.
+pub fn op_point(run: &Run, th: &RigParams, rg: &RigParams, s: &SweepSettings, tpr: u32) -> Result<OpPoint, SweepError> {
+    let RunKind::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s } = run.kind else {
+        return Err(SweepError::Analysis(format!("run {} is not an operating_point", run.id)));
+    };
+    let ticks = run
+        .data
+        .rotor_ticks
+        .as_ref()
+        .ok_or_else(|| SweepError::Analysis(format!("run {}: no rotor_ticks column", run.id)))?;
+    let time_s = &run.data.time_s;
+    let input = RunInput::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s };
+    let model = |p: &RigParams, which: &str| {
+        simulated(p, &input, time_s, s, tpr)
+            .map_err(|e| SweepError::Analysis(format!("run {}: {which} model: {e}", run.id)))
+    };
+    Ok(OpPoint {
+        id: run.id.clone(),
+        point: Point { motor_rpm: motor_rpm_setpoint, normal_force_n },
+        measured: classify_record(time_s, &encoder_speed_rad_s(time_s, ticks, tpr), s),
+        thesis: model(th, "thesis")?,
+        rig: model(rg, "rig")?,
+    })
+}
+
+/// A labelled point of the chapter simulated like a campaign run: 2 s ramp,
+/// 40 s at 500 Hz (the campaign's protocol), encoder and differentiator.
+pub fn from_rest(
+    p: &RigParams,
+    pt: Point,
+    s: &SweepSettings,
+    tpr: u32,
+) -> Result<Classification, rig_model::ModelError> {
+    let time_s: Vec<f64> = (0..=20_000).map(|k| k as f64 / 500.0).collect();
+    let input =
+        RunInput::OperatingPoint { motor_rpm_setpoint: pt.motor_rpm, normal_force_n: pt.normal_force_n, ramp_s: 2.0 };
+    simulated(p, &input, &time_s, s, tpr)
+}
+
+/// Both models at each labelled point of the chapter.
+pub fn labelled_points(
+    labels: &[LabelledPoint],
+    th: &RigParams,
+    rg: &RigParams,
+    s: &SweepSettings,
+    tpr: u32,
+) -> Result<Vec<Labelled>, SweepError> {
+    let mut out = Vec::new();
+    for l in labels {
+        let at = |p: &RigParams, which: &str| {
+            from_rest(p, l.point, s, tpr).map_err(|e| SweepError::Analysis(format!("{which} model at {}: {e}", l.id)))
+        };
+        let thesis = at(th, "thesis")?;
+        let rig = at(rg, "rig")?;
+        out.push(Labelled { point: l.clone(), thesis, rig });
+    }
+    Ok(out)
+}
+
+/// The set-point and force of an operating-point run (NaN for other kinds).
+fn condition(r: &Run) -> (f64, f64) {
+    match r.kind {
+        RunKind::OperatingPoint { motor_rpm_setpoint, normal_force_n, .. } => (motor_rpm_setpoint, normal_force_n),
+        _ => (f64::NAN, f64::NAN),
+    }
+}
+
+/// Figs. 4.19a/b and 4.21a/b: the campaign runs nearest (range-normalised
+/// distance over motor rpm and force) to the chapter's points; panel (b) may
+/// not reuse panel (a)'s run, so the pair still contrasts two conditions.
+/// `runs` must not be empty.
+pub fn time_response_runs<'a>(runs: &[&'a Run]) -> Vec<(String, Point, &'a Run)> {
+    let speeds: Vec<f64> = runs.iter().map(|r| condition(r).0).collect();
+    let forces: Vec<f64> = runs.iter().map(|r| condition(r).1).collect();
+    let span = |v: &[f64]| {
+        let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+        (v.iter().copied().fold(f64::NEG_INFINITY, f64::max) - lo).max(f64::MIN_POSITIVE)
+    };
+    let (sr, fr) = (span(&speeds), span(&forces));
+    let mut out: Vec<(String, Point, &Run)> = Vec::new();
+    for (fig, a, b) in [("fig-4-19", (80.0, 7.5), (80.0, 15.0)), ("fig-4-21", (55.0, 0.75), (55.0, 7.5))] {
+        let mut used: Option<&str> = None;
+        for (panel, (rpm, n)) in [("a", a), ("b", b)] {
+            let best = runs
+                .iter()
+                .filter(|r| Some(r.id.as_str()) != used)
+                .min_by(|x, y| {
+                    let dist = |r: &Run| ((condition(r).0 - rpm) / sr).powi(2) + ((condition(r).1 - n) / fr).powi(2);
+                    dist(x).total_cmp(&dist(y))
+                })
+                .expect("runs is not empty");
+            used = Some(best.id.as_str());
+            out.push((format!("{fig}{panel}"), Point { motor_rpm: rpm, normal_force_n: n }, *best));
+        }
+    }
+    out
+}
