@@ -9,7 +9,9 @@
 //! - [`MapSpec`], [`run_map_shard`], [`merge_slices`], [`Shard`]: severity
 //!   maps sharded by chain index and merged back, byte-identical to one run;
 //! - [`map_table`], [`chain_table`]: the CSV tables;
-//! - [`harmonic`]: Eq. 4-11 and the normal-force modulation (Figs. 4.27-4.29).
+//! - [`harmonic`]: Eq. 4-11 and the normal-force modulation (Figs. 4.27-4.29);
+//! - [`spectra`]: the campaign's operating points against the rig model in the
+//!   frequency domain, and Table 4.8 (Figs. 4.22-4.26).
 //!
 //! Determinism: chains are independent and run in parallel, and `collect`
 //! keeps chain order; nothing reads a clock or a random source.
@@ -17,6 +19,7 @@
 mod classify;
 mod continuation;
 pub mod harmonic;
+pub mod spectra;
 mod tables;
 
 pub use classify::{Classification, ClassifyOptions, Regime, classify};
