@@ -128,6 +128,10 @@ pub struct PipelineConfig {
 #[serde(deny_unknown_fields)]
 struct RawFile {
     settings: Settings,
+    /// The integrator's tolerances, declared once; a stage with
+    /// `integrator = true` gets them as `[stage.params.integrator]`.
+    #[serde(default)]
+    integrator: Option<toml::Table>,
     #[serde(default)]
     stage: Vec<RawStage>,
 }
@@ -148,6 +152,9 @@ struct RawStage {
     outputs: Vec<String>,
     #[serde(default)]
     optional: bool,
+    /// Hand the top-level `[integrator]` table to this stage as `params.integrator`.
+    #[serde(default)]
+    integrator: bool,
     #[serde(default)]
     params: toml::Table,
 }
@@ -173,8 +180,24 @@ impl PipelineConfig {
         let stages = raw
             .stage
             .into_iter()
-            .map(|s| {
+            .map(|mut s| {
                 let inputs = s.inputs.iter().map(|i| parse_input(path, &s.name, i)).collect::<Result<Vec<_>, _>>()?;
+                if s.integrator {
+                    let err = |reason: &str| PipelineError::Config {
+                        path: path.to_path_buf(),
+                        stage: Some(s.name.clone()),
+                        reason: reason.to_string(),
+                    };
+                    let table = raw.integrator.clone().ok_or_else(|| {
+                        err("`integrator = true` but pipeline.toml has no top-level [integrator] table")
+                    })?;
+                    if s.params.contains_key("integrator") {
+                        return Err(err(
+                            "[stage.params] integrator: declared in the top-level [integrator] table, not per stage",
+                        ));
+                    }
+                    s.params.insert("integrator".into(), toml::Value::Table(table));
+                }
                 Ok(StageDecl {
                     outputs: s.outputs.iter().map(|o| OutputPattern::parse(o)).collect(),
                     name: s.name,

@@ -20,10 +20,8 @@ use serde::Deserialize;
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Params {
-    /// Integrator tolerances and largest step of the rig-model runs (`rig_model::SimOptions`).
-    pub rtol: f64,
-    pub atol: f64,
-    pub max_step_s: f64,
+    /// Integrator tolerances of the rig-model runs (pipeline.toml's top-level `[integrator]`).
+    pub integrator: SimOptions,
     pub settle_s: f64,
     pub min_freq_hz: f64,
     pub max_freq_hz: f64,
@@ -192,13 +190,8 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
         .par_iter()
         .map(|(run, rpm, n, ramp)| {
             let input = RunInput::OperatingPoint { motor_rpm_setpoint: *rpm, normal_force_n: *n, ramp_s: *ramp };
-            simulate(
-                &rig_params,
-                &input,
-                &run.data.time_s,
-                &SimOptions { rtol: p.rtol, atol: p.atol, max_step_s: p.max_step_s },
-            )
-            .with_context(|| format!("simulating run {}", run.id))
+            simulate(&rig_params, &input, &run.data.time_s, &p.integrator)
+                .with_context(|| format!("simulating run {}", run.id))
         })
         .collect();
     let mut meas_tab = line_header();
