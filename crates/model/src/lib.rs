@@ -156,7 +156,7 @@ use rig_types::{
 use system::{Drive, System};
 
 /// Integrator settings. Tolerances are explicit arguments, never globals.
-/// pipeline.toml declares them once, in its top-level `[integrator]` table.
+/// pipeline.toml declares them once, in its `[shared.integrator]` table.
 #[derive(Debug, Clone, PartialEq, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SimOptions {

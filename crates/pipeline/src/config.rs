@@ -128,10 +128,10 @@ pub struct PipelineConfig {
 #[serde(deny_unknown_fields)]
 struct RawFile {
     settings: Settings,
-    /// The integrator's tolerances, declared once; a stage with
-    /// `integrator = true` gets them as `[stage.params.integrator]`.
+    /// Tables declared once (`[shared.<name>]`); a stage listing `<name>`
+    /// in its `shared` gets the table as `[stage.params.<name>]`.
     #[serde(default)]
-    integrator: Option<toml::Table>,
+    shared: std::collections::BTreeMap<String, toml::Table>,
     #[serde(default)]
     stage: Vec<RawStage>,
 }
@@ -152,9 +152,9 @@ struct RawStage {
     outputs: Vec<String>,
     #[serde(default)]
     optional: bool,
-    /// Hand the top-level `[integrator]` table to this stage as `params.integrator`.
+    /// Names of `[shared.<name>]` tables handed to this stage as `params.<name>`.
     #[serde(default)]
-    integrator: bool,
+    shared: Vec<String>,
     #[serde(default)]
     params: toml::Table,
 }
@@ -182,21 +182,21 @@ impl PipelineConfig {
             .into_iter()
             .map(|mut s| {
                 let inputs = s.inputs.iter().map(|i| parse_input(path, &s.name, i)).collect::<Result<Vec<_>, _>>()?;
-                if s.integrator {
-                    let err = |reason: &str| PipelineError::Config {
+                for name in &s.shared {
+                    let err = |reason: String| PipelineError::Config {
                         path: path.to_path_buf(),
                         stage: Some(s.name.clone()),
-                        reason: reason.to_string(),
+                        reason,
                     };
-                    let table = raw.integrator.clone().ok_or_else(|| {
-                        err("`integrator = true` but pipeline.toml has no top-level [integrator] table")
+                    let table = raw.shared.get(name).cloned().ok_or_else(|| {
+                        err(format!("shared = [\"{name}\"] but pipeline.toml has no [shared.{name}] table"))
                     })?;
-                    if s.params.contains_key("integrator") {
-                        return Err(err(
-                            "[stage.params] integrator: declared in the top-level [integrator] table, not per stage",
-                        ));
+                    if s.params.contains_key(name) {
+                        return Err(err(format!(
+                            "[stage.params] {name}: declared once in [shared.{name}], not per stage"
+                        )));
                     }
-                    s.params.insert("integrator".into(), toml::Value::Table(table));
+                    s.params.insert(name.clone(), toml::Value::Table(table));
                 }
                 Ok(StageDecl {
                     outputs: s.outputs.iter().map(|o| OutputPattern::parse(o)).collect(),

@@ -687,15 +687,14 @@ fn stage_errors_name_the_stage_once() {
     assert_eq!(msg.matches("stage c").count(), 1, "{msg}");
 }
 
-/// The top-level `[integrator]` table is declared once and reaches every
-/// stage with `integrator = true` as `params.integrator`, so it is in their
-/// keys (a changed tolerance re-runs exactly those stages, and `--why` names
-/// it); a stage declaring its own, or asking for a table that is not there,
-/// is refused.
+/// A `[shared.<name>]` table is declared once and reaches every stage
+/// listing it in `shared` as `params.<name>`, so it is in their keys (a
+/// changed tolerance re-runs exactly those stages, and `--why` names it); a
+/// stage declaring its own, or asking for a table that is not there, is refused.
 #[test]
-fn the_integrator_table_is_shared_by_the_stages_that_ask_for_it() {
-    let shared = "[integrator]\nrtol = 1e-8\natol = 1e-10\n";
-    let stages = DIAMOND.replace("name = \"d\"\n", "name = \"d\"\nintegrator = true\n");
+fn shared_tables_reach_the_stages_that_list_them() {
+    let shared = "[shared.integrator]\nrtol = 1e-8\natol = 1e-10\n";
+    let stages = DIAMOND.replace("name = \"d\"\n", "name = \"d\"\nshared = [\"integrator\"]\n");
     let f = Fixture::new(&format!("{shared}{stages}"));
     f.run();
     f.edit_toml("rtol = 1e-8", "rtol = 1e-6");
@@ -705,8 +704,8 @@ fn the_integrator_table_is_shared_by_the_stages_that_ask_for_it() {
     assert!(why.len() == 1 && why[0].starts_with("param integrator changed ({atol = "), "{why:?}");
 
     let e = config_error(&stages);
-    assert!(e.contains("stage d") && e.contains("no top-level [integrator] table"), "{e}");
+    assert!(e.contains("stage d") && e.contains("no [shared.integrator] table"), "{e}");
     let own = stages.replace("write = [\"d.txt\"]", "write = [\"d.txt\"]\nintegrator = { rtol = 1.0 }");
     let e = config_error(&format!("{shared}{own}"));
-    assert!(e.contains("stage d") && e.contains("declared in the top-level [integrator] table"), "{e}");
+    assert!(e.contains("stage d") && e.contains("declared once in [shared.integrator]"), "{e}");
 }

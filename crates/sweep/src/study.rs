@@ -22,7 +22,7 @@ use serde::Deserialize;
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SweepsParams {
-    /// Integrator tolerances (pipeline.toml's top-level `[integrator]`).
+    /// Integrator tolerances (pipeline.toml's `[shared.integrator]`).
     pub integrator: SimOptions,
     pub first_transient_s: f64,
     pub transient_s: f64,
@@ -41,7 +41,7 @@ pub struct SweepsParams {
     pub friction_sweep_campaign_rpm: f64,
     /// `"i/n"`: only chains of shard i of the maps.
     pub shard: String,
-    /// The regime classifier's thresholds (`[stage.params.classify]`).
+    /// The regime classifier's thresholds (pipeline.toml's `[shared.classify]`).
     pub classify: ClassifyOptions,
 }
 

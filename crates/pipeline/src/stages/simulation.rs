@@ -7,6 +7,7 @@
 use crate::StageCtx;
 use anyhow::Result;
 use rig_model::SimOptions;
+use rig_sweep::ClassifyOptions;
 use rig_sweep::misfit::misfit_study;
 use rig_types::RigParams;
 use rig_types::contract::{CampaignCalibration, ThesisData};
@@ -17,8 +18,10 @@ use serde::Deserialize;
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Params {
-    /// The top-level `[integrator]` of pipeline.toml.
+    /// pipeline.toml's `[shared.integrator]`.
     pub integrator: SimOptions,
+    /// pipeline.toml's `[shared.classify]`: stick-slip is the classifier's verdict.
+    pub classify: ClassifyOptions,
     /// Fig. 4.17 shows the last this many seconds of each run.
     pub limit_cycle_s: f64,
 }
@@ -32,7 +35,7 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     let cal: CampaignCalibration = ctx.read_json("data/campaign-calibration.json")?;
     let force = ForceCal { factor_mv_per_n: cal.force_factor_mv_per_n, offset_mv: cal.force_offset_mv };
     let campaign = ctx.campaign()?.clone();
-    let out = misfit_study(&campaign, &thesis, &rig, force, &p.integrator, p.limit_cycle_s)?;
+    let out = misfit_study(&campaign, &thesis, &rig, force, &p.integrator, &p.classify, p.limit_cycle_s)?;
     ctx.write_table("tables/campaign-simulation-misfit.csv", &out.table)?;
     for f in &out.figures {
         ctx.write_figure(f)?;

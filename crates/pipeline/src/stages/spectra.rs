@@ -20,7 +20,7 @@ use serde::Deserialize;
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Params {
-    /// Integrator tolerances of the rig-model runs (pipeline.toml's top-level `[integrator]`).
+    /// Integrator tolerances of the rig-model runs (pipeline.toml's `[shared.integrator]`).
     pub integrator: SimOptions,
     pub settle_s: f64,
     pub min_freq_hz: f64,
