@@ -2,99 +2,14 @@
 //! offset (Table 4.6's procedure), static stiffness (Table 4.3's), and the free
 //! decay of every voltage step (Table 4.2's: δ, ξ, ω_d, ω_n, then J1 by Eq. 4-4).
 
-use crate::signal::{self, DecayAnalysis, DecaySettings};
-use crate::stats::{self, LineFit};
+use crate::signal::{self, DecayAnalysis};
+use crate::stats;
 use crate::{CalibrateError, formulas};
 use rig_types::{Campaign, Run, RunKind, sensor};
-use serde::{Deserialize, Serialize};
 
-/// Default confidence level of every interval reported here.
-pub const CONFIDENCE: f64 = 0.95;
-
-/// One force_calibration run: the sensor's mean output under a known load.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ForceRun {
-    pub id: String,
-    pub load_n: f64,
-    pub mean_mv: f64,
-    /// Standard deviation of the samples (sensor noise), mV.
-    pub std_mv: f64,
-    pub samples: usize,
-    /// mean_mv / load_n as in Table 4.6 (no offset); `None` for a zero load.
-    pub ratio_mv_per_n: Option<f64>,
-}
-
-/// One static_twist run: the held torque and the mean rotor angle.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct TwistRun {
-    pub id: String,
-    pub torque_nm: f64,
-    pub angle_rad: f64,
-    pub angle_std_rad: f64,
-    /// K_SE = T/φ for this run (Table 4.3); `None` when the angle is zero.
-    pub stiffness_nm_rad: Option<f64>,
-}
-
-/// The free decay of one voltage step.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct StepDecay {
-    pub id: String,
-    pub voltage_v: f64,
-    /// Analysis of the shaft twist φ2 − φ1 (the quantity used, see [`calibrate_campaign`]).
-    pub twist: DecayAnalysis,
-    /// Cross-check on the rotor speed Ω1 (the thesis' Fig. 4.8 signal); `None` if it shows no decay.
-    pub rotor_speed: Option<DecayAnalysis>,
-    /// J1 = K / ω_n² (Eq. 4-4) with the campaign's static stiffness and this step's mean ω_n.
-    pub rotor_inertia_kgm2: f64,
-}
-
-/// A voltage step left out of the decay analysis, and why.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SkippedStep {
-    pub id: String,
-    pub voltage_v: f64,
-    pub reason: String,
-}
-
-/// Everything the campaign's calibration runs say. Fields named in the brief
-/// are the interface other crates rely on.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CampaignCalibration {
-    /// mV = offset + factor · N, least squares with offset over the force runs.
-    pub force_factor_mv_per_n: f64,
-    pub force_factor_mv_per_n_stderr: f64,
-    pub force_factor_mv_per_n_ci: [f64; 2],
-    pub force_offset_mv: f64,
-    pub force_offset_mv_stderr: f64,
-    /// Table 4.6's way: mean of the per-run ratios mV/N (no offset).
-    pub force_ratio_mean_mv_per_n: f64,
-    pub force_runs: Vec<ForceRun>,
-    /// T = K φ through the origin (the encoder is zeroed unloaded), with 95 % CI.
-    pub stiffness_nm_rad: f64,
-    pub stiffness_nm_rad_stderr: f64,
-    pub stiffness_nm_rad_ci: [f64; 2],
-    /// The same data fitted with an offset (a check that the origin is right).
-    pub stiffness_with_offset: LineFit,
-    pub twist_runs: Vec<TwistRun>,
-    /// Means over the voltage steps of each step's mean; stderr = spread over steps / √n.
-    pub log_decrement: f64,
-    pub log_decrement_stderr: f64,
-    pub damping_ratio: f64,
-    pub damping_ratio_stderr: f64,
-    pub damped_frequency_rad_s: f64,
-    pub damped_frequency_rad_s_stderr: f64,
-    pub natural_frequency_rad_s: f64,
-    pub natural_frequency_rad_s_stderr: f64,
-    /// J1 = K / ω_n² (Eq. 4-4); stderr propagates K's and ω_n's.
-    pub rotor_inertia_kgm2: f64,
-    pub rotor_inertia_kgm2_stderr: f64,
-    pub steps: Vec<StepDecay>,
-    /// Voltage steps that showed no measurable free decay (left out of the means).
-    pub steps_without_decay: Vec<SkippedStep>,
-    pub settings: CalibrationSettings,
-    pub twist_settings: DecaySettings,
-    pub speed_settings: DecaySettings,
-}
+pub use rig_types::contract::{
+    CONFIDENCE, CalibrationSettings, CampaignCalibration, ForceRun, SkippedStep, StepDecay, TwistRun,
+};
 
 fn column<'a, T>(run: &'a Run, col: &'a Option<Vec<T>>, name: &str) -> Result<&'a [T], CalibrateError> {
     col.as_deref().ok_or_else(|| CalibrateError::MissingColumn { run: run.id.clone(), column: name.to_string() })
@@ -147,73 +62,6 @@ pub fn twist_runs(c: &Campaign) -> Result<Vec<TwistRun>, CalibrateError> {
         });
     }
     Ok(out)
-}
-
-/// The knobs of the campaign calibration (pipeline.toml `[stage.params]` of
-/// `campaign-calibration`; [`Default`] holds the documented values).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct CalibrationSettings {
-    /// Confidence of every interval (two-sided).
-    pub confidence: f64,
-    /// Zero-phase smoothing before the extremum search, half-width in s.
-    pub smooth_half_s: f64,
-    /// Half-width of the parabola that locates each extremum, s: ±0.15 s is
-    /// ±25° of phase at the ≈ 0.45 Hz the chapter reports.
-    pub peak_fit_half_s: f64,
-    /// Twist: an extremum is confirmed after the signal leaves it by this many
-    /// encoder ticks (3 rejects quantisation flicker on flat tops).
-    pub twist_hysteresis_ticks: f64,
-    /// Twist: pairs stop when a swing falls under this many ticks (20: beyond
-    /// that one tick is > 5 % of the swing).
-    pub twist_min_swing_ticks: f64,
-    /// Rotor-speed cross-check: the differentiator leaves ≈ 0.16 rad/s of
-    /// quantisation noise, so 0.5 rad/s hysteresis and a 3 rad/s smallest swing.
-    pub speed_hysteresis_rad_s: f64,
-    pub speed_min_swing_rad_s: f64,
-    /// Extrema skipped at the start: the first is reached while the motor is
-    /// still spinning up from rest, so the swing into it is forced, not free.
-    pub skip_extrema: usize,
-}
-
-impl Default for CalibrationSettings {
-    fn default() -> Self {
-        CalibrationSettings {
-            confidence: CONFIDENCE,
-            smooth_half_s: 0.02,
-            peak_fit_half_s: 0.15,
-            twist_hysteresis_ticks: 3.0,
-            twist_min_swing_ticks: 20.0,
-            speed_hysteresis_rad_s: 0.5,
-            speed_min_swing_rad_s: 3.0,
-            skip_extrema: 1,
-        }
-    }
-}
-
-impl CalibrationSettings {
-    /// Decay settings for the twist, in rad for an encoder of `ticks_per_rev`.
-    pub fn twist(&self, ticks_per_rev: u32) -> DecaySettings {
-        let tick = 2.0 * std::f64::consts::PI / ticks_per_rev as f64;
-        DecaySettings {
-            smooth_half_s: self.smooth_half_s,
-            peak_fit_half_s: self.peak_fit_half_s,
-            hysteresis: self.twist_hysteresis_ticks * tick,
-            min_swing: self.twist_min_swing_ticks * tick,
-            skip_extrema: self.skip_extrema,
-        }
-    }
-
-    /// Decay settings for the rotor-speed cross-check, rad/s.
-    pub fn speed(&self) -> DecaySettings {
-        DecaySettings {
-            smooth_half_s: self.smooth_half_s,
-            peak_fit_half_s: self.peak_fit_half_s,
-            hysteresis: self.speed_hysteresis_rad_s,
-            min_swing: self.speed_min_swing_rad_s,
-            skip_extrema: self.skip_extrema,
-        }
-    }
 }
 
 /// The whole campaign-side calibration.

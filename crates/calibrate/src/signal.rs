@@ -3,66 +3,9 @@
 //! differentiator, the zero-phase moving average) are `rig_types::sensor`.
 
 use crate::{CalibrateError, formulas};
+pub use rig_types::contract::{DecayAnalysis, DecayPair, DecaySettings, Extremum};
 use rig_types::sensor::{centred_moving_average, half_window_samples};
-use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
-
-/// One extremum of a decaying oscillation.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Extremum {
-    pub time_s: f64,
-    pub value: f64,
-    pub is_max: bool,
-}
-
-/// One log-decrement estimate from extremum k and extremum k+2 (same sign):
-/// swings S_k = |e_{k+1} − e_k| and S_{k+2} are free of any constant offset,
-/// and for x = c + A e^{−σt} cos(ω_d t) they satisfy S_k/S_{k+2} = e^{δ}.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct DecayPair {
-    pub t1_s: f64,
-    pub t2_s: f64,
-    /// Swings (peak-to-peak) x1 and x2 in the signal's unit.
-    pub x1: f64,
-    pub x2: f64,
-    /// δ (Eq. 4-2a), ξ (Eq. 4-2b), ω_d = 2π/(t2 − t1), ω_n (Eq. 4-3).
-    pub log_decrement: f64,
-    pub damping_ratio: f64,
-    pub damped_rad_s: f64,
-    pub natural_rad_s: f64,
-}
-
-/// The free decay of one record: the extrema found, the pairs used and their spread.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct DecayAnalysis {
-    pub extrema: Vec<Extremum>,
-    pub pairs: Vec<DecayPair>,
-    pub log_decrement_mean: f64,
-    pub log_decrement_std: f64,
-    pub damping_ratio_mean: f64,
-    pub damping_ratio_std: f64,
-    pub damped_rad_s_mean: f64,
-    pub damped_rad_s_std: f64,
-    pub natural_rad_s_mean: f64,
-    pub natural_rad_s_std: f64,
-}
-
-/// Settings of the decay analysis; explicit so a stage can state them.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct DecaySettings {
-    /// Half-width of the zero-phase smoothing before extremum search, s.
-    pub smooth_half_s: f64,
-    /// Half-width of the least-squares parabola that locates each extremum, s
-    /// (keep it well under a quarter period so the parabola fits the cosine).
-    pub peak_fit_half_s: f64,
-    /// An extremum is confirmed only after the signal has left it by this much
-    /// (rejects quantisation flicker on flat tops).
-    pub hysteresis: f64,
-    /// Pairs whose later swing is below this are dropped (quantisation floor).
-    pub min_swing: f64,
-    /// Extrema skipped at the start (the start-up transient from rest).
-    pub skip_extrema: usize,
-}
 
 /// Finds alternating extrema of `x` (after zero-phase smoothing) with hysteresis.
 /// Each extremum time is refined by a parabola through its three samples.

@@ -3,7 +3,7 @@
 //! lines through the origin and with an offset, with confidence intervals.
 
 use crate::CalibrateError;
-use serde::{Deserialize, Serialize};
+pub use rig_types::contract::LineFit;
 
 /// Arithmetic mean; `None` for an empty slice.
 pub fn mean(x: &[f64]) -> Option<f64> {
@@ -133,24 +133,6 @@ pub fn student_t_quantile(p: f64, dof: f64) -> Result<f64, CalibrateError> {
         if student_t_cdf(mid, dof) < p { lo = mid } else { hi = mid }
     }
     Ok(0.5 * (lo + hi))
-}
-
-/// A least-squares straight line y = slope·x (+ intercept) with standard
-/// errors and two-sided confidence intervals at `confidence`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct LineFit {
-    pub slope: f64,
-    pub slope_stderr: f64,
-    pub slope_ci: [f64; 2],
-    /// 0 (and no error) for a fit through the origin.
-    pub intercept: f64,
-    pub intercept_stderr: f64,
-    pub intercept_ci: [f64; 2],
-    /// Residual standard deviation (with n − p degrees of freedom).
-    pub residual_std: f64,
-    pub dof: usize,
-    pub confidence: f64,
-    pub through_origin: bool,
 }
 
 fn check_xy(x: &[f64], y: &[f64], min_n: usize, what: &str) -> Result<(), CalibrateError> {

@@ -3,69 +3,14 @@
 //! not print), and [`ThesisData`], the parameters downstream stages use.
 
 use crate::formulas as f;
-use crate::published::{LabelledPoint, PublishedTables, ThesisTables};
+use crate::published::{PublishedTables, ThesisTables};
 use crate::stats::{self, LineFit};
 use crate::{CalibrateError, audit};
+pub use rig_types::contract::{FrequencyPeak, ThesisData};
 use rig_types::{MotorParams, Table, ThesisFriction, fmt_fixed};
-use serde::{Deserialize, Serialize};
 
 /// Confidence of every interval in the thesis tables.
 pub const CONFIDENCE: f64 = 0.95;
-
-/// A frequency peak of Table 4.8 in both printed units.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct FrequencyPeak {
-    pub freq_hz: f64,
-    /// As printed in the rad/s column (not recomputed from Hz).
-    pub omega_rad_s: f64,
-}
-
-/// The thesis' parameters as downstream stages need them (`data/thesis.json`).
-/// Values are as published unless the name says `_recomputed`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ThesisData {
-    /// Table 4.4 (initial values) and Table 4.5 (estimated), gear_ratio 1
-    /// because the chapter's model leaves the 8:1 gearbox out (§4.2).
-    pub motor_initial: MotorParams,
-    pub motor_estimated: MotorParams,
-    /// J_1 and K_s of Table 4.5 (what the thesis model uses).
-    pub rotor_inertia_kgm2: f64,
-    pub shaft_stiffness_nm_rad: f64,
-    /// J_1 and K_s of Table 4.4.
-    pub rotor_inertia_initial_kgm2: f64,
-    pub shaft_stiffness_initial_nm_rad: f64,
-    /// Table 4.2's mean ξ as printed, and ξ by Eq. 4-2b from its mean δ (they disagree, see the audit).
-    pub damping_ratio: f64,
-    pub damping_ratio_recomputed: f64,
-    /// C = 2 ξ √(J_1 K_s) (text under Eq. 4-9) with the printed ξ and Table 4.5's J_1, K_s.
-    pub shaft_damping_nm_s_rad: f64,
-    /// Same with ξ of Eq. 4-2b.
-    pub shaft_damping_recomputed_nm_s_rad: f64,
-    /// Table 4.2's mean ω_d and ω_n, printed in Hz.
-    pub damped_frequency_hz: f64,
-    pub natural_frequency_hz: f64,
-    /// Eq. 4-1, 4-4, 4-5 as printed.
-    pub k_sa_nm_rad: f64,
-    pub j1e_kgm2: f64,
-    pub j1a_kgm2: f64,
-    /// Table 4.7 with Tol of Eq. 4-10.
-    pub friction: ThesisFriction,
-    /// r of Eq. 4-10, m.
-    pub brake_disc_radius_m: f64,
-    /// Table 4.8.
-    pub peaks: Vec<FrequencyPeak>,
-    /// The 8:1 gearbox the text mentions and the model omits.
-    pub gear_ratio: f64,
-    /// "8 V (≃ 16 rad/s)".
-    pub step_voltage_v: f64,
-    pub step_speed_rad_s: f64,
-    /// "≃ 0.4 Hz" experimental and "≃ 0.3 Hz" numerical oscillation frequencies (§4.6).
-    pub oscillation_experimental_hz: f64,
-    pub oscillation_numerical_hz: f64,
-    pub encoder_ticks_per_rev: f64,
-    /// Operating points the captions label vibrating or quiet.
-    pub labelled_points: Vec<LabelledPoint>,
-}
 
 fn motor(
     t: &ThesisTables,

@@ -156,7 +156,9 @@ use rig_types::{
 use system::{Drive, System};
 
 /// Integrator settings. Tolerances are explicit arguments, never globals.
-#[derive(Debug, Clone, PartialEq)]
+/// pipeline.toml declares them once, in its `[shared.integrator]` table.
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SimOptions {
     pub rtol: f64,
     pub atol: f64,

@@ -128,6 +128,10 @@ pub struct PipelineConfig {
 #[serde(deny_unknown_fields)]
 struct RawFile {
     settings: Settings,
+    /// Tables declared once (`[shared.<name>]`); a stage listing `<name>`
+    /// in its `shared` gets the table as `[stage.params.<name>]`.
+    #[serde(default)]
+    shared: std::collections::BTreeMap<String, toml::Table>,
     #[serde(default)]
     stage: Vec<RawStage>,
 }
@@ -148,6 +152,9 @@ struct RawStage {
     outputs: Vec<String>,
     #[serde(default)]
     optional: bool,
+    /// Names of `[shared.<name>]` tables handed to this stage as `params.<name>`.
+    #[serde(default)]
+    shared: Vec<String>,
     #[serde(default)]
     params: toml::Table,
 }
@@ -173,8 +180,24 @@ impl PipelineConfig {
         let stages = raw
             .stage
             .into_iter()
-            .map(|s| {
+            .map(|mut s| {
                 let inputs = s.inputs.iter().map(|i| parse_input(path, &s.name, i)).collect::<Result<Vec<_>, _>>()?;
+                for name in &s.shared {
+                    let err = |reason: String| PipelineError::Config {
+                        path: path.to_path_buf(),
+                        stage: Some(s.name.clone()),
+                        reason,
+                    };
+                    let table = raw.shared.get(name).cloned().ok_or_else(|| {
+                        err(format!("shared = [\"{name}\"] but pipeline.toml has no [shared.{name}] table"))
+                    })?;
+                    if s.params.contains_key(name) {
+                        return Err(err(format!(
+                            "[stage.params] {name}: declared once in [shared.{name}], not per stage"
+                        )));
+                    }
+                    s.params.insert(name.clone(), toml::Value::Table(table));
+                }
                 Ok(StageDecl {
                     outputs: s.outputs.iter().map(|o| OutputPattern::parse(o)).collect(),
                     name: s.name,

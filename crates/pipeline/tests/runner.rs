@@ -686,3 +686,26 @@ fn stage_errors_name_the_stage_once() {
     assert!(msg.starts_with("stage c: reading "), "{msg}");
     assert_eq!(msg.matches("stage c").count(), 1, "{msg}");
 }
+
+/// A `[shared.<name>]` table is declared once and reaches every stage
+/// listing it in `shared` as `params.<name>`, so it is in their keys (a
+/// changed tolerance re-runs exactly those stages, and `--why` names it); a
+/// stage declaring its own, or asking for a table that is not there, is refused.
+#[test]
+fn shared_tables_reach_the_stages_that_list_them() {
+    let shared = "[shared.integrator]\nrtol = 1e-8\natol = 1e-10\n";
+    let stages = DIAMOND.replace("name = \"d\"\n", "name = \"d\"\nshared = [\"integrator\"]\n");
+    let f = Fixture::new(&format!("{shared}{stages}"));
+    f.run();
+    f.edit_toml("rtol = 1e-8", "rtol = 1e-6");
+    let r = f.run();
+    assert_eq!(r.ran(), ["d"]);
+    let why = reasons(&r, "d");
+    assert!(why.len() == 1 && why[0].starts_with("param integrator changed ({atol = "), "{why:?}");
+
+    let e = config_error(&stages);
+    assert!(e.contains("stage d") && e.contains("no [shared.integrator] table"), "{e}");
+    let own = stages.replace("write = [\"d.txt\"]", "write = [\"d.txt\"]\nintegrator = { rtol = 1.0 }");
+    let e = config_error(&format!("{shared}{own}"));
+    assert!(e.contains("stage d") && e.contains("declared once in [shared.integrator]"), "{e}");
+}

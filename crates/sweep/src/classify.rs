@@ -9,8 +9,9 @@
 //!    `equilibrium_rel` · |mean|): steady sliding with at most noise on it.
 //!    A window whose second half swings less than `decay_ratio` of its first
 //!    half is a transient decaying towards sliding: also equilibrium (`decay`).
-//! 3. **Stick** when min ≤ max(`stick_floor_rad_s`, `stick_rel` · |mean|) — the
-//!    same rule as the simulation stage's misfit table.
+//! 3. **Stick** when min ≤ max(`stick_floor_rad_s`, `stick_rel` · |mean|);
+//!    [`Regime::stick_slip`] is the workspace's one definition of stick-slip
+//!    (the sweeps' tables and the simulation stage's misfit table use it).
 //! 4. **Poincaré section**: upward crossings of Ω1 through its window mean,
 //!    with a hysteresis band of ± `hysteresis_rel` · (max − min) so that noise
 //!    does not count as crossings. One cycle = between two consecutive upward
@@ -128,6 +129,20 @@ impl Regime {
             Regime::QuasiPeriodic { stick } => format!("quasi-periodic{}", prefix(stick)),
             Regime::Chaotic { stick } => format!("chaotic{}", prefix(stick)),
         }
+    }
+
+    /// Stick-slip, the one definition: a vibrating regime in which the rotor
+    /// stops (its window's min speed reaches max(`stick_floor_rad_s`,
+    /// `stick_rel` · |mean|), step 3 of the module docs). A window that
+    /// decays towards sliding is an equilibrium, so it does not stick-slip
+    /// even if the rotor stopped early in it.
+    pub fn stick_slip(&self) -> bool {
+        matches!(
+            self,
+            Regime::Periodic { stick: true, .. }
+                | Regime::QuasiPeriodic { stick: true }
+                | Regime::Chaotic { stick: true }
+        )
     }
 
     /// True for every regime but equilibrium (the chapter's "vibrating").

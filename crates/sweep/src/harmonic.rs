@@ -22,10 +22,8 @@ use std::fmt::Write as _;
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct HarmonicOptions {
-    /// Integrator tolerances and largest step (`rig_model::SimOptions`).
-    pub rtol: f64,
-    pub atol: f64,
-    pub max_step_s: f64,
+    /// Integrator tolerances of the rig-model runs (pipeline.toml's `[shared.integrator]`).
+    pub integrator: SimOptions,
     pub motor_rpm: f64,
     pub normal_force_n: f64,
     pub ramp_s: f64,
@@ -137,9 +135,8 @@ pub fn study(
     let from_s = p.ramp_s + p.settle_s;
     jobs.par_iter()
         .map(|(model, prm, variant, w)| {
-            let tr =
-                simulate(prm, &input, &times, &SimOptions { rtol: p.rtol, atol: p.atol, max_step_s: p.max_step_s })
-                    .map_err(|e| SweepError::Analysis(format!("simulating the {model} model, {variant} {w:?}: {e}")))?;
+            let tr = simulate(prm, &input, &times, &p.integrator)
+                .map_err(|e| SweepError::Analysis(format!("simulating the {model} model, {variant} {w:?}: {e}")))?;
             analyse(model, variant.clone(), *w, &tr, from_s, p.sample_rate_hz)
         })
         .collect()

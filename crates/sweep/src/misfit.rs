@@ -15,15 +15,18 @@
 //!   model (`rig_types::sensor::encoder_ticks`, floor to
 //!   `encoder_ticks_per_rev`) and the same differentiator, so both sides see
 //!   the same quantisation and filter;
-//! - *stick-slip*: the rotor speed in the steady window falls below
-//!   max(10 % of the set-point, 0.3 rad/s); 0.3 rad/s is about twice the
-//!   differentiator's one-tick resolution (2π/1000 rad over 40 ms = 0.157 rad/s);
+//! - *stick-slip*: [`crate::Regime::stick_slip`] of the classifier
+//!   ([`crate::classify`], the thresholds of pipeline.toml's
+//!   `[shared.classify]`) on the steady window: a vibrating regime whose
+//!   minimum speed reaches max(`stick_floor_rad_s` = 0.3 rad/s, `stick_rel` =
+//!   10 % of the mean); 0.3 rad/s is about twice the differentiator's
+//!   one-tick resolution (2π/1000 rad over 40 ms = 0.157 rad/s);
 //! - *NRMSE*: rms(Ω1,sim − Ω1,meas) / rms(Ω1,meas) over the steady window,
 //!   dimensionless; 0 is a perfect fit, ≈ 1 is no better than predicting zero,
 //!   ≈ √2 is two uncorrelated signals of equal size (a phase drift between two
 //!   equal limit cycles ends there).
 
-use crate::SweepError;
+use crate::{ClassifyOptions, SweepError, classify};
 use rayon::prelude::*;
 use rig_model::{SimOptions, friction_coefficient, simulate};
 use rig_types::sensor::{ForceCal, SPEED_HALF_WINDOW_S, encoder_speed_rad_s, force_n, quantised_speed_rad_s};
@@ -79,6 +82,7 @@ pub fn misfit_study(
     rig: &RigParams,
     force: ForceCal,
     opts: &SimOptions,
+    classify: &ClassifyOptions,
     limit_cycle_s: f64,
 ) -> Result<MisfitOutput, SweepError> {
     let ticks_per_rev = campaign.rig.encoder_ticks_per_rev;
@@ -88,8 +92,10 @@ pub fn misfit_study(
         return Err(SweepError::Analysis(format!("campaign {} has no operating_point run to simulate", campaign.name)));
     }
     // Parallel over runs; collect keeps campaign order, so outputs do not depend on threads.
-    let results: Vec<RunResult> =
-        runs.par_iter().map(|r| compare_run(r, thesis, rig, opts, ticks_per_rev)).collect::<Result<_, _>>()?;
+    let results: Vec<RunResult> = runs
+        .par_iter()
+        .map(|r| compare_run(r, thesis, rig, opts, classify, ticks_per_rev))
+        .collect::<Result<_, _>>()?;
     let mut figures: Vec<FigureSpec> = results.iter().map(overlay_figure).collect();
     let measured_mu = measured_friction_points(&runs, force, radius_m, ticks_per_rev);
     figures.push(friction_figure(thesis, rig, measured_mu));
@@ -116,18 +122,26 @@ fn steady_window(time_s: &[f64]) -> std::ops::Range<usize> {
     start..end.max(start + 1).min(time_s.len())
 }
 
-fn summarise(speed: &[f64], window: std::ops::Range<usize>, setpoint_rad_s: f64, reference: Option<&[f64]>) -> Summary {
+/// The window's extremes, the classifier's stick-slip verdict at `fs_hz` and
+/// the NRMSE against `reference`.
+fn summarise(
+    speed: &[f64],
+    window: std::ops::Range<usize>,
+    fs_hz: f64,
+    o: &ClassifyOptions,
+    reference: Option<&[f64]>,
+) -> Summary {
     let w = &speed[window.clone()];
     let min = w.iter().copied().fold(f64::INFINITY, f64::min);
     let max = w.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let threshold = (0.1 * setpoint_rad_s).max(0.3);
+    let stick_slip = classify(w, fs_hz, o).regime.stick_slip();
     let nrmse = reference.map(|m| {
         let m = &m[window.clone()];
         let num = w.iter().zip(m).map(|(s, x)| (s - x).powi(2)).sum::<f64>();
         let den = m.iter().map(|x| x * x).sum::<f64>();
         (num / den).sqrt()
     });
-    Summary { stick_slip: min < threshold, min_rpm: min * RAD_S_TO_RPM, max_rpm: max * RAD_S_TO_RPM, nrmse }
+    Summary { stick_slip, min_rpm: min * RAD_S_TO_RPM, max_rpm: max * RAD_S_TO_RPM, nrmse }
 }
 
 fn compare_run(
@@ -135,6 +149,7 @@ fn compare_run(
     thesis: &RigParams,
     rig: &RigParams,
     opts: &SimOptions,
+    o: &ClassifyOptions,
     tpr: u32,
 ) -> Result<RunResult, SweepError> {
     let input = input_of(run)?;
@@ -154,14 +169,14 @@ fn compare_run(
     let thesis_speed = simulated(thesis, "thesis")?;
     let rig_speed = simulated(rig, "rig")?;
     let window = steady_window(&time_s);
-    let set = motor_rpm_setpoint / RAD_S_TO_RPM;
+    let fs = (time_s.len().max(2) - 1) as f64 / (time_s[time_s.len() - 1] - time_s[0]).max(f64::MIN_POSITIVE);
     Ok(RunResult {
         id: run.id.clone(),
         setpoint_rpm: motor_rpm_setpoint,
         normal_force_n,
-        measured: summarise(&measured, window.clone(), set, None),
-        thesis: summarise(&thesis_speed, window.clone(), set, Some(&measured)),
-        rig: summarise(&rig_speed, window, set, Some(&measured)),
+        measured: summarise(&measured, window.clone(), fs, o, None),
+        thesis: summarise(&thesis_speed, window.clone(), fs, o, Some(&measured)),
+        rig: summarise(&rig_speed, window, fs, o, Some(&measured)),
         time_s,
         measured_rad_s: measured,
         thesis_rad_s: thesis_speed,

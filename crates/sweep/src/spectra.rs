@@ -23,10 +23,8 @@ use serde::Deserialize;
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SpectraOptions {
-    /// Integrator tolerances and largest step of the rig-model runs (`rig_model::SimOptions`).
-    pub rtol: f64,
-    pub atol: f64,
-    pub max_step_s: f64,
+    /// Integrator tolerances of the rig-model runs (pipeline.toml's `[shared.integrator]`).
+    pub integrator: SimOptions,
     pub settle_s: f64,
     pub min_freq_hz: f64,
     pub max_freq_hz: f64,
@@ -184,13 +182,8 @@ pub fn study<'a>(
         .par_iter()
         .map(|(run, rpm, n, ramp)| {
             let input = RunInput::OperatingPoint { motor_rpm_setpoint: *rpm, normal_force_n: *n, ramp_s: *ramp };
-            simulate(
-                rig,
-                &input,
-                &run.data.time_s,
-                &SimOptions { rtol: o.rtol, atol: o.atol, max_step_s: o.max_step_s },
-            )
-            .map_err(|e| SweepError::Analysis(format!("simulating run {}: {e}", run.id)))
+            simulate(rig, &input, &run.data.time_s, &o.integrator)
+                .map_err(|e| SweepError::Analysis(format!("simulating run {}: {e}", run.id)))
         })
         .collect();
     let mut points = Vec::new();

@@ -22,9 +22,8 @@ use serde::Deserialize;
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SweepsParams {
-    pub rtol: f64,
-    pub atol: f64,
-    pub max_step_s: f64,
+    /// Integrator tolerances (pipeline.toml's `[shared.integrator]`).
+    pub integrator: SimOptions,
     pub first_transient_s: f64,
     pub transient_s: f64,
     pub window_s: f64,
@@ -42,7 +41,7 @@ pub struct SweepsParams {
     pub friction_sweep_campaign_rpm: f64,
     /// `"i/n"`: only chains of shard i of the maps.
     pub shard: String,
-    /// The regime classifier's thresholds (`[stage.params.classify]`).
+    /// The regime classifier's thresholds (pipeline.toml's `[shared.classify]`).
     pub classify: ClassifyOptions,
 }
 
@@ -55,7 +54,7 @@ impl SweepsParams {
                 window_s: self.window_s,
                 sample_rate_hz: self.sample_rate_hz,
             },
-            sim: SimOptions { rtol: self.rtol, atol: self.atol, max_step_s: self.max_step_s },
+            sim: self.integrator.clone(),
             classify: self.classify.clone(),
         }
     }

@@ -5,6 +5,7 @@
 //! field names (`_rad_s`, `_nm`, `_v`).
 
 mod campaign;
+pub mod contract;
 mod figure;
 mod params;
 pub mod sensor;

@@ -100,7 +100,10 @@ pub fn untyped() -> Vec<&'static str> {
 /// The thesis model as published (Table 4.5, the chapter's printed ξ — its C —,
 /// Table 4.7, r; see `rig_model::thesis_model_params`) with `drive`: the chapter
 /// publishes no PI gains, so stages pass the rig's identified drive.
-pub(crate) fn thesis_model(data: &rig_calibrate::ThesisData, drive: rig_types::DriveParams) -> rig_types::RigParams {
+pub(crate) fn thesis_model(
+    data: &rig_types::contract::ThesisData,
+    drive: rig_types::DriveParams,
+) -> rig_types::RigParams {
     rig_model::thesis_model_params(&rig_model::ThesisModelInputs {
         motor: data.motor_estimated.clone(),
         rotor_inertia_kgm2: data.rotor_inertia_kgm2,

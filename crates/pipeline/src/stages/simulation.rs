@@ -6,10 +6,11 @@
 
 use crate::StageCtx;
 use anyhow::Result;
-use rig_calibrate::{CampaignCalibration, ThesisData};
 use rig_model::SimOptions;
+use rig_sweep::ClassifyOptions;
 use rig_sweep::misfit::misfit_study;
 use rig_types::RigParams;
+use rig_types::contract::{CampaignCalibration, ThesisData};
 use rig_types::sensor::ForceCal;
 use serde::Deserialize;
 
@@ -17,17 +18,16 @@ use serde::Deserialize;
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Params {
-    /// Integrator tolerances and largest step (`rig_model::SimOptions`).
-    pub rtol: f64,
-    pub atol: f64,
-    pub max_step_s: f64,
+    /// pipeline.toml's `[shared.integrator]`.
+    pub integrator: SimOptions,
+    /// pipeline.toml's `[shared.classify]`: stick-slip is the classifier's verdict.
+    pub classify: ClassifyOptions,
     /// Fig. 4.17 shows the last this many seconds of each run.
     pub limit_cycle_s: f64,
 }
 
 pub fn run(ctx: &mut StageCtx) -> Result<()> {
     let p: Params = ctx.typed_params()?;
-    let opts = SimOptions { rtol: p.rtol, atol: p.atol, max_step_s: p.max_step_s };
     let rig: RigParams = ctx.read_json("data/rig-params.json")?;
     // The chapter publishes no PI gains: the thesis model gets the rig's identified drive.
     let data: ThesisData = ctx.read_json("data/thesis.json")?;
@@ -35,7 +35,7 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     let cal: CampaignCalibration = ctx.read_json("data/campaign-calibration.json")?;
     let force = ForceCal { factor_mv_per_n: cal.force_factor_mv_per_n, offset_mv: cal.force_offset_mv };
     let campaign = ctx.campaign()?.clone();
-    let out = misfit_study(&campaign, &thesis, &rig, force, &opts, p.limit_cycle_s)?;
+    let out = misfit_study(&campaign, &thesis, &rig, force, &p.integrator, &p.classify, p.limit_cycle_s)?;
     ctx.write_table("tables/campaign-simulation-misfit.csv", &out.table)?;
     for f in &out.figures {
         ctx.write_figure(f)?;

@@ -8,10 +8,10 @@
 use crate::StageCtx;
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use rig_calibrate::ThesisData;
 use rig_sweep::operating::LabelledPoint;
 use rig_sweep::{Point, Shard, map_shards, output, sweeps_study};
 use rig_types::RigParams;
+use rig_types::contract::ThesisData;
 use std::io::IsTerminal;
 
 /// `[stage.params]` of `sweeps` (meanings in pipeline.toml).
@@ -35,8 +35,8 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
         bar.finish_and_clear();
         return Ok(());
     }
-    let labels: Vec<LabelledPoint> = rig_ingest::thesis::read_thesis_tables(&ctx.thesis_dir)
-        .context("reading the thesis tables")?
+    // The chapter's labelled points, as the thesis-tables stage passes them on.
+    let labels: Vec<LabelledPoint> = data
         .labelled_points
         .iter()
         .map(|l| LabelledPoint {
