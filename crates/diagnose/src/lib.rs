@@ -132,6 +132,9 @@ pub struct DiagnoseOptions {
     /// Checks of every run kind (static twist, voltage steps, free run,
     /// torque balance): `[stage.params.channels]`.
     pub channels: channels::ChannelOptions,
+    /// The regime classifier, the one definition of stick-slip
+    /// (`[shared.classify]` of pipeline.toml, handed to the stage).
+    pub classify: rig_sweep::ClassifyOptions,
 }
 
 impl DiagnoseOptions {
@@ -141,17 +144,27 @@ impl DiagnoseOptions {
         struct Stage {
             name: String,
             params: Option<toml::Value>,
+            #[serde(default)]
+            shared: Vec<String>,
         }
         #[derive(serde::Deserialize)]
         struct File {
             stage: Vec<Stage>,
+            #[serde(default)]
+            shared: toml::Table,
         }
         let f: File = toml::from_str(text).map_err(|e| format!("pipeline.toml: {e}"))?;
         let st = f.stage.into_iter().find(|s| s.name == "diagnosis").ok_or("pipeline.toml: no stage `diagnosis`")?;
-        st.params
-            .ok_or("pipeline.toml: stage diagnosis has no [stage.params]")?
-            .try_into()
-            .map_err(|e| format!("pipeline.toml: stage diagnosis: [stage.params]: {e}"))
+        let mut params = st.params.ok_or("pipeline.toml: stage diagnosis has no [stage.params]")?;
+        // The runner hands each listed [shared.<name>] table to the stage as
+        // [stage.params.<name>]; the same here.
+        for name in &st.shared {
+            let table = f.shared.get(name).ok_or_else(|| format!("pipeline.toml: no [shared.{name}]"))?;
+            if let toml::Value::Table(t) = &mut params {
+                t.insert(name.clone(), table.clone());
+            }
+        }
+        params.try_into().map_err(|e| format!("pipeline.toml: stage diagnosis: [stage.params]: {e}"))
     }
 }
 

@@ -125,6 +125,10 @@ pub struct RunRow {
 pub struct Features {
     /// Fraction of the steady state with rotor 1 stuck (|Ω1| < slip threshold).
     pub stuck_fraction: f64,
+    /// Stick-slip by the one definition of the workspace, the regime
+    /// classifier's ([`rig_sweep::Regime::stick_slip`], `[shared.classify]`),
+    /// on the same steady window; the sweeps' agreement table uses the same rule.
+    pub stick_slip: bool,
     pub rotor_min_rad_s: f64,
     pub rotor_max_rad_s: f64,
     /// Largest spectral peak of Ω1 above 0.05 Hz, Hz (0 when no oscillation).
@@ -135,7 +139,7 @@ pub struct Features {
 
 impl Features {
     pub fn stick_slip(&self) -> bool {
-        self.stuck_fraction > 0.02 && self.rotor_max_rad_s > 0.0
+        self.stick_slip
     }
 }
 

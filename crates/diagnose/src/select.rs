@@ -14,6 +14,7 @@ use crate::signature::{self, Library, Samples};
 use crate::vocab::{Channel, EffectId, NONE, UNEXPLAINED};
 use crate::{DiagnoseError, DiagnoseOptions};
 use rayon::prelude::*;
+use rig_sweep::ClassifyOptions;
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 
@@ -203,21 +204,31 @@ fn compare(before: &[f64], after: &[f64], runs: &[RunSignals], folds: usize) -> 
 }
 
 /// Measured features of one run's steady state.
-pub fn measured_features(s: &RunSignals, slip_speed_rad_s: f64) -> Features {
+pub fn measured_features(s: &RunSignals, slip_speed_rad_s: f64, classify: &ClassifyOptions) -> Features {
     steady_features(
         &s.time_s[s.steady_from..],
         &s.rotor_speed_rad_s[s.steady_from..],
         &s.motor_speed_rad_s[s.steady_from..],
         s.setpoint_rad_s,
         slip_speed_rad_s,
+        classify,
     )
 }
 
 /// Features of a steady-state record (shared by measured and simulated runs).
-pub fn steady_features(t: &[f64], w1: &[f64], w2: &[f64], setpoint_rad_s: f64, slip_speed_rad_s: f64) -> Features {
+pub fn steady_features(
+    t: &[f64],
+    w1: &[f64],
+    w2: &[f64],
+    setpoint_rad_s: f64,
+    slip_speed_rad_s: f64,
+    classify: &ClassifyOptions,
+) -> Features {
     if t.len() < 16 {
         return Features::default();
     }
+    let fs_hz = (t.len() - 1) as f64 / (t[t.len() - 1] - t[0]);
+    let stick_slip = rig_sweep::classify(w1, fs_hz, classify).regime.stick_slip();
     let stuck = w1.iter().filter(|w| w.abs() < slip_speed_rad_s).count() as f64 / w1.len() as f64;
     let min = w1.iter().copied().fold(f64::INFINITY, f64::min);
     let max = w1.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -244,6 +255,7 @@ pub fn steady_features(t: &[f64], w1: &[f64], w2: &[f64], setpoint_rad_s: f64, s
     }
     Features {
         stuck_fraction: stuck,
+        stick_slip,
         rotor_min_rad_s: min,
         rotor_max_rad_s: max,
         fundamental_hz: best.0,
@@ -662,7 +674,7 @@ pub fn diagnose_signals(
             misfit_noise_floor: floor_ms[r],
             force_noise_n: s.force_noise_n,
             voltage_noise_v: s.voltage_noise_v,
-            measured: measured_features(s, opts.slip_speed_rad_s),
+            measured: measured_features(s, opts.slip_speed_rad_s, &opts.classify),
             simulated: None,
             extended: None,
         });

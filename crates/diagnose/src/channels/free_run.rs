@@ -19,6 +19,8 @@ pub struct FreeRunSettings {
     pub slip_speed_rad_s: f64,
     pub rotor_speed_half_window: usize,
     pub motor_speed_half_window: usize,
+    /// The regime classifier's thresholds (`[shared.classify]`).
+    pub classify: rig_sweep::ClassifyOptions,
 }
 
 impl FreeRunSettings {
@@ -29,6 +31,7 @@ impl FreeRunSettings {
             slip_speed_rad_s: opts.slip_speed_rad_s,
             rotor_speed_half_window: opts.rotor_speed_half_window,
             motor_speed_half_window: opts.motor_speed_half_window,
+            classify: opts.classify.clone(),
         }
     }
 }
@@ -71,7 +74,7 @@ fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) 
     let feat = |a1: &[f64], a2: &[f64]| {
         let w1 = centred_speed(tt, a1, s.rotor_speed_half_window);
         let w2 = centred_speed(tt, a2, s.motor_speed_half_window);
-        steady_features(&tt[from..], &w1[from..], &w2[from..], w_set, s.slip_speed_rad_s)
+        steady_features(&tt[from..], &w1[from..], &w2[from..], w_set, s.slip_speed_rad_s, &s.classify)
     };
     let measured = feat(&phi1, &phi2);
     let input = RunInput::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s };
