@@ -7,7 +7,7 @@ use crate::drive::{self, Pi};
 use crate::friction::SlipData;
 use crate::lines;
 use crate::prepare::RunSignals;
-use crate::report::{
+use crate::result::{
     Adequacy, CandidateScore, Detail, Diagnosis, Features, Finding, RunRow, SignatureEntry, StepRow, round_sig,
 };
 use crate::signature::{self, Library, Samples};

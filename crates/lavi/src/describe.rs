@@ -7,7 +7,7 @@
 //! values.
 
 use crate::data::{Prepared, RPM_TO_RAD_S};
-use crate::output::StudyOutput;
+use crate::render::StudyOutput;
 use crate::{LaviError, StudyParams};
 use rig_ingest::lavi::LaviRecording;
 use rig_model::one_dof::{OneDofFriction, OneDofParams, fit_one_dof, simulate_one_dof};

@@ -19,15 +19,15 @@
 mod classify;
 mod continuation;
 pub mod harmonic;
+mod render;
 pub mod spectra;
-mod tables;
 
 pub use classify::{Classification, ClassifyOptions, Regime, classify};
 pub use continuation::{
     Chain, ChainResult, Direction, MapSlice, MapSpec, Point, PointOutcome, Shard, SweepSettings, WindowSpec,
     bifurcation_chains, hysteresis, linspace, merge_slices, run_chain, run_chains, run_map_shard,
 };
-pub use tables::{chain_table, map_table};
+pub use render::{chain_table, map_table};
 
 /// Errors of this crate; simulation failures at a point are data
 /// ([`PointOutcome::result`]), not errors.
