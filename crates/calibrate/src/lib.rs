@@ -4,10 +4,9 @@
 
 pub mod audit;
 pub mod campaign;
-pub mod campaign_tables;
-pub mod figures;
 pub mod formulas;
 pub mod published;
+pub mod render;
 pub mod signal;
 pub mod stats;
 pub mod thesis;

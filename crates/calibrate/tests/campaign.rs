@@ -132,10 +132,7 @@ fn steps_without_decay_are_data() {
 #[test]
 fn synthetic_tables() {
     let c = calibrate_campaign(&synthetic()).unwrap();
-    insta::assert_snapshot!("synthetic_force", rig_calibrate::campaign_tables::force_table(&c).to_csv());
-    insta::assert_snapshot!("synthetic_stiffness", rig_calibrate::campaign_tables::stiffness_table(&c).to_csv());
-    insta::assert_snapshot!(
-        "synthetic_log_decrement",
-        rig_calibrate::campaign_tables::log_decrement_table(&c).to_csv()
-    );
+    insta::assert_snapshot!("synthetic_force", rig_calibrate::render::force_table(&c).to_csv());
+    insta::assert_snapshot!("synthetic_stiffness", rig_calibrate::render::stiffness_table(&c).to_csv());
+    insta::assert_snapshot!("synthetic_log_decrement", rig_calibrate::render::log_decrement_table(&c).to_csv());
 }

@@ -81,14 +81,14 @@ mod linalg;
 pub mod lines;
 pub mod prepare;
 pub mod render;
-mod report;
+mod result;
 mod select;
 pub mod signature;
 pub mod vocab;
 
 pub use channels::{ChannelCheck, ChannelOptions, extended_params};
 pub use prepare::{ForceCal, RunSignals};
-pub use report::{Adequacy, CandidateScore, Diagnosis, Finding, RunRow, SignatureEntry, StepRow, round_sig};
+pub use result::{Adequacy, CandidateScore, Diagnosis, Finding, RunRow, SignatureEntry, StepRow, round_sig};
 pub use select::diagnose_signals;
 pub use vocab::EffectId;
 

@@ -1,7 +1,7 @@
 //! The diagnosis for people: diagnosis.md, the tables and the evidence
 //! figures (as rig_types data; the pipeline stage writes them).
 
-use crate::report::{Diagnosis, Features, round_sig};
+use crate::result::{Diagnosis, Features, round_sig};
 use rig_types::{FigureSpec, Series, SeriesStyle, Table, fmt_fixed};
 use std::fmt::Write as _;
 

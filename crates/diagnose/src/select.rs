@@ -7,13 +7,14 @@ use crate::drive::{self, Pi};
 use crate::friction::SlipData;
 use crate::lines;
 use crate::prepare::RunSignals;
-use crate::report::{
+use crate::result::{
     Adequacy, CandidateScore, Detail, Diagnosis, Features, Finding, RunRow, SignatureEntry, StepRow, round_sig,
 };
 use crate::signature::{self, Library, Samples};
 use crate::vocab::{Channel, EffectId, NONE, UNEXPLAINED};
 use crate::{DiagnoseError, DiagnoseOptions};
 use rayon::prelude::*;
+use rig_spectra::{LineAnalysisOptions, line_analysis};
 use rig_sweep::ClassifyOptions;
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -215,6 +216,14 @@ pub fn measured_features(s: &RunSignals, slip_speed_rad_s: f64, classify: &Class
     )
 }
 
+/// The line analysis of a steady window's rotor speed (`rig_spectra::line_analysis`):
+/// 0.05 Hz (above the drift of a window of ≥ 20 s, below the slowest stick-slip
+/// of the rig, ≈ 0.3 Hz) to 5 Hz (the stick-slip fundamentals and their first
+/// harmonics; the differentiator smooths above); 0.1 bin, as the `spectra`
+/// stage for the same signals: the tolerance is then the peak's own 3σ_f.
+const STEADY_LINES: LineAnalysisOptions =
+    LineAnalysisOptions { min_freq_hz: 0.05, max_freq_hz: 5.0, tolerance_bins: 0.1 };
+
 /// Features of a steady-state record (shared by measured and simulated runs).
 pub fn steady_features(
     t: &[f64],
@@ -233,32 +242,21 @@ pub fn steady_features(
     let min = w1.iter().copied().fold(f64::INFINITY, f64::min);
     let max = w1.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let dip = w2.iter().map(|w| setpoint_rad_s - w).fold(0.0_f64, f64::max);
-    // Fundamental: largest periodogram value of Ω1 (decimated by 10) on 0.05..5 Hz.
-    let idx: Vec<usize> = (0..t.len()).step_by(10).collect();
-    let mean = idx.iter().map(|&k| w1[k]).sum::<f64>() / idx.len() as f64;
-    let var = idx.iter().map(|&k| (w1[k] - mean).powi(2)).sum::<f64>() / idx.len() as f64;
-    let mut best = (0.0, 0.0);
-    if var.sqrt() > slip_speed_rad_s {
-        for j in 0..=495 {
-            let f = 0.05 + 0.01 * j as f64;
-            let (mut re, mut im) = (0.0, 0.0);
-            for &k in &idx {
-                let (sn, cs) = (2.0 * PI * f * t[k]).sin_cos();
-                re += (w1[k] - mean) * cs;
-                im += (w1[k] - mean) * sn;
-            }
-            let p = re * re + im * im;
-            if p > best.1 {
-                best = (f, p);
-            }
-        }
-    }
+    // Fundamental: f0 of the line analysis of Ω1 when Ω1 swings more than the slip speed.
+    let n = w1.len() as f64;
+    let mean = w1.iter().sum::<f64>() / n;
+    let var = w1.iter().map(|w| (w - mean).powi(2)).sum::<f64>() / n;
+    let fundamental_hz = if var.sqrt() > slip_speed_rad_s {
+        line_analysis(w1, fs_hz, &STEADY_LINES).ok().and_then(|sl| sl.lines.f0_hz).unwrap_or(0.0)
+    } else {
+        0.0
+    };
     Features {
         stuck_fraction: stuck,
         stick_slip,
         rotor_min_rad_s: min,
         rotor_max_rad_s: max,
-        fundamental_hz: best.0,
+        fundamental_hz,
         motor_dip_rad_s: dip,
     }
 }

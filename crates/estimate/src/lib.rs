@@ -8,22 +8,22 @@
 
 pub mod argmin_adapter;
 mod error;
+pub mod fit_stats;
 pub mod friction;
 pub mod linreg;
 pub mod lsq;
 mod options;
-pub mod output;
 pub mod pi;
-pub mod report;
+pub mod render;
 mod rig;
 pub mod signals;
 pub mod steps;
 
 pub use error::EstimateError;
+pub use fit_stats::{FitReport, Identifiability, ParamEstimate};
 pub use friction::{FrictionEstimate, FrictionOptions, estimate_friction};
 pub use lsq::{IterationRecord, LsqProblem, LsqSolution, SolverOptions, Transform, levenberg_marquardt};
 pub use options::{EstimateOptions, InitialValues, SolverKind};
 pub use pi::{PiEstimate, PiMethod, PiOptions, estimate_pi};
-pub use report::{FitReport, Identifiability, ParamEstimate};
 pub use rig::{ModeComparison, RigEstimate, StepFit, estimate_rig};
 pub use steps::StepResidual;

@@ -5,14 +5,14 @@
 
 use crate::EstimateError;
 use crate::argmin_adapter::gauss_newton_ls;
+use crate::fit_stats::{
+    ChannelFit, FitReport, Identifiability, ParamEstimate, RunFit, aic_bic, covariance, fit_percent, flagged_pairs,
+    nrmse, whiteness,
+};
 use crate::friction::{FrictionEstimate, estimate_friction};
 use crate::lsq::{LsqSolution, Transform, fd_jacobian, levenberg_marquardt};
 use crate::options::{EstimateOptions, SolverKind};
 use crate::pi::{PiEstimate, estimate_pi};
-use crate::report::{
-    ChannelFit, FitReport, Identifiability, ParamEstimate, RunFit, aic_bic, covariance, fit_percent, flagged_pairs,
-    nrmse, whiteness,
-};
 use crate::steps::{
     FREE, HELD, StepData, StepProblem, coupled_mode, get_param, scales_with_torque, simulate_step, split, step_data,
     unit_of,

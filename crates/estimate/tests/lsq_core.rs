@@ -5,7 +5,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use rig_estimate::argmin_adapter::gauss_newton_ls;
-use rig_estimate::report::{aic_bic, covariance, fit_percent, flagged_pairs, whiteness};
+use rig_estimate::fit_stats::{aic_bic, covariance, fit_percent, flagged_pairs, whiteness};
 use rig_estimate::{EstimateError, LsqProblem, SolverOptions, Transform, levenberg_marquardt};
 
 /// Free decay x(t) = A e^{−ζωt} cos(ω√(1−ζ²) t); parameters (A, ω, ζ).

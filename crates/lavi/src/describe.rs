@@ -7,12 +7,12 @@
 //! values.
 
 use crate::data::{Prepared, RPM_TO_RAD_S};
-use crate::output::StudyOutput;
+use crate::render::StudyOutput;
 use crate::{LaviError, StudyParams};
 use rig_ingest::lavi::LaviRecording;
 use rig_model::one_dof::{OneDofFriction, OneDofParams, fit_one_dof, simulate_one_dof};
 use rig_spectra::stickslip::{bin_means, fit_weakening, severity};
-use rig_spectra::{Detrend, Line, LineOptions, PeakOptions, Window, amplitude_spectrum, analyse_lines, spectral_peaks};
+use rig_spectra::{Detrend, Window, amplitude_spectrum};
 use rig_types::{SeriesStyle, Table, fmt_fixed};
 use rig_types::{figure, series};
 use std::fmt::Write as _;
@@ -60,8 +60,8 @@ pub fn describe(
     let fastest_bin = bins.iter().rev().find(|b| b.count > 0).map_or(f64::NAN, |b| b.mean);
 
     // 4. Fundamental: spectrum of the filtered bit speed, whole record and window.
-    let lines_whole = line_analysis(bit, fs_hz)?;
-    let lines_win = line_analysis(&bit_w, fs_hz)?;
+    let lines_whole = line_analysis(bit, fs_hz, p.cutoff_hz)?;
+    let lines_win = line_analysis(&bit_w, fs_hz, p.cutoff_hz)?;
 
     // 5. Severity in the window.
     let sev_bit = severity(&bit_w);
@@ -99,7 +99,7 @@ pub fn describe(
     let sim_rpm: Vec<f64> = sim.bit_speed_rad_s.iter().map(|v| v / RPM_TO_RAD_S).collect();
     let nrmse = rms(&sim_rpm.iter().zip(&bit_w).map(|(a, b)| a - b).collect::<Vec<_>>()) / rms(&bit_w);
     let sev_sim = severity(&sim_rpm);
-    let lines_sim = line_analysis(&sim_rpm, fs_hz)?;
+    let lines_sim = line_analysis(&sim_rpm, fs_hz, p.cutoff_hz)?;
 
     // Tables.
     let mut summary = Table::new(["quantity", "value", "unit", "how"]);
@@ -393,12 +393,11 @@ pub fn describe(
     Ok(md)
 }
 
-/// Line analysis of a speed record: Hann spectrum, peaks above 0.2 Hz, default options.
-fn line_analysis(x: &[f64], fs_hz: f64) -> Result<(rig_spectra::LineAnalysis, f64), LaviError> {
-    let s = amplitude_spectrum(x, fs_hz, Window::Hann, Detrend::Constant)?;
-    let peaks = spectral_peaks(&s, &PeakOptions { min_freq_hz: 0.2, max_freq_hz: 10.0, ..PeakOptions::default() });
-    let lines: Vec<Line> = peaks.iter().map(Line::from).collect();
-    Ok((analyse_lines(&lines, s.resolution_hz, &LineOptions::default()), s.resolution_hz))
+/// Line analysis of a speed record (`rig_spectra::line_analysis` with the
+/// study's band, `features::line_options`): the lines and the resolution.
+fn line_analysis(x: &[f64], fs_hz: f64, max_hz: f64) -> Result<(rig_spectra::LineAnalysis, f64), LaviError> {
+    let sl = rig_spectra::line_analysis(x, fs_hz, &crate::features::line_options(max_hz))?;
+    Ok((sl.lines, sl.spectrum.resolution_hz))
 }
 
 /// The largest torque of each stick phase (consecutive samples with speed below `slip`).

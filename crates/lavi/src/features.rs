@@ -4,9 +4,7 @@
 //! mean torque–bit-speed loop area per cycle.
 
 use crate::LaviError;
-use rig_spectra::{
-    Detrend, Line, LineOptions, PeakOptions, Window, amplitude_spectrum, analyse_lines, lowpass_fft, spectral_peaks,
-};
+use rig_spectra::{LineAnalysisOptions, LineOptions, line_analysis, lowpass_fft};
 use serde::Serialize;
 use std::ops::Range;
 
@@ -93,13 +91,18 @@ pub fn window_features(
     })
 }
 
-/// The stick-slip fundamental by the line analysis of rig_spectra (Hann
-/// spectrum, mean removed, peaks between 0.2 Hz and the cut-off).
+/// The band and tolerance of every line analysis of the LAVI study: from
+/// 0.2 Hz (a 4 s window has 0.25 Hz bins; slower changes of the drive's
+/// speed are not stick-slip, whose fundamental is ≈ 2.7 Hz) to `max_hz`, the
+/// low-pass cut-off (nothing is left above it); the library's 1.5 bins, as
+/// the measured lines carry noise and the windows are short.
+pub fn line_options(max_hz: f64) -> LineAnalysisOptions {
+    LineAnalysisOptions { min_freq_hz: 0.2, max_freq_hz: max_hz, tolerance_bins: LineOptions::default().tolerance_bins }
+}
+
+/// The stick-slip fundamental by `rig_spectra::line_analysis` ([`line_options`]).
 pub fn fundamental_hz(x: &[f64], fs_hz: f64, max_hz: f64) -> Result<Option<f64>, LaviError> {
-    let s = amplitude_spectrum(x, fs_hz, Window::Hann, Detrend::Constant)?;
-    let peaks = spectral_peaks(&s, &PeakOptions { min_freq_hz: 0.2, max_freq_hz: max_hz, ..PeakOptions::default() });
-    let lines: Vec<Line> = peaks.iter().map(Line::from).collect();
-    Ok(analyse_lines(&lines, s.resolution_hz, &LineOptions::default()).f0_hz)
+    Ok(line_analysis(x, fs_hz, &line_options(max_hz))?.lines.f0_hz)
 }
 
 /// Indices of upward crossings of mean + h after the signal was below mean − h,

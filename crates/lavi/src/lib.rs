@@ -10,7 +10,7 @@
 //! calibration window and score it on the held-out windows with the
 //! phase-insensitive misfit of [`score`], select by forward selection
 //! ([`select`]), judge adequacy, and render tables, figures, `lavi.md` and
-//! `lavi-diagnosis.json` ([`output`]).
+//! `lavi-diagnosis.json` ([`render`]).
 //!
 //! # Effect ids of this rig (the `effect` field of `lavi-diagnosis.json`)
 //!
@@ -42,7 +42,7 @@ pub mod data;
 pub mod describe;
 pub mod features;
 pub mod fit;
-pub mod output;
+pub mod render;
 pub mod score;
 pub mod select;
 pub mod signature;
@@ -50,7 +50,7 @@ pub mod sim;
 pub mod study;
 
 pub use features::{FEATURES, FeatureOptions, Features, window_features};
-pub use output::StudyOutput;
+pub use render::StudyOutput;
 pub use study::{Study, run_study};
 
 use serde::{Deserialize, Serialize};

@@ -3,7 +3,7 @@
 
 use crate::data::{Prepared, RPM_TO_RAD_S, WindowSpec, prepare, windows};
 use crate::fit::{Derivation, derive};
-use crate::output::{StudyOutput, render};
+use crate::render::{StudyOutput, render};
 use crate::score::Evaluator;
 use crate::select::{Selection, forward_select, mean};
 use crate::signature::{SignatureTerm, residual_signature};

@@ -365,3 +365,25 @@ fn unit_conversions_have_one_home() {
         .collect();
     assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
+
+/// One rendering convention: the module that turns a crate's results into
+/// `Table`s, `FigureSpec`s and markdown is `render` (`render.rs` or
+/// `render/`), in every crate; `report` is only the HTML/markdown report of
+/// the pipeline (`crates/pipeline/src/report/`) and its stage.
+#[test]
+fn rendering_has_one_name() {
+    let allowed = ["crates/pipeline/src/stages/report.rs", "crates/pipeline/src/report/mod.rs"];
+    let root = root();
+    let problems: Vec<String> = rust_files(&root.join("crates"))
+        .iter()
+        .filter_map(|f| {
+            let rel = f.strip_prefix(&root).unwrap().to_string_lossy().replace('\\', "/");
+            let stem = f.file_stem()?.to_string_lossy().into_owned();
+            let named = ["output", "tables", "figures", "report"].contains(&stem.as_str());
+            (named && rel.contains("/src/") && !allowed.contains(&rel.as_str())).then(|| {
+                format!("{rel}: results are rendered in a module named `render` (ARCHITECTURE.md, Invariants)")
+            })
+        })
+        .collect();
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}

@@ -4,6 +4,7 @@
 //!
 //! Front door: the names re-exported below. Every FFT is realfft/rustfft.
 
+mod analysis;
 mod error;
 mod lines;
 mod peaks;
@@ -11,6 +12,7 @@ mod spectrum;
 pub mod stickslip;
 mod window;
 
+pub use analysis::{LineAnalysisOptions, SignalLines, line_analysis};
 pub use error::SpectraError;
 pub use lines::{Line, LineAnalysis, LineClass, LineOptions, LineRow, RatioTest, analyse_lines, ratio_test};
 pub use peaks::{Peak, PeakOptions, RawPeak, find_peaks, interpolate_gaussian, spectral_peaks};

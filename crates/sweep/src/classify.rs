@@ -24,17 +24,19 @@
 //!    With k clusters each no wider than that same tolerance (k ≤ `max_period`), at least `min_cycles_per_period`·k
 //!    cycles and a label sequence that repeats with period k, the motion is
 //!    **period-k**.
-//! 5. Otherwise the **spectrum** decides (rig_spectra line analysis of the
+//! 5. Otherwise the **spectrum** decides (`rig_spectra::line_analysis` of the
 //!    Hann-windowed, mean-removed Ω1 between `min_freq_hz` and `max_freq_hz`):
-//!    an incommensurate second base f2 with every line explained (harmonic,
-//!    base, combination, commensurate; none unrelated) is **quasi-periodic**;
+//!    **quasi-periodic** is rig-spectra's one definition
+//!    (`SignalLines::quasi_periodic`: an incommensurate second base f2 in a
+//!    discrete spectrum — every line explained, none unrelated, and the lines
+//!    carrying at least `min_line_power_fraction` of the variance);
 //!    no f2 and no unrelated line means the section was blurred by noise but
 //!    the motion is periodic: **period-k** with k = round(f_cycle / f0),
 //!    f_cycle the section's crossing rate; anything else — unrelated lines,
 //!    or lines carrying less than `min_line_power_fraction` of the variance
 //!    (a broadband floor) — is **chaotic**.
 
-use rig_spectra::{Detrend, LineClass, LineOptions, PeakOptions, Window, amplitude_spectrum, analyse_lines};
+use rig_spectra::{LineAnalysisOptions, line_analysis};
 use serde::{Deserialize, Serialize};
 
 /// Thresholds of the classifier (see the module docs for where each is used).
@@ -94,6 +96,20 @@ impl Default for ClassifyOptions {
             max_freq_hz: 10.0,
             tolerance_bins: 0.5,
             min_line_power_fraction: 0.5,
+        }
+    }
+}
+
+impl ClassifyOptions {
+    /// The spectral test's band and line tolerance for `rig_spectra::line_analysis`:
+    /// 0.1 Hz keeps the drift of a 20 s window (2 bins) out, 10 Hz is the
+    /// stick-slip harmonics' range that the encoder differentiator passes
+    /// (pipeline.toml `sweeps`); the tolerance is argued at `tolerance_bins`.
+    pub fn line_options(&self) -> LineAnalysisOptions {
+        LineAnalysisOptions {
+            min_freq_hz: self.min_freq_hz,
+            max_freq_hz: self.max_freq_hz,
+            tolerance_bins: self.tolerance_bins,
         }
     }
 }
@@ -296,27 +312,14 @@ fn repeats(labels: &[usize], k: usize) -> bool {
 }
 
 fn spectral_regime(x: &[f64], fs_hz: f64, f_cycle_hz: f64, stick: bool, o: &ClassifyOptions) -> Regime {
-    let Ok(s) = amplitude_spectrum(x, fs_hz, Window::Hann, Detrend::Constant) else {
+    let Ok(sl) = line_analysis(x, fs_hz, &o.line_options()) else {
         return Regime::Chaotic { stick };
     };
-    let peaks = rig_spectra::spectral_peaks(
-        &s,
-        &PeakOptions { min_freq_hz: o.min_freq_hz, max_freq_hz: o.max_freq_hz, ..PeakOptions::default() },
-    );
-    let lines: Vec<rig_spectra::Line> = peaks.iter().map(Into::into).collect();
-    let a = analyse_lines(
-        &lines,
-        s.resolution_hz,
-        &LineOptions { tolerance_bins: o.tolerance_bins, ..LineOptions::default() },
-    );
-    let unrelated = a.count(LineClass::Unrelated);
-    let mean = x.iter().sum::<f64>() / x.len() as f64;
-    let variance = x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / x.len() as f64;
-    let line_power: f64 = lines.iter().map(|l| 0.5 * l.amplitude * l.amplitude).sum();
-    let discrete = unrelated == 0 && line_power >= o.min_line_power_fraction * variance;
-    match (a.f0_hz, a.f2_hz) {
-        (Some(_), Some(_)) if discrete => Regime::QuasiPeriodic { stick },
-        (Some(f0), None) if discrete && f_cycle_hz > 0.0 => {
+    if sl.quasi_periodic(o.min_line_power_fraction) {
+        return Regime::QuasiPeriodic { stick };
+    }
+    match (sl.lines.f0_hz, sl.lines.f2_hz) {
+        (Some(f0), None) if sl.discrete(o.min_line_power_fraction) && f_cycle_hz > 0.0 => {
             Regime::Periodic { period: ((f_cycle_hz / f0).round() as u32).max(1), stick }
         }
         _ => Regime::Chaotic { stick },

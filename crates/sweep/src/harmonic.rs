@@ -8,10 +8,7 @@ use crate::SweepError;
 use rayon::prelude::*;
 use rig_model::{SimOptions, simulate};
 use rig_spectra::stickslip::severity;
-use rig_spectra::{
-    Detrend, Line, LineAnalysis, LineClass, LineOptions, PeakOptions, Window, amplitude_spectrum, analyse_lines,
-    spectral_peaks, thin_indices,
-};
+use rig_spectra::{LineAnalysis, LineAnalysisOptions, LineClass, line_analysis, thin_indices};
 use rig_types::units::RAD_S_TO_RPM;
 use rig_types::{FigureSpec, HarmonicFriction, RigParams, RunInput, SeriesStyle, Table, Trajectory, fmt_fixed};
 use rig_types::{figure as fig, series};
@@ -31,6 +28,28 @@ pub struct HarmonicOptions {
     pub window_s: f64,
     pub sample_rate_hz: f64,
     pub amplitude_ratio: f64,
+    /// Band of the line analysis, Hz: from 0.05 Hz (two bins of the 40 s
+    /// window, below the lowest ω_p of Table 4.8, 0.352 Hz) to 5 Hz (the
+    /// stick-slip harmonics of interest; the simulations are noise-free).
+    pub min_freq_hz: f64,
+    pub max_freq_hz: f64,
+    /// Line tolerance in bins: simulations are noise-free, σ_f is tiny, so
+    /// the 0.1-bin floor rules (as in the spectra stage).
+    pub tolerance_bins: f64,
+    /// Quasi-periodic needs a discrete spectrum whose lines carry at least
+    /// this fraction of the variance (`rig_spectra::SignalLines::quasi_periodic`,
+    /// as the sweeps classifier).
+    pub min_line_power_fraction: f64,
+}
+
+impl HarmonicOptions {
+    pub fn line_options(&self) -> LineAnalysisOptions {
+        LineAnalysisOptions {
+            min_freq_hz: self.min_freq_hz,
+            max_freq_hz: self.max_freq_hz,
+            tolerance_bins: self.tolerance_bins,
+        }
+    }
 }
 
 /// One simulated case and what the analysis found in its steady window.
@@ -46,15 +65,13 @@ pub struct Case {
     negative_speed_fraction: f64,
     lines: LineAnalysis,
     resolution_hz: f64,
+    /// rig-spectra's one definition (`SignalLines::quasi_periodic`), as the sweeps classifier uses it.
+    quasi_periodic: bool,
 }
 
 impl Case {
-    /// Quasi-periodic: a second base frequency f2 incommensurate with f0 (no
-    /// p/q with q ≤ 3 within the tolerance): the motion has two independent
-    /// frequencies. Combination tones (counted separately) show that the two
-    /// interact through the nonlinearity; they are not required.
     fn quasi_periodic(&self) -> bool {
-        self.lines.ratio.is_some_and(|r| r.incommensurate) && self.lines.f2_hz.is_some()
+        self.quasi_periodic
     }
 }
 
@@ -64,17 +81,13 @@ fn analyse(
     omega_p_rad_s: Option<f64>,
     tr: &Trajectory,
     from_s: f64,
-    fs_hz: f64,
+    p: &HarmonicOptions,
 ) -> Result<Case, SweepError> {
     let i0 = tr.time_s.partition_point(|t| *t < from_s);
     let rotor_rpm: Vec<f64> = tr.rotor_speed_rad_s[i0..].iter().map(|v| v * RAD_S_TO_RPM).collect();
     let n = rotor_rpm.len() as f64;
-    let s = amplitude_spectrum(&rotor_rpm, fs_hz, Window::Hann, Detrend::Constant)
+    let sl = line_analysis(&rotor_rpm, p.sample_rate_hz, &p.line_options())
         .map_err(|e| SweepError::Analysis(format!("{model} model, {variant}: spectrum: {e}")))?;
-    let peaks = spectral_peaks(&s, &PeakOptions { min_freq_hz: 0.05, max_freq_hz: 5.0, ..PeakOptions::default() });
-    let lines: Vec<Line> = peaks.iter().map(Line::from).collect();
-    // Simulations are noise-free: σ_f is tiny, so the 0.1-bin floor rules (as in the spectra stage).
-    let la = analyse_lines(&lines, s.resolution_hz, &LineOptions { tolerance_bins: 0.1, ..LineOptions::default() });
     Ok(Case {
         model,
         variant,
@@ -85,8 +98,9 @@ fn analyse(
         stuck_fraction: tr.stuck[i0..].iter().filter(|s| **s).count() as f64 / n,
         negative_speed_fraction: rotor_rpm.iter().filter(|v| **v < 0.0).count() as f64 / n,
         rotor_rpm,
-        lines: la,
-        resolution_hz: s.resolution_hz,
+        quasi_periodic: sl.quasi_periodic(p.min_line_power_fraction),
+        resolution_hz: sl.spectrum.resolution_hz,
+        lines: sl.lines,
     })
 }
 
@@ -137,7 +151,7 @@ pub fn study(
         .map(|(model, prm, variant, w)| {
             let tr = simulate(prm, &input, &times, &p.integrator)
                 .map_err(|e| SweepError::Analysis(format!("simulating the {model} model, {variant} {w:?}: {e}")))?;
-            analyse(model, variant.clone(), *w, &tr, from_s, p.sample_rate_hz)
+            analyse(model, variant.clone(), *w, &tr, from_s, p)
         })
         .collect()
 }
@@ -321,17 +335,22 @@ pub fn markdown(cases: &[Case], p: &HarmonicOptions) -> String {
         md,
         "Operating point {} rpm / {} N (Fig. 4.24), both models, for each ω_p of Table 4.8. Steady window {} s after \
          a {} s ramp and {} s settling, rotor speed sampled at {} Hz; resolution {:.4} Hz. Line analysis of the rotor-speed \
-         spectrum (rig-spectra; tolerance max(0.1 bin, 3σ_f)). *Quasi-periodic* here means: a second base frequency f2 \
-         whose ratio to f0 is not p/q with q ≤ 3 within the tolerance (combination tones |m f0 ± n f2|, counted in \
-         the summary table, show the two interact). \
-         Tables: tables/harmonic-summary.csv, tables/harmonic-lines.csv.\n",
+         spectrum between {} and {} Hz (rig-spectra; tolerance max({} bin, 3σ_f)). *Quasi-periodic* means what it \
+         means for the sweeps classifier (rig-spectra's one definition): a second base frequency f2 whose ratio to f0 \
+         is not p/q with q ≤ 3 within the tolerance, in a discrete spectrum (no unrelated line, the lines carrying at \
+         least {} of the variance); combination tones |m f0 ± n f2|, counted in the summary table, show the two \
+         interact. Tables: tables/harmonic-summary.csv, tables/harmonic-lines.csv.\n",
         p.motor_rpm,
         p.normal_force_n,
         p.window_s,
         p.ramp_s,
         p.settle_s,
         p.sample_rate_hz,
-        cases.first().map_or(f64::NAN, |c| c.resolution_hz)
+        cases.first().map_or(f64::NAN, |c| c.resolution_hz),
+        p.min_freq_hz,
+        p.max_freq_hz,
+        p.tolerance_bins,
+        p.min_line_power_fraction
     );
     let _ = writeln!(
         md,

@@ -12,7 +12,7 @@
 //! - [`harmonic`]: Eq. 4-11 and the normal-force modulation (Figs. 4.27-4.29);
 //! - [`sweeps_study`] the `sweeps` stage's study (both models' maps and
 //!   diagrams, the campaign's operating points and the chapter's labelled
-//!   points through [`operating`]), rendered by [`output::outputs`].
+//!   points through [`operating`]), rendered by [`study::render::outputs`].
 //! - [`spectra`]: the campaign's operating points against the rig model in the
 //!   frequency domain, and Table 4.8 (Figs. 4.22-4.26).
 //!
@@ -24,18 +24,17 @@ mod continuation;
 pub mod harmonic;
 pub mod misfit;
 pub mod operating;
-pub mod output;
+mod render;
 pub mod spectra;
-mod study;
-mod tables;
+pub mod study;
 
 pub use classify::{Classification, ClassifyOptions, Regime, classify};
 pub use continuation::{
     Chain, ChainResult, Direction, MapSlice, MapSpec, Point, PointOutcome, Shard, SweepSettings, WindowSpec,
     bifurcation_chains, hysteresis, linspace, merge_slices, run_chain, run_chains, run_map_shard,
 };
+pub use render::{chain_table, map_table};
 pub use study::{ModelSweeps, SweepsParams, SweepsStudy, map_shards, sweeps_study};
-pub use tables::{chain_table, map_table};
 
 /// Errors of this crate; simulation failures at a point are data
 /// ([`PointOutcome::result`]), not errors.

@@ -10,10 +10,7 @@ use crate::SweepError;
 use rayon::prelude::*;
 use rig_calibrate::{CampaignCalibration, friction_torque_nm};
 use rig_model::{SimOptions, simulate};
-use rig_spectra::{
-    Detrend, Line, LineAnalysis, LineOptions, Peak, PeakOptions, Spectrum, Window, amplitude_spectrum, analyse_lines,
-    spectral_peaks,
-};
+use rig_spectra::{Line, LineAnalysis, LineAnalysisOptions, LineOptions, SignalLines, analyse_lines, line_analysis};
 use rig_types::sensor::encoder_speed_rad_s as rotor_speed_rad_s;
 use rig_types::units::RAD_S_TO_RPM;
 use rig_types::{Campaign, RigInfo, RigParams, Run, RunInput, RunKind, Trajectory};
@@ -91,21 +88,23 @@ fn simulated(tr: &Trajectory) -> Signals {
     }
 }
 
-/// Spectrum → peaks → line analysis of one signal (Hann, mean removed).
-pub fn lines_of(x: &[f64], fs_hz: f64, o: &SpectraOptions) -> Result<(Spectrum, Vec<Peak>, LineAnalysis), SweepError> {
-    let s = amplitude_spectrum(x, fs_hz, Window::Hann, Detrend::Constant)
-        .map_err(|e| SweepError::Analysis(format!("spectrum: {e}")))?;
-    let peaks = spectral_peaks(
-        &s,
-        &PeakOptions { min_freq_hz: o.min_freq_hz, max_freq_hz: o.max_freq_hz, ..PeakOptions::default() },
-    );
-    let lines: Vec<Line> = peaks.iter().map(Line::from).collect();
-    let a = analyse_lines(
-        &lines,
-        s.resolution_hz,
-        &LineOptions { tolerance_bins: o.tolerance_bins, ..LineOptions::default() },
-    );
-    Ok((s, peaks, a))
+impl SpectraOptions {
+    /// The band and tolerance of every line analysis of the study: 0.1 Hz
+    /// keeps drift out (steady windows are ~30 s: 3 bins), 10 Hz is the range
+    /// of the stick-slip harmonics that the encoder differentiator passes;
+    /// the tolerance is argued in pipeline.toml (`spectra`).
+    pub fn line_options(&self) -> LineAnalysisOptions {
+        LineAnalysisOptions {
+            min_freq_hz: self.min_freq_hz,
+            max_freq_hz: self.max_freq_hz,
+            tolerance_bins: self.tolerance_bins,
+        }
+    }
+}
+
+/// `rig_spectra::line_analysis` of one signal with the study's options.
+pub fn lines_of(x: &[f64], fs_hz: f64, o: &SpectraOptions) -> Result<SignalLines, SweepError> {
+    line_analysis(x, fs_hz, &o.line_options()).map_err(|e| SweepError::Analysis(format!("spectrum: {e}")))
 }
 
 /// One operating point of the campaign: its run and what it imposes.
@@ -117,27 +116,23 @@ pub struct OperatingPoint<'a> {
     /// Measured and simulated signals over the steady window (from ramp + settling to the end).
     pub measured: Signals,
     pub simulated: Signals,
-    /// Line analysis of the measured, then the simulated signals: (signal, spectrum, lines) for
-    /// `rotor_rpm` and `torque_nm`, at the measured window's sample rate.
-    pub measured_lines: Vec<SignalLines>,
-    pub simulated_lines: Vec<SignalLines>,
+    /// Line analysis of the measured, then the simulated signals: `rotor_rpm`
+    /// and `torque_nm`, at the measured window's sample rate.
+    pub measured_lines: Vec<NamedLines>,
+    pub simulated_lines: Vec<NamedLines>,
 }
 
-/// The line analysis of one signal of one operating point.
-pub struct SignalLines {
+/// The line analysis of one named signal of one operating point.
+pub struct NamedLines {
     /// `rotor_rpm` or `torque_nm`.
     pub signal: &'static str,
-    pub resolution_hz: f64,
-    pub lines: LineAnalysis,
+    pub lines: SignalLines,
 }
 
-fn signal_lines(sig: &Signals, fs_hz: f64, o: &SpectraOptions) -> Result<Vec<SignalLines>, SweepError> {
+fn signal_lines(sig: &Signals, fs_hz: f64, o: &SpectraOptions) -> Result<Vec<NamedLines>, SweepError> {
     [("rotor_rpm", &sig.rotor_rpm), ("torque_nm", &sig.torque_nm)]
         .into_iter()
-        .map(|(signal, x)| {
-            let (s, _, lines) = lines_of(x, fs_hz, o)?;
-            Ok(SignalLines { signal, resolution_hz: s.resolution_hz, lines })
-        })
+        .map(|(signal, x)| Ok(NamedLines { signal, lines: lines_of(x, fs_hz, o)? }))
         .collect()
 }
 

@@ -8,6 +8,8 @@
 //! encoder; a continuation has no recording to mimic); operating points go
 //! through the sensor chain.
 
+pub mod render;
+
 use crate::operating::{LabelledPoint, OpPoint, labelled_points, op_point};
 use crate::{
     ChainResult, ClassifyOptions, MapSlice, MapSpec, Point, Shard, SweepError, SweepSettings, WindowSpec,

@@ -5,7 +5,7 @@
 use super::{ChannelCheck, ChannelOptions, rms};
 use crate::DiagnoseOptions;
 use crate::prepare::centred_speed;
-use crate::report::Features;
+use crate::result::Features;
 use crate::select::steady_features;
 use rig_model::SimOptions;
 use rig_types::{Campaign, RigParams, RunInput, RunKind};

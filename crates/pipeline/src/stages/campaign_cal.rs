@@ -4,7 +4,7 @@
 
 use crate::StageCtx;
 use anyhow::Result;
-use rig_calibrate::{CalibrationSettings, calibrate_campaign_with, campaign_tables, figures};
+use rig_calibrate::{CalibrationSettings, calibrate_campaign_with, render};
 use rig_types::sensor as signal;
 use rig_types::{RunKind, SeriesStyle};
 
@@ -16,9 +16,9 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     let campaign = ctx.campaign()?.clone();
     let cal = calibrate_campaign_with(&campaign, &settings)?;
 
-    ctx.write_table("tables/campaign-force-calibration.csv", &campaign_tables::force_table(&cal))?;
-    ctx.write_table("tables/campaign-stiffness.csv", &campaign_tables::stiffness_table(&cal))?;
-    ctx.write_table("tables/campaign-log-decrement.csv", &campaign_tables::log_decrement_table(&cal))?;
+    ctx.write_table("tables/campaign-force-calibration.csv", &render::force_table(&cal))?;
+    ctx.write_table("tables/campaign-stiffness.csv", &render::stiffness_table(&cal))?;
+    ctx.write_table("tables/campaign-log-decrement.csv", &render::log_decrement_table(&cal))?;
     ctx.write_json("data/campaign-calibration.json", &cal)?;
 
     // Fig. 4.8: the step closest to the thesis' 8 V (first one on a tie, campaign order).
@@ -50,7 +50,7 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
             ),
             None => "The rotor speed shows no swing above the 3 rad/s floor.".into(),
         };
-        ctx.write_figure(&figures::decay_figure(
+        ctx.write_figure(&render::decay_figure(
             "fig-4-08-campaign",
             &format!("Fig. 4.8 (campaign): rotor speed after a {} V step, run {}", dec.voltage_v, dec.id),
             &format!(
@@ -69,7 +69,7 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
             dec.rotor_speed.as_ref(),
             3,
         ))?;
-        ctx.write_figure(&figures::decay_figure(
+        ctx.write_figure(&render::decay_figure(
             "fig-4-08-campaign-twist",
             &format!("Shaft twist φ2 − φ1 after a {} V step, run {} (the log-decrement signal)", dec.voltage_v, dec.id),
             &format!(
@@ -96,7 +96,7 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
 
     let k_points: Vec<(f64, f64)> = cal.twist_runs.iter().map(|r| (r.angle_rad, r.torque_nm)).collect();
     let (k_origin, k_offset) = rig_calibrate::thesis::fits(&k_points, settings.confidence)?;
-    ctx.write_figure(&figures::fit_figure(
+    ctx.write_figure(&render::fit_figure(
         "fig-4-10-campaign",
         "Fig. 4.10 (campaign): torque vs rotor angle in the static twist runs",
         &format!(
@@ -112,7 +112,7 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     ))?;
     let f_points: Vec<(f64, f64)> = cal.force_runs.iter().map(|r| (r.load_n, r.mean_mv)).collect();
     let (f_origin, f_offset) = rig_calibrate::thesis::fits(&f_points, settings.confidence)?;
-    ctx.write_figure(&figures::fit_figure(
+    ctx.write_figure(&render::fit_figure(
         "fig-4-14-campaign",
         "Fig. 4.14 (campaign): force-sensor voltage vs load",
         &format!(

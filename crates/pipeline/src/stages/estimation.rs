@@ -5,7 +5,7 @@
 use crate::StageCtx;
 use anyhow::{Context, Result};
 use rig_calibrate::{CampaignCalibration, ThesisData};
-use rig_estimate::{EstimateOptions, InitialValues, PiMethod, SolverKind, StepResidual, estimate_rig, output};
+use rig_estimate::{EstimateOptions, InitialValues, PiMethod, SolverKind, StepResidual, estimate_rig, render};
 use serde::Deserialize;
 
 /// `[stage.params]` of `estimation`; every knob is explicit there.
@@ -99,14 +99,14 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     let est = estimate_rig(&campaign, &cal, &o).with_context(|| format!("estimating campaign {}", campaign.name))?;
 
     ctx.write_json("data/rig-params.json", &est.params)?;
-    ctx.write_table("tables/campaign-estimation.csv", &output::estimation_table(&est))?;
-    ctx.write_table("tables/campaign-estimation-correlation.csv", &output::correlation_table(&est))?;
-    ctx.write_table("tables/campaign-estimation-validation.csv", &output::validation_table(&est))?;
-    ctx.write_table("tables/campaign-estimation-history.csv", &output::history_table(&est))?;
-    ctx.write_text("estimation.md", &output::report_markdown(&est, &campaign.name, &o))?;
-    if let Some(fig) = output::fig_4_11(&est) {
+    ctx.write_table("tables/campaign-estimation.csv", &render::estimation_table(&est))?;
+    ctx.write_table("tables/campaign-estimation-correlation.csv", &render::correlation_table(&est))?;
+    ctx.write_table("tables/campaign-estimation-validation.csv", &render::validation_table(&est))?;
+    ctx.write_table("tables/campaign-estimation-history.csv", &render::history_table(&est))?;
+    ctx.write_text("estimation.md", &render::report_markdown(&est, &campaign.name, &o))?;
+    if let Some(fig) = render::fig_4_11(&est) {
         ctx.write_figure(&fig)?;
     }
-    ctx.write_figure(&output::fig_4_12(&est))?;
+    ctx.write_figure(&render::fig_4_12(&est))?;
     Ok(())
 }

@@ -3,13 +3,14 @@
 //! up and down by continuation, the campaign's operating points and the
 //! chapter's labelled points classified by the same classifier, the agreement
 //! table and the measured time responses of Figs. 4.19 and 4.21 — all of it
-//! `rig_sweep::sweeps_study`, rendered by `rig_sweep::output`.
+//! `rig_sweep::sweeps_study`, rendered by `rig_sweep::study::render`.
 
 use crate::StageCtx;
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rig_sweep::operating::LabelledPoint;
-use rig_sweep::{Point, Shard, map_shards, output, sweeps_study};
+use rig_sweep::study::render;
+use rig_sweep::{Point, Shard, map_shards, sweeps_study};
 use rig_types::RigParams;
 use rig_types::contract::ThesisData;
 use std::io::IsTerminal;
@@ -51,7 +52,7 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
         sweeps_study(thesis, rig, &campaign, &labels, &p, &tick, &|name| bar.set_message(format!("{name} model")))?;
     bar.finish_and_clear();
 
-    let out = output::outputs(&study, &campaign)?;
+    let out = render::outputs(&study, &campaign)?;
     for (path, table) in &out.tables {
         ctx.write_table(path, table)?;
     }

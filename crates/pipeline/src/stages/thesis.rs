@@ -4,7 +4,7 @@
 
 use crate::StageCtx;
 use anyhow::Result;
-use rig_calibrate::{audit, figures, thesis};
+use rig_calibrate::{audit, render, thesis};
 use serde::Deserialize;
 
 /// `[stage.params]` of `thesis-tables`.
@@ -30,7 +30,7 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     ctx.write_json("data/thesis.json", &o.data)?;
 
     let (ko, kw) = &o.stiffness_fits;
-    ctx.write_figure(&figures::fit_figure(
+    ctx.write_figure(&render::fit_figure(
         "fig-4-10-thesis",
         "Fig. 4.10 (thesis data): torque vs angular displacement of rotor 1",
         &format!(
@@ -46,7 +46,7 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
         (3, 4),
     ))?;
     let (fo, fw) = &o.force_fits;
-    ctx.write_figure(&figures::fit_figure(
+    ctx.write_figure(&render::fit_figure(
         "fig-4-14-thesis",
         "Fig. 4.14 (thesis data): force-sensor voltage vs weight",
         &format!(

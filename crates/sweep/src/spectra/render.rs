@@ -1,7 +1,7 @@
 //! The spectra study as tables and figures: the line tables of the campaign
 //! and the simulation, Table 4.8 at several record lengths, Figs. 4.22-4.26.
 
-use super::{OperatingPoint, SignalLines, SpectraOptions, SpectraStudy, TABLE_4_8_PEAKS_HZ, lines_of, table_4_8_lines};
+use super::{NamedLines, OperatingPoint, SpectraOptions, SpectraStudy, TABLE_4_8_PEAKS_HZ, lines_of, table_4_8_lines};
 use crate::SweepError;
 use rig_spectra::{LineClass, WelchOptions, frf_h1, thin_indices};
 use rig_types::{FigureSpec, SeriesStyle, Table, fmt_fixed};
@@ -26,16 +26,16 @@ fn line_header() -> Table {
 }
 
 /// Appends one signal's line analysis (a row "none" when no line passed the thresholds).
-fn push_lines(t: &mut Table, p: &OperatingPoint, window_s: f64, l: &SignalLines) {
+fn push_lines(t: &mut Table, p: &OperatingPoint, window_s: f64, l: &NamedLines) {
     let amp_dec = if l.signal == "rotor_rpm" { 2 } else { 4 };
-    let a = &l.lines;
+    let a = &l.lines.lines;
     let head = [
         p.run.id.clone(),
         fmt_fixed(p.motor_rpm_setpoint, 1),
         fmt_fixed(p.normal_force_n, 1),
         l.signal.to_string(),
         fmt_fixed(window_s, 1),
-        fmt_fixed(l.resolution_hz, 4),
+        fmt_fixed(l.lines.spectrum.resolution_hz, 4),
         a.f0_hz.map_or(String::new(), |f| fmt_fixed(f, 4)),
     ];
     if a.rows.is_empty() {
@@ -278,7 +278,8 @@ pub fn fig_4_26ab_frf(p: &OperatingPoint, o: &SpectraOptions, which: &str) -> Re
 /// Fig. 4.26 (c): the amplitude spectrum of RRPM with the peaks given to the line analysis.
 fn fig_4_26c_line_spectrum(p: &OperatingPoint, o: &SpectraOptions, which: &str) -> Result<FigureSpec, SweepError> {
     let m = &p.measured;
-    let (spec, peaks, a) = lines_of(&m.rotor_rpm, m.fs_hz(), o)?;
+    let sl = lines_of(&m.rotor_rpm, m.fs_hz(), o)?;
+    let (spec, peaks, a) = (&sl.spectrum, &sl.peaks, &sl.lines);
     let kb: Vec<usize> = (1..spec.freq_hz.len())
         .filter(|&k| spec.freq_hz[k] >= o.min_freq_hz && spec.freq_hz[k] <= o.max_freq_hz)
         .collect();

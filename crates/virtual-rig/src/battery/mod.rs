@@ -37,8 +37,8 @@ use rig_types::{Campaign, fmt_fixed};
 use std::collections::BTreeMap;
 use std::path::Path;
 
-mod tables;
-pub use tables::{
+mod render;
+pub use render::{
     clopper_pearson, confusion_table, detection_table, false_alarm_table, markdown_table, report_markdown, wrong_table,
 };
 

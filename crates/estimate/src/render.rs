@@ -3,8 +3,8 @@
 //! the pipeline stage writes them. Numbers are printed to the precision
 //! their standard errors support (two significant digits of the error).
 
+use crate::fit_stats::Identifiability;
 use crate::options::EstimateOptions;
-use crate::report::Identifiability;
 use crate::rig::RigEstimate;
 use crate::steps::StepResidual;
 use rig_types::{FigureSpec, Series, SeriesStyle, Table, fmt_fixed};
