@@ -141,6 +141,7 @@
 //! [`ModelError::IntegratorFailed`], never a hang or a panic.
 
 mod dopri;
+mod exact;
 pub mod friction;
 pub mod one_dof;
 mod sim;
