@@ -50,6 +50,7 @@ fn thesis_stuck(sys: &System, y: &Vector) -> bool {
     }
 }
 
+#[inline]
 fn push_sample(out: &mut Trajectory, sys: &System, mode: Mode, t: f64, y: &Vector) {
     out.time_s.push(t);
     out.rotor_angle_rad.push(y[PHI1]);
