@@ -29,11 +29,18 @@ const ROWS: usize = 6;
 pub(crate) type Mat = [[f64; AUG]; AUG];
 type Propagator = [[f64; AUG]; ROWS];
 
-/// Steps whose lengths differ by at most this fraction share a propagator:
-/// the sample grid k/rate has spacings that differ by a few ulps of t (about
-/// 10⁻¹² of h); using e^{M h'} for a step of h moves the end state by at most
-/// 10⁻¹⁰·h·|ż|, which, summed over a run, is below 10⁻⁹ of any state.
+/// Steps whose lengths differ by at most this fraction of h, plus a few ulps
+/// of t, share a propagator: the sample grid t0 + k/rate has spacings that
+/// differ by ulps of t. Using e^{M h'} for a step of h moves the end state by
+/// |h − h'|·|ż|: at most 10⁻¹⁰·h·|ż| (summed over a run, below 10⁻⁹ of any
+/// state) plus the error the rounding of t itself already makes.
 const H_MATCH_REL: f64 = 1e-10;
+
+/// Whether steps of lengths `a` and `b` at time `t` share a propagator (see [`H_MATCH_REL`]).
+#[inline]
+pub(crate) fn same_step(a: f64, b: f64, t: f64) -> bool {
+    (a - b).abs() <= H_MATCH_REL * a.abs() + 8.0 * f64::EPSILON * t.abs()
+}
 /// Cached propagators (regions × step lengths), replaced round-robin.
 const CACHE: usize = 12;
 
@@ -93,6 +100,11 @@ pub(crate) struct Exact {
 }
 
 impl Exact {
+    /// Whether propagators may still be computed (see [`Exact::propagator`]).
+    pub fn viable(&self) -> bool {
+        self.computed < 32 + self.steps / 16
+    }
+
     /// The propagator of `region` over `h`: cached; or computed and cached when
     /// `cache` (a step length the run will reuse); or computed for this step
     /// alone when `once`. Computing stops when the run has computed many more
@@ -103,11 +115,12 @@ impl Exact {
         sys: &System,
         region: &Region,
         y: &Vector,
+        t: f64,
         h: f64,
         cache: bool,
         once: bool,
     ) -> Option<&Propagator> {
-        let hit = |(r, hh, _): &(Region, f64, Propagator)| r == region && (hh - h).abs() <= H_MATCH_REL * h;
+        let hit = |(r, hh, _): &(Region, f64, Propagator)| r == region && same_step(*hh, h, t);
         let found = if self.entries.get(self.last).is_some_and(hit) {
             Some(self.last)
         } else {
@@ -116,7 +129,7 @@ impl Exact {
         let k = match found {
             Some(k) => k,
             None => {
-                if !(cache || once) || self.computed >= 32 + self.steps / 16 {
+                if !(cache || once) || !self.viable() {
                     return None;
                 }
                 let e = expm(&sys.affine_matrix(region, y), h);

@@ -3,7 +3,7 @@
 //! trajectory channel at the requested times.
 
 use crate::dopri::{DIM, Dopri, StepFailure, Vector, locate_root};
-use crate::exact::{Exact, apply};
+use crate::exact::{Exact, apply, same_step};
 use crate::system::{CUR, INT, Mode, PHI1, PHI2, Region, System, W1, W2};
 use crate::{ModelError, SimOptions, State};
 use rig_types::{FrictionLaw, ModelKind, Trajectory};
@@ -126,9 +126,9 @@ pub(crate) fn run(
             // Cache propagators of step lengths the run repeats (max_step_s, sample to
             // sample); compute a one-off one where Dormand–Prince would need more than
             // 16 steps (a stiff region, e.g. the thesis lookup's creep segment).
-            let nominal = (h - opts.max_step_s).abs() <= 1e-10 * h || (idx > 0 && samples[idx - 1] == t);
+            let nominal = same_step(h, opts.max_step_s, t) || (idx > 0 && samples[idx - 1] == t);
             let stiff = dp.proposed_step() * 16.0 < h;
-            if let Some(phi) = exact.propagator(sys, &region, &y, h, nominal, stiff) {
+            if let Some(phi) = exact.propagator(sys, &region, &y, t, h, nominal, stiff) {
                 let y1 = apply(phi, &y, t);
                 let g1 = sys.event(mode, t1, &y1);
                 let crossed = match (g0, g1) {
@@ -153,8 +153,12 @@ pub(crate) fn run(
                     continue;
                 }
             }
-            // An event or a switch inside: a Dormand–Prince step ending no later than t1.
-            t_stop = t1;
+            // An event or a switch inside (or no propagator): a Dormand–Prince step, ending
+            // no later than t1 while exact steps are still being taken, so that they resume
+            // on the sample grid.
+            if exact.viable() {
+                t_stop = t1;
+            }
         }
         if !fsal_valid {
             dp.reset();
