@@ -60,22 +60,48 @@ fn matmul(a: &Mat, b: &Mat) -> Mat {
 }
 
 /// e^{M h} by scaling and squaring of the Taylor series (Moler & Van Loan,
-/// "Nineteen dubious ways", method 3): M h / 2^s has ∞-norm ≤ 1/2, where 16
-/// terms leave a remainder below 0.5¹⁷/17! ≈ 2·10⁻²⁰ of the norm.
+/// "Nineteen dubious ways", method 3): M h / 2^s has ∞-norm ≤ 1/2, where the
+/// 16 terms leave a remainder below 0.5¹⁷/17! ≈ 2·10⁻²⁰ of the norm. The
+/// polynomial is evaluated by Paterson & Stockmeyer's scheme (blocks of four
+/// powers, Horner in A⁴): 7 matrix products instead of 16.
 pub(crate) fn expm(m: &Mat, h: f64) -> Mat {
     let norm = m.iter().map(|row| row.iter().map(|x| (x * h).abs()).sum::<f64>()).fold(0.0, f64::max);
     let s = if norm > 0.5 { (norm / 0.5).log2().ceil() as i32 } else { 0 };
     let scale = h / 2f64.powi(s);
     let a = m.map(|row| row.map(|x| x * scale));
-    let mut e = [[0.0; AUG]; AUG];
-    for k in (1..=16).rev() {
-        // e ← I + A·e / k (Horner form of Σ A^k / k!).
-        let mut next = matmul(&a, &e);
-        for (i, row) in next.iter_mut().enumerate() {
-            for x in row.iter_mut() {
-                *x /= f64::from(k);
+    let mut identity = [[0.0; AUG]; AUG];
+    for (i, row) in identity.iter_mut().enumerate() {
+        row[i] = 1.0;
+    }
+    let a2 = matmul(&a, &a);
+    let a3 = matmul(&a2, &a);
+    let a4 = matmul(&a2, &a2);
+    let powers = [&identity, &a, &a2, &a3];
+    // 1/k! for k = 0..=16.
+    let mut inv_fact = [1.0; 17];
+    for k in 1..17 {
+        inv_fact[k] = inv_fact[k - 1] / k as f64;
+    }
+    // Block j: Σ_{i<4} A^i / (4j + i)!; the last block is I/16!.
+    let block = |j: usize| -> Mat {
+        let mut b = [[0.0; AUG]; AUG];
+        for (i, p) in powers.iter().enumerate().filter(|(i, _)| 4 * j + i <= 16) {
+            let c = inv_fact[4 * j + i];
+            for (br, pr) in b.iter_mut().zip(p.iter()) {
+                for (x, y) in br.iter_mut().zip(pr) {
+                    *x += c * y;
+                }
             }
-            row[i] += 1.0;
+        }
+        b
+    };
+    let mut e = block(4);
+    for j in (0..4).rev() {
+        let mut next = matmul(&a4, &e);
+        for (nr, br) in next.iter_mut().zip(block(j)) {
+            for (x, y) in nr.iter_mut().zip(br) {
+                *x += y;
+            }
         }
         e = next;
     }
