@@ -15,7 +15,7 @@
 //! exactly as before. Propagators e^{M h} are cached per (region, h): with a
 //! uniform sample grid every step of a run reuses one or two of them.
 
-use crate::dopri::{DIM, Vector};
+use crate::dopri::Vector;
 use crate::system::{Region, System};
 
 /// Size of the augmented state [q (6), t, 1].
@@ -111,6 +111,17 @@ pub(crate) fn expm(m: &Mat, h: f64) -> Mat {
     e
 }
 
+/// What [`Exact::propagator`] may do when no cached propagator fits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Compute {
+    /// Compute one and cache it.
+    Cache,
+    /// Compute one for this step only.
+    Once,
+    /// Nothing: the caller takes a Dormand–Prince step.
+    No,
+}
+
 /// Cache of propagators e^{M h} of one run.
 #[derive(Debug, Default)]
 pub(crate) struct Exact {
@@ -132,8 +143,8 @@ impl Exact {
     }
 
     /// The propagator of `region` over `h`: cached; or computed and cached when
-    /// `cache` (a step length the run will reuse); or computed for this step
-    /// alone when `once`. Computing stops when the run has computed many more
+    /// [`Compute::Cache`] (a step length the run will reuse); or computed for
+    /// this step alone when [`Compute::Once`]. Computing stops when the run has computed many more
     /// than it used (a jittered sample grid would need one per step).
     #[inline]
     pub fn propagator(
@@ -143,9 +154,9 @@ impl Exact {
         y: &Vector,
         t: f64,
         h: f64,
-        cache: bool,
-        once: bool,
+        compute: Compute,
     ) -> Option<&Propagator> {
+        let (cache, once) = (compute == Compute::Cache, compute == Compute::Once);
         let hit = |(r, hh, _): &(Region, f64, Propagator)| r == region && same_step(*hh, h, t);
         let found = if self.entries.get(self.last).is_some_and(hit) {
             Some(self.last)
@@ -196,7 +207,6 @@ pub(crate) fn apply(phi: &Propagator, y: &Vector, t: f64) -> Vector {
         }
         *o = a + b;
     }
-    debug_assert!(DIM > ROWS);
     out
 }
 

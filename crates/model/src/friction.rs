@@ -132,10 +132,11 @@ pub fn imbalance_torque_nm(effects: &[Effect], phi1: f64) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn table_4_7() -> ThesisFriction {
+    /// Table 4.7 (also used by the unit tests of `system`).
+    pub(crate) fn table_4_7() -> ThesisFriction {
         ThesisFriction {
             mu_static: 1.6,
             mu_dynamic: 1.2,

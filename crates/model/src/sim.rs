@@ -3,7 +3,7 @@
 //! trajectory channel at the requested times.
 
 use crate::dopri::{DIM, Dopri, StepFailure, Vector, locate_root};
-use crate::exact::{Exact, apply, same_step};
+use crate::exact::{Compute, Exact, apply, same_step};
 use crate::system::{CUR, INT, Mode, PHI1, PHI2, Region, System, W1, W2};
 use crate::{ModelError, SimOptions, State};
 use rig_types::{FrictionLaw, ModelKind, Trajectory};
@@ -128,7 +128,14 @@ pub(crate) fn run(
             // 16 steps (a stiff region, e.g. the thesis lookup's creep segment).
             let nominal = same_step(h, opts.max_step_s, t) || (idx > 0 && samples[idx - 1] == t);
             let stiff = dp.proposed_step() * 16.0 < h;
-            if let Some(phi) = exact.propagator(sys, &region, &y, t, h, nominal, stiff) {
+            let compute = if nominal {
+                Compute::Cache
+            } else if stiff {
+                Compute::Once
+            } else {
+                Compute::No
+            };
+            if let Some(phi) = exact.propagator(sys, &region, &y, t, h, compute) {
                 let y1 = apply(phi, &y, t);
                 let g1 = sys.event(mode, t1, &y1);
                 let crossed = match (g0, g1) {

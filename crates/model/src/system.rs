@@ -602,7 +602,7 @@ fn sign_or_zero(x: f64) -> f64 {
 mod tests {
     use super::*;
     use crate::exact::{AUG, ONE, TIME};
-    use rig_types::{DriveParams, MotorParams, ThesisFriction};
+    use rig_types::{DriveParams, MotorParams};
 
     fn params(kind: ModelKind, friction: FrictionLaw) -> RigParams {
         RigParams {
@@ -633,14 +633,7 @@ mod tests {
     /// the exact propagator integrates the same equations as Dormand–Prince.
     #[test]
     fn affine_matrix_reproduces_rhs() {
-        let thesis = ThesisFriction {
-            mu_static: 1.6,
-            mu_dynamic: 1.2,
-            mu_negative: -0.2,
-            tolerance: 0.001,
-            static_setpoint_rpm: 0.05,
-            dynamic_setpoint_rpm: 0.5,
-        };
+        let thesis = crate::friction::tests::table_4_7();
         let laws = [
             FrictionLaw::Coulomb { mu_static: 0.5, mu_kinetic: 0.35 },
             FrictionLaw::Viscous { mu_static: 0.5, mu_kinetic: 0.3, viscous_per_rad_s: 0.02 },
