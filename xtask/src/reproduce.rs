@@ -45,10 +45,15 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(o) = &args.out {
         runner = runner.out(o);
     }
+    let out_dir = runner.out_dir();
     let report = runner.run()?;
     eprint!("{}", report.summary(args.why || args.dry_run));
     if let Some(m) = &report.manifest {
         eprintln!("manifest: {}", m.display());
+        // Wall and CPU time per stage: not reproducible, so beside the manifest, not in it.
+        let t = rig_pipeline::timing::write(&out_dir, &report, args.jobs)?;
+        eprint!("{}", rig_pipeline::timing::table(&report));
+        eprintln!("timings: {}", t.display());
     }
     report.into_result().map(|_| ())
 }

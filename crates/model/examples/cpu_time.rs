@@ -1,9 +1,14 @@
 //! CPU time (not wall time) per simulate call, read from /proc/self/stat (Linux):
 //! criterion measures wall time, which other jobs on the two shared cores inflate.
+//!
+//! `--peer-case` instead prints, as JSON, the criterion bench's problem in the
+//! form tests/scipy/rig_model_scipy.py reads (parameters, 40 rpm, 15 N, ramp,
+//! 500 Hz samples over 40 s, the two model constants) with this crate's CPU
+//! and wall time and results on it: scripts/peer_scipy.py times scipy on it.
 #[path = "../tests/common/mod.rs"]
 mod common;
-use rig_model::{SimOptions, simulate_with_stats};
-use rig_types::RunInput;
+use rig_model::{ANTI_WINDUP_TRACKING_S, MOTOR_FRICTION_SPEED_RAD_S, SimOptions, simulate_with_stats};
+use rig_types::{FrictionLaw, RunInput};
 fn cpu_s() -> f64 {
     let s = std::fs::read_to_string("/proc/self/stat").unwrap();
     let f: Vec<&str> = s.rsplit(')').next().unwrap().split_whitespace().collect();
@@ -12,6 +17,9 @@ fn cpu_s() -> f64 {
 fn main() {
     let input = RunInput::OperatingPoint { motor_rpm_setpoint: 40.0, normal_force_n: 15.0, ramp_s: 2.0 };
     let t = common::grid(40.0, 500.0);
+    if std::env::args().any(|a| a == "--peer-case") {
+        return peer_case(&input, &t);
+    }
     for (name, p, samples) in [
         ("rig 500 Hz", common::rig_params(), t.clone()),
         ("rig 1 sample", common::rig_params(), vec![40.0]),
@@ -31,4 +39,40 @@ fn main() {
             st.unwrap()
         );
     }
+}
+
+fn peer_case(input: &RunInput, t: &[f64]) {
+    let p = common::rig_params();
+    let RunInput::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s } = *input else { unreachable!() };
+    let FrictionLaw::Coulomb { mu_static, mu_kinetic } = p.friction else { unreachable!("the bench brake is Coulomb") };
+    let (n, c0, w0) = (500, cpu_s(), std::time::Instant::now());
+    let mut tr = None;
+    for _ in 0..n {
+        tr = Some(simulate_with_stats(&p, input, t, &SimOptions::default()).unwrap().0);
+    }
+    let (cpu_ms, wall_ms) = ((cpu_s() - c0) / n as f64 * 1e3, w0.elapsed().as_secs_f64() / n as f64 * 1e3);
+    let tr = tr.unwrap();
+    // Break-aways as in tests/scipy_crosscheck.rs: Ω1 grew from 0 at (μs − μk) N r / J1.
+    let accel = (mu_static - mu_kinetic) * normal_force_n * p.brake_disc_radius_m / p.rotor_inertia_kgm2;
+    let releases: Vec<f64> = (1..tr.len())
+        .filter(|&k| tr.stuck[k - 1] && !tr.stuck[k])
+        .map(|k| t[k] - tr.rotor_speed_rad_s[k] / accel)
+        .collect();
+    let case = serde_json::json!({
+        "params": p,
+        "motor_rpm_setpoint": motor_rpm_setpoint,
+        "normal_force_n": normal_force_n,
+        "ramp_s": ramp_s,
+        "sample_times_s": t,
+        "anti_windup_tracking_s": ANTI_WINDUP_TRACKING_S,
+        "motor_friction_speed_rad_s": MOTOR_FRICTION_SPEED_RAD_S,
+        "rust": {
+            "options": "SimOptions::default() (rtol 1e-8, atol 1e-10, max_step 0.01 s)",
+            "cpu_ms_per_run": cpu_ms,
+            "wall_ms_per_run": wall_ms,
+            "rotor_speed_rad_s": tr.rotor_speed_rad_s,
+            "release_times_s": releases,
+        },
+    });
+    println!("{case}");
 }

@@ -154,26 +154,27 @@ impl Dopri {
         self
     }
 
+    /// The step size the controller proposes next (0 before the first step).
+    pub fn proposed_step(&self) -> f64 {
+        self.h.min(self.max_step)
+    }
+
     /// Forget the FSAL derivative: the right-hand side changed (new mode) or
     /// the state was modified at an event. The proposed step size is kept.
     pub fn reset(&mut self) {
         self.k1 = None;
     }
 
-    /// Hairer's starting step (II.4, "hinit"), capped by `max_step` and `span`.
-    fn initial_step(
-        &self,
-        t: f64,
-        y: &Vector,
-        k1: &Vector,
-        span: f64,
-        f: &mut impl FnMut(f64, &Vector) -> Vector,
-    ) -> f64 {
+    /// Hairer's starting step (II.4, "hinit"), capped by `max_step`. Not by the
+    /// span to the next stop: a step cut to a sliver before a sample time must
+    /// not leave a sliver as the proposal for the steps after it (the probe
+    /// evaluates f beyond the stop, which is defined there).
+    fn initial_step(&self, t: f64, y: &Vector, k1: &Vector, f: &mut impl FnMut(f64, &Vector) -> Vector) -> f64 {
         let sc = |j: usize| self.atol + self.rtol * y[j].abs();
         let d0 = (y.iter().enumerate().map(|(j, v)| (v / sc(j)).powi(2)).sum::<f64>() / self.norm_dim).sqrt();
         let d1 = (k1.iter().enumerate().map(|(j, v)| (v / sc(j)).powi(2)).sum::<f64>() / self.norm_dim).sqrt();
         let h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
-        let h0 = h0.min(self.max_step).min(span);
+        let h0 = h0.min(self.max_step);
         let y1 = axpy(y, h0, [1.0], [k1]);
         let k2 = f(t + h0, &y1);
         let d2 = (k2.iter().zip(k1).enumerate().map(|(j, (a, b))| ((a - b) / sc(j)).powi(2)).sum::<f64>()
@@ -181,7 +182,8 @@ impl Dopri {
             .sqrt()
             / h0;
         let h1 = if d1.max(d2) <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { (0.01 / d1.max(d2)).powf(0.2) };
-        (100.0 * h0).min(h1).min(self.max_step).min(span)
+        // Not capped by `span`: this is the proposal for the steps after a cut one too.
+        (100.0 * h0).min(h1).min(self.max_step)
     }
 
     /// Takes one accepted step from (t, y) that does not pass `t_stop`.
@@ -205,7 +207,7 @@ impl Dopri {
         };
         let span = t_stop - t;
         if self.h <= 0.0 {
-            self.h = self.initial_step(t, y, &k1, span, f);
+            self.h = self.initial_step(t, y, &k1, f);
             self.n_eval += 1;
         }
         let mut h = self.h.min(self.max_step);
@@ -259,9 +261,11 @@ impl Dopri {
                     rcont[3][j] = ydiff - h * k7[j] - bspl;
                     rcont[4][j] = h * (D1 * k1[j] + D3 * k3[j] + D4 * k4[j] + D5 * k5[j] + D6 * k6[j] + D7 * k7[j]);
                 }
-                // Keep the controller's proposal even when the step was cut to t_stop.
+                // Keep the controller's proposal when the step was cut to t_stop, unless
+                // the error of the cut step asks for a smaller one (a step cut to a
+                // sliver says nothing about the step size the solution allows).
                 let h_new = h / fac;
-                if !last || h_new < self.h {
+                if !last || (h_new < h && h_new < self.h) {
                     self.h = h_new;
                 }
                 self.k1 = Some(k7);

@@ -4,7 +4,7 @@
 use rig_types::{Effect, FrictionLaw, HarmonicFriction, ThesisFriction};
 use std::f64::consts::PI;
 
-const RAD_S_TO_RPM: f64 = 60.0 / (2.0 * PI);
+pub(crate) const RAD_S_TO_RPM: f64 = 60.0 / (2.0 * PI);
 
 /// Eq. 4-10 with Table 4.7, read as a piecewise-linear lookup over rotor rpm
 /// (the reading is argued in the crate docs, "Friction as published"):
@@ -12,16 +12,27 @@ const RAD_S_TO_RPM: f64 = 60.0 / (2.0 * PI);
 /// μst → μdyn on (static, dynamic set-point], μdyn above. Signed: the
 /// published table is not symmetric in the sign of Ω1.
 pub fn thesis_lookup(f: &ThesisFriction, omega_rad_s: f64) -> f64 {
+    let (_, mu0, mu1) = thesis_segment(f, omega_rad_s);
+    mu0 + mu1 * omega_rad_s
+}
+
+/// The segment of [`thesis_lookup`] that holds `omega_rad_s` as (index 0–3,
+/// μ0, μ1 per rad/s) with μ = μ0 + μ1·Ω1 on the whole segment: the lookup is
+/// piecewise affine, which the exact propagator of the drive uses.
+pub(crate) fn thesis_segment(f: &ThesisFriction, omega_rad_s: f64) -> (i8, f64, f64) {
     let rpm = omega_rad_s * RAD_S_TO_RPM;
     let (s, d) = (f.static_setpoint_rpm, f.dynamic_setpoint_rpm);
     if rpm <= 0.0 {
-        f.mu_negative
+        (0, f.mu_negative, 0.0)
     } else if rpm <= s {
-        f.mu_negative + (f.mu_static - f.mu_negative) * rpm / s
+        // μneg + (μst − μneg)·rpm/s
+        (1, f.mu_negative, (f.mu_static - f.mu_negative) * RAD_S_TO_RPM / s)
     } else if rpm <= d {
-        f.mu_static + (f.mu_dynamic - f.mu_static) * (rpm - s) / (d - s)
+        // μst + (μdyn − μst)·(rpm − s)/(d − s)
+        let slope = (f.mu_dynamic - f.mu_static) / (d - s);
+        (2, f.mu_static - slope * s, slope * RAD_S_TO_RPM)
     } else {
-        f.mu_dynamic
+        (3, f.mu_dynamic, 0.0)
     }
 }
 
@@ -29,13 +40,24 @@ pub fn thesis_lookup(f: &ThesisFriction, omega_rad_s: f64) -> f64 {
 /// For the thesis law used inside the rig model, the lookup at |Ω1|.
 pub fn slip_mu(law: &FrictionLaw, speed_abs_rad_s: f64) -> f64 {
     let w = speed_abs_rad_s.abs();
-    match law {
-        FrictionLaw::Thesis(f) => thesis_lookup(f, w),
-        FrictionLaw::Coulomb { mu_kinetic, .. } => *mu_kinetic,
-        FrictionLaw::Stribeck { mu_static, mu_kinetic, stribeck_speed_rad_s } => {
+    match (law, slip_mu_affine(law, w)) {
+        (_, Some((_, mu0, mu1))) => mu0 + mu1 * w,
+        (FrictionLaw::Stribeck { mu_static, mu_kinetic, stribeck_speed_rad_s }, None) => {
             mu_kinetic + (mu_static - mu_kinetic) * (-(w / stribeck_speed_rad_s).powi(2)).exp()
         }
-        FrictionLaw::Viscous { mu_kinetic, viscous_per_rad_s, .. } => mu_kinetic + viscous_per_rad_s * w,
+        (_, None) => unreachable!("only the Stribeck law is not piecewise affine"),
+    }
+}
+
+/// [`slip_mu`] as μ0 + μ1·|Ω1| on the segment holding `speed_abs_rad_s`
+/// (segment index, μ0, μ1): Coulomb μk + 0, viscous μk + c|Ω1|, the thesis
+/// lookup's segment; `None` for the Stribeck law (not affine).
+pub(crate) fn slip_mu_affine(law: &FrictionLaw, speed_abs_rad_s: f64) -> Option<(i8, f64, f64)> {
+    match law {
+        FrictionLaw::Thesis(f) => Some(thesis_segment(f, speed_abs_rad_s)),
+        FrictionLaw::Coulomb { mu_kinetic, .. } => Some((0, *mu_kinetic, 0.0)),
+        FrictionLaw::Viscous { mu_kinetic, viscous_per_rad_s, .. } => Some((0, *mu_kinetic, *viscous_per_rad_s)),
+        FrictionLaw::Stribeck { .. } => None,
     }
 }
 
@@ -110,10 +132,11 @@ pub fn imbalance_torque_nm(effects: &[Effect], phi1: f64) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn table_4_7() -> ThesisFriction {
+    /// Table 4.7 (also used by the unit tests of `system`).
+    pub(crate) fn table_4_7() -> ThesisFriction {
         ThesisFriction {
             mu_static: 1.6,
             mu_dynamic: 1.2,

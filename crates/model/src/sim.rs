@@ -3,7 +3,8 @@
 //! trajectory channel at the requested times.
 
 use crate::dopri::{DIM, Dopri, StepFailure, Vector, locate_root};
-use crate::system::{CUR, INT, Mode, PHI1, PHI2, System, W1, W2};
+use crate::exact::{Compute, Exact, apply, same_step};
+use crate::system::{CUR, INT, Mode, PHI1, PHI2, Region, System, W1, W2};
 use crate::{ModelError, SimOptions, State};
 use rig_types::{FrictionLaw, ModelKind, Trajectory};
 use std::f64::consts::PI;
@@ -30,6 +31,10 @@ pub struct SimStats {
     pub rhs_evaluations: u64,
     /// Stick→slip and slip→stick (or reversal) transitions located.
     pub events: u64,
+    /// Exact steps (module `exact`) and the propagators e^{M h} they needed;
+    /// `accepted_steps` counts the Dormand–Prince steps only.
+    pub exact_steps: u64,
+    pub propagators: u64,
 }
 
 fn failed(t: f64, reason: impl Into<String>) -> ModelError {
@@ -45,6 +50,7 @@ fn thesis_stuck(sys: &System, y: &Vector) -> bool {
     }
 }
 
+#[inline]
 fn push_sample(out: &mut Trajectory, sys: &System, mode: Mode, t: f64, y: &Vector) {
     out.time_s.push(t);
     out.rotor_angle_rad.push(y[PHI1]);
@@ -103,8 +109,68 @@ pub(crate) fn run(
     let mut stats = SimStats::default();
     let mut zeno = 0u32;
     let budget = MAX_STEPS + (MAX_STEPS_PER_S * (t_end - t0)) as u64;
+    let mut exact = Exact::default();
+    let mut fsal_valid = true;
+    // The region and event value at the end of an accepted exact step (the next one's start).
+    let mut carried = None;
     while t < t_end {
-        let t_stop = breakpoints.iter().copied().filter(|&b| b > t && b < t_end).fold(t_end, f64::min);
+        let mut t_stop = breakpoints.iter().copied().filter(|&b| b > t && b < t_end).fold(t_end, f64::min);
+        let start = match carried.take() {
+            Some((r, g)) => Some((Region { ramping: sys.ramping(t), ..r }, g)),
+            None => sys.region(mode, t, &y).map(|r| (r, sys.event(mode, t, &y))),
+        };
+        if let Some((region, g0)) = start {
+            // An exact step to the next sample (or by max_step_s, or to the breakpoint).
+            let t1 = (t + opts.max_step_s).min(if idx < n { samples[idx] } else { t_end }).min(t_stop);
+            let h = t1 - t;
+            // Cache propagators of step lengths the run repeats (max_step_s, sample to
+            // sample); compute a one-off one where Dormand–Prince would need more than
+            // 16 steps (a stiff region, e.g. the thesis lookup's creep segment).
+            let nominal = same_step(h, opts.max_step_s, t) || (idx > 0 && samples[idx - 1] == t);
+            let stiff = dp.proposed_step() * 16.0 < h;
+            let compute = if nominal {
+                Compute::Cache
+            } else if stiff {
+                Compute::Once
+            } else {
+                Compute::No
+            };
+            if let Some(phi) = exact.propagator(sys, &region, &y, t, h, compute) {
+                let y1 = apply(phi, &y, t);
+                let g1 = sys.event(mode, t1, &y1);
+                let crossed = match (g0, g1) {
+                    (Some(g0), Some(g1)) => match mode {
+                        Mode::Stick => g0 <= 0.0 && g1 > 0.0,
+                        _ => g0 >= 0.0 && g1 < 0.0,
+                    },
+                    _ => false,
+                };
+                let end = sys.region(mode, t1, &y1);
+                let same_region = end.map(|r| Region { ramping: region.ramping, ..r }) == Some(region);
+                if !crossed && same_region && y1.iter().all(|v| v.is_finite()) {
+                    carried = end.map(|r| (r, g1));
+                    exact.steps += 1;
+                    while idx < n && samples[idx] <= t1 {
+                        push_sample(&mut out, sys, mode, samples[idx], &y1);
+                        idx += 1;
+                    }
+                    t = t1;
+                    y = y1;
+                    fsal_valid = false;
+                    continue;
+                }
+            }
+            // An event or a switch inside (or no propagator): a Dormand–Prince step, ending
+            // no later than t1 while exact steps are still being taken, so that they resume
+            // on the sample grid.
+            if exact.viable() {
+                t_stop = t1;
+            }
+        }
+        if !fsal_valid {
+            dp.reset();
+            fsal_valid = true;
+        }
         let step = dp.step(t, &y, t_stop, &mut |tt, yy| sys.rhs(mode, tt, yy)).map_err(|e| match e {
             StepFailure::StepTooSmall { h } => failed(t, format!("step size {h:e} s fell below round-off")),
             StepFailure::NonFinite => failed(t, "the right-hand side is not finite"),
@@ -123,15 +189,32 @@ pub(crate) fn run(
             ));
         }
         let (mut t_next, mut y_next, mut switch) = (step.t1(), step.y1, None);
+        if start.is_some() {
+            // In a piecewise-affine regime: end the step at the first switch of the
+            // right-hand side inside it (voltage clamp, a kink of the friction lookup),
+            // located on the dense output like an event, so that no step integrates
+            // across a kink and the next one can be exact again.
+            let (s0, s1) = (sys.switching(mode, t, &y), sys.switching(mode, step.t1(), &step.y1));
+            for k in 0..s0.len() {
+                if (s0[k] > 0.0) != (s1[k] > 0.0) {
+                    let tk = locate_root(t, s0[k], step.t1(), s1[k], |tt| sys.switching(mode, tt, &step.dense(tt))[k]);
+                    if tk < t_next {
+                        t_next = tk;
+                        y_next = step.dense(tk);
+                        fsal_valid = false;
+                    }
+                }
+            }
+        }
         if let Some(g0) = sys.event(mode, t, &y) {
-            let g1 = sys.event(mode, step.t1(), &step.y1).unwrap_or(0.0);
+            let g1 = sys.event(mode, t_next, &y_next).unwrap_or(0.0);
             let crossed = match mode {
                 Mode::Stick => g0 <= 0.0 && g1 > 0.0,
                 Mode::Slip { .. } => g0 >= 0.0 && g1 < 0.0,
                 Mode::Continuous => false,
             };
             if crossed {
-                let te = locate_root(t, g0, step.t1(), g1, |tt| sys.event(mode, tt, &step.dense(tt)).unwrap_or(0.0));
+                let te = locate_root(t, g0, t_next, g1, |tt| sys.event(mode, tt, &step.dense(tt)).unwrap_or(0.0));
                 t_next = te;
                 y_next = step.dense(te);
                 switch = Some(mode);
@@ -170,6 +253,8 @@ pub(crate) fn run(
     stats.accepted_steps = dp.n_accept;
     stats.rejected_steps = dp.n_reject;
     stats.rhs_evaluations = dp.n_eval;
+    stats.exact_steps = exact.steps;
+    stats.propagators = exact.computed;
     let end = State {
         time_s: t,
         rotor_angle_rad: y[PHI1],

@@ -11,7 +11,8 @@
 //! stages in dependency order (independent ones in parallel), skips a stage
 //! whose key (blake3 of name, params, inputs and code — computed from the
 //! stage's source, see [`code`]) and outputs are unchanged, and writes
-//! `<out>/manifest.json`.
+//! `<out>/manifest.json`. `cargo xtask reproduce` also writes each stage's wall
+//! and CPU time to `<out>/timings.json` ([`timing`]), outside the manifest.
 
 pub mod code;
 mod config;
@@ -24,6 +25,7 @@ mod report;
 mod runner;
 pub mod stages;
 mod store;
+pub mod timing;
 
 pub use config::{Input, OutputPattern, ParamsCheck, PipelineConfig, Registry, Settings, Sources, StageDecl};
 pub use ctx::{StageCtx, StageFn, parse_params};

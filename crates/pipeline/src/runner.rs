@@ -6,6 +6,7 @@ use crate::config::{Input, ParamsCheck, PipelineConfig, Registry, Sources, Stage
 use crate::error::PipelineError;
 use crate::hash::{canonical_params, hash_path};
 use crate::store::{self, CacheRecord, Fault, FileHash};
+use crate::timing::{Stopwatch, Timing};
 use crate::{StageCtx, graph, manifest};
 use rig_types::Campaign;
 use std::collections::{BTreeMap, BTreeSet};
@@ -45,6 +46,8 @@ pub struct StageReport {
     pub reasons: Vec<String>,
     /// The record of its outputs when it ran or was up to date.
     pub record: Option<CacheRecord>,
+    /// How long it took (not reproducible: kept out of every artifact, see `timing`).
+    pub timing: Timing,
 }
 
 impl StageReport {
@@ -64,6 +67,8 @@ pub struct RunReport {
     pub stages: Vec<StageReport>,
     /// `<out>/manifest.json`, unless this was a dry run.
     pub manifest: Option<PathBuf>,
+    /// Wall and CPU time of the whole run.
+    pub total: Timing,
 }
 
 impl RunReport {
@@ -279,6 +284,7 @@ impl Runner {
     /// Runs (or with `dry_run` only assesses) every selected stage.
     /// Stage failures are in the report; an `Err` means the run could not start.
     pub fn run(&self) -> Result<RunReport, PipelineError> {
+        let whole = Stopwatch::start();
         for decl in &self.config.stages {
             (self.params_check)(&decl.name, &decl.params).map_err(|reason| PipelineError::Config {
                 path: self.config.path.clone(),
@@ -346,7 +352,13 @@ impl Runner {
                         let reasons = vec![format!("upstream {by} did not succeed")];
                         done.insert(
                             name.clone(),
-                            StageReport { name, outcome: Outcome::Blocked { by }, reasons, record: None },
+                            StageReport {
+                                name,
+                                outcome: Outcome::Blocked { by },
+                                reasons,
+                                record: None,
+                                timing: Timing::default(),
+                            },
                         );
                         bar.inc(1);
                         continue;
@@ -373,9 +385,11 @@ impl Runner {
                     let (tx, pool, dirs, memo, index) = (tx.clone(), &pool, &dirs, &memo, &index);
                     let campaign = campaign.clone();
                     scope.spawn(move || {
-                        let report = pool.install(|| {
+                        let watch = Stopwatch::start();
+                        let mut report = pool.install(|| {
                             self.run_one(decl, dirs, memo, index, campaign, &upstream_runs, &after_outputs)
                         });
+                        report.timing = watch.stop();
                         // The receiver lives until every stage has reported.
                         let _ = tx.send(report);
                     });
@@ -393,7 +407,7 @@ impl Runner {
         bar.finish_and_clear();
         let stages: Vec<StageReport> = order.iter().filter_map(|n| done.remove(n)).collect();
         let manifest = if self.dry_run { None } else { Some(manifest::write(&self.config, &dirs.out, &stages)?) };
-        Ok(RunReport { stages, manifest })
+        Ok(RunReport { stages, manifest, total: whole.stop() })
     }
 
     /// Assesses one stage and, unless it is up to date (or this is a dry run), runs and commits it.
@@ -408,7 +422,13 @@ impl Runner {
         after_outputs: &[(String, String)],
     ) -> StageReport {
         let name = decl.name.clone();
-        let report = |outcome, reasons, record| StageReport { name: name.clone(), outcome, reasons, record };
+        let report = |outcome, reasons, record| StageReport {
+            name: name.clone(),
+            outcome,
+            reasons,
+            record,
+            timing: Timing::default(),
+        };
         if !upstream_runs.is_empty() {
             // Dry run: the upstream outputs this stage reads do not exist yet or may change.
             let reasons =

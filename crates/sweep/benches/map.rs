@@ -1,7 +1,8 @@
 //! A 100 × 100 severity map of the rig model on 2 threads: 100 friction rows
 //! (0.5–25 N), each swept up over 100 motor speeds (10–130 rpm) by
 //! continuation, every point a 40 s run (20 s transient + 20 s classified at
-//! 100 Hz) — 10 000 runs of 40 s. Target < 10 s (scipy LSODA ≈ 750 s).
+//! 100 Hz) — 10 000 runs of 40 s. Target ≤ 3 s wall on two cores (issue 12;
+//! rig-model's exact steps between events make a run ≈ 0.3 ms of CPU).
 //! rig-params.json is the estimation stage's output on data/emulated-rig-2026
 //! (Coulomb brake μs 1.46 / μk 1.10, n = 8, PI 4.49 V·s/rad, 49.4 V/rad).
 

@@ -7,6 +7,8 @@ same equations with scipy's solve_ivp (DOP853, rtol 1e-10) using terminal
 events for stick->slip (|T_s| = mu_s N r) and slip->stick (Omega1 = 0), and
 writes JSON: rotor speed at the sample times, stick->slip event times.
 Written from the equations in crates/model/src/lib.rs docs, not from the Rust code.
+`simulate(case, method, rtol, atol)` is also imported by scripts/peer_scipy.py,
+which times it on the criterion bench's problem.
 """
 import json
 import math
@@ -16,8 +18,8 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 
-def main():
-    case = json.load(sys.stdin)
+def simulate(case, method="DOP853", rtol=1e-10, atol=1e-12):
+    """Rotor speed at the case's sample times and the stick->slip times."""
     p = case["params"]
     m = p["motor"]
     d = p["drive"]
@@ -77,7 +79,7 @@ def main():
         t_stop = min(b for b in breaks if b > t)
         events = [stick_event] if mode == 0 else [slip_event]
         mask = (samples > t) & (samples <= t_stop)
-        sol = solve_ivp(rhs, (t, t_stop), y, method="DOP853", rtol=1e-10, atol=1e-12, max_step=0.01,
+        sol = solve_ivp(rhs, (t, t_stop), y, method=method, rtol=rtol, atol=atol, max_step=0.01,
                         events=events, args=(mode,), dense_output=True)
         if sol.status == -1:
             raise SystemExit(sol.message)
@@ -98,6 +100,11 @@ def main():
         if t <= 0.0 and (samples == 0.0).any():
             out[samples == 0.0] = 0.0
         t = t_new
+    return out, releases
+
+
+def main():
+    out, releases = simulate(json.load(sys.stdin))
     json.dump({"rotor_speed_rad_s": out.tolist(), "release_times_s": releases}, sys.stdout)
 
 
