@@ -3,7 +3,7 @@
 //! prefixes every stage error with `stage <name>:` once.
 
 use anyhow::{Context, Result, anyhow};
-use rig_types::{Campaign, FigureSpec, Table};
+use rig_types::{Campaign, FigureSpec, Sheet, Table};
 use serde::{Serialize, de::DeserializeOwned};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -137,6 +137,16 @@ impl StageCtx {
         self.write_text(rel, &table.to_csv())
     }
 
+    /// A large table: `rel` (`tables/<name>.csv`) and, beside it,
+    /// `tables/<name>.parquet` with the same cells, typed
+    /// ([`crate::parquet`]), for loading into polars or pandas in one line.
+    pub fn write_table_with_parquet(&mut self, rel: &str, table: &Table) -> Result<()> {
+        let stem = rel.strip_suffix(".csv").ok_or_else(|| anyhow!("table path {rel} must end in .csv"))?;
+        let parquet = crate::parquet::table_parquet(table).with_context(|| format!("table {rel}"))?;
+        self.write_table(rel, table)?;
+        self.write_bytes(&format!("{stem}.parquet"), parquet)
+    }
+
     /// Pretty JSON with a trailing newline.
     pub fn write_json<T: Serialize>(&mut self, rel: &str, value: &T) -> Result<()> {
         let mut s = serde_json::to_string_pretty(value)?;
@@ -152,6 +162,18 @@ impl StageCtx {
         self.write_bytes(&format!("figures/{}.png", spec.id), png)?;
         self.write_text(&format!("figures/{}.txt", spec.id), &format!("{}\n\n{}\n", spec.title, spec.caption))?;
         self.write_text(&format!("figures/{}.csv", spec.id), &rig_figures::series_csv(spec))?;
+        Ok(())
+    }
+
+    /// A multi-panel sheet: `figures/<id>.svg`, `.png`, `.txt` (caption) and
+    /// `.csv` (every panel's series, with a `panel` column).
+    pub fn write_sheet(&mut self, sheet: &Sheet) -> Result<()> {
+        let svg = rig_figures::render_sheet_svg(sheet).with_context(|| format!("figure {}", sheet.id))?;
+        let png = rig_figures::render_sheet_png(sheet).with_context(|| format!("figure {}", sheet.id))?;
+        self.write_text(&format!("figures/{}.svg", sheet.id), &svg)?;
+        self.write_bytes(&format!("figures/{}.png", sheet.id), png)?;
+        self.write_text(&format!("figures/{}.txt", sheet.id), &format!("{}\n\n{}\n", sheet.title, sheet.caption))?;
+        self.write_text(&format!("figures/{}.csv", sheet.id), &rig_figures::sheet_csv(sheet))?;
         Ok(())
     }
 

@@ -20,6 +20,7 @@ mod error;
 pub mod graph;
 mod hash;
 mod manifest;
+pub mod parquet;
 mod runner;
 pub mod stages;
 mod store;
