@@ -2,7 +2,7 @@
 //! figures (as rig_types data; the pipeline stage writes them).
 
 use crate::report::{Diagnosis, Features, round_sig};
-use rig_types::{AxisScale, FigureSpec, Panel, Series, SeriesStyle, Sheet, Table, band, fmt_fixed};
+use rig_types::{AxisScale, FigureSpec, MarkerShape, Panel, Series, SeriesStyle, Sheet, Table, band, fmt_fixed};
 use std::fmt::Write as _;
 
 fn f4(x: f64) -> String {
@@ -202,7 +202,7 @@ pub fn figures(d: &Diagnosis) -> Vec<FigureSpec> {
             name: "measured".into(),
             x: dips.iter().map(|r| r.motor_rpm_setpoint).collect(),
             y: dips.iter().map(|r| r.measured.motor_dip_rad_s).collect(),
-            style: SeriesStyle::Points,
+            style: SeriesStyle::Marker { shape: MarkerShape::Circle, filled: true },
         }];
         let sim: Vec<_> =
             dips.iter().filter_map(|r| r.simulated.map(|f| (r.motor_rpm_setpoint, f.motor_dip_rad_s))).collect();

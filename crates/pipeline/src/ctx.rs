@@ -158,23 +158,31 @@ impl StageCtx {
     pub fn write_figure(&mut self, spec: &FigureSpec) -> Result<()> {
         let svg = rig_figures::render_svg(spec).with_context(|| format!("figure {}", spec.id))?;
         let png = rig_figures::render_png(spec).with_context(|| format!("figure {}", spec.id))?;
-        self.write_text(&format!("figures/{}.svg", spec.id), &svg)?;
-        self.write_bytes(&format!("figures/{}.png", spec.id), png)?;
-        self.write_text(&format!("figures/{}.txt", spec.id), &format!("{}\n\n{}\n", spec.title, spec.caption))?;
-        self.write_text(&format!("figures/{}.csv", spec.id), &rig_figures::series_csv(spec))?;
-        Ok(())
+        let csv = rig_figures::series_csv(spec);
+        self.write_figure_files(&spec.id, svg, png, (&spec.title, &spec.caption), csv)
     }
 
-    /// A multi-panel sheet: `figures/<id>.svg`, `.png`, `.txt` (caption) and
-    /// `.csv` (every panel's series, with a `panel` column).
+    /// A multi-panel sheet: the same four files as [`Self::write_figure`];
+    /// its `.csv` holds every panel's series with a `panel` column.
     pub fn write_sheet(&mut self, sheet: &Sheet) -> Result<()> {
         let svg = rig_figures::render_sheet_svg(sheet).with_context(|| format!("figure {}", sheet.id))?;
         let png = rig_figures::render_sheet_png(sheet).with_context(|| format!("figure {}", sheet.id))?;
-        self.write_text(&format!("figures/{}.svg", sheet.id), &svg)?;
-        self.write_bytes(&format!("figures/{}.png", sheet.id), png)?;
-        self.write_text(&format!("figures/{}.txt", sheet.id), &format!("{}\n\n{}\n", sheet.title, sheet.caption))?;
-        self.write_text(&format!("figures/{}.csv", sheet.id), &rig_figures::sheet_csv(sheet))?;
-        Ok(())
+        let csv = rig_figures::sheet_csv(sheet);
+        self.write_figure_files(&sheet.id, svg, png, (&sheet.title, &sheet.caption), csv)
+    }
+
+    fn write_figure_files(
+        &mut self,
+        id: &str,
+        svg: String,
+        png: Vec<u8>,
+        (title, caption): (&str, &str),
+        csv: String,
+    ) -> Result<()> {
+        self.write_text(&format!("figures/{id}.svg"), &svg)?;
+        self.write_bytes(&format!("figures/{id}.png"), png)?;
+        self.write_text(&format!("figures/{id}.txt"), &format!("{title}\n\n{caption}\n"))?;
+        self.write_text(&format!("figures/{id}.csv"), &csv)
     }
 
     /// Everything staged so far (the runner commits these).

@@ -67,6 +67,25 @@ fn process_mutex() -> &'static Mutex<()> {
     M.get_or_init(|| Mutex::new(()))
 }
 
+/// The shared out dir after running `names` (and their upstream), locked
+/// against other test processes while the returned guard lives.
+pub fn shared_outputs(names: &[&str]) -> SharedOut {
+    let guard = process_mutex().lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    let dir = shared_out_dir();
+    let lock = lock_shared_out_dir(&dir);
+    if let Err(e) = run_report(&dir, names) {
+        panic!("running stages {names:?}: {e:#}");
+    }
+    SharedOut { dir, _lock: lock, _guard: guard }
+}
+
+/// See [`shared_outputs`].
+pub struct SharedOut {
+    pub dir: PathBuf,
+    _lock: DirLock,
+    _guard: std::sync::MutexGuard<'static, ()>,
+}
+
 /// Runs stage `name` (and its upstream) into this process's out dir and
 /// insta-snapshots every output of that stage into `crates/pipeline/tests/snapshots/`:
 /// CSV, MD, JSON and TXT as text; each figure's SVG text and PNG pixels as
