@@ -458,8 +458,10 @@ where
             }
             SeriesStyle::Band => {
                 // The polygon as given (NaN vertices dropped): runs joined, in order.
+                // Fewer than three vertices is an empty band: nothing drawn, still in the legend.
                 let pts: Vec<(f64, f64)> = runs.into_iter().flatten().collect();
-                chart.draw_series(std::iter::once(Polygon::new(pts, colour.mix(0.25).filled())))?
+                let poly = (pts.len() >= 3).then(|| Polygon::new(pts, colour.mix(0.25).filled()));
+                chart.draw_series(poly)?
             }
             SeriesStyle::HatchCells => {
                 let heat = plan.heat.as_ref().expect("Plan::new rejects hatching without a heat map");
