@@ -13,6 +13,8 @@
 //! - [`sweeps_study`] the `sweeps` stage's study (both models' maps and
 //!   diagrams, the campaign's operating points and the chapter's labelled
 //!   points through [`operating`]), rendered by [`output::outputs`].
+//! - [`spectra`]: the campaign's operating points against the rig model in the
+//!   frequency domain, and Table 4.8 (Figs. 4.22-4.26).
 //!
 //! Determinism: chains are independent and run in parallel, and `collect`
 //! keeps chain order; nothing reads a clock or a random source.
@@ -23,6 +25,7 @@ pub mod harmonic;
 pub mod misfit;
 pub mod operating;
 pub mod output;
+pub mod spectra;
 mod study;
 mod tables;
 
