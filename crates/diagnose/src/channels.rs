@@ -35,7 +35,9 @@ mod twist;
 
 pub use balance::torque_balance_check;
 pub use drive_balance::drive_balance_check;
-pub use free_run::{FreeRunSettings, Pair as FreeRunPair, free_run_checks, free_run_checks_of, free_run_pairs};
+pub use free_run::{
+    FreeRunSettings, Pair as FreeRunPair, free_run_checks, free_run_checks_of, free_run_pairs, speed_traces,
+};
 pub use step::voltage_step_checks;
 pub use twist::static_twist_checks;
 

@@ -243,6 +243,8 @@ pub fn diagnose(
         }
         d.detail.free_run_baseline = channels::free_run_checks_of(c, &base_pairs, &s, o);
         d.detail.free_run_extended = channels::free_run_checks_of(c, &ext_pairs, &s, o);
+        d.detail.speed_traces = channels::speed_traces(&base_pairs, &ext_pairs);
+        d.detail.motor_speed_tick_rad_s = base_pairs.first().map_or(0.0, |q| q.motor_tick_rad_s);
     }
     d.detail.channel_checks = checks;
     Ok(d)

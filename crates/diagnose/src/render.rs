@@ -2,7 +2,7 @@
 //! figures (as rig_types data; the pipeline stage writes them).
 
 use crate::result::{Diagnosis, Features, round_sig};
-use rig_types::{FigureSpec, Series, SeriesStyle, Table, fmt_fixed};
+use rig_types::{AxisScale, FigureSpec, MarkerShape, Panel, Series, SeriesStyle, Sheet, Table, band, fmt_fixed};
 use std::fmt::Write as _;
 
 fn f4(x: f64) -> String {
@@ -193,26 +193,8 @@ pub fn figures(d: &Diagnosis) -> Vec<FigureSpec> {
             heatmap: None,
         });
     }
-    if !det.residual_vs_angle.is_empty() {
-        out.push(FigureSpec {
-            id: "diagnosis-residual-vs-angle".into(),
-            title: "Friction residual against rotor angle (training run with most slip)".into(),
-            caption:
-                "Mean of μ_obs − μk over slip samples in 72 bins of the rotor angle φ1 mod 2π. A warped or eccentric \
-                      disc shows n periods per revolution."
-                    .into(),
-            x_label: "rotor angle mod 2π [rad]".into(),
-            y_label: "μ residual [-]".into(),
-            series: vec![Series {
-                name: "residual".into(),
-                x: det.residual_vs_angle.iter().map(|r| r.0).collect(),
-                y: det.residual_vs_angle.iter().map(|r| r.1).collect(),
-                style: SeriesStyle::Line,
-            }],
-            x_decimals: 3,
-            y_decimals: 4,
-            heatmap: None,
-        });
+    if let Some(f) = residual_vs_angle_figure(d) {
+        out.push(f);
     }
     let dips: Vec<_> = det.runs.iter().collect();
     if !dips.is_empty() {
@@ -220,7 +202,7 @@ pub fn figures(d: &Diagnosis) -> Vec<FigureSpec> {
             name: "measured".into(),
             x: dips.iter().map(|r| r.motor_rpm_setpoint).collect(),
             y: dips.iter().map(|r| r.measured.motor_dip_rad_s).collect(),
-            style: SeriesStyle::Points,
+            style: SeriesStyle::Marker { shape: MarkerShape::Circle, filled: true },
         }];
         let sim: Vec<_> =
             dips.iter().filter_map(|r| r.simulated.map(|f| (r.motor_rpm_setpoint, f.motor_dip_rad_s))).collect();
@@ -232,20 +214,7 @@ pub fn figures(d: &Diagnosis) -> Vec<FigureSpec> {
                 style: SeriesStyle::Markers,
             });
         }
-        out.push(FigureSpec {
-            id: "diagnosis-motor-dips".into(),
-            title: "Deepest motor-speed dip below the set-point, per operating point".into(),
-            caption:
-                "Largest Ω_set − Ω2 over each run's steady state (after ramp + settle). A drive that saturates lets \
-                      the motor slow while the rotor is stuck; the PI loop of the baseline holds it."
-                    .into(),
-            x_label: "motor set-point [rpm]".into(),
-            y_label: "motor speed dip [rad/s]".into(),
-            series,
-            x_decimals: 1,
-            y_decimals: 3,
-            heatmap: None,
-        });
+        out.push(motor_dips_figure(series, det.motor_speed_tick_rad_s));
     }
     if !det.signature_curve.is_empty() {
         let best = &det.signature[0];
@@ -432,4 +401,165 @@ pub fn markdown(d: &Diagnosis) -> String {
         );
     }
     s
+}
+
+/// μ residual against rotor angle for the run with most slip: the mean over
+/// revolutions in each angle bin with its 95 % interval as a band (select.rs
+/// says why revolutions are the unit), so a reader sees whether a wave
+/// stands out of its own uncertainty.
+fn residual_vs_angle_figure(d: &Diagnosis) -> Option<FigureSpec> {
+    let r = &d.detail.residual_vs_angle;
+    if r.is_empty() {
+        return None;
+    }
+    let x: Vec<f64> = r.iter().map(|r| r.0).collect();
+    let revs = (r.iter().map(|r| r.4).min()?, r.iter().map(|r| r.4).max()?);
+    Some(FigureSpec {
+        id: "diagnosis-residual-vs-angle".into(),
+        title: "Friction residual against rotor angle (training run with most slip)".into(),
+        caption: format!(
+            "μ_obs − μk over slip samples in 72 bins of the rotor angle φ1 mod 2π: in each bin the mean over the \
+             revolutions that pass through it ({}–{} per bin) of the per-revolution mean, with its 95 % interval \
+             (±1.96 standard errors over revolutions; samples within one pass are correlated, so a pass is the \
+             unit). A warped or eccentric disc shows n periods per revolution standing out of the band; a wave \
+             inside it is not evidence.",
+            revs.0, revs.1
+        ),
+        x_label: "rotor angle mod 2π [rad]".into(),
+        y_label: "μ residual [-]".into(),
+        series: vec![
+            band(
+                "95 % interval of the mean",
+                &x,
+                &r.iter().map(|r| r.2).collect::<Vec<_>>(),
+                &r.iter().map(|r| r.3).collect::<Vec<_>>(),
+            ),
+            Series {
+                name: "mean over revolutions".into(),
+                x: x.clone(),
+                y: r.iter().map(|r| r.1).collect(),
+                style: SeriesStyle::Line,
+            },
+            Series {
+                name: "zero".into(),
+                x: vec![0.0, 2.0 * std::f64::consts::PI],
+                y: vec![0.0, 0.0],
+                style: SeriesStyle::Dashed,
+            },
+        ],
+        x_decimals: 3,
+        y_decimals: 4,
+        heatmap: None,
+    })
+}
+
+/// The motor-speed dips with the resolution of the speed they are read from:
+/// a dip of one encoder tick over the differentiator window is quantisation,
+/// so that level is drawn as a shaded band from 0 and named in the caption.
+fn motor_dips_figure(mut series: Vec<Series>, tick_rad_s: f64) -> FigureSpec {
+    let xs: Vec<f64> = series.iter().flat_map(|s| s.x.iter().copied()).filter(|x| x.is_finite()).collect();
+    let (lo, hi) = xs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+    if tick_rad_s > 0.0 && lo.is_finite() {
+        series.push(band(
+            &format!("below 1 encoder tick per differentiator window ({tick_rad_s:.3} rad/s)"),
+            &[lo, hi],
+            &[0.0, 0.0],
+            &[tick_rad_s, tick_rad_s],
+        ));
+    }
+    FigureSpec {
+        id: "diagnosis-motor-dips".into(),
+        title: "Deepest motor-speed dip below the set-point, per operating point".into(),
+        caption: format!(
+            "Largest Ω_set − Ω2 over each run's steady state (after ramp + settle). A drive that saturates lets the \
+             motor slow while the rotor is stuck; the PI loop of the baseline holds it. Ω2 comes from encoder ticks \
+             through a centred difference, so it moves in steps of one tick over the differentiator window \
+             ({tick_rad_s:.3} rad/s, the grey band): a dip inside the band is quantisation, not a slow-down."
+        ),
+        x_label: "motor set-point [rpm]".into(),
+        y_label: "motor speed dip [rad/s]".into(),
+        series,
+        x_decimals: 1,
+        y_decimals: 3,
+        heatmap: None,
+    }
+}
+
+/// Every operating point's rotor speed, measured against the baseline's and
+/// the extended model's free runs, one panel per run on one sheet: where the
+/// models fail is seen in one look.
+pub fn speed_sheet(d: &Diagnosis) -> Option<Sheet> {
+    let traces = &d.detail.speed_traces;
+    if traces.is_empty() {
+        return None;
+    }
+    let panels = traces
+        .iter()
+        .map(|t| {
+            let row = d.detail.runs.iter().find(|r| r.id == t.id);
+            let title = match row {
+                Some(r) => format!("{} · {:.0} rpm · {:.1} N", t.id, r.motor_rpm_setpoint, r.normal_force_n),
+                None => t.id.clone(),
+            };
+            let nan = vec![f64::NAN; t.time_s.len()];
+            let line = |name: &str, y: &Option<Vec<f64>>, style| Series {
+                name: name.into(),
+                x: t.time_s.clone(),
+                y: y.clone().unwrap_or_else(|| nan.clone()),
+                style,
+            };
+            let spec = FigureSpec {
+                id: format!("diagnosis-speed-{}", t.id),
+                title,
+                caption: String::new(),
+                x_label: "time [s]".into(),
+                y_label: "Ω1 [rad/s]".into(),
+                series: vec![
+                    Series {
+                        name: "measured".into(),
+                        x: t.time_s.clone(),
+                        y: t.measured_rad_s.clone(),
+                        style: SeriesStyle::Line,
+                    },
+                    line("baseline", &t.baseline_rad_s, SeriesStyle::Dashed),
+                    line("extended", &t.extended_rad_s, SeriesStyle::Line),
+                ],
+                x_decimals: 2,
+                y_decimals: 3,
+                heatmap: None,
+            };
+            Panel { spec, x_scale: AxisScale::Linear }
+        })
+        .collect();
+    Some(Sheet {
+        id: "diagnosis-speed-small-multiples".into(),
+        title: format!("Rotor speed per operating point: measured, baseline and extended ({})", d.verdict),
+        caption: "Ω1 over each operating point's steady window (after ramp + settle), measured (encoder, centred \
+                  difference) and simulated from rest under the run's protocol by the baseline rig model and by the \
+                  extended model of the verdict (the free runs of the diagnosis' free-run checks), sampled at 20 Hz. \
+                  A panel where the dashed or the second solid line leaves the measured one is an operating point \
+                  that model gets wrong; a missing line is a simulation that failed."
+            .into(),
+        columns: 6,
+        panels,
+    })
+}
+
+/// The traces of [`speed_sheet`] as one long table, one row per sample:
+/// what a reader loads to redo the comparison (written with a Parquet twin).
+pub fn speed_traces_table(d: &Diagnosis) -> Table {
+    let mut t = Table::new(["run", "time_s", "measured_rotor_rad_s", "baseline_rotor_rad_s", "extended_rotor_rad_s"]);
+    let cell = |v: Option<&Vec<f64>>, i: usize| v.and_then(|v| v.get(i)).map_or(String::new(), |x| fmt_fixed(*x, 3));
+    for tr in &d.detail.speed_traces {
+        for (i, &time) in tr.time_s.iter().enumerate() {
+            t.push([
+                tr.id.clone(),
+                fmt_fixed(time, 3),
+                fmt_fixed(tr.measured_rad_s[i], 3),
+                cell(tr.baseline_rad_s.as_ref(), i),
+                cell(tr.extended_rad_s.as_ref(), i),
+            ]);
+        }
+    }
+    t
 }

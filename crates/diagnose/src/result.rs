@@ -169,8 +169,9 @@ pub struct Detail {
     pub freq_scan: Vec<(f64, f64)>,
     /// Friction evidence: slip-speed bins (centre rad/s, mean μ_obs, baseline μ̂, extended μ̂).
     pub mu_vs_speed: Vec<(f64, f64, f64, f64)>,
-    /// Baseline μ residual against rotor angle mod 2π (bin centre rad, mean residual).
-    pub residual_vs_angle: Vec<(f64, f64)>,
+    /// Baseline μ residual against rotor angle mod 2π: (bin centre rad, mean
+    /// over revolutions, lower and upper end of its 95 % interval, revolutions).
+    pub residual_vs_angle: Vec<(f64, f64, f64, f64, usize)>,
     /// Baseline coefficients (μk, PI gains, supply).
     pub baseline_text: String,
     /// Thesis ladder: (rung, held-out misfit, cause).
@@ -182,6 +183,24 @@ pub struct Detail {
     /// extended model (reported; not part of the adequacy test, see `diagnose`).
     pub free_run_baseline: Vec<crate::ChannelCheck>,
     pub free_run_extended: Vec<crate::ChannelCheck>,
+    /// Rotor speed of every operating point over its steady window, measured
+    /// and free-run simulated by both models (small-multiples figure and the
+    /// diagnosis-speed-traces table).
+    pub speed_traces: Vec<SpeedTraces>,
+    /// One encoder tick over the motor-speed differentiator window, rad/s:
+    /// the resolution of the motor-dip feature (0 when not computed).
+    pub motor_speed_tick_rad_s: f64,
+}
+
+/// One operating point's rotor speed over the steady window (about 20 Hz).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SpeedTraces {
+    pub id: String,
+    pub time_s: Vec<f64>,
+    pub measured_rad_s: Vec<f64>,
+    /// `None` where that model's simulation failed.
+    pub baseline_rad_s: Option<Vec<f64>>,
+    pub extended_rad_s: Option<Vec<f64>>,
 }
 
 /// One effect tried in one forward-selection step.

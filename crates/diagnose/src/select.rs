@@ -778,19 +778,39 @@ fn mu_vs_speed(d: &SlipData, base: &Composite, ext: &Composite, phases: &[Phases
         .collect()
 }
 
-fn residual_vs_angle(runs: &[&RunSignals], mu_k: f64) -> Vec<(f64, f64)> {
+/// μ_obs − μk of the run with most slip in 72 bins of φ1 mod 2π, with the
+/// interval the data support: the independent unit is one pass of the disc
+/// through a bin (samples inside one pass are correlated), so each bin gives
+/// the mean over revolutions of the per-revolution mean and ±1.96 standard
+/// errors over those revolutions; bins seen on fewer than 3 revolutions are
+/// left out. Rows: (bin centre rad, mean, lower, upper, revolutions).
+fn residual_vs_angle(runs: &[&RunSignals], mu_k: f64) -> Vec<(f64, f64, f64, f64, usize)> {
     let Some(s) = runs.iter().max_by_key(|s| s.slip_idx.len()) else { return vec![] };
     let nb = 72;
-    let mut acc = vec![(0.0, 0usize); nb];
+    // (revolution, bin) -> (sum, count), in a fixed order.
+    let mut per_pass: std::collections::BTreeMap<(i64, usize), (f64, usize)> = std::collections::BTreeMap::new();
     for (j, &k) in s.slip_idx.iter().enumerate() {
-        let a = s.rotor_angle_rad[k].rem_euclid(2.0 * PI);
+        let phi = s.rotor_angle_rad[k];
+        let rev = (phi / (2.0 * PI)).floor() as i64;
+        let a = phi.rem_euclid(2.0 * PI);
         let b = ((a / (2.0 * PI) * nb as f64) as usize).min(nb - 1);
-        acc[b].0 += s.mu_obs[j] - mu_k;
-        acc[b].1 += 1;
+        let e = per_pass.entry((rev, b)).or_insert((0.0, 0));
+        e.0 += s.mu_obs[j] - mu_k;
+        e.1 += 1;
     }
-    acc.iter()
+    let mut bins: Vec<Vec<f64>> = vec![Vec::new(); nb];
+    for ((_, b), (sum, n)) in per_pass {
+        bins[b].push(sum / n as f64);
+    }
+    bins.iter()
         .enumerate()
-        .filter(|(_, a)| a.1 > 0)
-        .map(|(b, a)| ((b as f64 + 0.5) * 2.0 * PI / nb as f64, a.0 / a.1 as f64))
+        .filter(|(_, v)| v.len() >= 3)
+        .map(|(b, v)| {
+            let n = v.len() as f64;
+            let mean = v.iter().sum::<f64>() / n;
+            let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+            let half = 1.96 * sd / n.sqrt();
+            ((b as f64 + 0.5) * 2.0 * PI / nb as f64, mean, mean - half, mean + half, v.len())
+        })
         .collect()
 }

@@ -2,7 +2,7 @@
 //! decimals the spec says the data supports: the text snapshots and
 //! `xtask diff` compare.
 
-use rig_types::{FigureSpec, Table, fmt_fixed};
+use rig_types::{FigureSpec, Sheet, Table, fmt_fixed};
 
 /// Long-format CSV: one row per point, `series,x,y`, x and y formatted by
 /// [`fmt_fixed`] at `x_decimals` / `y_decimals`; a non-finite value is
@@ -14,6 +14,31 @@ use rig_types::{FigureSpec, Table, fmt_fixed};
 /// largest |z|: enough to see a moved cell, not so many that solver noise
 /// shows.
 pub fn series_csv(spec: &FigureSpec) -> String {
+    spec_table(spec).to_csv()
+}
+
+/// A sheet's data: every panel's [`series_csv`] rows with a leading `panel`
+/// column (the panel's title), panels in order; `z` present when any panel
+/// has a heat map.
+pub fn sheet_csv(sheet: &Sheet) -> String {
+    let with_z = sheet.panels.iter().any(|p| p.spec.heatmap.is_some());
+    let mut cols = vec!["panel", "series", "x", "y"];
+    if with_z {
+        cols.push("z");
+    }
+    let mut out = Table::new(cols);
+    for p in &sheet.panels {
+        for mut row in spec_table(&p.spec).rows {
+            if with_z && row.len() == 3 {
+                row.push(String::new());
+            }
+            out.push(std::iter::once(p.spec.title.clone()).chain(row));
+        }
+    }
+    out.to_csv()
+}
+
+fn spec_table(spec: &FigureSpec) -> Table {
     let fmt = |v: f64, d: usize| if v.is_finite() { fmt_fixed(v, d) } else { "NaN".to_string() };
     let with_z = spec.heatmap.is_some();
     let mut table = if with_z { Table::new(["series", "x", "y", "z"]) } else { Table::new(["series", "x", "y"]) };
@@ -39,7 +64,7 @@ pub fn series_csv(spec: &FigureSpec) -> String {
             }
         }
     }
-    table.to_csv()
+    table
 }
 
 /// Decimals giving four significant digits for the largest finite |z|.

@@ -1,28 +1,36 @@
-//! Drawing one [`FigureSpec`] on any plotters backend: axes, heat map with
-//! colour bar, series in four styles with NaN gaps, legend.
+//! Drawing one [`FigureSpec`] (or one panel of a [`Sheet`]) on any plotters
+//! backend: axes (linear or log x), heat map with colour bar and hatched
+//! regions, series in every [`SeriesStyle`] with NaN gaps, legend inside the
+//! emptiest corner or outside the plot area.
 
+use crate::glyph::{HALO, glyph, legend_swatch};
 use crate::range::{Extent, PAD_FRACTION, cell_edges, tick_decimals};
 use plotters::coord::Shift;
+use plotters::coord::ranged1d::{AsRangedCoord, Ranged, ValueFormatter};
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
-use rig_types::{FigureSpec, SeriesStyle};
+use rig_types::{AxisScale, FigureSpec, SeriesStyle, Sheet};
 
 /// Width of the colour-bar strip at the right of a heat map, pixels.
 const COLOUR_BAR_PX: u32 = 120;
-const FONT: &str = "sans-serif";
+pub(crate) const FONT: &str = "sans-serif";
 
-/// Tableau-10: distinguishable, and fixed so colours do not depend on anything but order.
-const PALETTE: [RGBColor; 10] = [
-    RGBColor(31, 119, 180),
-    RGBColor(255, 127, 14),
-    RGBColor(44, 160, 44),
-    RGBColor(214, 39, 40),
-    RGBColor(148, 103, 189),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(127, 127, 127),
-    RGBColor(188, 189, 34),
-    RGBColor(23, 190, 207),
+/// Okabe & Ito (2008), "Color Universal Design": eight colours told apart
+/// under every common colour-vision deficiency; yellow last (weak on white).
+pub(crate) const PALETTE: [RGBColor; 8] = [
+    RGBColor(0, 114, 178),   // blue
+    RGBColor(213, 94, 0),    // vermillion
+    RGBColor(0, 158, 115),   // bluish green
+    RGBColor(204, 121, 167), // reddish purple
+    RGBColor(230, 159, 0),   // orange
+    RGBColor(86, 180, 233),  // sky blue
+    RGBColor(0, 0, 0),       // black
+    RGBColor(240, 228, 66),  // yellow
 ];
+/// A band with no statistic after it (e.g. a bistable range) is grey.
+const BAND_GREY: RGBColor = RGBColor(150, 150, 150);
+/// On a heat map, series start at vermillion (blue and green vanish in viridis).
+const FIRST_ON_HEAT: usize = 1;
 
 /// Viridis sampled at nine evenly spaced points (matplotlib's table), linearly
 /// interpolated: perceptually ordered and readable in grey.
@@ -52,8 +60,11 @@ fn viridis(t: f64) -> RGBColor {
 pub struct Plan {
     x_range: (f64, f64),
     y_range: (f64, f64),
+    x_scale: AxisScale,
     /// Heat-map cell edges and the z range, when there is a heat map.
     heat: Option<HeatPlan>,
+    /// Palette colour of each series (bands: of the series they belong to).
+    colours: Vec<RGBColor>,
 }
 
 #[derive(Debug)]
@@ -65,24 +76,32 @@ struct HeatPlan {
 
 impl Plan {
     /// Validates the spec and computes the axis ranges; `Err` says what is malformed.
-    pub fn new(spec: &FigureSpec) -> Result<Plan, String> {
+    pub fn new(spec: &FigureSpec, x_scale: AxisScale) -> Result<Plan, String> {
         let (mut xe, mut ye) = (Extent::empty(), Extent::empty());
+        let log_x = x_scale == AxisScale::Log10;
         for s in &spec.series {
             if s.x.len() != s.y.len() {
                 return Err(format!("series {:?} has {} x values but {} y values", s.name, s.x.len(), s.y.len()));
             }
+            if s.style == SeriesStyle::HatchCells && spec.heatmap.is_none() {
+                return Err(format!("series {:?} hatches heat-map cells but the figure has no heat map", s.name));
+            }
             for (&x, &y) in s.x.iter().zip(&s.y) {
-                // A point is plotted only when both coordinates are finite.
-                if x.is_finite() && y.is_finite() {
-                    xe.add(x);
+                // A point is plotted only when both coordinates are finite (and x > 0 on a log axis).
+                if x.is_finite() && y.is_finite() && (!log_x || x > 0.0) {
+                    xe.add(if log_x { x.log10() } else { x });
                     ye.add(y);
                 }
             }
         }
         let mut x_range = xe.padded(PAD_FRACTION);
+        if log_x {
+            x_range = (10f64.powf(x_range.0), 10f64.powf(x_range.1));
+        }
         let mut y_range = ye.padded(PAD_FRACTION);
         let heat = match &spec.heatmap {
             None => None,
+            Some(_) if log_x => return Err("a heat map needs a linear x axis".into()),
             Some(h) => {
                 if h.z.len() != h.y.len() {
                     return Err(format!("heat map has {} y centres but {} z rows", h.y.len(), h.z.len()));
@@ -124,17 +143,69 @@ impl Plan {
                 Some(HeatPlan { x_edges, y_edges, z_range })
             }
         };
-        Ok(Plan { x_range, y_range, heat })
+        let colours = series_colours(spec);
+        Ok(Plan { x_range, y_range, x_scale, heat, colours })
     }
+}
+
+/// Palette colours in series order, counting only series that are drawn as
+/// data (lines and markers). A band takes the colour of the next such series
+/// (the statistic it is the interval of) and is grey when none follows; a
+/// hatched region is black/white by the map's brightness (no palette entry).
+fn series_colours(spec: &FigureSpec) -> Vec<RGBColor> {
+    let first = if spec.heatmap.is_some() { FIRST_ON_HEAT } else { 0 };
+    let mut k = 0;
+    let own: Vec<Option<RGBColor>> = spec
+        .series
+        .iter()
+        .map(|s| match s.style {
+            SeriesStyle::Band | SeriesStyle::HatchCells => None,
+            _ => {
+                k += 1;
+                Some(PALETTE[(first + k - 1) % PALETTE.len()])
+            }
+        })
+        .collect();
+    (0..own.len()).map(|i| own[i].or_else(|| own[i..].iter().flatten().next().copied()).unwrap_or(BAND_GREY)).collect()
+}
+
+/// Font sizes and margins: full size for a figure, compact for a small panel.
+#[derive(Debug, Clone, Copy)]
+struct Look {
+    title: u32,
+    label: u32,
+    desc: u32,
+    margin: u32,
+    x_area: u32,
+    y_area: u32,
+}
+
+impl Look {
+    fn for_width(w: u32) -> Look {
+        if w >= 560 {
+            Look { title: 20, label: 14, desc: 16, margin: 14, x_area: 52, y_area: 78 }
+        } else {
+            Look { title: 14, label: 11, desc: 12, margin: 6, x_area: 38, y_area: 56 }
+        }
+    }
+}
+
+/// Where a panel's legend goes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum LegendAt {
+    /// In the plot corner holding the fewest points.
+    Inside,
+    /// Drawn by the caller outside the plot area (or not at all).
+    Outside,
 }
 
 /// Runs of consecutive plottable points: a NaN (or infinite) value ends a run,
 /// so lines show a gap instead of bridging missing data.
-fn finite_runs(x: &[f64], y: &[f64]) -> Vec<Vec<(f64, f64)>> {
+fn finite_runs(x: &[f64], y: &[f64], log_x: bool) -> Vec<Vec<(f64, f64)>> {
     let mut runs = Vec::new();
     let mut cur = Vec::new();
     for (&a, &b) in x.iter().zip(y) {
-        if a.is_finite() && b.is_finite() {
+        if a.is_finite() && b.is_finite() && (!log_x || a > 0.0) {
             cur.push((a, b));
         } else if !cur.is_empty() {
             runs.push(std::mem::take(&mut cur));
@@ -148,49 +219,177 @@ fn finite_runs(x: &[f64], y: &[f64]) -> Vec<Vec<(f64, f64)>> {
 
 type DrawResult<DB> = Result<(), DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
 
-/// Draws the whole figure on `root` and presents it.
+/// Draws the whole figure on `root` and presents it. A heat map's legend
+/// goes below the plot area, so it never covers a cell or a marker.
 pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, spec: &FigureSpec, plan: &Plan) -> DrawResult<DB> {
     root.fill(&WHITE)?;
-    let (w, _) = root.dim_in_pixel();
-    let (plot_area, bar_area) = match &plan.heat {
+    let (w, h) = root.dim_in_pixel();
+    let look = Look::for_width(w);
+    let (mut plot_area, bar_area) = match &plan.heat {
         Some(_) => {
             let (a, b) = root.split_horizontally(w.saturating_sub(COLOUR_BAR_PX));
             (a, Some(b))
         }
         None => (root.clone(), None),
     };
+    let entries = legend_entries(spec, plan);
+    let outside = plan.heat.is_some() && !entries.is_empty();
+    let mut legend_area = None;
+    if outside {
+        let strip = legend_height(&plot_area, &entries, look);
+        let (a, b) = plot_area.split_vertically(h.saturating_sub(strip));
+        plot_area = a;
+        legend_area = Some(b);
+    }
+    draw_panel(&plot_area, spec, plan, look, if outside { LegendAt::Outside } else { LegendAt::Inside })?;
+    if let Some(area) = legend_area {
+        draw_legend_strip(&area, &entries, look)?;
+    }
+    if let (Some(bar), Some(hm), Some(heat)) = (bar_area, &spec.heatmap, &plan.heat) {
+        draw_colour_bar(&bar, &hm.z_label, heat.z_range, look)?;
+    }
+    root.present()
+}
 
-    let x_dec = tick_decimals(plan.x_range.0, plan.x_range.1);
+/// Pixel size of a sheet: panels of a size that keeps their text readable.
+pub fn sheet_size(sheet: &Sheet) -> (u32, u32) {
+    let (cols, rows, pw, ph) = sheet_grid(sheet);
+    let legend = if shared_legend(sheet) { SHEET_LEGEND_PX } else { 0 };
+    (cols * pw, SHEET_TITLE_PX + rows * ph + legend)
+}
+
+const SHEET_TITLE_PX: u32 = 44;
+const SHEET_LEGEND_PX: u32 = 40;
+
+/// (columns, rows, panel width, panel height) in pixels.
+fn sheet_grid(sheet: &Sheet) -> (u32, u32, u32, u32) {
+    let cols = sheet.columns.clamp(1, sheet.panels.len().max(1)) as u32;
+    let rows = (sheet.panels.len() as u32).div_ceil(cols).max(1);
+    let (pw, ph) = match cols {
+        1 if rows == 1 => (900, 560),
+        1 => (900, 320),
+        2 => (560, 380),
+        _ => (320, 240),
+    };
+    (cols, rows, pw, ph)
+}
+
+/// Panels with the same named series in the same styles share one legend
+/// below the grid instead of repeating it in every panel.
+fn shared_legend(sheet: &Sheet) -> bool {
+    let key = |s: &FigureSpec| -> Vec<(String, SeriesStyle)> {
+        s.series.iter().filter(|x| !x.name.is_empty()).map(|x| (x.name.clone(), x.style)).collect()
+    };
+    sheet.panels.len() > 1
+        && !key(&sheet.panels[0].spec).is_empty()
+        && sheet.panels.iter().all(|p| key(&p.spec) == key(&sheet.panels[0].spec))
+}
+
+/// Draws a sheet: its title, then the panels in a grid, then a shared legend.
+pub fn draw_sheet<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, sheet: &Sheet, plans: &[Plan]) -> DrawResult<DB> {
+    root.fill(&WHITE)?;
+    let (cols, rows, pw, ph) = sheet_grid(sheet);
+    let (title, rest) = root.split_vertically(SHEET_TITLE_PX);
+    title.draw(&Text::new(
+        sheet.title.as_str(),
+        (12, 10),
+        (FONT, 22).into_font().color(&BLACK).pos(plotters::style::text_anchor::Pos::default()),
+    ))?;
+    let shared = shared_legend(sheet);
+    let (grid, legend) = rest.split_vertically(rows * ph);
+    for (i, (panel, plan)) in sheet.panels.iter().zip(plans).enumerate() {
+        let (c, r) = (i as u32 % cols, i as u32 / cols);
+        let area = grid.clone().shrink((c * pw, r * ph), (pw, ph));
+        draw_panel(
+            &area,
+            &panel.spec,
+            plan,
+            Look::for_width(pw),
+            if shared { LegendAt::Outside } else { LegendAt::Inside },
+        )?;
+    }
+    if shared {
+        let entries = legend_entries(&sheet.panels[0].spec, &plans[0]);
+        draw_legend_strip(&legend, &entries, Look::for_width(900))?;
+    }
+    root.present()
+}
+
+/// The axes and everything in them, on one area.
+fn draw_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    spec: &FigureSpec,
+    plan: &Plan,
+    look: Look,
+    legend: LegendAt,
+) -> DrawResult<DB> {
+    let (x0, x1) = plan.x_range;
+    let builder = |a| {
+        let mut b = ChartBuilder::on(a);
+        b.caption(&spec.title, (FONT, look.title))
+            .margin(look.margin)
+            .x_label_area_size(look.x_area)
+            .y_label_area_size(look.y_area);
+        b
+    };
+    let y = plan.y_range.0..plan.y_range.1;
+    match plan.x_scale {
+        AxisScale::Linear => {
+            let x_dec = tick_decimals(x0, x1);
+            let fmt = move |v: &f64| rig_types::fmt_fixed(*v, x_dec);
+            fill_chart(builder(area).build_cartesian_2d(x0..x1, y)?, spec, plan, look, legend, &fmt)
+        }
+        AxisScale::Log10 => {
+            fill_chart(builder(area).build_cartesian_2d((x0..x1).log_scale(), y)?, spec, plan, look, legend, &log_tick)
+        }
+    }
+}
+
+/// A log axis tick: as many decimals as the value needs (0.01, 0.5, 20).
+fn log_tick(v: &f64) -> String {
+    let d = if *v >= 1.0 || *v <= 0.0 { 0 } else { (-v.log10()).ceil() as usize + 1 };
+    let s = rig_types::fmt_fixed(*v, d.min(6));
+    if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
+}
+
+fn fill_chart<'a, DB: DrawingBackend + 'a, X>(
+    mut chart: ChartContext<'a, DB, Cartesian2d<X, RangedCoordf64>>,
+    spec: &FigureSpec,
+    plan: &Plan,
+    look: Look,
+    legend: LegendAt,
+    x_fmt: &dyn Fn(&f64) -> String,
+) -> DrawResult<DB>
+where
+    X: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    std::ops::Range<f64>: AsRangedCoord,
+{
     let y_dec = tick_decimals(plan.y_range.0, plan.y_range.1);
-    let x_fmt = move |v: &f64| rig_types::fmt_fixed(*v, x_dec);
     let y_fmt = move |v: &f64| rig_types::fmt_fixed(*v, y_dec);
-
-    let mut chart = ChartBuilder::on(&plot_area)
-        .caption(&spec.title, (FONT, 20))
-        .margin(14)
-        .x_label_area_size(52)
-        .y_label_area_size(78)
-        .build_cartesian_2d(plan.x_range.0..plan.x_range.1, plan.y_range.0..plan.y_range.1)?;
     chart
         .configure_mesh()
         .x_desc(spec.x_label.as_str())
         .y_desc(spec.y_label.as_str())
-        .x_label_formatter(&x_fmt)
+        .x_label_formatter(x_fmt)
         .y_label_formatter(&y_fmt)
-        .label_style((FONT, 14))
-        .axis_desc_style((FONT, 16))
+        .label_style((FONT, look.label))
+        .axis_desc_style((FONT, look.desc))
         .light_line_style(RGBColor(235, 235, 235))
         .bold_line_style(RGBColor(210, 210, 210))
         .draw()?;
 
+    let mut grid: Vec<Vec<Option<RGBColor>>> = Vec::new();
     if let (Some(h), Some(heat)) = (&spec.heatmap, &plan.heat) {
         let (z0, z1) = heat.z_range;
+        grid =
+            h.z.iter()
+                .map(|row| row.iter().map(|&z| z.is_finite().then(|| viridis((z - z0) / (z1 - z0)))).collect())
+                .collect();
         let mut cells = Vec::new();
-        for (j, row) in h.z.iter().enumerate() {
-            for (i, &z) in row.iter().enumerate() {
+        for (j, row) in grid.iter().enumerate() {
+            for (i, c) in row.iter().enumerate() {
                 // A non-finite cell (e.g. a simulation that did not converge) stays white.
-                if z.is_finite() {
-                    let c = viridis((z - z0) / (z1 - z0));
+                if let Some(c) = c {
                     cells.push(Rectangle::new(
                         [(heat.x_edges[i], heat.y_edges[j]), (heat.x_edges[i + 1], heat.y_edges[j + 1])],
                         c.filled(),
@@ -200,15 +399,13 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, spec: &FigureSpec
         }
         chart.draw_series(cells)?;
     }
+    let cell_colour = |i: usize, j: usize| grid.get(j).and_then(|r| r.get(i)).copied().flatten();
 
-    let mut any_label = false;
-    // On a heat map, series start at red (the palette's blue and green vanish
-    // in viridis) and symbols get a white halo.
     let on_heat = plan.heat.is_some();
-    let first_colour = if on_heat { 3 } else { 0 };
+    let log_x = plan.x_scale == AxisScale::Log10;
     for (k, s) in spec.series.iter().enumerate() {
-        let colour = PALETTE[(first_colour + k) % PALETTE.len()];
-        let runs = finite_runs(&s.x, &s.y);
+        let colour = plan.colours[k];
+        let runs = finite_runs(&s.x, &s.y, log_x);
         let line = colour.stroke_width(2);
         // Every series is drawn as one annotated element (possibly empty) so
         // the legend lists it even when all its points are gaps.
@@ -239,36 +436,182 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, spec: &FigureSpec
                 }
                 chart.draw_series(pts.into_iter().map(|p| Cross::new(p, 6, colour.stroke_width(2))))?
             }
-        };
-        if !s.name.is_empty() {
-            any_label = true;
-            let style = s.style;
-            anno.label(s.name.as_str()).legend(move |(x, y)| -> DynElement<'static, DB, (i32, i32)> {
-                match style {
-                    SeriesStyle::Line => PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)).into_dyn(),
-                    SeriesStyle::Dashed => {
-                        PathElement::new(vec![(x, y), (x + 7, y)], colour.stroke_width(2)).into_dyn()
+            SeriesStyle::Marker { shape, filled } => {
+                // Drawn in pixels on the plotting area (a marker keeps its shape
+                // whatever the axes' aspect); the empty series carries the legend entry.
+                let r = if look.label >= 14 { 5 } else { 4 };
+                let area = chart.plotting_area().strip_coord_spec();
+                let (bx, by) = area.get_base_pixel();
+                let pixels: Vec<(i32, i32)> = runs
+                    .into_iter()
+                    .flatten()
+                    .map(|p| chart.backend_coord(&p))
+                    .map(|(a, b)| (a - bx, b - by))
+                    .collect();
+                for &p in &pixels {
+                    if on_heat {
+                        area.draw(&glyph::<DB>(p, shape, true, HALO, r + 2, 1))?;
                     }
-                    SeriesStyle::Points => Circle::new((x + 10, y), 3, colour.filled()).into_dyn(),
-                    SeriesStyle::Markers => Cross::new((x + 10, y), 6, colour.stroke_width(2)).into_dyn(),
+                    area.draw(&glyph::<DB>(p, shape, filled, colour, r, 2))?;
                 }
-            });
+                chart.draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?
+            }
+            SeriesStyle::Band => {
+                // The polygon as given (NaN vertices dropped): runs joined, in order.
+                // Fewer than three vertices is an empty band: nothing drawn, still in the legend.
+                let pts: Vec<(f64, f64)> = runs.into_iter().flatten().collect();
+                let poly = (pts.len() >= 3).then(|| Polygon::new(pts, colour.mix(0.25).filled()));
+                chart.draw_series(poly)?
+            }
+            SeriesStyle::HatchCells => {
+                let heat = plan.heat.as_ref().expect("Plan::new rejects hatching without a heat map");
+                let cells = hatched_cells(&s.x, &s.y, &heat.x_edges, &heat.y_edges);
+                chart.draw_series(hatch_lines(&cells, heat, &cell_colour))?;
+                chart.draw_series(outline(&cells, heat))?
+            }
+        };
+        if !s.name.is_empty() && legend == LegendAt::Inside {
+            let style = s.style;
+            anno.label(s.name.as_str()).legend(move |(x, y)| legend_swatch::<DB>((x, y), style, colour));
         }
     }
-    if any_label {
+    let any_label = spec.series.iter().any(|s| !s.name.is_empty());
+    if any_label && legend == LegendAt::Inside {
         chart
             .configure_series_labels()
             .position(legend_corner(spec, plan))
-            .label_font((FONT, 14))
+            .label_font((FONT, look.label))
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
             .draw()?;
     }
+    Ok(())
+}
 
-    if let (Some(bar), Some(h), Some(heat)) = (bar_area, &spec.heatmap, &plan.heat) {
-        draw_colour_bar(&bar, &h.z_label, heat.z_range)?;
+/// (column, row) of the heat-map cell holding each finite point, sorted and
+/// without repeats; points outside the map are ignored.
+fn hatched_cells(x: &[f64], y: &[f64], xe: &[f64], ye: &[f64]) -> Vec<(usize, usize)> {
+    let index = |edges: &[f64], v: f64| {
+        let k = edges.partition_point(|&e| e <= v);
+        (k >= 1 && k < edges.len()).then(|| k - 1)
+    };
+    let mut cells: Vec<(usize, usize)> = x
+        .iter()
+        .zip(y)
+        .filter(|(a, b)| a.is_finite() && b.is_finite())
+        .filter_map(|(&a, &b)| Some((index(xe, a)?, index(ye, b)?)))
+        .collect();
+    cells.sort_unstable();
+    cells.dedup();
+    cells
+}
+
+/// Three diagonal strokes per cell, black over a light cell and white over a
+/// dark one so the hatching reads on every part of the colour scale.
+fn hatch_lines(
+    cells: &[(usize, usize)],
+    heat: &HeatPlan,
+    cell_colour: &dyn Fn(usize, usize) -> Option<RGBColor>,
+) -> Vec<PathElement<(f64, f64)>> {
+    let mut out = Vec::new();
+    for &(i, j) in cells {
+        let (x0, x1, y0, y1) = (heat.x_edges[i], heat.x_edges[i + 1], heat.y_edges[j], heat.y_edges[j + 1]);
+        let at = |u: f64, v: f64| (x0 + u * (x1 - x0), y0 + v * (y1 - y0));
+        let light =
+            cell_colour(i, j).is_none_or(|c| 0.299 * c.0 as f64 + 0.587 * c.1 as f64 + 0.114 * c.2 as f64 > 128.0);
+        let ink = if light { BLACK.mix(0.7) } else { WHITE.mix(0.9) };
+        for c in [-0.5, 0.0, 0.5] {
+            let (a, b) = if c >= 0.0 { (at(c, 0.0), at(1.0, 1.0 - c)) } else { (at(0.0, -c), at(1.0 + c, 1.0)) };
+            out.push(PathElement::new(vec![a, b], ink.stroke_width(1)));
+        }
     }
-    root.present()
+    out
+}
+
+/// The region's boundary: every cell edge between a hatched and an unhatched cell.
+fn outline(cells: &[(usize, usize)], heat: &HeatPlan) -> Vec<PathElement<(f64, f64)>> {
+    let inside = |i: isize, j: isize| i >= 0 && j >= 0 && cells.binary_search(&(i as usize, j as usize)).is_ok();
+    let (xe, ye) = (&heat.x_edges, &heat.y_edges);
+    let mut out = Vec::new();
+    for &(i, j) in cells {
+        let (ii, jj) = (i as isize, j as isize);
+        let edges = [
+            (!inside(ii - 1, jj), (xe[i], ye[j]), (xe[i], ye[j + 1])),
+            (!inside(ii + 1, jj), (xe[i + 1], ye[j]), (xe[i + 1], ye[j + 1])),
+            (!inside(ii, jj - 1), (xe[i], ye[j]), (xe[i + 1], ye[j])),
+            (!inside(ii, jj + 1), (xe[i], ye[j + 1]), (xe[i + 1], ye[j + 1])),
+        ];
+        for (open, a, b) in edges {
+            if open {
+                out.push(PathElement::new(vec![a, b], BLACK.stroke_width(2)));
+            }
+        }
+    }
+    out
+}
+
+/// (name, style, colour) of every named series, in order.
+fn legend_entries(spec: &FigureSpec, plan: &Plan) -> Vec<(String, SeriesStyle, RGBColor)> {
+    spec.series
+        .iter()
+        .zip(&plan.colours)
+        .filter(|(s, _)| !s.name.is_empty())
+        .map(|(s, c)| (s.name.clone(), s.style, *c))
+        .collect()
+}
+
+const LEGEND_ROW_PX: u32 = 22;
+const SWATCH_PX: i32 = 24;
+
+/// Entries laid out left to right, wrapping: (row, x offset) of each.
+fn legend_layout<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[(String, SeriesStyle, RGBColor)],
+    look: Look,
+) -> Vec<(u32, i32)> {
+    let width = area.dim_in_pixel().0 as i32 - 2 * look.margin as i32;
+    let font = TextStyle::from((FONT, look.label).into_font());
+    let (mut row, mut x) = (0u32, 0i32);
+    let mut out = Vec::new();
+    for (name, _, _) in entries {
+        let text_w = area.estimate_text_size(name, &font).map(|s| s.0 as i32).unwrap_or(8 * name.len() as i32);
+        let w = SWATCH_PX + 6 + text_w + 18;
+        if x > 0 && x + w > width {
+            row += 1;
+            x = 0;
+        }
+        out.push((row, x));
+        x += w;
+    }
+    out
+}
+
+fn legend_height<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[(String, SeriesStyle, RGBColor)],
+    look: Look,
+) -> u32 {
+    let rows = legend_layout(area, entries, look).last().map_or(0, |e| e.0 + 1);
+    rows * LEGEND_ROW_PX + 10
+}
+
+/// A legend outside the plot area: one swatch and name per entry, in rows.
+fn draw_legend_strip<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[(String, SeriesStyle, RGBColor)],
+    look: Look,
+) -> DrawResult<DB> {
+    let left = look.margin as i32 + look.y_area as i32;
+    for ((name, style, colour), (row, x)) in entries.iter().zip(legend_layout(area, entries, look)) {
+        let y = 4 + (row * LEGEND_ROW_PX) as i32 + LEGEND_ROW_PX as i32 / 2;
+        area.draw(&legend_swatch::<DB>((left + x, y), *style, *colour))?;
+        area.draw(&Text::new(
+            name.as_str(),
+            (left + x + SWATCH_PX + 6, y - look.label as i32 / 2 - 1),
+            (FONT, look.label).into_font(),
+        ))?;
+    }
+    Ok(())
 }
 
 /// The legend goes in the plot corner holding the fewest data points, ties
@@ -276,6 +619,9 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, spec: &FigureSpec
 fn legend_corner(spec: &FigureSpec, plan: &Plan) -> SeriesLabelPosition {
     let (x0, x1) = plan.x_range;
     let (y0, y1) = plan.y_range;
+    let log_x = plan.x_scale == AxisScale::Log10;
+    let pos_x =
+        |x: f64| if log_x { (x.log10() - x0.log10()) / (x1.log10() - x0.log10()) } else { (x - x0) / (x1 - x0) };
     // The legend box is roughly a third of the width and a quarter of the
     // height for a few entries; grow the height with the entry count.
     let named = spec.series.iter().filter(|s| !s.name.is_empty()).count() as f64;
@@ -292,7 +638,7 @@ fn legend_corner(spec: &FigureSpec, plan: &Plan) -> SeriesLabelPosition {
             .iter()
             .flat_map(|s| s.x.iter().zip(&s.y))
             .filter(|(x, y)| {
-                let u = (**x - x0) / (x1 - x0);
+                let u = pos_x(**x);
                 let v = (**y - y0) / (y1 - y0);
                 let in_x = if right { u >= 1.0 - fx } else { u <= fx };
                 let in_y = if upper { v >= 1.0 - fy } else { v <= fy };
@@ -311,7 +657,12 @@ fn legend_corner(spec: &FigureSpec, plan: &Plan) -> SeriesLabelPosition {
 }
 
 /// The heat map's colour scale: a vertical strip from z min to z max with its label.
-fn draw_colour_bar<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, z_label: &str, z: (f64, f64)) -> DrawResult<DB> {
+fn draw_colour_bar<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    z_label: &str,
+    z: (f64, f64),
+    look: Look,
+) -> DrawResult<DB> {
     let z_dec = tick_decimals(z.0, z.1);
     let z_fmt = move |v: &f64| rig_types::fmt_fixed(*v, z_dec);
     let mut bar = ChartBuilder::on(area)
@@ -326,8 +677,8 @@ fn draw_colour_bar<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, z_label: &
         .disable_x_axis()
         .y_desc(z_label)
         .y_label_formatter(&z_fmt)
-        .label_style((FONT, 13))
-        .axis_desc_style((FONT, 14))
+        .label_style((FONT, look.label.min(13)))
+        .axis_desc_style((FONT, look.desc.min(14)))
         .draw()?;
     const STEPS: usize = 100;
     let dz = (z.1 - z.0) / STEPS as f64;

@@ -3,16 +3,21 @@
 //!
 //! Everything here is deterministic: one embedded font (DejaVu Sans, see
 //! `assets/LICENSE-DejaVu.txt`), no system font lookup, axis ranges computed
-//! from the data with fixed padding, fixed colour palette, no clock.
+//! from the data with fixed padding, one colour-blind-safe palette (Okabe–Ito),
+//! no clock. Besides single figures: multi-panel [`Sheet`]s (log-x panels,
+//! one shared legend), marker shapes, shaded bands and hatched heat-map regions.
 
 mod csv;
 mod draw;
+mod glyph;
+mod png_io;
 mod range;
 
 use plotters::prelude::*;
-use rig_types::FigureSpec;
+use rig_types::{AxisScale, FigureSpec, Sheet};
 
-pub use csv::series_csv;
+pub use csv::{series_csv, sheet_csv};
+pub use png_io::{PngSettings, decode_png, encode_png};
 
 /// Width and height of every rendered figure, pixels.
 pub const SIZE_PX: (u32, u32) = (900, 600);
@@ -28,8 +33,8 @@ pub enum FigureError {
     /// plotters failed while drawing.
     #[error("figure {id}: {reason}")]
     Draw { id: String, reason: String },
-    /// Encoding the bitmap as PNG failed (temporary file IO or encoder).
-    #[error("figure {id}: PNG encoding: {reason}")]
+    /// Encoding or decoding a PNG failed.
+    #[error("figure {id}: PNG: {reason}")]
     Png { id: String, reason: String },
 }
 
@@ -47,8 +52,12 @@ fn ensure_font() -> std::result::Result<(), String> {
 }
 
 fn prepare(spec: &FigureSpec) -> Result<draw::Plan> {
-    ensure_font().map_err(|reason| FigureError::Draw { id: spec.id.clone(), reason })?;
-    draw::Plan::new(spec).map_err(|reason| FigureError::Spec { id: spec.id.clone(), reason })
+    prepare_scaled(spec, &spec.id, AxisScale::Linear)
+}
+
+fn prepare_scaled(spec: &FigureSpec, id: &str, x_scale: AxisScale) -> Result<draw::Plan> {
+    ensure_font().map_err(|reason| FigureError::Draw { id: id.to_string(), reason })?;
+    draw::Plan::new(spec, x_scale).map_err(|reason| FigureError::Spec { id: id.to_string(), reason })
 }
 
 /// SVG text of the figure (text stays text: the viewer's sans-serif font renders it).
@@ -74,20 +83,57 @@ pub fn render_rgb(spec: &FigureSpec) -> Result<Vec<u8>> {
     Ok(buf)
 }
 
-/// PNG bytes of the figure.
-///
-/// plotters only encodes PNG when saving to a path (its `image` dependency is
-/// not re-exported), so the pixels of [`render_rgb`] are blitted into a file
-/// backend in a private temporary directory and read back.
+/// PNG bytes of the figure ([`render_rgb`] encoded with [`PngSettings::default`]).
 pub fn render_png(spec: &FigureSpec) -> Result<Vec<u8>> {
     let rgb = render_rgb(spec)?;
-    let png_err = |reason: String| FigureError::Png { id: spec.id.clone(), reason };
-    let dir = tempfile::tempdir().map_err(|e| png_err(format!("creating a temporary directory: {e}")))?;
-    let path = dir.path().join("figure.png");
-    {
-        let mut backend = BitMapBackend::new(&path, SIZE_PX);
-        backend.blit_bitmap((0, 0), SIZE_PX, &rgb).map_err(|e| png_err(e.to_string()))?;
-        backend.present().map_err(|e| png_err(e.to_string()))?;
+    encode_png(SIZE_PX, &rgb, PngSettings::default()).map_err(|reason| FigureError::Png { id: spec.id.clone(), reason })
+}
+
+/// Pixel size of a rendered sheet (it grows with its panel grid).
+pub fn sheet_size_px(sheet: &Sheet) -> (u32, u32) {
+    draw::sheet_size(sheet)
+}
+
+fn prepare_sheet(sheet: &Sheet) -> Result<Vec<draw::Plan>> {
+    if sheet.panels.is_empty() {
+        return Err(FigureError::Spec { id: sheet.id.clone(), reason: "a sheet needs at least one panel".into() });
     }
-    std::fs::read(&path).map_err(|e| png_err(format!("reading {}: {e}", path.display())))
+    sheet
+        .panels
+        .iter()
+        .enumerate()
+        .map(|(i, p)| prepare_scaled(&p.spec, &format!("{} panel {}", sheet.id, i + 1), p.x_scale))
+        .collect()
+}
+
+/// SVG text of a multi-panel sheet.
+pub fn render_sheet_svg(sheet: &Sheet) -> Result<String> {
+    let plans = prepare_sheet(sheet)?;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, sheet_size_px(sheet)).into_drawing_area();
+        draw::draw_sheet(&root, sheet, &plans)
+            .map_err(|e| FigureError::Draw { id: sheet.id.clone(), reason: e.to_string() })?;
+    }
+    Ok(svg)
+}
+
+/// Raw RGB8 pixels of a sheet, [`sheet_size_px`] in size.
+pub fn render_sheet_rgb(sheet: &Sheet) -> Result<Vec<u8>> {
+    let plans = prepare_sheet(sheet)?;
+    let size = sheet_size_px(sheet);
+    let mut buf = vec![0u8; (size.0 * size.1 * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, size).into_drawing_area();
+        draw::draw_sheet(&root, sheet, &plans)
+            .map_err(|e| FigureError::Draw { id: sheet.id.clone(), reason: e.to_string() })?;
+    }
+    Ok(buf)
+}
+
+/// PNG bytes of a sheet.
+pub fn render_sheet_png(sheet: &Sheet) -> Result<Vec<u8>> {
+    let rgb = render_sheet_rgb(sheet)?;
+    encode_png(sheet_size_px(sheet), &rgb, PngSettings::default())
+        .map_err(|reason| FigureError::Png { id: sheet.id.clone(), reason })
 }

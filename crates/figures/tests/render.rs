@@ -1,8 +1,11 @@
 //! Renders a small spec of each kind and checks what a reader relies on:
 //! labels present, gaps in lines, legends, deterministic pixels and text.
 
-use rig_figures::{FigureError, SIZE_PX, render_png, render_rgb, render_svg, series_csv};
-use rig_types::{FigureSpec, Heatmap, Series, SeriesStyle};
+use rig_figures::{
+    FigureError, SIZE_PX, render_png, render_rgb, render_sheet_rgb, render_sheet_svg, render_svg, series_csv,
+    sheet_csv, sheet_size_px,
+};
+use rig_types::{AxisScale, FigureSpec, Heatmap, MarkerShape, Panel, Series, SeriesStyle, Sheet, band};
 
 fn series(name: &str, style: SeriesStyle, x: &[f64], y: &[f64]) -> Series {
     Series { name: name.into(), x: x.to_vec(), y: y.to_vec(), style }
@@ -139,4 +142,85 @@ fn mismatched_lengths_are_a_spec_error() {
 fn empty_figure_still_draws_axes() {
     let svg = render_svg(&spec("empty", vec![], None)).unwrap();
     assert!(svg.contains("time (s)"));
+}
+
+fn panel(spec: FigureSpec, x_scale: AxisScale) -> Panel {
+    Panel { spec, x_scale }
+}
+
+#[test]
+fn a_sheet_draws_every_panel_and_grows_with_its_grid() {
+    let (t, y) = decay();
+    let mk = |title: &str| {
+        let mut s = spec("p", vec![series("measured", SeriesStyle::Line, &t, &y)], None);
+        s.title = title.into();
+        s
+    };
+    let sheet = Sheet {
+        id: "sheet".into(),
+        title: "Sheet title".into(),
+        caption: String::new(),
+        columns: 2,
+        panels: ["(a) one", "(b) two", "(c) three"].iter().map(|t| panel(mk(t), AxisScale::Linear)).collect(),
+    };
+    let svg = render_sheet_svg(&sheet).unwrap();
+    for text in ["Sheet title", "(a) one", "(b) two", "(c) three"] {
+        assert!(svg.contains(text), "SVG lacks {text:?}");
+    }
+    // Panels share their series, so the legend is drawn once, below the grid.
+    assert_eq!(svg.matches(">\nmeasured\n<").count() + svg.matches(">measured<").count(), 1, "one shared legend entry");
+    let (w, h) = sheet_size_px(&sheet);
+    assert_eq!(render_sheet_rgb(&sheet).unwrap().len(), (w * h * 3) as usize);
+    let two_rows = h;
+    let one_row = sheet_size_px(&Sheet { panels: sheet.panels[..2].to_vec(), ..sheet.clone() }).1;
+    assert!(two_rows > one_row, "{two_rows} vs {one_row}");
+    let csv = sheet_csv(&sheet);
+    assert!(csv.starts_with("panel,series,x,y\n(a) one,measured,0.000,1.00\n"), "{}", &csv[..60]);
+}
+
+#[test]
+fn a_log_axis_skips_non_positive_x_and_keeps_decades() {
+    let s = spec("log", vec![series("H", SeriesStyle::Line, &[0.0, 0.1, 1.0, 10.0], &[1.0, 2.0, 3.0, 4.0])], None);
+    let sheet = Sheet {
+        id: "log".into(),
+        title: "t".into(),
+        caption: String::new(),
+        columns: 1,
+        panels: vec![panel(s, AxisScale::Log10)],
+    };
+    let svg = render_sheet_svg(&sheet).unwrap();
+    for tick in [">\n0.1\n<", ">\n1\n<", ">\n10\n<"] {
+        assert!(svg.contains(tick), "no decade tick {tick:?}");
+    }
+}
+
+#[test]
+fn new_styles_render_and_hatching_needs_a_heat_map() {
+    let heat = Heatmap {
+        x: vec![1.0, 2.0, 3.0],
+        y: vec![10.0, 20.0],
+        z: vec![vec![0.0, 0.5, 1.0], vec![0.2, 1.5, 2.0]],
+        z_label: "severity (-)".into(),
+    };
+    let open = SeriesStyle::Marker { shape: MarkerShape::TriangleDown, filled: false };
+    let s = spec(
+        "styles",
+        vec![
+            series("bistable", SeriesStyle::HatchCells, &[2.0, 3.0], &[20.0, 20.0]),
+            series("down", open, &[1.0], &[10.0]),
+        ],
+        Some(heat),
+    );
+    let svg = render_svg(&s).unwrap();
+    // Outside legend: both names are drawn below the plot.
+    assert!(svg.contains("bistable") && svg.contains("down"));
+    let no_heat = spec("nh", vec![series("r", SeriesStyle::HatchCells, &[1.0], &[1.0])], None);
+    match render_svg(&no_heat) {
+        Err(FigureError::Spec { reason, .. }) => assert!(reason.contains("no heat map"), "{reason}"),
+        other => panic!("expected a spec error, got {other:?}"),
+    }
+    let b = band("spread", &[0.0, 1.0, 2.0], &[0.0, 0.5, 0.2], &[1.0, 1.5, 1.2]);
+    let with_band = spec("band", vec![b, series("mean", SeriesStyle::Line, &[0.0, 1.0, 2.0], &[0.5, 1.0, 0.7])], None);
+    let svg = render_svg(&with_band).unwrap();
+    assert!(svg.contains("<polygon"), "band drawn as a polygon");
 }

@@ -3,7 +3,7 @@
 //! prefixes every stage error with `stage <name>:` once.
 
 use anyhow::{Context, Result, anyhow};
-use rig_types::{Campaign, FigureSpec, Table};
+use rig_types::{Campaign, FigureSpec, Sheet, Table};
 use serde::{Serialize, de::DeserializeOwned};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -137,6 +137,16 @@ impl StageCtx {
         self.write_text(rel, &table.to_csv())
     }
 
+    /// A large table: `rel` (`tables/<name>.csv`) and, beside it,
+    /// `tables/<name>.parquet` with the same cells, typed
+    /// ([`crate::parquet`]), for loading into polars or pandas in one line.
+    pub fn write_table_with_parquet(&mut self, rel: &str, table: &Table) -> Result<()> {
+        let stem = rel.strip_suffix(".csv").ok_or_else(|| anyhow!("table path {rel} must end in .csv"))?;
+        let parquet = crate::parquet::table_parquet(table).with_context(|| format!("table {rel}"))?;
+        self.write_table(rel, table)?;
+        self.write_bytes(&format!("{stem}.parquet"), parquet)
+    }
+
     /// Pretty JSON with a trailing newline.
     pub fn write_json<T: Serialize>(&mut self, rel: &str, value: &T) -> Result<()> {
         let mut s = serde_json::to_string_pretty(value)?;
@@ -148,11 +158,31 @@ impl StageCtx {
     pub fn write_figure(&mut self, spec: &FigureSpec) -> Result<()> {
         let svg = rig_figures::render_svg(spec).with_context(|| format!("figure {}", spec.id))?;
         let png = rig_figures::render_png(spec).with_context(|| format!("figure {}", spec.id))?;
-        self.write_text(&format!("figures/{}.svg", spec.id), &svg)?;
-        self.write_bytes(&format!("figures/{}.png", spec.id), png)?;
-        self.write_text(&format!("figures/{}.txt", spec.id), &format!("{}\n\n{}\n", spec.title, spec.caption))?;
-        self.write_text(&format!("figures/{}.csv", spec.id), &rig_figures::series_csv(spec))?;
-        Ok(())
+        let csv = rig_figures::series_csv(spec);
+        self.write_figure_files(&spec.id, svg, png, (&spec.title, &spec.caption), csv)
+    }
+
+    /// A multi-panel sheet: the same four files as [`Self::write_figure`];
+    /// its `.csv` holds every panel's series with a `panel` column.
+    pub fn write_sheet(&mut self, sheet: &Sheet) -> Result<()> {
+        let svg = rig_figures::render_sheet_svg(sheet).with_context(|| format!("figure {}", sheet.id))?;
+        let png = rig_figures::render_sheet_png(sheet).with_context(|| format!("figure {}", sheet.id))?;
+        let csv = rig_figures::sheet_csv(sheet);
+        self.write_figure_files(&sheet.id, svg, png, (&sheet.title, &sheet.caption), csv)
+    }
+
+    fn write_figure_files(
+        &mut self,
+        id: &str,
+        svg: String,
+        png: Vec<u8>,
+        (title, caption): (&str, &str),
+        csv: String,
+    ) -> Result<()> {
+        self.write_text(&format!("figures/{id}.svg"), &svg)?;
+        self.write_bytes(&format!("figures/{id}.png"), png)?;
+        self.write_text(&format!("figures/{id}.txt"), &format!("{title}\n\n{caption}\n"))?;
+        self.write_text(&format!("figures/{id}.csv"), &csv)
     }
 
     /// Everything staged so far (the runner commits these).

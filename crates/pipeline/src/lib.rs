@@ -21,6 +21,7 @@ mod error;
 pub mod graph;
 mod hash;
 mod manifest;
+pub mod parquet;
 mod report;
 mod runner;
 pub mod stages;

@@ -67,10 +67,30 @@ fn process_mutex() -> &'static Mutex<()> {
     M.get_or_init(|| Mutex::new(()))
 }
 
+/// The shared out dir after running `names` (and their upstream), locked
+/// against other test processes while the returned guard lives.
+pub fn shared_outputs(names: &[&str]) -> SharedOut {
+    let guard = process_mutex().lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    let dir = shared_out_dir();
+    let lock = lock_shared_out_dir(&dir);
+    if let Err(e) = run_report(&dir, names) {
+        panic!("running stages {names:?}: {e:#}");
+    }
+    SharedOut { dir, _lock: lock, _guard: guard }
+}
+
+/// See [`shared_outputs`].
+pub struct SharedOut {
+    pub dir: PathBuf,
+    _lock: DirLock,
+    _guard: std::sync::MutexGuard<'static, ()>,
+}
+
 /// Runs stage `name` (and its upstream) into this process's out dir and
 /// insta-snapshots every output of that stage into `crates/pipeline/tests/snapshots/`:
-/// CSV, MD, JSON and TXT as text; each figure's SVG and PNG as hashes in one
-/// small YAML snapshot (its `.csv` series and `.txt` caption are text
+/// CSV, MD, JSON and TXT as text; each figure's SVG text and PNG pixels as
+/// hashes in one small YAML snapshot ([`png_pixels_blake3`]: a PNG encoder
+/// update that changes no pixel changes no snapshot) (its `.csv` series and `.txt` caption are text
 /// snapshots like any other); any other file as hash and size.
 /// Snapshot names are `<stage>__<output path with / as __>`.
 ///
@@ -120,10 +140,12 @@ fn snapshot_texts(dir: &Path, outputs: &BTreeMap<String, crate::FileHash>) -> BT
             "svg" if rel.starts_with("figures/") => {
                 renders.entry(format!("{stem}.render")).or_default().insert("svg_blake3", hash.blake3.clone());
             }
-            // Hash of the PNG file: rig-figures exposes no RGB decoder yet, so
-            // an encoder upgrade will show up here as a change.
+            // The decoded pixels, not the file: only a visible change fails.
             "png" if rel.starts_with("figures/") => {
-                renders.entry(format!("{stem}.render")).or_default().insert("png_blake3", hash.blake3.clone());
+                let path = dir.join(rel);
+                let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                let pixels = png_pixels_blake3(&bytes).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                renders.entry(format!("{stem}.render")).or_default().insert("pixels_blake3", pixels);
             }
             _ => {
                 texts.insert(rel.clone(), format!("blake3: {}\nsize: {}\n", hash.blake3, hash.size));
@@ -135,6 +157,18 @@ fn snapshot_texts(dir: &Path, outputs: &BTreeMap<String, crate::FileHash>) -> BT
         texts.insert(rel, text);
     }
     texts
+}
+
+/// blake3 of a PNG's decoded RGB8 pixels, prefixed by its width and height:
+/// the same for every encoding of the same picture (compression level,
+/// filter, encoder version), different for any changed pixel.
+pub fn png_pixels_blake3(png: &[u8]) -> Result<String, String> {
+    let ((w, h), rgb) = rig_figures::decode_png(png)?;
+    let mut hasher = blake3::Hasher::new();
+    hasher.update(&w.to_le_bytes());
+    hasher.update(&h.to_le_bytes());
+    hasher.update(&rgb);
+    Ok(hasher.finalize().to_hex().to_string())
 }
 
 /// Developer aid for stage authors: runs only stage `name` against an out dir
@@ -169,4 +203,35 @@ pub fn dev_run_only(name: &str, out: &Path) -> anyhow::Result<()> {
         std::fs::write(path, bytes)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::png_pixels_blake3;
+    use rig_figures::{PngSettings, SIZE_PX, encode_png, render_rgb};
+    use rig_types::{SeriesStyle, figure, series};
+
+    #[test]
+    fn pixel_hash_ignores_the_encoding_and_sees_one_pixel() {
+        let spec = figure(
+            "t",
+            "pixel hash",
+            "",
+            ("x", 1),
+            ("y", 1),
+            vec![series("s", vec![0.0, 1.0, 2.0], vec![0.0, 2.0, 1.0], SeriesStyle::Line)],
+        );
+        let rgb = render_rgb(&spec).unwrap();
+        let fast = PngSettings { compression: png::Compression::Fast, filter: png::FilterType::NoFilter };
+        let best = PngSettings { compression: png::Compression::Best, filter: png::FilterType::Paeth };
+        let (a, b) = (encode_png(SIZE_PX, &rgb, fast).unwrap(), encode_png(SIZE_PX, &rgb, best).unwrap());
+        assert_ne!(a, b, "the two encodings must differ for this test to mean anything");
+        assert_eq!(png_pixels_blake3(&a).unwrap(), png_pixels_blake3(&b).unwrap());
+        let mut moved = rgb.clone();
+        let i = 3 * (SIZE_PX.0 as usize * 300 + 450);
+        moved[i] ^= 0x01;
+        let c = encode_png(SIZE_PX, &moved, fast).unwrap();
+        assert_ne!(png_pixels_blake3(&a).unwrap(), png_pixels_blake3(&c).unwrap());
+        assert!(png_pixels_blake3(b"not a png").is_err());
+    }
 }

@@ -15,7 +15,9 @@ mod trajectory;
 pub mod units;
 
 pub use campaign::{Campaign, RigInfo, Run, RunData, RunKind};
-pub use figure::{FigureSpec, Heatmap, Series, SeriesStyle, figure, series};
+pub use figure::{
+    AxisScale, FigureSpec, Heatmap, MarkerShape, Panel, Series, SeriesStyle, Sheet, band, figure, series,
+};
 pub use params::{
     DriveParams, Effect, FrictionLaw, HarmonicFriction, ModelKind, MotorParams, RigParams, RunInput, ThesisFriction,
 };

@@ -44,7 +44,25 @@ pub struct Pair {
     pub measured: Features,
     pub simulated: Option<Features>,
     pub window_s: f64,
+    /// Rotor speed over the steady window, for the small-multiples figure.
+    pub trace: Trace,
+    /// One encoder tick over the motor-speed differentiator window,
+    /// tick/(2h·dt), rad/s: the smallest motor-speed step (dip) it can show.
+    pub motor_tick_rad_s: f64,
 }
+
+/// Ω1 over a run's steady window at about [`TRACE_RATE_HZ`] (every k-th
+/// sample of the centred difference the features use), measured and simulated.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Trace {
+    pub time_s: Vec<f64>,
+    pub measured_rad_s: Vec<f64>,
+    pub simulated_rad_s: Option<Vec<f64>>,
+}
+
+/// Rate of a [`Trace`]: ten points per second of the fastest stick-slip
+/// cycle the rig shows (periods 2-6 s) and then some.
+pub const TRACE_RATE_HZ: f64 = 20.0;
 
 /// One [`Pair`] per operating point of `c` with model `p` (one simulation per
 /// run over ramp + settle + `steady_s` only, in parallel, campaign order kept;
@@ -71,17 +89,38 @@ fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) 
     let phi2: Vec<f64> = run.data.motor_ticks.as_ref()?[..to].iter().map(|&k| k as f64 * rad).collect();
     let tt = &t[..to];
     let w_set = motor_rpm_setpoint * 2.0 * PI / 60.0;
+    let dt = (tt[to - 1] - tt[0]) / (to - 1) as f64;
+    let stride = ((1.0 / (TRACE_RATE_HZ * dt)).round() as usize).max(1);
     let feat = |a1: &[f64], a2: &[f64]| {
         let w1 = centred_speed(tt, a1, s.rotor_speed_half_window);
         let w2 = centred_speed(tt, a2, s.motor_speed_half_window);
-        steady_features(&tt[from..], &w1[from..], &w2[from..], w_set, s.slip_speed_rad_s, &s.classify)
+        let f = steady_features(&tt[from..], &w1[from..], &w2[from..], w_set, s.slip_speed_rad_s, &s.classify);
+        (f, w1[from..].iter().step_by(stride).copied().collect::<Vec<f64>>())
     };
-    let measured = feat(&phi1, &phi2);
+    let (measured, measured_rad_s) = feat(&phi1, &phi2);
     let input = RunInput::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s };
-    let simulated = rig_model::simulate(p, &input, tt, &SimOptions::default())
+    let sim = rig_model::simulate(p, &input, tt, &SimOptions::default())
         .ok()
         .map(|tr| feat(&tr.rotor_angle_rad, &tr.motor_angle_rad));
-    Some(Pair { id: run.id.clone(), measured, simulated, window_s: tt[to - 1] - tt[from] })
+    let (simulated, simulated_rad_s) = sim.map_or((None, None), |(f, w)| (Some(f), Some(w)));
+    let trace = Trace { time_s: tt[from..].iter().step_by(stride).copied().collect(), measured_rad_s, simulated_rad_s };
+    let motor_tick_rad_s = rad / (2.0 * s.motor_speed_half_window as f64 * dt);
+    Some(Pair { id: run.id.clone(), measured, simulated, window_s: tt[to - 1] - tt[from], trace, motor_tick_rad_s })
+}
+
+/// Each operating point's measured rotor speed with the baseline's and the
+/// extended model's free runs (pairs of [`free_run_pairs`], matched by run id).
+pub fn speed_traces(baseline: &[Pair], extended: &[Pair]) -> Vec<crate::result::SpeedTraces> {
+    baseline
+        .iter()
+        .map(|b| crate::result::SpeedTraces {
+            id: b.id.clone(),
+            time_s: b.trace.time_s.clone(),
+            measured_rad_s: b.trace.measured_rad_s.clone(),
+            baseline_rad_s: b.trace.simulated_rad_s.clone(),
+            extended_rad_s: extended.iter().find(|e| e.id == b.id).and_then(|e| e.trace.simulated_rad_s.clone()),
+        })
+        .collect()
 }
 
 /// The four free-run checks of model `p` (one simulation per operating point,

@@ -523,8 +523,14 @@ fn section_tables(out: &Path) -> String {
     }
     for name in names {
         let rows = parse_csv(&read_opt(&out.join("tables"), &name).unwrap_or_default());
+        // A large table's Parquet twin (StageCtx::write_table_with_parquet), for polars or pandas.
+        let parquet = name.strip_suffix(".csv").map(|stem| format!("{stem}.parquet"));
+        let link = match parquet.filter(|p| out.join("tables").join(p).is_file()) {
+            Some(p) => format!(" · <a href=\"tables/{0}\">{0}</a>", escape(&p)),
+            None => String::new(),
+        };
         s.push_str(&format!(
-            "<details><summary><code>tables/{}</code> ({} rows)</summary>\n{}</details>\n",
+            "<details><summary><code>tables/{}</code> ({} rows){link}</summary>\n{}</details>\n",
             escape(&name),
             rows.len().saturating_sub(1),
             csv_table(&rows, status_column(&rows))

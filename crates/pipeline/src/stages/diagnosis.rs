@@ -1,7 +1,9 @@
 //! Stage `diagnosis`: blind diagnosis of the campaign (rig_diagnose): what
 //! the rig model gets wrong, the cause, the extended model and its held-out
 //! gain; diagnosis.json exactly as ../shared/spec/diagnosis.md, diagnosis.md,
-//! tables/diagnosis-{runs,candidates,rungs,checks}.csv and the evidence figures.
+//! tables/diagnosis-{runs,candidates,rungs,checks,speed-traces}.csv (runs and
+//! speed traces with Parquet twins), the evidence figures and the
+//! small-multiples sheet of every operating point's rotor speed.
 
 use crate::StageCtx;
 use anyhow::{Context, Result};
@@ -21,12 +23,16 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     // The options as run: the confusion stage diagnoses with exactly these.
     ctx.write_json("data/diagnose-options.json", &opts)?;
     ctx.write_text("diagnosis.md", &render::markdown(&d))?;
-    ctx.write_table("tables/diagnosis-runs.csv", &render::runs_table(&d))?;
+    ctx.write_table_with_parquet("tables/diagnosis-runs.csv", &render::runs_table(&d))?;
+    ctx.write_table_with_parquet("tables/diagnosis-speed-traces.csv", &render::speed_traces_table(&d))?;
     ctx.write_table("tables/diagnosis-candidates.csv", &render::candidates_table(&d))?;
     ctx.write_table("tables/diagnosis-rungs.csv", &render::rungs_table(&d))?;
     ctx.write_table("tables/diagnosis-checks.csv", &render::checks_table(&d))?;
     for f in render::figures(&d) {
         ctx.write_figure(&f)?;
+    }
+    if let Some(sheet) = render::speed_sheet(&d) {
+        ctx.write_sheet(&sheet)?;
     }
     Ok(())
 }

@@ -56,8 +56,14 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     for (path, table) in &out.tables {
         ctx.write_table(path, table)?;
     }
+    for (path, table) in &out.large_tables {
+        ctx.write_table_with_parquet(path, table)?;
+    }
     for f in &out.figures {
         ctx.write_figure(f)?;
+    }
+    for s in &out.sheets {
+        ctx.write_sheet(s)?;
     }
     ctx.write_text("sweeps.md", &out.markdown)?;
     Ok(())

@@ -10,7 +10,10 @@ use crate::{
 };
 use rig_types::sensor::encoder_speed_rad_s;
 use rig_types::units::RAD_S_TO_RPM;
-use rig_types::{Campaign, FigureSpec, Heatmap, Run, Series, SeriesStyle, Table, fmt_fixed};
+use rig_types::{
+    AxisScale, Campaign, FigureSpec, Heatmap, MarkerShape, Panel, Run, Series, SeriesStyle, Sheet, Table, band,
+    fmt_fixed,
+};
 
 /// Most points a time-response series gets.
 const MAX_POINTS: usize = 2000;
@@ -22,7 +25,11 @@ const EXTREMES: [Extreme; 2] = [("max", |k| k.max_rad_s), ("min", |k| k.min_rad_
 pub struct SweepsOutput {
     /// (path relative to the out dir, table).
     pub tables: Vec<(String, Table)>,
+    /// The severity-map tables: written with a Parquet twin beside the CSV.
+    pub large_tables: Vec<(String, Table)>,
     pub figures: Vec<FigureSpec>,
+    /// The bifurcation diagrams: one panel per model.
+    pub sheets: Vec<Sheet>,
     /// sweeps.md.
     pub markdown: String,
 }
@@ -30,9 +37,9 @@ pub struct SweepsOutput {
 /// Renders the whole study; `campaign` gives the recordings of the time responses.
 pub fn outputs(study: &SweepsStudy, campaign: &Campaign) -> Result<SweepsOutput, SweepError> {
     let (models, ops, labels) = (&study.models, &study.ops, &study.labelled);
-    let mut tables = Vec::new();
+    let (mut tables, mut large_tables) = (Vec::new(), Vec::new());
     for m in models {
-        tables.push((format!("tables/sweep-map-{}.csv", m.name), map_table(&m.map)));
+        large_tables.push((format!("tables/sweep-map-{}.csv", m.name), map_table(&m.map)));
         for (kind, chains) in [
             ("speed", &m.speed),
             ("friction", &m.friction),
@@ -61,8 +68,10 @@ pub fn outputs(study: &SweepsStudy, campaign: &Campaign) -> Result<SweepsOutput,
             &format!("{} N", fmt_fixed(force, 2)),
         )
     };
-    figures.push(speed_fig("fig-4-18", study.speed_sweep_force_n, |m| &m.speed));
-    figures.push(speed_fig("fig-4-18-campaign", study.campaign_force_n, |m| &m.speed_campaign));
+    let mut sheets = vec![
+        speed_fig("fig-4-18", study.speed_sweep_force_n, |m| &m.speed),
+        speed_fig("fig-4-18-campaign", study.campaign_force_n, |m| &m.speed_campaign),
+    ];
     let friction_fig = |id: &str, rpm: f64, pick: fn(&ModelSweeps) -> &Vec<ChainResult>| {
         diagram_figure(
             id,
@@ -75,15 +84,15 @@ pub fn outputs(study: &SweepsStudy, campaign: &Campaign) -> Result<SweepsOutput,
             &format!("{} rpm", fmt_fixed(rpm, 1)),
         )
     };
-    figures.push(friction_fig("fig-4-20", study.friction_sweep_rpm, |m| &m.friction));
-    figures.push(friction_fig("fig-4-20-campaign", study.campaign_rpm, |m| &m.friction_campaign));
+    sheets.push(friction_fig("fig-4-20", study.friction_sweep_rpm, |m| &m.friction));
+    sheets.push(friction_fig("fig-4-20-campaign", study.campaign_rpm, |m| &m.friction_campaign));
     let tpr = campaign.rig.encoder_ticks_per_rev;
     for (fig, target, id) in &study.chosen {
         let run = campaign.runs.iter().find(|r| &r.id == id).expect("chosen from the campaign's runs");
         let op = ops.iter().find(|o| &o.id == id).expect("every run has an op point");
         figures.push(time_response_figure(fig, *target, run, op, tpr)?);
     }
-    Ok(SweepsOutput { tables, figures, markdown: markdown(study) })
+    Ok(SweepsOutput { tables, large_tables, figures, sheets, markdown: markdown(study) })
 }
 
 fn missing(run: &Run, column: &str) -> SweepError {
@@ -205,25 +214,31 @@ pub fn map_figure(m: &ModelSweeps, dir: usize, ops: &[OpPoint], labels: &[Labell
             bistable.1.push(p.normal_force_n);
         }
     }
-    let mut series =
-        vec![Series {
-            name: "up ≠ down (bistable)".into(), x: bistable.0, y: bistable.1, style: SeriesStyle::Points
-        }];
+    // The map first: the bistable region hatched and outlined, measured and
+    // labelled points as open markers (shape = source and class) over it.
+    let mut series = vec![Series {
+        name: "bistable: up ≠ down".into(),
+        x: bistable.0,
+        y: bistable.1,
+        style: SeriesStyle::HatchCells,
+    }];
+    let open = |shape| SeriesStyle::Marker { shape, filled: false };
     for vib in [true, false] {
+        let class = if vib { "vibrating" } else { "quiet" };
         let pts: Vec<&OpPoint> = ops.iter().filter(|o| o.measured.regime.vibrating() == vib).collect();
         series.push(Series {
-            name: format!("measured {}", if vib { "vibrating" } else { "quiet" }),
+            name: format!("measured {class}"),
             x: pts.iter().map(|o| o.point.motor_rpm).collect(),
             y: pts.iter().map(|o| o.point.normal_force_n).collect(),
-            style: if vib { SeriesStyle::Markers } else { SeriesStyle::Points },
+            style: open(if vib { MarkerShape::Circle } else { MarkerShape::Diamond }),
         });
         let ls: Vec<&LabelledPoint> =
             labels.iter().map(|l| &l.point).filter(|l| (l.label == "vibrating") == vib).collect();
         series.push(Series {
-            name: format!("thesis label {}", if vib { "vibrating" } else { "quiet" }),
+            name: format!("thesis label {class}"),
             x: ls.iter().map(|l| l.point.motor_rpm).collect(),
             y: ls.iter().map(|l| l.point.normal_force_n).collect(),
-            style: if vib { SeriesStyle::Markers } else { SeriesStyle::Points },
+            style: open(if vib { MarkerShape::Square } else { MarkerShape::TriangleUp }),
         });
     }
     let dname = if dir == 0 { "up" } else { "down" };
@@ -234,10 +249,11 @@ pub fn map_figure(m: &ModelSweeps, dir: usize, ops: &[OpPoint], labels: &[Labell
             "Stick-slip severity (max − min)/mean of rotor speed over a {nx} × {ny} grid of motor set-point × \
              normal force (the chapter's Frict), {} model, each friction row swept {dname} in speed by \
              continuation (each point starts from the previous point's end state; {} s discarded after each \
-             step, the next {} s classified). Points: grid cells where the up and down sweeps end in different \
-             regimes (the bistable band); campaign operating points classified from their recordings by the \
-             same classifier (vibrating = any regime but equilibrium); the chapter's labelled points \
-             (Figs. 4.17, 4.19, 4.21–4.24). {failed} grid points did not converge (shown as 0).",
+             step, the next {} s classified). Hatched and outlined: grid cells where the up and down sweeps end \
+             in different regimes (the bistable band). Open markers: campaign operating points classified from \
+             their recordings by the same classifier (circle vibrating, diamond quiet; vibrating = any regime \
+             but equilibrium); the chapter's labelled points (Figs. 4.17, 4.19, 4.21–4.24; square vibrating, \
+             triangle quiet). {failed} grid points did not converge (shown as 0).",
             m.name,
             fmt_fixed(w.transient_s, 1),
             fmt_fixed(w.window_s, 1)
@@ -256,6 +272,11 @@ pub fn map_figure(m: &ModelSweeps, dir: usize, ops: &[OpPoint], labels: &[Labell
     }
 }
 
+/// A bifurcation diagram as the field draws it: one panel per model, the
+/// window's min and max rotor speed as points, swept up (filled triangles up)
+/// and down (open triangles down), the parameter range where the two
+/// directions end in different regimes shaded (the bistable band), and the
+/// campaign runs on that line as open circles in every panel.
 #[allow(clippy::too_many_arguments)]
 pub fn diagram_figure(
     id: &str,
@@ -266,50 +287,102 @@ pub fn diagram_figure(
     ops: &[OpPoint],
     on_line: impl Fn(&Point) -> bool,
     fixed: &str,
-) -> FigureSpec {
-    let mut series = Vec::new();
-    for m in models {
-        for c in pick(m) {
-            let pts: Vec<(Point, &Classification)> = ok_points(c).collect();
-            let style = if c.direction == Direction::Up { SeriesStyle::Line } else { SeriesStyle::Dashed };
-            for (which, f) in EXTREMES {
-                series.push(Series {
-                    name: format!("{} model {} RRPM {which}", m.name, c.direction.as_str()),
-                    x: pts.iter().map(|(p, _)| x_of(p)).collect(),
-                    y: pts.iter().map(|(_, k)| f(k) * RAD_S_TO_RPM).collect(),
-                    style,
-                });
-            }
-        }
-    }
+) -> Sheet {
     let meas: Vec<&OpPoint> = ops.iter().filter(|o| on_line(&o.point)).collect();
     let ids: Vec<&str> = meas.iter().map(|o| o.id.as_str()).collect();
-    for (which, f) in EXTREMES {
-        series.push(Series {
-            name: format!("measured RRPM {which}"),
-            x: meas.iter().map(|o| x_of(&o.point)).collect(),
-            y: meas.iter().map(|o| f(&o.measured) * RAD_S_TO_RPM).collect(),
-            style: SeriesStyle::Markers,
-        });
-    }
-    FigureSpec {
+    let extremes = |k: &Classification| EXTREMES.map(|(_, f)| f(k) * RAD_S_TO_RPM);
+    let measured = Series {
+        name: "measured (campaign)".into(),
+        x: meas.iter().flat_map(|o| [x_of(&o.point); 2]).collect(),
+        y: meas.iter().flat_map(|o| extremes(&o.measured)).collect(),
+        style: SeriesStyle::Marker { shape: MarkerShape::Circle, filled: false },
+    };
+    let panels = models
+        .iter()
+        .map(|m| {
+            let chains = pick(m);
+            let mut series = Vec::new();
+            for dir in [Direction::Up, Direction::Down] {
+                let pts: Vec<(Point, &Classification)> =
+                    chains.iter().filter(|c| c.direction == dir).flat_map(ok_points).collect();
+                let (shape, filled) = if dir == Direction::Up {
+                    (MarkerShape::TriangleUp, true)
+                } else {
+                    (MarkerShape::TriangleDown, false)
+                };
+                series.push(Series {
+                    name: format!("swept {}", dir.as_str()),
+                    x: pts.iter().flat_map(|(p, _)| [x_of(p); 2]).collect(),
+                    y: pts.iter().flat_map(|(_, k)| extremes(k)).collect(),
+                    style: SeriesStyle::Marker { shape, filled },
+                });
+            }
+            series.push(measured.clone());
+            let top = series.iter().flat_map(|s| s.y.iter().copied()).filter(|y| y.is_finite()).fold(0.0, f64::max);
+            series.extend(bistable_bands(chains, x_of, top));
+            let spec = FigureSpec {
+                id: format!("{id}-{}", m.name),
+                title: format!("{} model", m.name),
+                caption: String::new(),
+                x_label: x_label.into(),
+                y_label: "rotor speed RRPM min, max [rpm]".into(),
+                series,
+                x_decimals: 3,
+                y_decimals: 2,
+                heatmap: None,
+            };
+            Panel { spec, x_scale: AxisScale::Linear }
+        })
+        .collect();
+    Sheet {
         id: id.into(),
-        title: format!("Bifurcation diagram at {fixed}: min and max rotor speed, up and down, both models"),
+        title: format!("Bifurcation diagram at {fixed}: min and max rotor speed, swept up and down"),
         caption: format!(
-            "Minimum and maximum rotor-1 speed RRPM in the classification window at {fixed}, thesis model as \
-             published and rig model, each swept up (solid) and down (dashed) by continuation (each point starts \
-             from the previous point's end state), so where the two directions differ the model is bistable. \
-             Markers: campaign runs at {fixed} ({}), min and max of the encoder-derived rotor speed over the last \
-             20 s of the record. Where min and max meet the rotor slides steadily; min at 0 is stick-slip.",
+            "Minimum and maximum rotor-1 speed RRPM in the classification window at {fixed}, one panel per model \
+             (thesis model as published, rig model), each swept up (filled triangles) and down (open triangles) by \
+             continuation (each point starts from the previous point's end state). Grey: where the two \
+             directions end in different regimes, the model is bistable. Open circles: campaign runs at {fixed} \
+             ({}), min and max of the encoder-derived rotor speed over the last 20 s of the record. Where min and \
+             max meet the rotor slides steadily; min at 0 is stick-slip.",
             if ids.is_empty() { "none in this campaign".to_string() } else { ids.join(", ") }
         ),
-        x_label: x_label.into(),
-        y_label: "rotor speed RRPM [rpm]".into(),
-        series,
-        x_decimals: 3,
-        y_decimals: 2,
-        heatmap: None,
+        columns: models.len().max(1),
+        panels,
     }
+}
+
+/// The bistable band of an up/down pair of chains as shaded x-intervals from
+/// 0 to `top`: each point where the directions disagree ([`hysteresis`])
+/// covers half the step to its neighbours, and touching intervals merge. The
+/// first band is named (so the legend has it even when the model has no
+/// bistable point: an empty band); the others are not.
+fn bistable_bands(chains: &[ChainResult], x_of: fn(&Point) -> f64, top: f64) -> Vec<Series> {
+    let up = chains.iter().find(|c| c.direction == Direction::Up);
+    let down = chains.iter().find(|c| c.direction == Direction::Down);
+    let (Some(up), Some(down)) = (up, down) else { return vec![band("bistable (up ≠ down)", &[], &[], &[])] };
+    let grid: Vec<f64> = up.points.iter().map(|o| x_of(&o.point)).collect();
+    let half = |x: f64| {
+        let k = grid.iter().position(|&g| g == x).unwrap_or(0);
+        let lo = if k > 0 { 0.5 * (grid[k] - grid[k - 1]) } else { 0.0 };
+        let hi = if k + 1 < grid.len() { 0.5 * (grid[k + 1] - grid[k]) } else { 0.0 };
+        (x - lo, x + hi)
+    };
+    let mut spans: Vec<(f64, f64)> = Vec::new();
+    for (p, _, _) in hysteresis(up, down) {
+        let (a, b) = half(x_of(&p));
+        match spans.last_mut() {
+            Some(last) if a <= last.1 + 1e-9 => last.1 = last.1.max(b),
+            _ => spans.push((a, b)),
+        }
+    }
+    if spans.is_empty() {
+        return vec![band("bistable (up ≠ down)", &[], &[], &[])];
+    }
+    spans
+        .iter()
+        .enumerate()
+        .map(|(i, &(a, b))| band(if i == 0 { "bistable (up ≠ down)" } else { "" }, &[a, b], &[0.0, 0.0], &[top, top]))
+        .collect()
 }
 
 fn thin(x: &[f64]) -> Vec<f64> {
