@@ -20,8 +20,12 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     for (rel, table) in spectra::render::tables(&study, &p) {
         ctx.write_table(rel, &table)?;
     }
-    for f in spectra::render::figures(&study, &p)? {
-        ctx.write_figure(&f)?;
+    let (figures, sheets) = spectra::render::figures(&study, &p)?;
+    for f in &figures {
+        ctx.write_figure(f)?;
+    }
+    for s in &sheets {
+        ctx.write_sheet(s)?;
     }
     Ok(())
 }

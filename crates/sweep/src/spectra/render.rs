@@ -4,7 +4,7 @@
 use super::{NamedLines, OperatingPoint, SpectraOptions, SpectraStudy, TABLE_4_8_PEAKS_HZ, lines_of, table_4_8_lines};
 use crate::SweepError;
 use rig_spectra::{LineClass, WelchOptions, frf_h1, thin_indices};
-use rig_types::{FigureSpec, SeriesStyle, Table, fmt_fixed};
+use rig_types::{AxisScale, FigureSpec, Panel, SeriesStyle, Sheet, Table, fmt_fixed};
 use rig_types::{figure as fig, series};
 
 fn line_header() -> Table {
@@ -136,7 +136,9 @@ const TARGETS: [(&str, f64, f64); 3] = [("fig-4-22", 54.4, 4.5), ("fig-4-23", 84
 /// Figs. 4.22-4.26: limit cycle and time response of the operating points
 /// nearest to the thesis' (a, b of 4.22-4.24), then on the run of Fig. 4.24
 /// its time responses (4.25), FRF, coherence and line spectrum (4.26).
-pub fn figures(study: &SpectraStudy, o: &SpectraOptions) -> Result<Vec<FigureSpec>, SweepError> {
+/// Fig. 4.26 (a) is a sheet (magnitude and coherence panels over a log
+/// frequency axis), the others single panels.
+pub fn figures(study: &SpectraStudy, o: &SpectraOptions) -> Result<(Vec<FigureSpec>, Vec<Sheet>), SweepError> {
     let mut out = Vec::new();
     let mut fig24 = None;
     for (id, rpm, n) in TARGETS {
@@ -174,9 +176,10 @@ pub fn figures(study: &SpectraStudy, o: &SpectraOptions) -> Result<Vec<FigureSpe
         ("RTor [N m]", 4),
         vec![series("RTor", pick(&m.time_s), pick(&m.torque_nm), SeriesStyle::Line)],
     ));
-    out.extend(fig_4_26ab_frf(p, o, &which)?);
+    let (frf_sheet, coherence) = fig_4_26ab_frf(p, o, &which)?;
+    out.push(coherence);
     out.push(fig_4_26c_line_spectrum(p, o, &which)?);
-    Ok(out)
+    Ok((out, vec![frf_sheet]))
 }
 
 /// Panels (a) limit cycle and (b) time response of one of Figs. 4.22-4.24.
@@ -241,7 +244,7 @@ fn limit_cycle_and_time_response(
 
 /// Fig. 4.26 (a) FRF magnitude |H1| from RRPM to RTor and (b) their coherence
 /// (Welch, Hann segments), in the study's band.
-pub fn fig_4_26ab_frf(p: &OperatingPoint, o: &SpectraOptions, which: &str) -> Result<[FigureSpec; 2], SweepError> {
+pub fn fig_4_26ab_frf(p: &OperatingPoint, o: &SpectraOptions, which: &str) -> Result<(Sheet, FigureSpec), SweepError> {
     let m = &p.measured;
     let fs = m.fs_hz();
     let seg = ((o.welch_segment_s * fs) as usize).min(m.time_s.len());
@@ -255,24 +258,49 @@ pub fn fig_4_26ab_frf(p: &OperatingPoint, o: &SpectraOptions, which: &str) -> Re
         "Welch: Hann segments of {} s ({} samples), 50 % overlap, {} segments, mean removed; resolution {:.3} Hz. {which}",
         o.welch_segment_s, seg, frf.segments, frf.resolution_hz
     );
-    Ok([
-        fig(
-            "fig-4-26a",
-            "FRF magnitude |H1| from RRPM to RTor",
-            &format!("(a) H1 = S_xy / S_xx with x = RRPM (rpm), y = RTor (N m). {welch_note}"),
-            ("frequency [Hz]", 3),
-            ("|H1| [N m/rpm]", 6),
-            vec![series("|H1|", fb(&frf.freq_hz), fb(&frf.magnitude), SeriesStyle::Line)],
+    // The field's convention for a frequency response: magnitude in dB over a
+    // logarithmic frequency axis, coherence in its own panel below (where the
+    // coherence is low the magnitude estimate is not to be read).
+    let db: Vec<f64> = fb(&frf.magnitude).iter().map(|a| 20.0 * a.max(1e-300).log10()).collect();
+    let log = |spec| Panel { spec, x_scale: AxisScale::Log10 };
+    let sheet = Sheet {
+        id: "fig-4-26a".into(),
+        title: "FRF from RRPM to RTor: magnitude and coherence".into(),
+        caption: format!(
+            "(a) H1 = S_xy / S_xx with x = RRPM (rpm), y = RTor (N m), magnitude 20 log10(|H1| / (1 N m/rpm)) dB \
+             over a logarithmic frequency axis, magnitude-squared coherence |S_xy|^2 / (S_xx S_yy) below it. {welch_note}"
         ),
-        fig(
-            "fig-4-26b",
-            "Coherence of RRPM and RTor",
-            &format!("(b) Magnitude-squared coherence |S_xy|^2 / (S_xx S_yy). {welch_note}"),
-            ("frequency [Hz]", 3),
-            ("coherence [-]", 3),
-            vec![series("coherence", fb(&frf.freq_hz), fb(&frf.coherence), SeriesStyle::Line)],
+        columns: 1,
+        panels: vec![
+            log(fig(
+                "fig-4-26a-magnitude",
+                "|H1|",
+                "",
+                ("frequency [Hz]", 3),
+                ("|H1| [dB re 1 N m/rpm]", 2),
+                vec![series("|H1|", fb(&frf.freq_hz), db, SeriesStyle::Line)],
+            )),
+            log(fig(
+                "fig-4-26a-coherence",
+                "coherence",
+                "",
+                ("frequency [Hz]", 3),
+                ("coherence [-]", 3),
+                vec![series("coherence", fb(&frf.freq_hz), fb(&frf.coherence), SeriesStyle::Line)],
+            )),
+        ],
+    };
+    let coherence = fig(
+        "fig-4-26b",
+        "Coherence of RRPM and RTor",
+        &format!(
+            "(b) Magnitude-squared coherence |S_xy|^2 / (S_xx S_yy), linear frequency axis as in the thesis. {welch_note}"
         ),
-    ])
+        ("frequency [Hz]", 3),
+        ("coherence [-]", 3),
+        vec![series("coherence", fb(&frf.freq_hz), fb(&frf.coherence), SeriesStyle::Line)],
+    );
+    Ok((sheet, coherence))
 }
 
 /// Fig. 4.26 (c): the amplitude spectrum of RRPM with the peaks given to the line analysis.
