@@ -22,7 +22,6 @@ pub mod graph;
 mod hash;
 mod manifest;
 pub mod parquet;
-mod report;
 mod runner;
 pub mod stages;
 mod store;
@@ -33,6 +32,7 @@ pub use ctx::{StageCtx, StageFn, parse_params};
 pub use error::PipelineError;
 pub use runner::{CampaignReader, Outcome, RunReport, Runner, StageReport};
 pub use store::{CacheRecord, FileHash};
-pub mod diff;
 pub mod shards;
+/// `cargo xtask diff` (xtask's one door is this crate): the comparison lives in rig-report.
+pub use rig_report::diff;
 pub mod testing;

@@ -274,7 +274,7 @@ fn stage_keys_cover_what_stages_use() {
     }
     // The two holes the hand-written lists had (issue 11).
     let report = index.stage_code(rig_pipeline::stages::source("report"), &[]).unwrap();
-    assert!(report.paths.contains("crates/pipeline/src/diff.rs"), "report uses diff::parse_csv: {:?}", report.paths);
+    assert!(report.paths.contains("crates/report/src"), "report uses rig_report: {:?}", report.paths);
     assert!(report.paths.contains("data/figures.toml"), "report embeds data/figures.toml: {:?}", report.paths);
     let sweeps = index.stage_code(rig_pipeline::stages::source("sweeps"), &[]).unwrap();
     assert!(sweeps.paths.contains("crates/calibrate/src"), "sweeps uses rig_calibrate: {:?}", sweeps.paths);
@@ -307,12 +307,7 @@ fn every_stage_has_typed_params_and_pipeline_toml_passes() {
     }
 }
 
-/// Stage files over 150 lines that still hold analysis (issue 11: each stage
-/// an adapter of at most ~150 lines). Shrink this list, never grow it.
-const THICK_NOT_YET: [&str; 0] = [];
-
-/// Every stage file is a thin adapter (≤ 150 lines) unless listed above, and
-/// no stage imports another stage (shared helpers live in the crates).
+/// Every stage file is a thin adapter (≤ 150 lines, issue 11), and no stage imports another stage (shared helpers live in the crates).
 #[test]
 fn stage_files_are_thin() {
     let dir = root().join("crates/pipeline/src/stages");
@@ -326,14 +321,10 @@ fn stage_files_are_thin() {
     for name in &stages {
         let text = std::fs::read_to_string(dir.join(name)).unwrap();
         let lines = text.lines().count();
-        let listed = THICK_NOT_YET.contains(&name.as_str());
-        if lines > 150 && !listed {
+        if lines > 150 {
             problems.push(format!(
                 "stages/{name} has {lines} lines; a stage reads, calls one analysis function, writes (≤ 150)"
             ));
-        }
-        if lines <= 150 && listed {
-            problems.push(format!("stages/{name} is thin now ({lines} lines): remove it from THICK_NOT_YET"));
         }
         for other in &stages {
             let module = other.trim_end_matches(".rs");
@@ -372,7 +363,7 @@ fn unit_conversions_have_one_home() {
 /// the pipeline (`crates/pipeline/src/report/`) and its stage.
 #[test]
 fn rendering_has_one_name() {
-    let allowed = ["crates/pipeline/src/stages/report.rs", "crates/pipeline/src/report/mod.rs"];
+    let allowed = ["crates/pipeline/src/stages/report.rs"];
     let root = root();
     let problems: Vec<String> = rust_files(&root.join("crates"))
         .iter()

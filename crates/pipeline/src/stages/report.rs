@@ -1,6 +1,6 @@
 //! Stage `report`: the self-contained HTML page (reports/index.html) and
 //! figures.md, built from what the other stages left in the out dir
-//! (`crate::report`).
+//! (`rig_report`).
 
 use crate::StageCtx;
 use anyhow::Result;
@@ -12,7 +12,7 @@ pub struct Params {}
 
 pub fn run(ctx: &mut StageCtx) -> Result<()> {
     let Params {} = ctx.typed_params()?;
-    let report = crate::report::build(&ctx.out_dir, &ctx.campaign_dir)?;
+    let report = rig_report::build(&ctx.out_dir, &ctx.campaign_dir)?;
     ctx.write_text("index.html", &report.index_html)?;
     ctx.write_text("figures.md", &report.figures_md)?;
     Ok(())

@@ -5,9 +5,11 @@
 //! plus figures.md, the figure list with its reproducibility status. The
 //! `report` stage writes what [`build`] returns.
 //!
-//! This is the runner's concern, not an analysis crate's: it reads whatever
-//! the other stages left in the out dir (their tables, figures and `.md`
-//! files, by the file layout the runner defines) and knows no physics.
+//! Not an analysis crate: it reads whatever the other stages left in the out
+//! dir (their tables, figures and `.md` files, by the file layout the runner
+//! defines) and knows no physics. [`diff`] compares an out dir with the one a
+//! git revision committed (`cargo xtask diff`); both read CSV with
+//! [`diff::parse_csv`], one parser.
 //!
 //! The page has no network dependency: inline CSS, figures as inline SVG, no
 //! fonts or scripts from elsewhere. A file an upstream stage did not write
@@ -15,6 +17,7 @@
 //! can be read while the pipeline is incomplete. Deterministic: files are
 //! listed in sorted order, nothing reads the clock.
 
+pub mod diff;
 mod markdown;
 
 use crate::diff::parse_csv;
@@ -25,7 +28,7 @@ use std::path::Path;
 
 /// The figure catalogue of chapter 4 (data/figures.toml), compiled in so the
 /// stage needs no path to the repository; its key covers it (`code.rs` follows `include_str!`).
-static CATALOGUE: &str = include_str!("../../../../data/figures.toml");
+static CATALOGUE: &str = include_str!("../../../data/figures.toml");
 
 /// Tables longer than this show their first rows only (the CSV is beside the page).
 const TABLE_ROWS_SHOWN: usize = 200;

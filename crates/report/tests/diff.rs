@@ -73,7 +73,7 @@ fn reports_moves_rows_and_files() {
     std::fs::remove_file(root.join("reports/tables/gone.csv")).unwrap();
     write(root, "reports/tables/new.csv", "a\n1\n");
 
-    let text = rig_pipeline::diff::run(root, "HEAD", "reports").unwrap();
+    let text = rig_report::diff::run(root, "HEAD", "reports").unwrap();
     let expected_lines = [
         "reports/audit.csv: 1 rows changed (1 numeric cells moved, 1 text cells changed), 0 rows added, 0 rows removed",
         "    id=J_1E / recomputed: 0.0293 → 0.0290 (-1.02 %)",
@@ -104,11 +104,11 @@ fn compares_with_an_older_revision_and_rejects_a_bad_one() {
     );
     git(root, &["commit", "-q", "-am", "second"]);
     // The working tree equals HEAD: nothing moved against HEAD, one cell against HEAD~1.
-    let same = rig_pipeline::diff::run(root, "HEAD", "reports").unwrap();
+    let same = rig_report::diff::run(root, "HEAD", "reports").unwrap();
     assert!(same.contains("4 files compared: 4 unchanged, 0 changed"), "{same}");
-    let older = rig_pipeline::diff::run(root, "HEAD~1", "reports/").unwrap();
+    let older = rig_report::diff::run(root, "HEAD~1", "reports/").unwrap();
     assert!(older.contains("    measured #1 / y: 0.142 → 0.150 (+5.63 %)"), "{older}");
 
-    let err = rig_pipeline::diff::run(root, "no-such-rev", "reports").unwrap_err();
+    let err = rig_report::diff::run(root, "no-such-rev", "reports").unwrap_err();
     assert!(format!("{err:#}").contains("\"no-such-rev\" is not a commit"), "{err:#}");
 }

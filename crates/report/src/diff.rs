@@ -123,7 +123,7 @@ fn git(repo_root: &Path, args: &[&str]) -> Result<String> {
 }
 
 /// RFC 4180 CSV (quoted cells, doubled quotes, `\n` or `\r\n` line ends) → rows of cells.
-pub(crate) fn parse_csv(text: &str) -> Vec<Vec<String>> {
+pub fn parse_csv(text: &str) -> Vec<Vec<String>> {
     let mut rows = Vec::new();
     let mut row = Vec::new();
     let mut cell = String::new();
