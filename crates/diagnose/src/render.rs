@@ -151,8 +151,8 @@ pub fn figures(d: &Diagnosis) -> Vec<FigureSpec> {
     if !det.mu_vs_speed.is_empty() {
         let s = |name: &str, k: usize, style| Series {
             name: name.into(),
-            x: det.mu_vs_speed.iter().map(|r| r.0).collect(),
-            y: det.mu_vs_speed.iter().map(|r| [r.1, r.2, r.3][k]).collect(),
+            x: det.mu_vs_speed.iter().map(|r| r.speed_rad_s).collect(),
+            y: det.mu_vs_speed.iter().map(|r| [r.measured, r.baseline, r.extended][k]).collect(),
             style,
         };
         out.push(FigureSpec {
@@ -161,12 +161,24 @@ pub fn figures(d: &Diagnosis) -> Vec<FigureSpec> {
             caption: format!(
                 "Mean observed μ = F/N0 over slip samples binned by |Ω1| (30 bins), with the baseline (Coulomb) and the \
                  verdict's model ({}) averaged over the same samples. A speed law shows as a trend; a time or angle \
-                 modulation averages out here.",
+                 modulation averages out here. Shaded: 95 % interval of the measured mean, Student t over the \
+                 runs' own bin means (the run is the independent unit; samples within a run are correlated); no band \
+                 where fewer than two runs slip that fast.",
                 d.verdict
             ),
             x_label: "slip speed |Ω1| [rad/s]".into(),
             y_label: "friction coefficient μ [-]".into(),
-            series: vec![s("measured", 0, SeriesStyle::Points), s("baseline", 1, SeriesStyle::Dashed), s("extended", 2, SeriesStyle::Line)],
+            series: vec![
+                band(
+                    "measured, 95 % interval over runs",
+                    &det.mu_vs_speed.iter().map(|r| r.speed_rad_s).collect::<Vec<_>>(),
+                    &det.mu_vs_speed.iter().map(|r| r.measured - r.measured_half_width_95).collect::<Vec<_>>(),
+                    &det.mu_vs_speed.iter().map(|r| r.measured + r.measured_half_width_95).collect::<Vec<_>>(),
+                ),
+                s("measured", 0, SeriesStyle::Points),
+                s("baseline", 1, SeriesStyle::Dashed),
+                s("extended", 2, SeriesStyle::Line),
+            ],
             x_decimals: 2,
             y_decimals: 4,
             heatmap: None,

@@ -168,7 +168,7 @@ pub struct Detail {
     /// Normal-force scan: (frequency Hz, ΔRSS fraction) for the evidence figure.
     pub freq_scan: Vec<(f64, f64)>,
     /// Friction evidence: slip-speed bins (centre rad/s, mean μ_obs, baseline μ̂, extended μ̂).
-    pub mu_vs_speed: Vec<(f64, f64, f64, f64)>,
+    pub mu_vs_speed: Vec<MuBin>,
     /// Baseline μ residual against rotor angle mod 2π: (bin centre rad, mean
     /// over revolutions, lower and upper end of its 95 % interval, revolutions).
     pub residual_vs_angle: Vec<(f64, f64, f64, f64, usize)>,
@@ -216,4 +216,17 @@ pub struct StepRow {
     /// Paired run-level t of ln(M_before/M_after) (crate docs).
     pub t: f64,
     pub accepted: bool,
+}
+
+/// One slip-speed bin of the friction-vs-slip evidence: the sample means of
+/// measured μ and of both models over the bin's slip samples, and the 95 %
+/// half-width of the measured mean with the run as the independent unit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MuBin {
+    pub speed_rad_s: f64,
+    pub measured: f64,
+    pub baseline: f64,
+    pub extended: f64,
+    /// NaN when fewer than two runs have 5 samples in the bin.
+    pub measured_half_width_95: f64,
 }

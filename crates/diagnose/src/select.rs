@@ -7,6 +7,7 @@ use crate::drive::{self, Pi};
 use crate::friction::SlipData;
 use crate::lines;
 use crate::prepare::RunSignals;
+use crate::result::MuBin;
 use crate::result::{
     Adequacy, CandidateScore, Detail, Diagnosis, Features, Finding, RunRow, SignatureEntry, StepRow, round_sig,
 };
@@ -756,13 +757,15 @@ fn evidence(effect: EffectId, params: &[(&str, f64)], c: &Comparison) -> String 
     )
 }
 
-fn mu_vs_speed(d: &SlipData, base: &Composite, ext: &Composite, phases: &[Phases]) -> Vec<(f64, f64, f64, f64)> {
+fn mu_vs_speed(d: &SlipData, base: &Composite, ext: &Composite, phases: &[Phases]) -> Vec<MuBin> {
     let wmax = d.omega.iter().copied().fold(0.0_f64, f64::max);
     if wmax <= 0.0 {
         return vec![];
     }
     let nb = 30;
     let mut acc = vec![(0.0, 0.0, 0.0, 0usize); nb];
+    // Per bin and run: (Σμ, n), for the run-level spread of the bin mean.
+    let mut per_run = vec![vec![(0.0, 0usize); d.n_runs]; nb];
     for i in 0..d.len() {
         let b = ((d.omega[i] / wmax * nb as f64) as usize).min(nb - 1);
         let ph = phases.get(d.run[i]).copied().unwrap_or((0.0, 0.0));
@@ -770,11 +773,34 @@ fn mu_vs_speed(d: &SlipData, base: &Composite, ext: &Composite, phases: &[Phases
         acc[b].1 += base.mu(d.t[i], d.phi[i], d.omega[i], (0.0, 0.0));
         acc[b].2 += ext.mu(d.t[i], d.phi[i], d.omega[i], ph);
         acc[b].3 += 1;
+        per_run[b][d.run[i]].0 += d.mu[i];
+        per_run[b][d.run[i]].1 += 1;
     }
     acc.iter()
+        .zip(&per_run)
         .enumerate()
-        .filter(|(_, a)| a.3 >= 20)
-        .map(|(b, a)| ((b as f64 + 0.5) * wmax / nb as f64, a.0 / a.3 as f64, a.1 / a.3 as f64, a.2 / a.3 as f64))
+        .filter(|(_, (a, _))| a.3 >= 20)
+        .map(|(b, (a, runs))| {
+            // 95 % half-width with the run as the independent unit (samples of
+            // one run are correlated): Student t over the runs' own bin means.
+            let means: Vec<f64> = runs.iter().filter(|r| r.1 >= 5).map(|r| r.0 / r.1 as f64).collect();
+            let k = means.len();
+            let half = if k >= 2 {
+                let m = means.iter().sum::<f64>() / k as f64;
+                let sd = (means.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (k - 1) as f64).sqrt();
+                rig_calibrate::stats::student_t_quantile(0.975, (k - 1) as f64)
+                    .map_or(f64::NAN, |t| t * sd / (k as f64).sqrt())
+            } else {
+                f64::NAN
+            };
+            MuBin {
+                speed_rad_s: (b as f64 + 0.5) * wmax / nb as f64,
+                measured: a.0 / a.3 as f64,
+                baseline: a.1 / a.3 as f64,
+                extended: a.2 / a.3 as f64,
+                measured_half_width_95: half,
+            }
+        })
         .collect()
 }
 
