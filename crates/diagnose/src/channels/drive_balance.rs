@@ -3,7 +3,6 @@
 
 use super::{ChannelCheck, ChannelOptions};
 use crate::DiagnoseOptions;
-use crate::linalg::Normal;
 use rig_types::{Campaign, RunKind};
 use std::f64::consts::TAU;
 
@@ -28,17 +27,10 @@ fn window_means(time_s: &[f64], v: &[f64], t1: &[i64], t2: &[i64], rad: f64, fro
     ]
 }
 
-/// Weighted least squares of `y` on the columns of `x` (rows); RSS.
+/// Least squares of `y` on the rows `x` (the workspace's one solver,
+/// `rig_estimate::linreg::ols`): (coefficients, residual sum of squares).
 fn rss(x: &[Vec<f64>], y: &[f64]) -> Option<(Vec<f64>, f64)> {
-    let mut ne = Normal::new(x[0].len());
-    for (row, &yi) in x.iter().zip(y) {
-        let sparse: Vec<(usize, f64)> = row.iter().copied().enumerate().collect();
-        ne.add_sparse(&sparse, yi);
-    }
-    let beta = ne.solve()?;
-    let rss =
-        x.iter().zip(y).map(|(row, &yi)| (yi - row.iter().zip(&beta).map(|(a, b)| a * b).sum::<f64>()).powi(2)).sum();
-    Some((beta, rss))
+    rig_estimate::linreg::ols(x, y, "drive balance").ok().map(|f| (f.beta, f.ssr))
 }
 
 /// The drive's mean balance over the steady state of every operating point:
