@@ -146,14 +146,16 @@ pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order
     let mut rss = weighted_rss(d, &m, &phases);
     let mut converged = set == FrictionSet::default();
     let passes = if set == FrictionSet::default() { 0 } else { 6 };
+    // The two modulation factors of every sample under the current model,
+    // recomputed only when their block changes them (the same values
+    // Composite::time_factor / angle_factor give, each evaluated once).
+    let factors = |f: &dyn Fn(usize) -> f64| -> Vec<f64> { (0..d.len()).map(f).collect() };
+    let mut tf = vec![1.0; d.len()];
+    let mut af = vec![1.0; d.len()];
     for pass in 0..passes {
         params.clear();
         // Speed block on μ / (modulations).
-        let mods = |i: usize, m: &Composite| {
-            let ph = phases[d.run[i]];
-            m.time_factor(d.t[i], ph.0) * m.angle_factor(d.phi[i], ph.1)
-        };
-        let ds = with_mu(d, |i| d.mu[i] / mods(i, &m));
+        let ds = with_mu(d, |i| d.mu[i] / (tf[i] * af[i]));
         if set.stribeck {
             let f = friction::fit_stribeck(&ds, set.viscous)?;
             let FrictionModel::Stribeck { mu_k, mu_s, vs, c } = f.model else { unreachable!() };
@@ -185,7 +187,7 @@ pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order
         }
         // Time modulation on μ / (speed law · angle factor).
         if set.time_mod {
-            let dt = with_mu(d, |i| d.mu[i] / (m.speed_mu(d.omega[i]) * m.angle_factor(d.phi[i], phases[d.run[i]].1)));
+            let dt = with_mu(d, |i| d.mu[i] / (m.speed_mu(d.omega[i]) * af[i]));
             let grid: Vec<f64> = match (pass, m.time_mod) {
                 (0, _) | (_, None) => freqs_hz.to_vec(),
                 (_, Some((_, f))) => vec![f],
@@ -203,10 +205,11 @@ pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order
             for (k, v, e) in f.params {
                 params.push((EffectId::NormalForceModulation, k, v, e));
             }
+            tf = factors(&|i| m.time_factor(d.t[i], phases[d.run[i]].0));
         }
         // Angle modulation on μ / (speed law · time factor).
         if set.angle_mod {
-            let da = with_mu(d, |i| d.mu[i] / (m.speed_mu(d.omega[i]) * m.time_factor(d.t[i], phases[d.run[i]].0)));
+            let da = with_mu(d, |i| d.mu[i] / (m.speed_mu(d.omega[i]) * tf[i]));
             let f = friction::fit_sine(&da, false, &[], max_order)?;
             let FrictionModel::AngleSine { mu_k: s, a, order } = f.model else { unreachable!() };
             m.angle_mod = Some((a, order));
@@ -217,8 +220,15 @@ pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order
             for (k, v, e) in f.params {
                 params.push((EffectId::AnglePeriodicFriction, k, v, e));
             }
+            af = factors(&|i| m.angle_factor(d.phi[i], phases[d.run[i]].1));
         }
-        let next = weighted_rss(d, &m, &phases);
+        // weighted_rss(d, &m, &phases) with the cached factors (same products, same order).
+        let next: f64 = (0..d.len())
+            .map(|i| {
+                let e = d.mu[i] - m.speed_mu(d.omega[i]) * tf[i] * af[i];
+                d.w(i) * e * e
+            })
+            .sum();
         let done = pass > 0 && (rss - next).abs() <= 1e-7 * rss.max(f64::MIN_POSITIVE);
         rss = next;
         if done {

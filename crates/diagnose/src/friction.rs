@@ -602,27 +602,29 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], max_order: u32)
             FrictionModel::AngleSine { mu_k: th[0], a: th[1], order: psi0 as u32 }
         }
     };
-    let rss_of = |th: &[f64]| {
-        if time_kind {
-            return weighted_rss(d, &model_of(th), &th[2 + nf..]);
-        }
+    // The weighted RSS at `th`, leaving sin and cos of each sample's argument
+    // in `sc`: an accepted line-search candidate hands them to the next
+    // iteration's normal equations, so each iteration evaluates them once.
+    let rss_of = |th: &[f64], sc: &mut Vec<(f64, f64)>| -> f64 {
         let trig = run_trig(th);
-        (0..d.len())
-            .map(|i| {
-                let e = d.mu[i] - th[0] * (1.0 + th[1] * sin_cos_at(th, i, &trig).0);
-                d.w(i) * e * e
-            })
-            .sum::<f64>()
+        sc.clear();
+        let mut rss = 0.0;
+        for i in 0..d.len() {
+            let v = sin_cos_at(th, i, &trig);
+            sc.push(v);
+            let e = d.mu[i] - th[0] * (1.0 + th[1] * v.0);
+            rss += d.w(i) * e * e;
+        }
+        rss
     };
-    let mut rss = rss_of(&theta);
+    let (mut sc, mut sc_cand) = (Vec::with_capacity(d.len()), Vec::with_capacity(d.len()));
+    let mut rss = rss_of(&theta, &mut sc);
     let mut converged = false;
     let mut ne_last = None;
     for _ in 0..30 {
         let mut ne = Normal::new(np);
-        let trig = run_trig(&theta);
-        for i in 0..d.len() {
+        for (i, &(s, c)) in sc.iter().enumerate() {
             let r = d.run[i];
-            let (s, c) = sin_cos_at(&theta, i, &trig);
             let (mk, a) = (theta[0], theta[1]);
             let sw = d.w(i).sqrt();
             let e = d.mu[i] - mk * (1.0 + a * s);
@@ -640,11 +642,12 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], max_order: u32)
         let mut improved = false;
         for _ in 0..12 {
             let cand: Vec<f64> = theta.iter().zip(&step).map(|(t, s)| t + lambda * s).collect();
-            let r2 = rss_of(&cand);
+            let r2 = rss_of(&cand, &mut sc_cand);
             if r2 <= rss {
                 let rel = (rss - r2) / rss.max(f64::MIN_POSITIVE);
                 theta = cand;
                 rss = r2;
+                std::mem::swap(&mut sc, &mut sc_cand);
                 improved = true;
                 if rel < 1e-10 {
                     converged = true;

@@ -72,27 +72,46 @@ impl Cv<'_> {
     }
 
     fn friction(&self, set: FrictionSet) -> FrictionCv {
-        let per_fold: Vec<FoldFriction> = (0..self.folds)
-            .into_par_iter()
-            .map(|f| {
-                let train = self.train(f);
-                let d = SlipData::from_runs(&train);
-                let model = composite::fit_composite(&d, set, &self.freqs, self.max_order).map(|x| x.model);
-                let mut held = Vec::new();
-                for (i, s) in self.runs.iter().enumerate().filter(|(_, s)| s.fold == f) {
-                    let dr = SlipData::from_runs(&[s]);
-                    let (e, ph) = match &model {
-                        Some(m) => {
-                            let ph = composite::heldout_phases(m, &dr);
-                            (composite::relative_mu_error(m, &dr, ph), ph)
-                        }
-                        None => (None, (0.0, 0.0)),
-                    };
-                    held.push((i, e, ph));
+        self.friction_many(&[set]).pop().expect("one set")
+    }
+
+    /// The cross-validated friction channel of each set, every (set, fold) fit
+    /// a task of its own: a forward-selection step fits 3–4 sets × 5 folds,
+    /// which two cores share evenly, where 5 folds alone leave one idle a
+    /// third of the time. Each fit is the one [`Cv::fold_friction`] makes.
+    fn friction_many(&self, sets: &[FrictionSet]) -> Vec<FrictionCv> {
+        let tasks: Vec<(usize, usize)> = (0..sets.len()).flat_map(|k| (0..self.folds).map(move |f| (k, f))).collect();
+        let mut fits: Vec<FoldFriction> = tasks.par_iter().map(|&(k, f)| self.fold_friction(sets[k], f)).collect();
+        let mut out = Vec::with_capacity(sets.len());
+        for _ in sets {
+            let rest = fits.split_off(self.folds);
+            out.push(self.assemble(std::mem::replace(&mut fits, rest)));
+        }
+        out
+    }
+
+    /// Fold `f`'s friction fit: the model of `set` fitted on the other folds,
+    /// and each held-out run's μ error and phases under it.
+    fn fold_friction(&self, set: FrictionSet, f: usize) -> FoldFriction {
+        let train = self.train(f);
+        let d = SlipData::from_runs(&train);
+        let model = composite::fit_composite(&d, set, &self.freqs, self.max_order).map(|x| x.model);
+        let mut held = Vec::new();
+        for (i, s) in self.runs.iter().enumerate().filter(|(_, s)| s.fold == f) {
+            let dr = SlipData::from_runs(&[s]);
+            let (e, ph) = match &model {
+                Some(m) => {
+                    let ph = composite::heldout_phases(m, &dr);
+                    (composite::relative_mu_error(m, &dr, ph), ph)
                 }
-                (model, held)
-            })
-            .collect();
+                None => (None, (0.0, 0.0)),
+            };
+            held.push((i, e, ph));
+        }
+        (model, held)
+    }
+
+    fn assemble(&self, per_fold: Vec<FoldFriction>) -> FrictionCv {
         let mut out = FrictionCv {
             e_mu: vec![None; self.runs.len()],
             models: Vec::new(),
@@ -373,7 +392,10 @@ pub fn diagnose_signals(
     // the drive channel only on the limit.
     let mut fr_cache: BTreeMap<FrictionSet, FrictionCv> = BTreeMap::new();
     let mut dr_cache: BTreeMap<bool, DriveCv> = BTreeMap::new();
-    let mut misfits = |m: ModelSet| -> Vec<f64> {
+    let misfits = |fr_cache: &mut BTreeMap<FrictionSet, FrictionCv>,
+                   dr_cache: &mut BTreeMap<bool, DriveCv>,
+                   m: ModelSet|
+     -> Vec<f64> {
         let fr = fr_cache.entry(m.friction).or_insert_with(|| cv.friction(m.friction));
         let e_mu = fr.e_mu.clone();
         let dr = dr_cache.entry(m.limit).or_insert_with(|| cv.drive(m.limit));
@@ -382,7 +404,7 @@ pub fn diagnose_signals(
 
     // Forward selection.
     let mut current = ModelSet::default();
-    let base_ms = misfits(current);
+    let base_ms = misfits(&mut fr_cache, &mut dr_cache, current);
     let mut cur_ms = base_ms.clone();
     let mut accepted: Vec<(EffectId, Comparison)> = Vec::new();
     let mut steps: Vec<StepRow> = Vec::new();
@@ -391,9 +413,21 @@ pub fn diagnose_signals(
     for step in 1..=EffectId::ALL.len() {
         let remaining: Vec<EffectId> =
             EffectId::ALL.into_iter().filter(|e| !accepted.iter().any(|a| a.0 == *e)).collect();
+        // Fit every candidate's friction sets (and the drive limit) at once, in parallel.
+        let needed: Vec<FrictionSet> = {
+            let mut v: Vec<FrictionSet> = remaining.iter().map(|&e| current.with(e).friction).collect();
+            v.sort();
+            v.dedup();
+            v.retain(|set| !fr_cache.contains_key(set));
+            v
+        };
+        let limit_needed = remaining.iter().map(|&e| current.with(e).limit).find(|l| !dr_cache.contains_key(l));
+        let (fr_new, dr_new) = rayon::join(|| cv.friction_many(&needed), || limit_needed.map(|l| (l, cv.drive(l))));
+        fr_cache.extend(needed.into_iter().zip(fr_new));
+        dr_cache.extend(dr_new);
         let mut tried: Vec<(EffectId, Comparison, Vec<f64>)> = Vec::new();
         for e in remaining {
-            let ms = misfits(current.with(e));
+            let ms = misfits(&mut fr_cache, &mut dr_cache, current.with(e));
             tried.push((e, compare(&cur_ms, &ms, runs, folds), ms));
         }
         let best = tried

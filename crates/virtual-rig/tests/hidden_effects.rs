@@ -81,15 +81,32 @@ fn full_battery() {
     use rig_virtual_rig::battery::*;
     let thesis = thesis_data();
     let battery = Battery::full();
-    let out = battery.run(|_, c| {
+    let started = std::time::Instant::now();
+    let out = battery.run(|case, c| {
         let d = rig_diagnose::diagnose_campaign(c, Some(&thesis), &opts()).map_err(|e| e.to_string())?;
+        // Progress on stderr: the full battery runs for about an hour.
+        eprintln!("[{:6.0} s] {}: {}", started.elapsed().as_secs_f64(), case.id, d.verdict);
         serde_json::to_value(&d).and_then(serde_json::from_value::<DiagnosisResult>).map_err(|e| e.to_string())
     });
     let md = report_markdown(&battery, &out);
     println!("{md}");
     if let Ok(dir) = std::env::var("BATTERY_OUT") {
         std::fs::create_dir_all(&dir).expect("BATTERY_OUT");
-        std::fs::write(format!("{dir}/battery.md"), &md).expect("write");
+        let write = |name: &str, bytes: &[u8]| std::fs::write(format!("{dir}/{name}"), bytes).expect("write");
+        write("battery.md", md.as_bytes());
+        for (name, t) in [
+            ("confusion-matrix.csv", confusion_table(&out)),
+            ("confusion-false-alarms.csv", false_alarm_table(&out)),
+            ("confusion-detection.csv", detection_table(&out)),
+            ("confusion-wrong.csv", wrong_table(&out)),
+        ] {
+            write(name, t.to_csv().as_bytes());
+        }
+        if let Some(sheet) = detection_sheet(&detection_table(&out), battery.name) {
+            write("battery-detection.svg", rig_figures::render_sheet_svg(&sheet).expect("svg").as_bytes());
+            write("battery-detection.png", &rig_figures::render_sheet_png(&sheet).expect("png"));
+            write("battery-detection.csv", rig_figures::sheet_csv(&sheet).as_bytes());
+        }
     }
     // Nulls: `none` at a false-alarm rate of at most 5 %.
     let nulls: Vec<&Outcome> = out.iter().filter(|o| o.case.group == Group::Null).collect();

@@ -10,7 +10,8 @@ use anyhow::{Result, bail};
 use rig_calibrate::ThesisData;
 use rig_diagnose::{DiagnoseOptions, diagnose_campaign};
 use rig_virtual_rig::battery::{
-    Battery, DiagnosisResult, confusion_table, detection_table, false_alarm_table, report_markdown, wrong_table,
+    Battery, DiagnosisResult, confusion_table, detection_sheet, detection_table, false_alarm_table, report_markdown,
+    wrong_table,
 };
 
 /// `[stage.params]` of the confusion stage.
@@ -40,7 +41,11 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     });
     ctx.write_table("tables/confusion-matrix.csv", &confusion_table(&out))?;
     ctx.write_table("tables/confusion-false-alarms.csv", &false_alarm_table(&out))?;
-    ctx.write_table("tables/confusion-detection.csv", &detection_table(&out))?;
+    let detection = detection_table(&out);
+    ctx.write_table("tables/confusion-detection.csv", &detection)?;
+    if let Some(sheet) = detection_sheet(&detection, battery.name) {
+        ctx.write_sheet(&sheet)?;
+    }
     ctx.write_table("tables/confusion-wrong.csv", &wrong_table(&out))?;
     ctx.write_text("confusion.md", &report_markdown(&battery, &out))?;
     Ok(())

@@ -39,7 +39,8 @@ use std::path::Path;
 
 mod render;
 pub use render::{
-    clopper_pearson, confusion_table, detection_table, false_alarm_table, markdown_table, report_markdown, wrong_table,
+    clopper_pearson, confusion_table, detection_sheet, detection_table, false_alarm_table, markdown_table,
+    report_markdown, wrong_table,
 };
 
 /// One finding of a diagnosis, as diagnosis.md's `findings[]` (effect id and
