@@ -216,7 +216,7 @@ pub fn estimate_pi(c: &Campaign, limit_v: f64, opts: &PiOptions) -> Result<PiEst
     let fit = match opts.method {
         PiMethod::CorrectedLs => {
             // Var of ē: 2·(Δ²/12)/Δt²; of Ī (trapezoid mean of w + 1 samples): ≈ (Δ²/12)/(w + 1).
-            let q = (TAU / c.rig.encoder_ticks_per_rev as f64).powi(2) / 12.0;
+            let q = rig_types::sensor::tick_rad(c.rig.encoder_ticks_per_rev).powi(2) / 12.0;
             let dt = w as f64 / c.rig.sample_rate_hz;
             let mut noise_var = vec![0.0; p];
             noise_var[0] = 2.0 * q / (dt * dt);

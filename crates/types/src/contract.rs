@@ -216,7 +216,7 @@ impl Default for CalibrationSettings {
 impl CalibrationSettings {
     /// Decay settings for the twist, in rad for an encoder of `ticks_per_rev`.
     pub fn twist(&self, ticks_per_rev: u32) -> DecaySettings {
-        let tick = 2.0 * std::f64::consts::PI / ticks_per_rev as f64;
+        let tick = crate::sensor::tick_rad(ticks_per_rev);
         DecaySettings {
             smooth_half_s: self.smooth_half_s,
             peak_fit_half_s: self.peak_fit_half_s,

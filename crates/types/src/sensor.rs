@@ -18,23 +18,28 @@ use std::f64::consts::PI;
 /// kernel is a triangle (side lobes −27 dB instead of −13 dB), still zero phase.
 pub const SPEED_HALF_WINDOW_S: f64 = 0.020;
 
+/// One encoder tick, rad: 2π / `ticks_per_rev`.
+pub fn tick_rad(ticks_per_rev: u32) -> f64 {
+    2.0 * PI / f64::from(ticks_per_rev)
+}
+
 /// Encoder model: the cumulative count of an incremental encoder with
 /// `ticks_per_rev` ticks per revolution, floor(angle / (2π / ticks_per_rev)).
 pub fn encoder_ticks(angle_rad: &[f64], ticks_per_rev: u32) -> Vec<i64> {
-    let tick = 2.0 * PI / f64::from(ticks_per_rev);
+    let tick = tick_rad(ticks_per_rev);
     angle_rad.iter().map(|a| (a / tick).floor() as i64).collect()
 }
 
 /// Cumulative ticks → angle in rad.
 pub fn ticks_to_rad(ticks: &[i64], ticks_per_rev: u32) -> Vec<f64> {
-    let k = 2.0 * PI / ticks_per_rev as f64;
+    let k = tick_rad(ticks_per_rev);
     ticks.iter().map(|&t| t as f64 * k).collect()
 }
 
 /// Speed resolution of a difference over `w` samples at `dt_s`: one tick per
 /// `w · dt_s` seconds, rad/s.
 pub fn speed_resolution_rad_s(ticks_per_rev: u32, w: usize, dt_s: f64) -> f64 {
-    2.0 * PI / ticks_per_rev as f64 / (w as f64 * dt_s)
+    tick_rad(ticks_per_rev) / (w as f64 * dt_s)
 }
 
 /// Samples in a half window of `half_s` seconds, from the median sample step

@@ -5,8 +5,8 @@ use super::{ChannelCheck, ChannelOptions, rms};
 use crate::DiagnoseOptions;
 use crate::prepare::diff_noise;
 use rig_calibrate::CampaignCalibration;
+use rig_types::sensor::{tick_rad, ticks_to_rad};
 use rig_types::{Campaign, RigParams, RunKind};
-use std::f64::consts::TAU;
 
 /// Regressors of one window boundary: [⟨Ω̇1⟩, ⟨φ2−φ1⟩, ⟨Ω2−Ω1⟩, ⟨Ω1⟩, 1] and r⟨F⟩.
 type Row = ([f64; 5], f64);
@@ -67,7 +67,7 @@ pub fn torque_balance_check(
     let name = "operating_point.torque_balance";
     let w = o.balance_window_samples.max(2);
     let dt = 1.0 / c.rig.sample_rate_hz;
-    let rad = TAU / c.rig.encoder_ticks_per_rev as f64;
+    let rad = tick_rad(c.rig.encoder_ticks_per_rev);
     let r_m = c.rig.brake_disc_radius_m;
     struct RunRows {
         id: String,
@@ -80,8 +80,8 @@ pub fn torque_balance_check(
         let RunKind::OperatingPoint { ramp_s, .. } = run.kind else { continue };
         let d = &run.data;
         let (Some(t1), Some(t2), Some(mv)) = (&d.rotor_ticks, &d.motor_ticks, &d.brake_force_mv) else { continue };
-        let phi1: Vec<f64> = t1.iter().map(|&k| k as f64 * rad).collect();
-        let phi2: Vec<f64> = t2.iter().map(|&k| k as f64 * rad).collect();
+        let phi1 = ticks_to_rad(t1, c.rig.encoder_ticks_per_rev);
+        let phi2 = ticks_to_rad(t2, c.rig.encoder_ticks_per_rev);
         let f: Vec<f64> = mv.iter().map(|m| (m - cal.force_offset_mv) / cal.force_factor_mv_per_n).collect();
         let from = d.time_s.partition_point(|&x| x < ramp_s + opts.settle_s);
         // Σk²/(Σk)² of the triangle kernel: the variance gain of white noise.

@@ -3,8 +3,8 @@
 
 use super::{ChannelCheck, ChannelOptions};
 use crate::DiagnoseOptions;
+use rig_types::sensor::tick_rad;
 use rig_types::{Campaign, RunKind};
-use std::f64::consts::TAU;
 
 /// One operating point's steady-state means: ⟨V⟩, ⟨φ2 − φ1⟩, ⟨Ω2⟩ over the
 /// whole steady window and over each of its halves, and the recorded
@@ -62,7 +62,7 @@ fn rss(x: &[Vec<f64>], y: &[f64]) -> Option<(Vec<f64>, f64)> {
 /// (a grows), warm magnets lower k_T = k_e (b falls).
 pub fn drive_balance_check(c: &Campaign, opts: &DiagnoseOptions, o: &ChannelOptions) -> ChannelCheck {
     let name = "operating_point.drive_balance";
-    let rad = TAU / c.rig.encoder_ticks_per_rev as f64;
+    let rad = tick_rad(c.rig.encoder_ticks_per_rev);
     let mut clock_s = 0.0;
     let mut means = Vec::new();
     for run in &c.runs {

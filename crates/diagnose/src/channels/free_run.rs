@@ -8,8 +8,9 @@ use crate::prepare::centred_speed;
 use crate::result::Features;
 use crate::select::steady_features;
 use rig_model::SimOptions;
+use rig_types::sensor::{tick_rad, ticks_to_rad};
 use rig_types::{Campaign, RigParams, RunInput, RunKind};
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::PI;
 
 /// What the free-run comparison needs from the diagnosis options.
 #[derive(Debug, Clone, PartialEq)]
@@ -84,9 +85,9 @@ fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) 
     if to < from + 16 {
         return None;
     }
-    let rad = TAU / c.rig.encoder_ticks_per_rev as f64;
-    let phi1: Vec<f64> = run.data.rotor_ticks.as_ref()?[..to].iter().map(|&k| k as f64 * rad).collect();
-    let phi2: Vec<f64> = run.data.motor_ticks.as_ref()?[..to].iter().map(|&k| k as f64 * rad).collect();
+    let rad = tick_rad(c.rig.encoder_ticks_per_rev);
+    let phi1 = ticks_to_rad(&run.data.rotor_ticks.as_ref()?[..to], c.rig.encoder_ticks_per_rev);
+    let phi2 = ticks_to_rad(&run.data.motor_ticks.as_ref()?[..to], c.rig.encoder_ticks_per_rev);
     let tt = &t[..to];
     let w_set = motor_rpm_setpoint * 2.0 * PI / 60.0;
     let dt = (tt[to - 1] - tt[0]) / (to - 1) as f64;
@@ -180,8 +181,7 @@ pub fn free_run_checks_of(c: &Campaign, pairs: &[Pair], s: &FreeRunSettings, o: 
         ),
     ));
 
-    let floor = std::f64::consts::TAU
-        / c.rig.encoder_ticks_per_rev as f64
+    let floor = tick_rad(c.rig.encoder_ticks_per_rev)
         / (2.0 * s.rotor_speed_half_window as f64 / c.rig.sample_rate_hz)
         / 6f64.sqrt();
     for (name, th, get) in [

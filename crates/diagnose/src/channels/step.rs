@@ -40,7 +40,7 @@ pub fn voltage_step_checks(
     o: &ChannelOptions,
 ) -> Vec<ChannelCheck> {
     let mut out = Vec::new();
-    let tick_rad = std::f64::consts::TAU / c.rig.encoder_ticks_per_rev as f64;
+    let tick_rad = rig_types::sensor::tick_rad(c.rig.encoder_ticks_per_rev);
     let dt = 1.0 / c.rig.sample_rate_hz;
     let ids: Vec<String> = cal.steps.iter().map(|s| s.id.clone()).collect();
     let mut freq = Vec::new();

@@ -5,7 +5,6 @@
 use super::{ChannelCheck, ChannelOptions};
 use rig_calibrate::CampaignCalibration;
 use rig_types::Campaign;
-use std::f64::consts::TAU;
 
 /// Least squares of y on the columns of `x` (rows of equal length), by the
 /// normal equations (at most 3 columns here). None when singular.
@@ -36,7 +35,7 @@ pub fn static_twist_checks(c: &Campaign, cal: &CampaignCalibration, o: &ChannelO
     let runs = &cal.twist_runs;
     let ids: Vec<String> = runs.iter().map(|r| r.id.clone()).collect();
     let n = runs.len();
-    let tick_rad = TAU / c.rig.encoder_ticks_per_rev as f64;
+    let tick_rad = rig_types::sensor::tick_rad(c.rig.encoder_ticks_per_rev);
     let names = ["static_twist.linearity", "static_twist.dead_zone", "static_twist.hysteresis"];
     if n < 3 {
         return names
