@@ -22,6 +22,7 @@
 //! | `operating_point.fundamental` | operating_point | RMS relative error | frequency resolution |
 //! | `operating_point.torque_balance` | operating_point | RMS of the rotor torque balance, N·m | sensor noise |
 //! | `operating_point.drive_balance` | operating_point | RMS the motor-constant drift explains in ⟨V⟩, V | √(2σ̂²/n) of the drift fit (ratio² = F) |
+//! | `force_calibration.linearity` | force_calibration | residual SD of the line mV vs load through the runs' means, mV | half-run difference of the means / 2 |
 //!
 //! σ_θ, the uncertainty of a held angle's mean, is the encoder quantisation
 //! tick/√12 (the held angle is arbitrary within a tick) plus the measured
@@ -29,12 +30,14 @@
 
 mod balance;
 mod drive_balance;
+mod force_linearity;
 mod free_run;
 mod step;
 mod twist;
 
 pub use balance::torque_balance_check;
 pub use drive_balance::drive_balance_check;
+pub use force_linearity::force_linearity_check;
 pub use free_run::{
     FreeRunSettings, Pair as FreeRunPair, free_run_checks, free_run_checks_of, free_run_pairs, speed_traces,
 };
@@ -111,7 +114,8 @@ impl ChannelCheck {
 /// (crates/virtual-rig/tests/channel_calibration.rs): 30 null draws (small
 /// protocol, seeds 9000–9029, blind baseline) gave maximum ratios rotor_max
 /// 1.88, rotor_min 1.64, torque_balance 1.05, dead_zone 1.06, linearity 0.43,
-/// step frequency 0.91, decay 0.18, step residual 1.12, drive balance 1.97;
+/// step frequency 0.91, decay 0.18, step residual 1.12, drive balance 1.97,
+/// force-sensor linearity 2.69 (threshold 6: its ratio² is F(3, 5) with 5 loads);
 /// 0/30 campaigns flagged
 /// (one-sided 95 % upper bound 9.5 %). Each threshold is about twice the null
 /// maximum. No null run of that protocol sticks and slips, so regime and
@@ -134,6 +138,8 @@ pub struct ChannelOptions {
     pub torque_balance_ratio: f64,
     /// The drive-balance drift test (ratio² is its F statistic).
     pub drive_balance_ratio: f64,
+    /// Linearity of the force sensor over its calibration runs (ratio² is F-distributed, (n − 2, n) dof).
+    pub force_linearity_ratio: f64,
     /// Window of the step residual, samples (the estimate's 50 ms).
     pub window_samples: usize,
     /// Window of the torque balance, samples (long enough that the
@@ -206,6 +212,7 @@ pub fn all_checks(
     v.extend(free_run_checks(c, model, &FreeRunSettings::of(opts, o), o));
     v.push(torque_balance_check(c, cal, baseline, opts, o));
     v.push(drive_balance_check(c, opts, o));
+    v.push(force_linearity_check(c, o));
     v
 }
 

@@ -217,6 +217,8 @@ pub fn diagnose(
     }
     // The drive balance needs no baseline: it fits its coefficients to the records.
     checks.push(channels::drive_balance_check(c, opts, o));
+    // So does the force sensor's linearity: the calibration runs against their own line.
+    checks.push(channels::force_linearity_check(c, o));
     let flagged: Vec<(String, String)> = checks.iter().filter(|k| k.flagged).map(ChannelCheck::as_pair).collect();
     let mut d = diagnose_signals(
         &c.name,

@@ -139,6 +139,40 @@ fn drive_balance_sees_a_motor_that_warms_up() {
     }
 }
 
+/// Force-sensor linearity: a sensor with a quadratic term (the virtual rig's
+/// `force_sensor_nonlinearity`, 0.3–0.8 mV/N² on a ≈ 210 mV/N sensor) is seen
+/// in the calibration runs; effect-free rigs and rigs with a vocabulary
+/// effect (which never touches the sensor) are not. Small protocol,
+/// `draw_truth` seeds 9000+: 4 bent sensors 37–61, 30 null draws 0.29–2.69
+/// (threshold 6); `--nocapture` prints the ratios.
+#[test]
+fn force_linearity_sees_a_bent_sensor() {
+    let o = opts();
+    let ratio = |class: &str, seed: u64| {
+        let truth = draw_truth(class, 130.0, seed);
+        let c = generate(class, &truth, &Protocol::small(), seed).expect("generate");
+        let ch = rig_diagnose::channels::force_linearity_check(&c, &o.channels);
+        println!("{class:<30} seed {seed}: ratio {:.2} {}", ch.ratio, ch.detail);
+        (ch.ratio, ch.flagged, ch.detail)
+    };
+    let threshold = o.channels.force_linearity_ratio;
+    for seed in 9000..9004 {
+        let (r, f, detail) = ratio("force_sensor_nonlinearity", seed);
+        assert!(f && r > 2.0 * threshold, "nonlinear sensor seed {seed}: ratio {r:.2} ({detail})");
+    }
+    let mut null_max = 0.0f64;
+    for seed in 9000..9030 {
+        let (r, f, detail) = ratio("none", seed);
+        assert!(!f, "null seed {seed}: ratio {r:.2} flagged ({detail})");
+        null_max = null_max.max(r);
+    }
+    for class in ["normal_force_modulation", "velocity_weakening_friction", "drive_voltage_limit"] {
+        let (r, f, detail) = ratio(class, 9000);
+        assert!(!f, "{class}: ratio {r:.2} flagged ({detail})");
+    }
+    println!("null maximum over 30 draws: {null_max:.2} (threshold {threshold})");
+}
+
 fn twist_runs_mut(c: &mut Campaign) -> impl Iterator<Item = &mut rig_types::Run> {
     c.runs.iter_mut().filter(|r| matches!(r.kind, RunKind::StaticTwist { .. }))
 }
