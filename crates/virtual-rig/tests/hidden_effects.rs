@@ -74,13 +74,19 @@ fn motor_cogging_is_unexplained() {
 /// ladders) on the full protocol, each campaign diagnosed blind with a baseline
 /// estimated from the thesis' published values (as the pipeline does).
 /// `cargo nextest run -p rig-virtual-rig --test hidden_effects --run-ignored only`;
-/// BATTERY_OUT=DIR writes the tables and the report there.
+/// BATTERY_OUT=DIR writes the tables and the report there; BATTERY_CASES=a,b
+/// keeps only the cases whose id starts with a or b.
 #[test]
 #[ignore]
 fn full_battery() {
     use rig_virtual_rig::battery::*;
     let thesis = thesis_data();
-    let battery = Battery::full();
+    let mut battery = Battery::full();
+    // BATTERY_CASES=prefix,prefix,... reruns only the cases whose id starts with one of them.
+    if let Ok(only) = std::env::var("BATTERY_CASES") {
+        let prefixes: Vec<&str> = only.split(',').filter(|p| !p.is_empty()).collect();
+        battery.cases.retain(|c| prefixes.iter().any(|p| c.id.starts_with(p)));
+    }
     let started = std::time::Instant::now();
     let out = battery.run(|case, c| {
         let d = rig_diagnose::diagnose_campaign(c, Some(&thesis), &opts()).map_err(|e| e.to_string())?;
