@@ -22,9 +22,14 @@
 //!    held-out fold (each run is held out exactly once). The effect with the
 //!    largest cross-validated gain is kept when the gain is at least
 //!    `min_relative_gain` AND the paired run-level t statistic of
-//!    ln(M_before/M_after) over the held-out runs is at least `min_t`; repeat
-//!    until no effect earns its place; the retained effects are then refitted
-//!    jointly on every run for the reported parameters.
+//!    ln(M_before/M_after) over the held-out runs is at least `min_t`, and
+//!    when it is **admissible**: fitted on every run it has the sign that
+//!    defines it (viscous c > 0, velocity weakening μs > μk). A best effect
+//!    with the opposite sign is a shape the vocabulary lacks (for example a
+//!    fading brake: friction falling with slip power), so selection stops and
+//!    the adequacy test judges the mismatch. Repeat until no effect earns its
+//!    place; the retained effects are then refitted jointly on every run for
+//!    the reported parameters.
 //! 4. **Adequacy**: the final model's cross-validated misfit against the noise
 //!    floor (ratio ≤ `adequacy_ratio`), no angle-locked order line left in most
 //!    runs ([`lines`]), and no flagged check of the other run kinds

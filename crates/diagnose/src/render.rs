@@ -339,6 +339,16 @@ pub fn markdown(d: &Diagnosis) -> String {
             r.step, r.effect, r.misfit_before, r.misfit_after, r.gain, r.gain_fold_sd, r.t, r.accepted
         );
     }
+    for r in det.steps.iter().filter(|r| r.inadmissible.is_some()) {
+        let _ = writeln!(
+            s,
+            "\nStep {}: `{}` has the largest significant gain but is not accepted: {}. Selection stops there; \
+             the adequacy test judges what is left.",
+            r.step,
+            r.effect,
+            r.inadmissible.as_deref().unwrap_or_default()
+        );
+    }
     if det.lines.is_empty() {
         let _ = writeln!(s, "\nNo order line locked to a shaft angle is significant in most runs.");
     } else {

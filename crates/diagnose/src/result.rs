@@ -216,6 +216,9 @@ pub struct StepRow {
     /// Paired run-level t of ln(M_before/M_after) (crate docs).
     pub t: f64,
     pub accepted: bool,
+    /// Why the step's best effect was not accepted although significant: its
+    /// fit contradicts the effect's definition (diagnosis.md's table).
+    pub inadmissible: Option<String>,
 }
 
 /// One slip-speed bin of the friction-vs-slip evidence: the sample means of

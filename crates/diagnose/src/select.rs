@@ -151,6 +151,33 @@ impl Cv<'_> {
     }
 }
 
+/// Whether adding `e` to the friction effects `set` gives the effect its name
+/// says, fitted on every run: `viscous_brake_friction` is friction that grows
+/// with slip speed (c > 0) and `velocity_weakening_friction` friction that
+/// falls from a higher static value (μs > μk), diagnosis.md's table. A fit
+/// with the opposite sign is a shape outside the vocabulary (friction falling
+/// linearly with speed, or rising toward a plateau), so the effect is not
+/// accepted and selection stops: a second-best vocabulary effect would only
+/// paper over the mismatch, which the adequacy test then judges. `None` when
+/// admissible (every other effect, whose fitted sign is free or canonical).
+fn inadmissible(d_all: &SlipData, set: FrictionSet, e: EffectId, freqs: &[f64], max_order: u32) -> Option<String> {
+    if !matches!(e, EffectId::ViscousBrakeFriction | EffectId::VelocityWeakeningFriction) {
+        return None;
+    }
+    let m = composite::fit_composite(d_all, set.with(e), freqs, max_order)?.model;
+    match e {
+        EffectId::ViscousBrakeFriction => m.viscous.filter(|&c| c <= 0.0).map(|c| {
+            format!("fitted on every run c = {c:.3e} per rad/s ≤ 0: friction falls with slip speed, not viscous friction")
+        }),
+        _ => m.stribeck.filter(|&(mu_s, _)| mu_s <= m.mu_k).map(|(mu_s, _)| {
+            format!(
+                "fitted on every run μs = {mu_s:.4} ≤ μk = {:.4}: friction rises with slip speed, not velocity weakening",
+                m.mu_k
+            )
+        }),
+    }
+}
+
 /// M_r = sqrt((e_μ² + e_V²)/2), or e_V without slip samples (crate docs).
 fn combine(e_mu: Option<f64>, e_v: f64) -> f64 {
     match e_mu {
@@ -402,6 +429,10 @@ pub fn diagnose_signals(
         e_mu.iter().zip(&dr.e_v).map(|(a, b)| combine(*a, *b)).collect()
     };
 
+    // Every run's slip samples (the admissibility fits and the final joint fit).
+    let all: Vec<&RunSignals> = runs.iter().collect();
+    let d_all = SlipData::from_runs(&all);
+
     // Forward selection.
     let mut current = ModelSet::default();
     let base_ms = misfits(&mut fr_cache, &mut dr_cache, current);
@@ -436,7 +467,13 @@ pub fn diagnose_signals(
             .filter(|(_, t)| t.1.after.is_finite())
             .max_by(|a, b| a.1.1.gain.total_cmp(&b.1.1.gain).then(b.0.cmp(&a.0)))
             .map(|(i, _)| i);
+        // A significant best effect must be the effect its name says: its fit on
+        // every run has the sign that defines it (crate docs, "admissible").
+        let inadmissible = best
+            .filter(|&i| significant(&tried[i].1))
+            .and_then(|i| inadmissible(&d_all, current.friction, tried[i].0, &cv.freqs, opts.max_order));
         for (i, (e, c, _)) in tried.iter().enumerate() {
+            let is_best = Some(i) == best;
             steps.push(StepRow {
                 step,
                 effect: e.id().into(),
@@ -445,14 +482,15 @@ pub fn diagnose_signals(
                 gain: c.gain,
                 gain_fold_sd: c.gain_fold_sd,
                 t: c.t,
-                accepted: Some(i) == best && significant(c),
+                accepted: is_best && significant(c) && inadmissible.is_none(),
+                inadmissible: if is_best { inadmissible.clone() } else { None },
             });
         }
         if step == 1 {
             first_step = tried.clone();
         }
         match best {
-            Some(i) if significant(&tried[i].1) => {
+            Some(i) if significant(&tried[i].1) && inadmissible.is_none() => {
                 let (e, c, ms) = tried.swap_remove(i);
                 current = current.with(e);
                 cur_ms = ms;
@@ -463,8 +501,6 @@ pub fn diagnose_signals(
     }
 
     // Final joint fit on every run for the reported parameters.
-    let all: Vec<&RunSignals> = runs.iter().collect();
-    let d_all = SlipData::from_runs(&all);
     let full = composite::fit_composite(&d_all, current.friction, &cv.freqs, opts.max_order)
         .ok_or(DiagnoseError::Singular("the joint fit of the retained friction effects"))?;
     let limit_fit = if current.limit { drive::fit_limit(&all, supply_v) } else { None };
