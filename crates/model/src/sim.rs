@@ -18,6 +18,16 @@ use std::f64::consts::PI;
 pub const MAX_STEPS: u64 = 1_000_000;
 /// See [`MAX_STEPS`].
 pub const MAX_STEPS_PER_S: f64 = 25_000.0;
+/// Consecutive steps cut short at a kink of the right-hand side, each
+/// advancing less than [`KINK_HUG_DT_S`], after which kinks are no longer
+/// located until the next exact step or event: the trajectory is running
+/// along the kink (a steady state that needs exactly the drive's voltage
+/// limit, where the PI's raw voltage hovers at the clamp), and cutting every
+/// step there would stall the run in ever shorter steps. Dormand–Prince
+/// integrates across such a kink under its own error control (the
+/// right-hand side is continuous there, only its derivative jumps).
+const MAX_KINK_HUGS: u32 = 3;
+const KINK_HUG_DT_S: f64 = 1e-5;
 /// Consecutive events that may happen without time advancing by more than
 /// [`ZENO_DT_S`] before the run is declared stuck in an event loop.
 const MAX_ZENO_EVENTS: u32 = 100;
@@ -108,6 +118,7 @@ pub(crate) fn run(
     });
     let mut stats = SimStats::default();
     let mut zeno = 0u32;
+    let mut kink_hugs = 0u32;
     let budget = MAX_STEPS + (MAX_STEPS_PER_S * (t_end - t0)) as u64;
     let mut exact = Exact::default();
     let mut fsal_valid = true;
@@ -150,6 +161,7 @@ pub(crate) fn run(
                 if !crossed && same_region && y1.iter().all(|v| v.is_finite()) {
                     carried = end.map(|r| (r, g1));
                     exact.steps += 1;
+                    kink_hugs = 0;
                     while idx < n && samples[idx] <= t1 {
                         push_sample(&mut out, sys, mode, samples[idx], &y1);
                         idx += 1;
@@ -189,7 +201,8 @@ pub(crate) fn run(
             ));
         }
         let (mut t_next, mut y_next, mut switch) = (step.t1(), step.y1, None);
-        if start.is_some() {
+        let mut cut_at_kink = false;
+        if start.is_some() && kink_hugs < MAX_KINK_HUGS {
             // In a piecewise-affine regime: end the step at the first switch of the
             // right-hand side inside it (voltage clamp, a kink of the friction lookup),
             // located on the dense output like an event, so that no step integrates
@@ -202,6 +215,7 @@ pub(crate) fn run(
                         t_next = tk;
                         y_next = step.dense(tk);
                         fsal_valid = false;
+                        cut_at_kink = true;
                     }
                 }
             }
@@ -220,6 +234,11 @@ pub(crate) fn run(
                 switch = Some(mode);
             }
         }
+        kink_hugs = match (switch, cut_at_kink && t_next - t < KINK_HUG_DT_S) {
+            (Some(_), _) => 0,
+            (None, true) => kink_hugs + 1,
+            (None, false) => kink_hugs,
+        };
         while idx < n && samples[idx] <= t_next {
             push_sample(&mut out, sys, mode, samples[idx], &step.dense(samples[idx]));
             idx += 1;

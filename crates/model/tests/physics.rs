@@ -176,6 +176,26 @@ fn drive_saturates_at_limit() {
     assert!(tr.voltage_v.contains(&3.0));
 }
 
+/// A steady state that needs exactly the drive's voltage limit: the PI's raw
+/// voltage then hovers at the clamp, a kink of the right-hand side the run
+/// keeps touching. Found by the virtual rig's battery (a drawn rig whose
+/// limit, 4.911 V, was what 85 rpm at 10 N needs): every step was cut at the
+/// kink and the run died after 1.3 million steps in 9 s. Now it completes in
+/// a few hundred Dormand–Prince steps and the voltage never exceeds the limit.
+#[test]
+fn a_steady_state_at_the_voltage_limit_does_not_stall_the_integrator() {
+    let p = rig_params();
+    let t = grid(40.0, 500.0);
+    let free = simulate(&p, &op(85.0, 10.0, 2.0), &t, &opts(1e-8)).unwrap();
+    let need_v = *free.voltage_v.last().unwrap();
+    let mut at_limit = p.clone();
+    at_limit.drive.limit_v = need_v;
+    let (tr, st) = rig_model::simulate_with_stats(&at_limit, &op(85.0, 10.0, 2.0), &t, &opts(1e-8)).unwrap();
+    assert!(st.accepted_steps + st.rejected_steps < 20_000, "{st:?}");
+    assert!(tr.voltage_v.iter().all(|v| v.abs() <= need_v), "the clamp holds");
+    assert_eq!(tr.time_s.len(), t.len());
+}
+
 /// Anti-windup: after a long saturation the speed overshoot stays small
 /// (a wound-up integral of 2 s at ~10 rad/s error would add ki·20 V).
 #[test]
