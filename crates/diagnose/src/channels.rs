@@ -37,7 +37,7 @@ mod twist;
 
 pub use balance::torque_balance_check;
 pub use drive_balance::drive_balance_check;
-pub use force_linearity::force_linearity_check;
+pub use force_linearity::{force_linearity_check, force_parabola};
 pub use free_run::{
     FreeRunSettings, Pair as FreeRunPair, free_run_checks, free_run_checks_of, free_run_pairs, speed_traces,
 };

@@ -212,8 +212,23 @@ pub fn diagnose(
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
     let fc = ForceCal { factor_mv_per_n: cal.force_factor_mv_per_n, offset_mv: cal.force_offset_mv };
-    let runs = prepare::prepare_runs(c, fc, opts)?;
     let o = &opts.channels;
+    // The force sensor first: when its calibration line fails, the slip
+    // channel reads forces through the calibration runs' parabola instead, so
+    // the friction laws are fitted to forces and not to the sensor's bend
+    // (the failed check still makes the verdict `unexplained`).
+    let mut force_check = channels::force_linearity_check(c, o);
+    let law = match channels::force_parabola(c).filter(|_| force_check.flagged) {
+        Some(q) => {
+            force_check.detail.push_str(&format!(
+                "; the slip channel reads forces through that parabola (mV = {:.2} + {:.3}·F {:+.4}·F²)",
+                q[0], q[1], q[2]
+            ));
+            prepare::SensorLaw::Parabola(q)
+        }
+        None => prepare::SensorLaw::Line(fc),
+    };
+    let runs = prepare::prepare_runs(c, law, opts)?;
     let mut checks: Vec<ChannelCheck> = Vec::new();
     if let Some(p) = baseline {
         checks.extend(channels::static_twist_checks(c, cal, o));
@@ -223,7 +238,7 @@ pub fn diagnose(
     // The drive balance needs no baseline: it fits its coefficients to the records.
     checks.push(channels::drive_balance_check(c, opts, o));
     // So does the force sensor's linearity: the calibration runs against their own line.
-    checks.push(channels::force_linearity_check(c, o));
+    checks.push(force_check);
     let flagged: Vec<(String, String)> = checks.iter().filter(|k| k.flagged).map(ChannelCheck::as_pair).collect();
     let mut d = diagnose_signals(
         &c.name,

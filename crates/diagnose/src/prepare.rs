@@ -84,7 +84,34 @@ pub fn stratified_folds(conditions: &[(f64, f64)], folds: usize) -> Vec<usize> {
 
 /// Builds the signals of every operating-point run (campaign order), each
 /// with its cross-validation fold ([`stratified_folds`]).
-pub fn prepare_runs(c: &Campaign, cal: ForceCal, opts: &DiagnoseOptions) -> Result<Vec<RunSignals>, DiagnoseError> {
+/// How the force sensor's mV are read as newtons.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SensorLaw {
+    /// The calibration line (rig-calibrate; thesis §4.1).
+    Line(ForceCal),
+    /// mV = a + b·F + c·F² ([`crate::channels::force_parabola`]), used when the
+    /// force-sensor linearity check rejects the line: F is the root of the
+    /// parabola on the branch through the calibration loads.
+    Parabola([f64; 3]),
+}
+
+impl SensorLaw {
+    pub fn force_n(&self, mv: &[f64]) -> Vec<f64> {
+        match *self {
+            SensorLaw::Line(cal) => force_n(mv, cal),
+            SensorLaw::Parabola([a, b, c]) => mv
+                .iter()
+                .map(|m| {
+                    // c F² + b F + (a − mV) = 0, the root that tends to (mV − a)/b as c → 0.
+                    let disc = (b * b + 4.0 * c * (m - a)).max(0.0);
+                    2.0 * (m - a) / (b + disc.sqrt())
+                })
+                .collect(),
+        }
+    }
+}
+
+pub fn prepare_runs(c: &Campaign, cal: SensorLaw, opts: &DiagnoseOptions) -> Result<Vec<RunSignals>, DiagnoseError> {
     let ops: Vec<&Run> = c.runs_of("operating_point").collect();
     let conditions: Vec<(f64, f64)> = ops
         .iter()
@@ -108,7 +135,7 @@ fn column<'a, T>(run: &'a Run, col: &'static str, v: &'a Option<Vec<T>>) -> Resu
 fn prepare_run(
     c: &Campaign,
     run: &Run,
-    cal: ForceCal,
+    cal: SensorLaw,
     fold: usize,
     opts: &DiagnoseOptions,
 ) -> Result<RunSignals, DiagnoseError> {
@@ -122,7 +149,7 @@ fn prepare_run(
     let phi2 = ticks_to_rad(column(run, "motor_ticks", &d.motor_ticks)?, tpr);
     let volt = column(run, "motor_voltage_v", &d.motor_voltage_v)?.clone();
     let mv = column(run, "brake_force_mv", &d.brake_force_mv)?;
-    let force = force_n(mv, cal);
+    let force = cal.force_n(mv);
     let w1 = centred_speed(&t, &phi1, opts.rotor_speed_half_window);
     let w2 = centred_speed(&t, &phi2, opts.motor_speed_half_window);
 

@@ -69,6 +69,28 @@ fn motor_cogging_is_unexplained() {
     check("motor_cogging", 17);
 }
 
+/// A bent force sensor with a vocabulary effect behind it: the sensor check
+/// rejects the calibration line, so the verdict is `unexplained`; the slip
+/// channel then reads forces through the calibration parabola, so the
+/// velocity weakening is found as the partial explanation and the sensor's
+/// bend earns no friction law of its own (before: a spurious viscous term).
+#[test]
+fn bent_force_sensor_is_unexplained_and_the_friction_behind_it_is_found() {
+    // The full battery's case (full protocol), where the line-read forces gave the spurious term.
+    let battery = rig_virtual_rig::battery::Battery::full();
+    let case = battery
+        .cases
+        .iter()
+        .find(|c| c.id == "mixed-velocity_weakening_friction+force_sensor_nonlinearity-0")
+        .expect("battery case");
+    let c = case.generate(&battery.protocol).expect("generate");
+    let d = rig_diagnose::diagnose_campaign(&c, Some(&thesis_data()), &opts()).expect("diagnosis");
+    let effects: Vec<&str> = d.findings.iter().map(|f| f.effect.as_str()).collect();
+    assert_eq!(d.verdict, "unexplained", "findings {effects:?}");
+    assert!(effects.contains(&"velocity_weakening_friction"), "findings {effects:?}");
+    assert!(!effects.contains(&"viscous_brake_friction"), "findings {effects:?}");
+}
+
 /// The whole battery (rig_virtual_rig::battery::Battery::full: 20+ nulls, every
 /// vocabulary effect, compounds, effects outside the vocabulary, detection
 /// ladders) on the full protocol, each campaign diagnosed blind with a baseline

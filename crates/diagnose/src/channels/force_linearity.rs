@@ -9,6 +9,47 @@ fn ols(x: &[Vec<f64>], y: &[f64]) -> Option<(Vec<f64>, f64)> {
     rig_estimate::linreg::ols(x, y, "force-sensor linearity").ok().map(|f| (f.beta, f.ssr))
 }
 
+/// The calibration runs' ids, loads, mean readings and Σ d² of their
+/// half-run differences.
+struct Means {
+    ids: Vec<String>,
+    loads: Vec<f64>,
+    means: Vec<f64>,
+    d2: f64,
+}
+
+fn calibration_means(c: &Campaign) -> Means {
+    let mut m = Means { ids: Vec::new(), loads: Vec::new(), means: Vec::new(), d2: 0.0 };
+    for run in &c.runs {
+        let RunKind::ForceCalibration { load_n } = run.kind else { continue };
+        let Some(mv) = run.data.brake_force_mv.as_ref().filter(|v| v.len() >= 8) else { continue };
+        let mean = |s: &[f64]| s.iter().sum::<f64>() / s.len() as f64;
+        let half = mv.len() / 2;
+        m.ids.push(run.id.clone());
+        m.loads.push(load_n);
+        m.means.push(mean(mv));
+        m.d2 += (mean(&mv[..half]) - mean(&mv[half..])).powi(2);
+    }
+    m
+}
+
+/// The parabola mV = a + b·F + c·F² through the calibration runs' means
+/// ([a, b, c]), the sensor law the diagnosis reads forces through when
+/// [`force_linearity_check`] rejects the line; `None` with fewer than four
+/// runs at three loads.
+pub fn force_parabola(c: &Campaign) -> Option<[f64; 3]> {
+    let m = calibration_means(c);
+    let mut distinct = m.loads.clone();
+    distinct.sort_by(f64::total_cmp);
+    distinct.dedup();
+    if m.loads.len() < 4 || distinct.len() < 3 {
+        return None;
+    }
+    let x: Vec<Vec<f64>> = m.loads.iter().map(|&l| vec![1.0, l, l * l]).collect();
+    let (q, _) = ols(&x, &m.means)?;
+    Some([q[0], q[1], q[2]])
+}
+
 /// Linearity of the force sensor over the `force_calibration` runs.
 ///
 /// The calibration (thesis §4.1, rig-calibrate) fits the straight line
@@ -34,18 +75,7 @@ fn ols(x: &[Vec<f64>], y: &[f64]) -> Option<(Vec<f64>, f64)> {
 /// line's force at the largest normal force of the operating points.
 pub fn force_linearity_check(c: &Campaign, o: &ChannelOptions) -> ChannelCheck {
     let name = "force_calibration.linearity";
-    let mut ids = Vec::new();
-    let (mut loads, mut means, mut d2) = (Vec::new(), Vec::new(), 0.0);
-    for run in &c.runs {
-        let RunKind::ForceCalibration { load_n } = run.kind else { continue };
-        let Some(mv) = run.data.brake_force_mv.as_ref().filter(|v| v.len() >= 8) else { continue };
-        let mean = |s: &[f64]| s.iter().sum::<f64>() / s.len() as f64;
-        let half = mv.len() / 2;
-        ids.push(run.id.clone());
-        loads.push(load_n);
-        means.push(mean(mv));
-        d2 += (mean(&mv[..half]) - mean(&mv[half..])).powi(2);
-    }
+    let Means { ids, loads, means, d2 } = calibration_means(c);
     let n = loads.len();
     let distinct = {
         let mut l = loads.clone();
