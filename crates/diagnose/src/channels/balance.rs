@@ -5,7 +5,7 @@ use super::{ChannelCheck, ChannelOptions, rms};
 use crate::DiagnoseOptions;
 use crate::prepare::diff_noise;
 use rig_calibrate::CampaignCalibration;
-use rig_types::sensor::{tick_rad, ticks_to_rad};
+use rig_types::sensor::{ForceCal, force_n, tick_rad, ticks_to_rad};
 use rig_types::{Campaign, RigParams, RunKind};
 
 /// Regressors of one window boundary: [⟨Ω̇1⟩, ⟨φ2−φ1⟩, ⟨Ω2−Ω1⟩, ⟨Ω1⟩, 1] and r⟨F⟩.
@@ -82,7 +82,7 @@ pub fn torque_balance_check(
         let (Some(t1), Some(t2), Some(mv)) = (&d.rotor_ticks, &d.motor_ticks, &d.brake_force_mv) else { continue };
         let phi1 = ticks_to_rad(t1, c.rig.encoder_ticks_per_rev);
         let phi2 = ticks_to_rad(t2, c.rig.encoder_ticks_per_rev);
-        let f: Vec<f64> = mv.iter().map(|m| (m - cal.force_offset_mv) / cal.force_factor_mv_per_n).collect();
+        let f = force_n(mv, ForceCal { factor_mv_per_n: cal.force_factor_mv_per_n, offset_mv: cal.force_offset_mv });
         let from = d.time_s.partition_point(|&x| x < ramp_s + opts.settle_s);
         // Σk²/(Σk)² of the triangle kernel: the variance gain of white noise.
         let kernel_gain = {
