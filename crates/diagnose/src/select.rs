@@ -534,11 +534,13 @@ pub fn diagnose_signals(
         .flatten()
         .collect();
     // A found angle-periodic friction of order n drives the rotor speed at
-    // order n and its harmonics: those rotor lines are explained, not left over.
+    // order n and its harmonics, and the shaft carries that torque to the
+    // motor side, whose angle φ2 = φ1 + twist turns at the rotor's mean rate:
+    // those lines, in either speed, are explained, not left over.
     let explained_order = full.model.angle_mod.map(|(_, n)| n);
     let consistent: Vec<lines::ConsistentLine> = lines::consistent_lines(&all_lines, opts.line_ratio)
         .into_iter()
-        .filter(|l| !(l.channel == "rotor" && explained_order.is_some_and(|n| l.order % n == 0)))
+        .filter(|l| !explained_order.is_some_and(|n| l.order % n == 0))
         .collect();
     let line_text: Vec<String> = consistent
         .iter()
