@@ -216,6 +216,12 @@ pub fn all_checks(
     v
 }
 
+/// Least squares of `y` on the rows `x` (the workspace's one solver,
+/// `rig_estimate::linreg::ols`): (coefficients, residual sum of squares).
+fn ols(x: &[Vec<f64>], y: &[f64]) -> Option<(Vec<f64>, f64)> {
+    rig_estimate::linreg::ols(x, y, "channel check").ok().map(|f| (f.beta, f.ssr))
+}
+
 /// Root mean square (0 for an empty slice).
 fn rms(x: &[f64]) -> f64 {
     if x.is_empty() { 0.0 } else { (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt() }

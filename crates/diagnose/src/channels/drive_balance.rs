@@ -1,7 +1,7 @@
 //! Steady-state balance of the drive over the operating points: do the
 //! motor's constants stay put during the campaign?
 
-use super::{ChannelCheck, ChannelOptions};
+use super::{ChannelCheck, ChannelOptions, ols};
 use crate::DiagnoseOptions;
 use rig_types::sensor::tick_rad;
 use rig_types::{Campaign, RunKind};
@@ -25,12 +25,6 @@ fn window_means(time_s: &[f64], v: &[f64], t1: &[i64], t2: &[i64], rad: f64, fro
         (from..=to).map(|j| (t2[j] - t1[j]) as f64 * rad).sum::<f64>() / k,
         (t2[to] - t2[from]) as f64 * rad / (time_s[to] - time_s[from]),
     ]
-}
-
-/// Least squares of `y` on the rows `x` (the workspace's one solver,
-/// `rig_estimate::linreg::ols`): (coefficients, residual sum of squares).
-fn rss(x: &[Vec<f64>], y: &[f64]) -> Option<(Vec<f64>, f64)> {
-    rig_estimate::linreg::ols(x, y, "drive balance").ok().map(|f| (f.beta, f.ssr))
 }
 
 /// The drive's mean balance over the steady state of every operating point:
@@ -97,7 +91,7 @@ pub fn drive_balance_check(c: &Campaign, opts: &DiagnoseOptions, o: &ChannelOpti
     let row = |m: &[f64; 3]| vec![m[1], m[2], 1.0];
     let y: Vec<f64> = means.iter().map(|m| m.whole[0]).collect();
     let x0: Vec<Vec<f64>> = means.iter().map(|m| row(&m.whole)).collect();
-    let Some((b0, rss0)) = rss(&x0, &y) else {
+    let Some((b0, rss0)) = ols(&x0, &y) else {
         return ChannelCheck::not_testable(name, ids, "the drive balance regression is singular".into());
     };
     let resid = |m: &[f64; 3]| m[0] - row(m).iter().zip(&b0).map(|(a, b)| a * b).sum::<f64>();
@@ -121,7 +115,7 @@ pub fn drive_balance_check(c: &Campaign, opts: &DiagnoseOptions, o: &ChannelOpti
         let syy: f64 = r.iter().map(|b| (b - mr).powi(2)).sum();
         if sxx > 0.0 && syy > 0.0 { sxy / (sxx * syy).sqrt() } else { 0.0 }
     };
-    let drift = match (n >= 8, rss(&x1, &y)) {
+    let drift = match (n >= 8, ols(&x1, &y)) {
         (true, Some((b1, rss1))) => {
             let pct = |slope: f64, at0: f64| if at0 != 0.0 { 100.0 * slope / at0 } else { f64::NAN };
             format!(

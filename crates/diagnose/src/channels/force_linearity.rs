@@ -1,13 +1,7 @@
 //! The force sensor's calibration runs: is mV against load a straight line?
 
-use super::{ChannelCheck, ChannelOptions};
+use super::{ChannelCheck, ChannelOptions, ols};
 use rig_types::{Campaign, RunKind};
-
-/// Least squares of `y` on the rows `x` (the workspace's one solver,
-/// `rig_estimate::linreg::ols`): (coefficients, residual sum of squares).
-fn ols(x: &[Vec<f64>], y: &[f64]) -> Option<(Vec<f64>, f64)> {
-    rig_estimate::linreg::ols(x, y, "force-sensor linearity").ok().map(|f| (f.beta, f.ssr))
-}
 
 /// The calibration runs' ids, loads, mean readings and Σ d² of their
 /// half-run differences.
