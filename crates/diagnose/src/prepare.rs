@@ -99,14 +99,7 @@ impl SensorLaw {
     pub fn force_n(&self, mv: &[f64]) -> Vec<f64> {
         match *self {
             SensorLaw::Line(cal) => force_n(mv, cal),
-            SensorLaw::Parabola([a, b, c]) => mv
-                .iter()
-                .map(|m| {
-                    // c F² + b F + (a − mV) = 0, the root that tends to (mV − a)/b as c → 0.
-                    let disc = (b * b + 4.0 * c * (m - a)).max(0.0);
-                    2.0 * (m - a) / (b + disc.sqrt())
-                })
-                .collect(),
+            SensorLaw::Parabola(abc) => rig_types::sensor::force_n_parabola(mv, abc),
         }
     }
 }

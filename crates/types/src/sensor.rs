@@ -131,9 +131,37 @@ pub fn force_n(mv: &[f64], cal: ForceCal) -> Vec<f64> {
     mv.iter().map(|m| (m - cal.offset_mv) / cal.factor_mv_per_n).collect()
 }
 
+/// Force-sensor output → force, N, for a sensor that is not linear:
+/// mV = a + b·F + c·F² (`abc`), F the root on the branch through the origin
+/// of the load axis, written so that it tends to [`force_n`]'s (mV − a)/b as c → 0.
+pub fn force_n_parabola(mv: &[f64], abc: [f64; 3]) -> Vec<f64> {
+    let [a, b, c] = abc;
+    mv.iter()
+        .map(|m| {
+            // c F² + b F + (a − mV) = 0.
+            let disc = (b * b + 4.0 * c * (m - a)).max(0.0);
+            2.0 * (m - a) / (b + disc.sqrt())
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn parabola_inverts_its_law_and_is_the_line_without_curvature() {
+        let abc = [3.0, 210.0, 0.6];
+        let f = [0.0, 1.5, 8.0, 25.0];
+        let mv: Vec<f64> = f.iter().map(|x| abc[0] + abc[1] * x + abc[2] * x * x).collect();
+        for (got, want) in force_n_parabola(&mv, abc).iter().zip(f) {
+            assert!((got - want).abs() < 1e-12 * want.max(1.0), "{got} vs {want}");
+        }
+        let line = force_n(&mv, ForceCal { factor_mv_per_n: 210.0, offset_mv: 3.0 });
+        for (p, l) in force_n_parabola(&mv, [3.0, 210.0, 0.0]).iter().zip(&line) {
+            assert!((p - l).abs() < 1e-12 * l.abs().max(1.0));
+        }
+    }
 
     /// A constant speed of 16 rad/s quantised to 1000-tick encoder counts:
     /// the differentiator's noise must stay far below one tick per sample (3.14 rad/s).
