@@ -21,9 +21,13 @@ pub struct Args {
     /// Print for each stage why it runs or is skipped.
     #[arg(long)]
     why: bool,
-    /// Run only this stage and what it depends on (repeatable).
+    /// Run only this stage and what it depends on (repeatable); an on-demand
+    /// stage (pipeline.toml `on_demand = true`, e.g. the confusion battery) runs when named here.
     #[arg(long)]
     only: Vec<String>,
+    /// Also run the on-demand stages (the confusion battery, ~70 s).
+    #[arg(long)]
+    all: bool,
     /// Override a stage param for this run, `STAGE.KEY=VALUE` (repeatable), e.g.
     /// `--set sweeps.shard=2/4` for job 2 of a 4-job array (then `cargo xtask merge-shards`).
     #[arg(long = "set", value_name = "STAGE.KEY=VALUE")]
@@ -33,7 +37,7 @@ pub struct Args {
 pub fn run(args: Args) -> Result<()> {
     let toml = super::workspace_root().join("pipeline.toml");
     let only: Vec<&str> = args.only.iter().map(String::as_str).collect();
-    let mut runner = Runner::new(&toml)?.jobs(args.jobs).dry_run(args.dry_run).only(&only).progress(true);
+    let mut runner = Runner::new(&toml)?.jobs(args.jobs).dry_run(args.dry_run).only(&only).all(args.all).progress(true);
     for item in &args.set {
         let (lhs, value) = item.split_once('=').with_context(|| format!("--set {item}: expected STAGE.KEY=VALUE"))?;
         let (stage, key) = lhs.split_once('.').with_context(|| format!("--set {item}: expected STAGE.KEY=VALUE"))?;

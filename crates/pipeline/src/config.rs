@@ -88,6 +88,11 @@ pub struct StageDecl {
     pub outputs: Vec<OutputPattern>,
     /// Skipped with a message, not an error, when an input is missing.
     pub optional: bool,
+    /// Run only when asked for by name (`--only NAME`) or with `--all`; a
+    /// default run assesses it (up to date, or stale and why) without running
+    /// it, and stages listing it in `after` read its last outputs. No stage
+    /// that is not on demand may read its outputs as `inputs`.
+    pub on_demand: bool,
     pub params: toml::Table,
 }
 
@@ -152,6 +157,8 @@ struct RawStage {
     outputs: Vec<String>,
     #[serde(default)]
     optional: bool,
+    #[serde(default)]
+    on_demand: bool,
     /// Names of `[shared.<name>]` tables handed to this stage as `params.<name>`.
     #[serde(default)]
     shared: Vec<String>,
@@ -206,6 +213,7 @@ impl PipelineConfig {
                     after: s.after,
                     code: s.code.iter().chain(common_code.iter().filter(|c| !s.code.contains(c))).cloned().collect(),
                     optional: s.optional,
+                    on_demand: s.on_demand,
                     params: s.params,
                 })
             })
@@ -252,6 +260,15 @@ impl PipelineConfig {
                         return Err(
                             self.err(&s.name, format!("input @{stage}/{rel}: stage {stage} declares no such output"))
                         );
+                    }
+                    if up.on_demand && !s.on_demand {
+                        return Err(self.err(
+                            &s.name,
+                            format!(
+                                "input @{stage}/{rel}: stage {stage} is on_demand, so a default run may not have its \
+                                 outputs; name it in `after` or make this stage on_demand too"
+                            ),
+                        ));
                     }
                 }
             }

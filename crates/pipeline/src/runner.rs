@@ -29,6 +29,10 @@ pub enum Outcome {
     WouldRun,
     /// An `optional` stage whose inputs are missing.
     SkippedOptional,
+    /// An `on_demand` stage not asked for (`--only NAME` or `--all`) whose
+    /// inputs, params or code changed since its last run (the reasons say
+    /// what); stages after it read its last outputs, if any.
+    SkippedOnDemand,
     /// The body returned Ok without staging any output.
     SkippedEmpty,
     /// The body, its inputs or its commit failed; nothing of it was written.
@@ -91,12 +95,15 @@ impl RunReport {
                 Outcome::UpToDate => "up to date".to_string(),
                 Outcome::WouldRun => "would run".to_string(),
                 Outcome::SkippedOptional => "skipped (optional, input missing)".to_string(),
+                Outcome::SkippedOnDemand => {
+                    format!("skipped (on demand, stale: `cargo xtask reproduce --only {}` or `--all` runs it)", st.name)
+                }
                 Outcome::SkippedEmpty => "skipped (wrote no output)".to_string(),
                 Outcome::Failed(_) => "FAILED".to_string(),
                 Outcome::Blocked { by } => format!("not run: upstream {by} failed"),
             };
             s.push_str(&format!("{:<22} {what}\n", st.name));
-            let always = matches!(st.outcome, Outcome::SkippedOptional | Outcome::WouldRun);
+            let always = matches!(st.outcome, Outcome::SkippedOptional | Outcome::SkippedOnDemand | Outcome::WouldRun);
             if why || always {
                 for r in &st.reasons {
                     s.push_str(&format!("{:<22}   - {r}\n", ""));
@@ -132,6 +139,7 @@ pub struct Runner {
     jobs: usize,
     dry_run: bool,
     only: Vec<String>,
+    all: bool,
     progress: bool,
     faults: BTreeMap<String, Fault>,
 }
@@ -168,6 +176,7 @@ impl Runner {
             jobs: 2,
             dry_run: false,
             only: Vec::new(),
+            all: false,
             progress: false,
             faults: BTreeMap::new(),
         })
@@ -228,6 +237,12 @@ impl Runner {
     /// Only these stages and what they depend on (empty: all).
     pub fn only(mut self, names: &[&str]) -> Self {
         self.only = names.iter().map(|s| s.to_string()).collect();
+        self
+    }
+
+    /// Also run the `on_demand` stages (without it they run only when named in [`Runner::only`]).
+    pub fn all(mut self, yes: bool) -> Self {
+        self.all = yes;
         self
     }
 
@@ -380,6 +395,8 @@ impl Runner {
                             rec.outputs.iter().map(move |(rel, h)| (format!("@{d}/{rel}"), h.blake3.clone()))
                         })
                         .collect();
+                    // An on-demand stage runs only when asked for.
+                    let may_run = !decl.on_demand || self.all || self.only.iter().any(|o| o == &name);
                     running.insert(name.clone());
                     bar.set_message(running.iter().cloned().collect::<Vec<_>>().join(", "));
                     let (tx, pool, dirs, memo, index) = (tx.clone(), &pool, &dirs, &memo, &index);
@@ -387,7 +404,7 @@ impl Runner {
                     scope.spawn(move || {
                         let watch = Stopwatch::start();
                         let mut report = pool.install(|| {
-                            self.run_one(decl, dirs, memo, index, campaign, &upstream_runs, &after_outputs)
+                            self.run_one(decl, dirs, memo, index, campaign, &upstream_runs, &after_outputs, may_run)
                         });
                         report.timing = watch.stop();
                         // The receiver lives until every stage has reported.
@@ -410,7 +427,9 @@ impl Runner {
         Ok(RunReport { stages, manifest, total: whole.stop() })
     }
 
-    /// Assesses one stage and, unless it is up to date (or this is a dry run), runs and commits it.
+    /// Assesses one stage and, unless it is up to date (or this is a dry run,
+    /// or it is on demand and `may_run` is false), runs and commits it.
+    #[allow(clippy::too_many_arguments)]
     fn run_one(
         &self,
         decl: &StageDecl,
@@ -420,6 +439,7 @@ impl Runner {
         campaign: Option<Arc<Campaign>>,
         upstream_runs: &[String],
         after_outputs: &[(String, String)],
+        may_run: bool,
     ) -> StageReport {
         let name = decl.name.clone();
         let report = |outcome, reasons, record| StageReport {
@@ -433,7 +453,7 @@ impl Runner {
             // Dry run: the upstream outputs this stage reads do not exist yet or may change.
             let reasons =
                 upstream_runs.iter().map(|u| format!("upstream {u} would run; its outputs may change")).collect();
-            return report(Outcome::WouldRun, reasons, None);
+            return report(if may_run { Outcome::WouldRun } else { Outcome::SkippedOnDemand }, reasons, None);
         }
         // Resolve and check the inputs.
         let mut resolved: Vec<(String, PathBuf, bool)> = Vec::new();
@@ -481,6 +501,16 @@ impl Runner {
                 vec![format!("inputs, params and code unchanged; {n} outputs intact")],
                 Some(previous),
             );
+        }
+        if !may_run {
+            // Its last outputs, when intact, stay what stages after it read.
+            let had_record = previous.is_some();
+            let last = previous.filter(|r| store::output_problems(&dirs.out, &r.outputs).is_empty());
+            let mut reasons = reasons;
+            if had_record && last.is_none() {
+                reasons.push("its last outputs are not intact".into());
+            }
+            return report(Outcome::SkippedOnDemand, reasons, last);
         }
         if self.dry_run {
             return report(Outcome::WouldRun, reasons, None);

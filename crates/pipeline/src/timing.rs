@@ -69,7 +69,7 @@ fn outcome(o: &Outcome) -> &'static str {
         Outcome::Ran => "ran",
         Outcome::UpToDate => "up to date",
         Outcome::WouldRun => "would run",
-        Outcome::SkippedOptional | Outcome::SkippedEmpty => "skipped",
+        Outcome::SkippedOptional | Outcome::SkippedEmpty | Outcome::SkippedOnDemand => "skipped",
         Outcome::Failed(_) => "failed",
         Outcome::Blocked { .. } => "blocked",
     }

@@ -709,3 +709,62 @@ fn shared_tables_reach_the_stages_that_list_them() {
     let e = config_error(&format!("{shared}{own}"));
     assert!(e.contains("stage d") && e.contains("declared once in [shared.integrator]"), "{e}");
 }
+
+/// An `on_demand` stage (like the confusion battery) does not run in a default
+/// run: it is assessed (up to date, or skipped as stale with the reasons), a
+/// stage `after` it reads its last outputs, and `--only NAME` or `--all` runs it.
+#[test]
+fn an_on_demand_stage_runs_only_when_asked_for() {
+    let stages = format!(
+        "{DIAMOND}{}",
+        r#"
+[[stage]]
+name = "slow"
+inputs = ["@b/b.txt"]
+outputs = ["slow.txt"]
+on_demand = true
+[stage.params]
+read = ["out:b.txt"]
+write = ["slow.txt"]
+
+[[stage]]
+name = "page"
+after = ["slow"]
+outputs = ["page.txt"]
+[stage.params]
+write = ["page.txt"]
+"#
+    );
+    let f = Fixture::new(&stages);
+    let r = f.run();
+    assert_eq!(outcome(&r, "slow"), "SkippedOnDemand");
+    assert_eq!(reasons(&r, "slow"), ["no record of an earlier run in this out dir"]);
+    assert!(r.summary(false).contains("cargo xtask reproduce --only slow"), "{}", r.summary(false));
+    assert_eq!(r.ran(), ["a", "b", "c", "d", "page"]);
+    assert!(!f.out().join("slow.txt").exists());
+    // Named: it runs, and the page after it re-runs on its new outputs.
+    let r = f.runner().only(&["slow", "page"]).run().unwrap();
+    assert_eq!(r.ran(), ["slow", "page"], "{}", r.summary(true));
+    assert!(f.read_out("slow.txt").contains("beta"));
+    let r = f.run();
+    assert_eq!(outcome(&r, "slow"), "UpToDate");
+    assert!(r.ran().is_empty(), "{}", r.summary(true));
+    // Its input changes: a default run reports it stale and why, keeps its last
+    // outputs (and the page's key, so the page does not re-run), and the
+    // manifest still lists them; `--all` runs it.
+    f.write("campaign/b.txt", "gamma\n");
+    let r = f.run();
+    assert_eq!(outcome(&r, "slow"), "SkippedOnDemand");
+    assert_eq!(reasons(&r, "slow"), ["input @b/b.txt changed"]);
+    assert_eq!(r.ran(), ["b", "c", "d"]); // d hashes the whole campaign folder
+    assert!(f.read_out("slow.txt").contains("beta"));
+    assert!(f.read_out("manifest.json").contains("\"slow.txt\""));
+    let r = f.runner().all(true).run().unwrap();
+    assert_eq!(r.ran(), ["slow", "page"], "{}", r.summary(true));
+    assert!(f.read_out("slow.txt").contains("gamma"));
+    // No default stage may read its outputs as an input.
+    let e = config_error(&format!(
+        "{stages}[[stage]]\nname = \"reader\"\ninputs = [\"@slow/slow.txt\"]\noutputs = [\"r.txt\"]\n"
+    ));
+    assert!(e.contains("stage reader: input @slow/slow.txt: stage slow is on_demand"), "{e}");
+}
