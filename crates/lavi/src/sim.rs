@@ -45,7 +45,8 @@ impl FrictionLaw {
     pub fn slip_nm(&self, omega_rad_s: f64) -> f64 {
         let w = omega_rad_s.abs();
         self.kinetic_nm
-            + (self.static_nm - self.kinetic_nm) * (-(w / self.stribeck_speed_rad_s).powf(self.shape_exponent)).exp()
+            + (self.static_nm - self.kinetic_nm)
+                * rig_spectra::stickslip::weakening_shape(w / self.stribeck_speed_rad_s, self.shape_exponent)
             + self.viscous_nm_s_rad * w
     }
 }
