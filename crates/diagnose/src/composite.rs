@@ -145,7 +145,17 @@ pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order
     let mut scan = Vec::new();
     let mut rss = weighted_rss(d, &m, &phases);
     let mut converged = set == FrictionSet::default();
-    let passes = if set == FrictionSet::default() { 0 } else { 6 };
+    // Without a modulation there is one block, the speed law, fitted exactly
+    // once: a second pass would refit it to the same data (the same numbers)
+    // only to find the RSS unchanged.
+    let modulated = set.time_mod || set.angle_mod;
+    let passes = if set == FrictionSet::default() {
+        0
+    } else if modulated {
+        6
+    } else {
+        1
+    };
     // The two modulation factors of every sample under the current model,
     // recomputed only when their block changes them (the same values
     // Composite::time_factor / angle_factor give, each evaluated once).
@@ -229,7 +239,7 @@ pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order
                 d.w(i) * e * e
             })
             .sum();
-        let done = pass > 0 && (rss - next).abs() <= 1e-7 * rss.max(f64::MIN_POSITIVE);
+        let done = !modulated || (pass > 0 && (rss - next).abs() <= 1e-7 * rss.max(f64::MIN_POSITIVE));
         rss = next;
         if done {
             converged = true;
