@@ -213,6 +213,75 @@ pub fn fit_viscous(d: &SlipData) -> Option<FrictionFit> {
     })
 }
 
+/// The weighted RSS of the Stribeck regression μ = μk + Δ g(Ω; vs) [+ c Ω]
+/// at a given vs, as [`linear_solve`] computes it (the same products summed
+/// in the same order, so the same bits), without its per-call row storage
+/// and general sparse accumulation: the sums that do not involve g (Σw,
+/// ΣwΩ, ΣwΩ², Σwμ, ΣwΩμ) are made once, and each vs costs one exp and a
+/// few products per sample. The Stribeck speed search evaluates it ~70
+/// times per fit.
+struct StribeckRss<'a> {
+    d: &'a SlipData,
+    viscous: bool,
+    /// √w and μ√w per sample.
+    sw: Vec<f64>,
+    y: Vec<f64>,
+    /// Σ sw², Σ sw·(Ω sw), Σ (Ω sw)², Σ sw·y, Σ (Ω sw)·y.
+    fixed: [f64; 5],
+    /// g of every sample at the last vs (the residual pass reuses it).
+    g: Vec<f64>,
+}
+
+impl<'a> StribeckRss<'a> {
+    fn new(d: &'a SlipData, viscous: bool) -> Self {
+        let sw: Vec<f64> = (0..d.len()).map(|i| d.w(i).sqrt()).collect();
+        let y: Vec<f64> = (0..d.len()).map(|i| d.mu[i] * sw[i]).collect();
+        let mut fixed = [0.0; 5];
+        for i in 0..d.len() {
+            let (v0, v2) = (1.0 * sw[i], d.omega[i] * sw[i]);
+            fixed[0] += v0 * v0;
+            fixed[1] += v0 * v2;
+            fixed[2] += v2 * v2;
+            fixed[3] += v0 * y[i];
+            fixed[4] += v2 * y[i];
+        }
+        StribeckRss { d, viscous, sw, y, fixed, g: vec![0.0; d.len()] }
+    }
+
+    /// The RSS at `vs` (∞ when the normal equations are singular).
+    fn at(&mut self, vs: f64) -> f64 {
+        let d = self.d;
+        let (mut a01, mut a11, mut a12, mut b1) = (0.0, 0.0, 0.0, 0.0);
+        for i in 0..d.len() {
+            let g = (-(d.omega[i] / vs).powi(2)).exp();
+            self.g[i] = g;
+            let (v0, v1, v2) = (1.0 * self.sw[i], g * self.sw[i], d.omega[i] * self.sw[i]);
+            a01 += v0 * v1;
+            a11 += v1 * v1;
+            a12 += v1 * v2;
+            b1 += v1 * self.y[i];
+        }
+        let [a00, a02, a22, b0, b2] = self.fixed;
+        let ne = if self.viscous {
+            Normal { n: 3, ata: vec![a00, a01, a02, a01, a11, a12, a02, a12, a22], atb: vec![b0, b1, b2] }
+        } else {
+            Normal { n: 2, ata: vec![a00, a01, a01, a11], atb: vec![b0, b1] }
+        };
+        let Some(p) = ne.solve() else { return f64::INFINITY };
+        let mut rss = 0.0;
+        for i in 0..d.len() {
+            let fit = if self.viscous {
+                1.0 * p[0] + self.g[i] * p[1] + d.omega[i] * p[2]
+            } else {
+                1.0 * p[0] + self.g[i] * p[1]
+            };
+            let e = d.mu[i] - fit;
+            rss += d.w(i) * e * e;
+        }
+        rss
+    }
+}
+
 /// μ = μk + Δ exp(−(Ω/vs)²) [+ c|Ω| when `with_viscous`]: linear in (μk, Δ[, c])
 /// for fixed vs; vs by a log grid then golden-section refinement; covariance
 /// from the numerical Jacobian.
@@ -228,35 +297,14 @@ pub fn fit_stribeck(d: &SlipData, with_viscous: bool) -> Option<FrictionFit> {
         })
     };
     let grid: Vec<f64> = (0..41).map(|j| 0.05 * 10f64.powf(j as f64 * 3.0 / 40.0)).collect();
-    let rss_at = |lv: f64| {
-        let vs = lv.exp();
-        linear_solve(d, ncol, |i, r| {
-            r[0] = 1.0;
-            r[1] = (-(d.omega[i] / vs).powi(2)).exp();
-            if with_viscous {
-                r[2] = d.omega[i];
-            }
-        })
-        .map(|x| x.1)
-        .unwrap_or(f64::INFINITY)
-    };
     // The grid on a subsample locates the basin; golden section on every sample.
     let ds = d.subsample(SEARCH_EVERY);
-    let rss_coarse = |v: f64| {
-        linear_solve(&ds, ncol, |i, r| {
-            r[0] = 1.0;
-            r[1] = (-(ds.omega[i] / v).powi(2)).exp();
-            if with_viscous {
-                r[2] = ds.omega[i];
-            }
-        })
-        .map(|x| x.1)
-        .unwrap_or(f64::INFINITY)
-    };
-    let (best, _) = grid.iter().enumerate().map(|(j, &v)| (j, rss_coarse(v))).min_by(|a, b| a.1.total_cmp(&b.1))?;
+    let mut coarse = StribeckRss::new(&ds, with_viscous);
+    let mut fine = StribeckRss::new(d, with_viscous);
+    let (best, _) = grid.iter().enumerate().map(|(j, &v)| (j, coarse.at(v))).min_by(|a, b| a.1.total_cmp(&b.1))?;
     let lo = grid[best.saturating_sub(1)].ln();
     let hi = grid[(best + 1).min(grid.len() - 1)].ln();
-    let lv = golden(lo, hi, 25, rss_at);
+    let lv = golden(lo, hi, 25, |lv| fine.at(lv.exp()));
     let vs = lv.exp();
     let (p, _, rss) = lin(vs)?;
     let (mu_k, dmu) = (p[0], p[1]);
@@ -299,7 +347,7 @@ pub fn fit_stribeck(d: &SlipData, with_viscous: bool) -> Option<FrictionFit> {
 }
 
 /// Golden-section minimum of `f` on [lo, hi].
-pub(crate) fn golden(mut lo: f64, mut hi: f64, iters: usize, f: impl Fn(f64) -> f64) -> f64 {
+pub(crate) fn golden(mut lo: f64, mut hi: f64, iters: usize, mut f: impl FnMut(f64) -> f64) -> f64 {
     let g = (5f64.sqrt() - 1.0) / 2.0;
     let mut x1 = hi - g * (hi - lo);
     let mut x2 = lo + g * (hi - lo);
