@@ -202,7 +202,7 @@ pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order
                 (0, _) | (_, None) => freqs_hz.to_vec(),
                 (_, Some((_, f))) => vec![f],
             };
-            let f = friction::fit_sine(&dt, true, &grid, max_order)?;
+            let f = friction::fit_sine(&dt, true, &grid, 1..=max_order)?;
             let FrictionModel::TimeSine { mu_k: s, a, f_hz } = f.model else { unreachable!() };
             if pass == 0 {
                 scan = f.scan.clone();
@@ -220,7 +220,12 @@ pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order
         // Angle modulation on μ / (speed law · time factor).
         if set.angle_mod {
             let da = with_mu(d, |i| d.mu[i] / (m.speed_mu(d.omega[i]) * tf[i]));
-            let f = friction::fit_sine(&da, false, &[], max_order)?;
+            // Later passes refine the order the first chose (as the time block keeps its frequency).
+            let orders = match m.angle_mod {
+                Some((_, n)) if pass > 0 => n..=n,
+                _ => 1..=max_order,
+            };
+            let f = friction::fit_sine(&da, false, &[], orders)?;
             let FrictionModel::AngleSine { mu_k: s, a, order } = f.model else { unreachable!() };
             m.angle_mod = Some((a, order));
             m.scale(s);

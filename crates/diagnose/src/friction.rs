@@ -7,6 +7,7 @@
 use crate::linalg::Normal;
 use crate::prepare::RunSignals;
 use std::f64::consts::PI;
+use std::ops::RangeInclusive;
 
 /// A friction law in slip, with its shared parameters.
 #[derive(Debug, Clone, PartialEq)]
@@ -578,33 +579,34 @@ fn time_scan_at(d: &SlipData, freqs_hz: &[f64]) -> Vec<(f64, f64)> {
 /// parallel over orders; sin/cos of n·φ by the multiple-angle recurrence from
 /// sin/cos φ (rounding grows by about one unit per order, far below the RSS
 /// differences the scan ranks).
-fn order_scan(d: &SlipData, max_order: u32) -> Vec<(f64, f64)> {
+fn order_scan(d: &SlipData, orders: &RangeInclusive<u32>) -> Vec<(f64, f64)> {
     let sums = ScanSums::of(d);
     let base: Vec<(f64, f64)> = d.phi.iter().map(|p| p.sin_cos()).collect();
     let mut sc = base.clone();
-    let mut out = Vec::with_capacity(max_order as usize);
-    for n in 1..=max_order {
+    let mut out = Vec::with_capacity(orders.clone().count());
+    for n in 1..=*orders.end() {
         if n > 1 {
             for (v, b) in sc.iter_mut().zip(&base) {
                 *v = (v.0 * b.1 + v.1 * b.0, v.1 * b.1 - v.0 * b.0);
             }
         }
-        out.push((f64::from(n), sine_rss_scan(d, &sc, &sums)));
+        if orders.contains(&n) {
+            out.push((f64::from(n), sine_rss_scan(d, &sc, &sums)));
+        }
     }
     out
 }
 
 /// Sine models: scan the frequency (time kind, grid of `freqs_hz`) or the
-/// order (angle kind, 1..=max_order), then Gauss–Newton on the shared
-/// (μk, a[, f]) and per-run θ_r. Returns the best fit.
-pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], max_order: u32) -> Option<FrictionFit> {
+/// order (angle kind, `orders`, usually 1..=max_order), then Gauss–Newton on
+/// the shared (μk, a[, f]) and per-run θ_r. Returns the best fit.
+pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeInclusive<u32>) -> Option<FrictionFit> {
     if d.is_empty() {
         return None;
     }
-    let cands: Vec<f64> = if time_kind { freqs_hz.to_vec() } else { (1..=max_order).map(f64::from).collect() };
     let xarg = |psi: f64, i: usize| if time_kind { 2.0 * PI * psi * d.t[i] } else { psi * d.phi[i] };
     let scored: Vec<(f64, f64)> =
-        if time_kind { time_scan(&d.subsample(SEARCH_EVERY), &cands) } else { order_scan(d, max_order) };
+        if time_kind { time_scan(&d.subsample(SEARCH_EVERY), freqs_hz) } else { order_scan(d, &orders) };
     let (psi0, _) = scored.iter().copied().min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.total_cmp(&b.0)))?;
     let (_, p) = sine_scan_rss(d, |i| xarg(psi0, i))?;
     // Angle kind: the regressor n·φ does not move during Gauss–Newton, so its
@@ -924,7 +926,7 @@ pub(crate) mod tests {
     fn time_modulation_is_recovered_with_per_run_phases() {
         let d = synth(4, |r, t, _, _| 0.5 * (1.0 + 0.1 * (2.0 * PI * 1.37 * t + r as f64).sin()));
         let freqs: Vec<f64> = (0..300).map(|j| 0.05 + 0.01 * j as f64).collect();
-        let f = fit_sine(&d, true, &freqs, 8).unwrap();
+        let f = fit_sine(&d, true, &freqs, 1..=8).unwrap();
         let FrictionModel::TimeSine { mu_k, a, f_hz } = f.model else { panic!() };
         assert!((mu_k - 0.5).abs() < 1e-3 && (a - 0.1).abs() < 3e-3 && (f_hz - 1.37).abs() < 1e-3, "{:?}", f.model);
         for (r, th) in f.phases.iter().enumerate() {
@@ -936,7 +938,7 @@ pub(crate) mod tests {
     #[test]
     fn angle_order_is_recovered() {
         let d = synth(3, |r, _, phi, _| 0.5 * (1.0 + 0.15 * (3.0 * phi + 0.5 * r as f64).sin()));
-        let f = fit_sine(&d, false, &[], 8).unwrap();
+        let f = fit_sine(&d, false, &[], 1..=8).unwrap();
         let FrictionModel::AngleSine { a, order, .. } = f.model else { panic!() };
         assert_eq!(order, 3);
         assert!((a - 0.15).abs() < 3e-3);
