@@ -31,6 +31,11 @@ const KINK_HUG_DT_S: f64 = 1e-5;
 /// Consecutive events that may happen without time advancing by more than
 /// [`ZENO_DT_S`] before the run is declared stuck in an event loop.
 const MAX_ZENO_EVENTS: u32 = 100;
+/// Most sample steps of one exact block (see `run`): 10 ms of 1 kHz samples.
+const MAX_BLOCK: usize = 16;
+/// Slack of a block's extent against max_step_s: sample times are sums that
+/// miss k·h by a few ulps.
+const H_GRID_REL: f64 = 1e-9;
 const ZENO_DT_S: f64 = 1e-9;
 
 /// Counters of one run, for benches and tests.
@@ -121,6 +126,7 @@ pub(crate) fn run(
     let mut kink_hugs = 0u32;
     let budget = MAX_STEPS + (MAX_STEPS_PER_S * (t_end - t0)) as u64;
     let mut exact = Exact::default();
+    let mut block = [[0.0; DIM]; MAX_BLOCK];
     let mut fsal_valid = true;
     // The region and event value at the end of an accepted exact step (the next one's start).
     let mut carried = None;
@@ -147,6 +153,56 @@ pub(crate) fn run(
                 Compute::No
             };
             if let Some(phi) = exact.propagator(sys, &region, &y, t, h, compute) {
+                // A block: where the samples are denser than max_step_s, the step to
+                // the next sample is repeated along the uniform grid for up to
+                // max_step_s (the step the run takes where it samples less often),
+                // and the event and the region are checked at the block's end only.
+                // The states are the same products as sample-by-sample steps; if the
+                // block's end fails a check, only its first step is taken (below), as
+                // without blocks.
+                let mut k = 1;
+                if compute == Compute::Cache && idx < n && samples[idx] == t1 {
+                    while k < MAX_BLOCK
+                        && idx + k < n
+                        && samples[idx + k] <= t_stop
+                        && samples[idx + k] - t <= opts.max_step_s * (1.0 + H_GRID_REL)
+                        && same_step(samples[idx + k] - samples[idx + k - 1], h, samples[idx + k])
+                    {
+                        k += 1;
+                    }
+                }
+                if k > 1 {
+                    let mut yk = y;
+                    let mut tk = t;
+                    for j in 0..k {
+                        yk = apply(phi, &yk, tk);
+                        tk = samples[idx + j];
+                        block[j] = yk;
+                    }
+                    let g1 = sys.event(mode, tk, &yk);
+                    let crossed = match (g0, g1) {
+                        (Some(g0), Some(g1)) => match mode {
+                            Mode::Stick => g0 <= 0.0 && g1 > 0.0,
+                            _ => g0 >= 0.0 && g1 < 0.0,
+                        },
+                        _ => false,
+                    };
+                    let end = sys.region(mode, tk, &yk);
+                    let same_region = end.map(|r| Region { ramping: region.ramping, ..r }) == Some(region);
+                    if !crossed && same_region && yk.iter().all(|v| v.is_finite()) {
+                        carried = end.map(|r| (r, g1));
+                        exact.steps += k as u64;
+                        kink_hugs = 0;
+                        for (j, yj) in block[..k].iter().enumerate() {
+                            push_sample(&mut out, sys, mode, samples[idx + j], yj);
+                        }
+                        idx += k;
+                        t = tk;
+                        y = yk;
+                        fsal_valid = false;
+                        continue;
+                    }
+                }
                 let y1 = apply(phi, &y, t);
                 let g1 = sys.event(mode, t1, &y1);
                 let crossed = match (g0, g1) {
