@@ -10,6 +10,7 @@ use crate::fit::{Fitted, fit_candidate};
 use crate::score::Evaluator;
 use crate::sim::Model;
 use crate::{Candidate, LaviError};
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// One candidate tried at one step.
@@ -71,9 +72,18 @@ pub fn forward_select(
     let mut step = 1;
     while !left.is_empty() {
         let first = sel.trials.len();
-        for c in &left {
-            let fitted = fit_candidate(*c, &current, ev, max_evals)?;
-            let heldout = ev.heldout_misfits(&fitted.model);
+        // Each candidate's fit and held-out scores are independent: fitted in
+        // parallel, kept in candidate order (the same numbers on any thread count).
+        let fits: Vec<Result<(Fitted, Vec<f64>), LaviError>> = left
+            .par_iter()
+            .map(|c| {
+                let fitted = fit_candidate(*c, &current, ev, max_evals)?;
+                let heldout = ev.heldout_misfits(&fitted.model);
+                Ok((fitted, heldout))
+            })
+            .collect();
+        for (c, fit) in left.iter().zip(fits) {
+            let (fitted, heldout) = fit?;
             let heldout_mean = mean(&heldout);
             let d: Vec<f64> = current_held.iter().zip(&heldout).map(|(a, b)| a - b).collect();
             let (md, sd) = (mean(&d), std(&d));
