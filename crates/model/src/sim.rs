@@ -31,7 +31,7 @@ const KINK_HUG_DT_S: f64 = 1e-5;
 /// Consecutive events that may happen without time advancing by more than
 /// [`ZENO_DT_S`] before the run is declared stuck in an event loop.
 const MAX_ZENO_EVENTS: u32 = 100;
-/// Most sample steps of one exact block (see `run`): 10 ms of 1 kHz samples.
+/// Most sample steps of one exact block (see `run`): the default 10 ms at up to 1.6 kHz.
 const MAX_BLOCK: usize = 16;
 /// Slack of a block's extent against max_step_s: sample times are sums that
 /// miss k·h by a few ulps.
@@ -62,6 +62,18 @@ fn thesis_stuck(sys: &System, y: &Vector) -> bool {
     match &sys.p.friction {
         FrictionLaw::Thesis(f) => (y[W1] * 60.0 / (2.0 * PI)).abs() < f.static_setpoint_rpm,
         _ => y[W1] == 0.0,
+    }
+}
+
+/// Whether the event function went from `g0` to `g1` across the end of
+/// `mode` (see `System::event`): stick ends where it crosses from ≤ 0 to > 0,
+/// slip where it crosses from ≥ 0 to < 0; the continuous mode has no event.
+#[inline]
+fn ends_mode(mode: Mode, g0: f64, g1: f64) -> bool {
+    match mode {
+        Mode::Stick => g0 <= 0.0 && g1 > 0.0,
+        Mode::Slip { .. } => g0 >= 0.0 && g1 < 0.0,
+        Mode::Continuous => false,
     }
 }
 
@@ -180,13 +192,7 @@ pub(crate) fn run(
                         block[j] = yk;
                     }
                     let g1 = sys.event(mode, tk, &yk);
-                    let crossed = match (g0, g1) {
-                        (Some(g0), Some(g1)) => match mode {
-                            Mode::Stick => g0 <= 0.0 && g1 > 0.0,
-                            _ => g0 >= 0.0 && g1 < 0.0,
-                        },
-                        _ => false,
-                    };
+                    let crossed = matches!((g0, g1), (Some(a), Some(b)) if ends_mode(mode, a, b));
                     let end = sys.region(mode, tk, &yk);
                     let same_region = end.map(|r| Region { ramping: region.ramping, ..r }) == Some(region);
                     if !crossed && same_region && yk.iter().all(|v| v.is_finite()) {
@@ -205,13 +211,7 @@ pub(crate) fn run(
                 }
                 let y1 = apply(phi, &y, t);
                 let g1 = sys.event(mode, t1, &y1);
-                let crossed = match (g0, g1) {
-                    (Some(g0), Some(g1)) => match mode {
-                        Mode::Stick => g0 <= 0.0 && g1 > 0.0,
-                        _ => g0 >= 0.0 && g1 < 0.0,
-                    },
-                    _ => false,
-                };
+                let crossed = matches!((g0, g1), (Some(a), Some(b)) if ends_mode(mode, a, b));
                 let end = sys.region(mode, t1, &y1);
                 let same_region = end.map(|r| Region { ramping: region.ramping, ..r }) == Some(region);
                 if !crossed && same_region && y1.iter().all(|v| v.is_finite()) {
@@ -278,12 +278,7 @@ pub(crate) fn run(
         }
         if let Some(g0) = sys.event(mode, t, &y) {
             let g1 = sys.event(mode, t_next, &y_next).unwrap_or(0.0);
-            let crossed = match mode {
-                Mode::Stick => g0 <= 0.0 && g1 > 0.0,
-                Mode::Slip { .. } => g0 >= 0.0 && g1 < 0.0,
-                Mode::Continuous => false,
-            };
-            if crossed {
+            if ends_mode(mode, g0, g1) {
                 let te = locate_root(t, g0, t_next, g1, |tt| sys.event(mode, tt, &step.dense(tt)).unwrap_or(0.0));
                 t_next = te;
                 y_next = step.dense(te);
