@@ -77,6 +77,25 @@ fn ends_mode(mode: Mode, g0: f64, g1: f64) -> bool {
     }
 }
 
+/// Whether an exact step that started in `region` with event value `g0` may
+/// end at (t1, y1): no event crossed, the same region (up to the ramp flag),
+/// a finite state. If so, the region and event value carried to the next step.
+#[inline]
+fn exact_end(
+    sys: &System,
+    mode: Mode,
+    region: &Region,
+    g0: Option<f64>,
+    t1: f64,
+    y1: &Vector,
+) -> Option<Option<(Region, Option<f64>)>> {
+    let g1 = sys.event(mode, t1, y1);
+    let crossed = matches!((g0, g1), (Some(a), Some(b)) if ends_mode(mode, a, b));
+    let end = sys.region(mode, t1, y1);
+    let same_region = end.map(|r| Region { ramping: region.ramping, ..r }) == Some(*region);
+    (!crossed && same_region && y1.iter().all(|v| v.is_finite())).then(|| end.map(|r| (r, g1)))
+}
+
 #[inline]
 fn push_sample(out: &mut Trajectory, sys: &System, mode: Mode, t: f64, y: &Vector) {
     out.time_s.push(t);
@@ -191,12 +210,8 @@ pub(crate) fn run(
                         tk = samples[idx + j];
                         block[j] = yk;
                     }
-                    let g1 = sys.event(mode, tk, &yk);
-                    let crossed = matches!((g0, g1), (Some(a), Some(b)) if ends_mode(mode, a, b));
-                    let end = sys.region(mode, tk, &yk);
-                    let same_region = end.map(|r| Region { ramping: region.ramping, ..r }) == Some(region);
-                    if !crossed && same_region && yk.iter().all(|v| v.is_finite()) {
-                        carried = end.map(|r| (r, g1));
+                    if let Some(end) = exact_end(sys, mode, &region, g0, tk, &yk) {
+                        carried = end;
                         exact.steps += k as u64;
                         kink_hugs = 0;
                         for (j, yj) in block[..k].iter().enumerate() {
@@ -210,12 +225,8 @@ pub(crate) fn run(
                     }
                 }
                 let y1 = apply(phi, &y, t);
-                let g1 = sys.event(mode, t1, &y1);
-                let crossed = matches!((g0, g1), (Some(a), Some(b)) if ends_mode(mode, a, b));
-                let end = sys.region(mode, t1, &y1);
-                let same_region = end.map(|r| Region { ramping: region.ramping, ..r }) == Some(region);
-                if !crossed && same_region && y1.iter().all(|v| v.is_finite()) {
-                    carried = end.map(|r| (r, g1));
+                if let Some(end) = exact_end(sys, mode, &region, g0, t1, &y1) {
+                    carried = end;
                     exact.steps += 1;
                     kink_hugs = 0;
                     while idx < n && samples[idx] <= t1 {
