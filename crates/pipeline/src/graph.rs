@@ -55,7 +55,8 @@ pub fn mermaid(config: &PipelineConfig) -> String {
     let mut s = String::from("flowchart LR\n");
     for st in &config.stages {
         let opt = if st.optional { " (optional)" } else { "" };
-        s.push_str(&format!("    {}[\"{}{}\"]\n", node_id(&st.name), st.name, opt));
+        let demand = if st.on_demand { " (on demand)" } else { "" };
+        s.push_str(&format!("    {}[\"{}{}{}\"]\n", node_id(&st.name), st.name, opt, demand));
     }
     for st in &config.stages {
         for (dep, data) in edges(st) {
@@ -71,7 +72,8 @@ pub fn dot(config: &PipelineConfig) -> String {
     let mut s = String::from("digraph pipeline {\n    rankdir=LR;\n    node [shape=box];\n");
     for st in &config.stages {
         let style = if st.optional { " style=dashed" } else { "" };
-        s.push_str(&format!("    \"{}\" [label=\"{}\"{style}];\n", st.name, st.name));
+        let demand = if st.on_demand { " (on demand)" } else { "" };
+        s.push_str(&format!("    \"{}\" [label=\"{}{demand}\"{style}];\n", st.name, st.name));
     }
     for st in &config.stages {
         for (dep, data) in edges(st) {

@@ -736,6 +736,7 @@ write = ["page.txt"]
 "#
     );
     let f = Fixture::new(&stages);
+    assert!(rig_pipeline::graph::mermaid(f.runner().config()).contains("slow[\"slow (on demand)\"]"));
     let r = f.run();
     assert_eq!(outcome(&r, "slow"), "SkippedOnDemand");
     assert_eq!(reasons(&r, "slow"), ["no record of an earlier run in this out dir"]);
