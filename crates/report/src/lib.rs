@@ -221,8 +221,10 @@ const CHECK_SCRIPT: &str = "(function(){
 
 fn section_rerun() -> String {
     "<h2 id=\"rerun\">How to rerun</h2>\n\
-     <pre><code>cargo xtask reproduce          # the whole pipeline → reports/ (tables, figures, audit, diagnosis, index.html)\n\
+     <pre><code>cargo xtask reproduce          # the pipeline → reports/ (tables, figures, audit, diagnosis, index.html)\n\
      cargo nextest run --workspace  # the tests (snapshot regression included)</code></pre>\n\
+     <p>The confusion battery (13 blind diagnoses, about a minute) runs on demand; a default run says whether its section is current:</p>\n\
+     <pre><code>cargo xtask reproduce --all</code></pre>\n\
      <p>Any campaign folder in the <code>rig-campaign/1</code> format, into any out dir:</p>\n\
      <pre><code>cargo xtask reproduce --campaign DIR --out OUT</code></pre>\n\
      <p>Compare every table and figure series with a git revision, at printed precision:</p>\n\
