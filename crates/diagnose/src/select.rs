@@ -540,7 +540,7 @@ pub fn diagnose_signals(
     let explained_order = full.model.angle_mod.map(|(_, n)| n);
     let consistent: Vec<lines::ConsistentLine> = lines::consistent_lines(&all_lines, opts.line_ratio)
         .into_iter()
-        .filter(|l| !explained_order.is_some_and(|n| l.order % n == 0))
+        .filter(|l| explained_order.is_none_or(|n| l.order % n != 0))
         .collect();
     let line_text: Vec<String> = consistent
         .iter()

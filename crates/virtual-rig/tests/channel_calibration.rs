@@ -282,9 +282,7 @@ fn shipped_campaign_with_baseline_and_extended_model() {
     assert_eq!(f.first().map(|x| x.0), Some(EffectId::NormalForceModulation));
     let left: Vec<&str> = ve
         .iter()
-        .filter(|c| {
-            c.flagged && c.run_kind != "operating_point" || c.channel == "operating_point.torque_balance" && c.flagged
-        })
+        .filter(|c| c.flagged && (c.run_kind != "operating_point" || c.channel == "operating_point.torque_balance"))
         .map(|c| c.channel.as_str())
         .collect();
     assert!(left.is_empty(), "flagged with the extended model: {left:?}");
