@@ -597,11 +597,6 @@ fn order_scan(d: &SlipData, orders: &RangeInclusive<u32>) -> Vec<(f64, f64)> {
     out
 }
 
-/// Frequency parameters of a sine model before the per-run phases: f (time kind) or none.
-fn nf_of(time_kind: bool) -> usize {
-    usize::from(time_kind)
-}
-
 /// Samples between exact re-synchronisations of [`time_sin_cos`].
 const RESYNC_EVERY: usize = 64;
 
@@ -642,6 +637,8 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeIn
     if d.is_empty() {
         return None;
     }
+    // Frequency parameters before the per-run phases: f (time kind) or none.
+    let nf = usize::from(time_kind);
     let xarg = |psi: f64, i: usize| if time_kind { 2.0 * PI * psi * d.t[i] } else { psi * d.phi[i] };
     let scored: Vec<(f64, f64)> =
         if time_kind { time_scan(&d.subsample(SEARCH_EVERY), freqs_hz) } else { order_scan(d, &orders) };
@@ -661,7 +658,7 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeIn
         let (st, ct) = trig[d.run[i]];
         (sx * ct + cx * st, cx * ct - sx * st)
     };
-    let run_trig = |th: &[f64]| -> Vec<(f64, f64)> { th[2 + nf_of(time_kind)..].iter().map(|t| t.sin_cos()).collect() };
+    let run_trig = |th: &[f64]| -> Vec<(f64, f64)> { th[2 + nf..].iter().map(|t| t.sin_cos()).collect() };
     let mu_k0 = p[0];
     // Shared amplitude: weighted mean of per-run amplitudes (start of GN).
     let mut amp_sum = 0.0;
@@ -673,7 +670,6 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeIn
     }
     let a0 = amp_sum / d.n_runs as f64 / mu_k0.abs().max(1e-9);
     // Gauss–Newton: params [μk, a, (f), θ_0..θ_{R−1}].
-    let nf = if time_kind { 1 } else { 0 };
     let np = 2 + nf + d.n_runs;
     let mut theta = vec![mu_k0, a0];
     if time_kind {

@@ -2,7 +2,7 @@
 //! of the final model and the residual signature (the rules are stated in the
 //! crate docs).
 
-use crate::composite::{self, Composite, FrictionSet, Phases};
+use crate::composite::{self, Composite, CompositeFit, FrictionSet, Phases};
 use crate::drive::{self, Pi};
 use crate::friction::SlipData;
 use crate::lines;
@@ -160,11 +160,17 @@ impl Cv<'_> {
 /// accepted and selection stops: a second-best vocabulary effect would only
 /// paper over the mismatch, which the adequacy test then judges. `None` when
 /// admissible (every other effect, whose fitted sign is free or canonical).
-fn inadmissible(d_all: &SlipData, set: FrictionSet, e: EffectId, freqs: &[f64], max_order: u32) -> Option<String> {
+/// `fit_all` is the joint fit of a friction set on every run (memoised: the
+/// final joint fit reuses it).
+fn inadmissible(
+    fit_all: &mut impl FnMut(FrictionSet) -> Option<CompositeFit>,
+    set: FrictionSet,
+    e: EffectId,
+) -> Option<String> {
     if !matches!(e, EffectId::ViscousBrakeFriction | EffectId::VelocityWeakeningFriction) {
         return None;
     }
-    let m = composite::fit_composite(d_all, set.with(e), freqs, max_order)?.model;
+    let m = fit_all(set.with(e))?.model;
     match e {
         EffectId::ViscousBrakeFriction => m.viscous.filter(|&c| c <= 0.0).map(|c| {
             format!("fitted on every run c = {c:.3e} per rad/s ≤ 0: friction falls with slip speed, not viscous friction")
@@ -429,9 +435,14 @@ pub fn diagnose_signals(
         e_mu.iter().zip(&dr.e_v).map(|(a, b)| combine(*a, *b)).collect()
     };
 
-    // Every run's slip samples (the admissibility fits and the final joint fit).
+    // Every run's slip samples, and the joint fit of a friction set on them
+    // (the admissibility test's and, for the retained set, the final one).
     let all: Vec<&RunSignals> = runs.iter().collect();
     let d_all = SlipData::from_runs(&all);
+    let mut all_fits: BTreeMap<FrictionSet, Option<CompositeFit>> = BTreeMap::new();
+    let mut fit_all = |set: FrictionSet| {
+        all_fits.entry(set).or_insert_with(|| composite::fit_composite(&d_all, set, &cv.freqs, opts.max_order)).clone()
+    };
 
     // Forward selection.
     let mut current = ModelSet::default();
@@ -471,7 +482,7 @@ pub fn diagnose_signals(
         // every run has the sign that defines it (crate docs, "admissible").
         let inadmissible = best
             .filter(|&i| significant(&tried[i].1))
-            .and_then(|i| inadmissible(&d_all, current.friction, tried[i].0, &cv.freqs, opts.max_order));
+            .and_then(|i| inadmissible(&mut fit_all, current.friction, tried[i].0));
         for (i, (e, c, _)) in tried.iter().enumerate() {
             let is_best = Some(i) == best;
             steps.push(StepRow {
@@ -501,8 +512,8 @@ pub fn diagnose_signals(
     }
 
     // Final joint fit on every run for the reported parameters.
-    let full = composite::fit_composite(&d_all, current.friction, &cv.freqs, opts.max_order)
-        .ok_or(DiagnoseError::Singular("the joint fit of the retained friction effects"))?;
+    let full =
+        fit_all(current.friction).ok_or(DiagnoseError::Singular("the joint fit of the retained friction effects"))?;
     let limit_fit = if current.limit { drive::fit_limit(&all, supply_v) } else { None };
     let pi_base = drive::fit_gains(&all, supply_v).ok_or(DiagnoseError::Singular("PI gains of the baseline drive"))?;
     let coulomb = composite::fit_composite(&d_all, FrictionSet::default(), &[], opts.max_order)

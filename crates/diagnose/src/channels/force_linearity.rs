@@ -27,21 +27,33 @@ fn calibration_means(c: &Campaign) -> Means {
     m
 }
 
+impl Means {
+    /// Runs and distinct loads: the line and the parabola need 4 runs at 3 loads.
+    fn counts(&self) -> (usize, usize) {
+        let mut l = self.loads.clone();
+        l.sort_by(f64::total_cmp);
+        l.dedup();
+        (self.loads.len(), l.len())
+    }
+
+    /// [a, b, c] of mV = a + b·F + c·F² through the means (`None` below 4 runs at 3 loads).
+    fn parabola(&self) -> Option<[f64; 3]> {
+        let (n, distinct) = self.counts();
+        if n < 4 || distinct < 3 {
+            return None;
+        }
+        let x: Vec<Vec<f64>> = self.loads.iter().map(|&l| vec![1.0, l, l * l]).collect();
+        let (q, _) = ols(&x, &self.means)?;
+        Some([q[0], q[1], q[2]])
+    }
+}
+
 /// The parabola mV = a + b·F + c·F² through the calibration runs' means
 /// ([a, b, c]), the sensor law the diagnosis reads forces through when
 /// [`force_linearity_check`] rejects the line; `None` with fewer than four
 /// runs at three loads.
 pub fn force_parabola(c: &Campaign) -> Option<[f64; 3]> {
-    let m = calibration_means(c);
-    let mut distinct = m.loads.clone();
-    distinct.sort_by(f64::total_cmp);
-    distinct.dedup();
-    if m.loads.len() < 4 || distinct.len() < 3 {
-        return None;
-    }
-    let x: Vec<Vec<f64>> = m.loads.iter().map(|&l| vec![1.0, l, l * l]).collect();
-    let (q, _) = ols(&x, &m.means)?;
-    Some([q[0], q[1], q[2]])
+    calibration_means(c).parabola()
 }
 
 /// Linearity of the force sensor over the `force_calibration` runs.
@@ -69,14 +81,10 @@ pub fn force_parabola(c: &Campaign) -> Option<[f64; 3]> {
 /// line's force at the largest normal force of the operating points.
 pub fn force_linearity_check(c: &Campaign, o: &ChannelOptions) -> ChannelCheck {
     let name = "force_calibration.linearity";
-    let Means { ids, loads, means, d2 } = calibration_means(c);
-    let n = loads.len();
-    let distinct = {
-        let mut l = loads.clone();
-        l.sort_by(f64::total_cmp);
-        l.dedup();
-        l.len()
-    };
+    let m = calibration_means(c);
+    let (n, distinct) = m.counts();
+    let parabola = m.parabola();
+    let Means { ids, loads, means, d2 } = m;
     if n < 4 || distinct < 3 {
         return ChannelCheck::not_testable(
             name,
@@ -98,9 +106,8 @@ pub fn force_linearity_check(c: &Campaign, o: &ChannelOptions) -> ChannelCheck {
             _ => None,
         })
         .fold(0.0, f64::max);
-    let parabola: Vec<Vec<f64>> = loads.iter().map(|&l| vec![1.0, l, l * l]).collect();
-    let bend = match ols(&parabola, &means) {
-        Some((q, _)) if n_max > 0.0 && b[1] != 0.0 => format!(
+    let bend = match parabola {
+        Some(q) if n_max > 0.0 && b[1] != 0.0 => format!(
             "; a parabola through the same means has {:+.3} mV/N², which at the largest normal force of the \
              operating points ({n_max:.1} N) reads {:+.1} % off the line",
             q[2],
