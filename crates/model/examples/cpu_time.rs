@@ -7,7 +7,7 @@
 //! and wall time and results on it: scripts/peer_scipy.py times scipy on it.
 #[path = "../tests/common/mod.rs"]
 mod common;
-use rig_model::{ANTI_WINDUP_TRACKING_S, MOTOR_FRICTION_SPEED_RAD_S, SimOptions, simulate_with_stats};
+use rig_model::{ANTI_WINDUP_TRACKING_S, MOTOR_FRICTION_SPEED_RAD_S, SimOptions, simulate_into, simulate_with_stats};
 use rig_types::{FrictionLaw, RunInput};
 fn cpu_s() -> f64 {
     let s = std::fs::read_to_string("/proc/self/stat").unwrap();
@@ -32,8 +32,15 @@ fn main() {
         for _ in 0..n {
             st = Some(simulate_with_stats(&p, &input, &samples, &SimOptions::default()).unwrap().1);
         }
+        let (cpu_fresh, wall_fresh) = ((cpu_s() - c0) / n as f64 * 1e3, w0.elapsed().as_secs_f64() / n as f64 * 1e3);
+        let mut out = rig_types::Trajectory::default();
+        let (c0, w0) = (cpu_s(), std::time::Instant::now());
+        for _ in 0..n {
+            simulate_into(&p, &input, &samples, &SimOptions::default(), &mut out).unwrap();
+        }
         println!(
-            "{name}: cpu {:.3} ms, wall {:.3} ms per run, {:?}",
+            "{name}: cpu {cpu_fresh:.3} ms, wall {wall_fresh:.3} ms per run; into a reused trajectory cpu {:.3} ms, \
+             wall {:.3} ms; {:?}",
             (cpu_s() - c0) / n as f64 * 1e3,
             w0.elapsed().as_secs_f64() / n as f64 * 1e3,
             st.unwrap()

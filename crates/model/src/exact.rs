@@ -27,7 +27,9 @@ pub(crate) const ONE: usize = 7;
 /// Rows of e^{M h} that are propagated (the rows of t and 1 are trivial).
 const ROWS: usize = 6;
 pub(crate) type Mat = [[f64; AUG]; AUG];
-type Propagator = [[f64; AUG]; ROWS];
+/// The first [`ROWS`] rows of e^{M h}, stored by column: `p[j][i]` is row i,
+/// column j, so that the six rows' products with one z_j are contiguous (see [`apply`]).
+type Propagator = [[f64; ROWS]; AUG];
 
 /// Steps whose lengths differ by at most this fraction of h, plus a few ulps
 /// of t, share a propagator: the sample grid t0 + k/rate has spacings that
@@ -171,7 +173,7 @@ impl Exact {
                 }
                 let e = expm(&sys.affine_matrix(region, y), h);
                 self.computed += 1;
-                let phi: Propagator = std::array::from_fn(|i| e[i]);
+                let phi: Propagator = std::array::from_fn(|j| std::array::from_fn(|i| e[i][j]));
                 if !cache {
                     self.once = phi;
                     return Some(&self.once);
@@ -196,18 +198,43 @@ impl Exact {
 /// thermal state (absent wherever a region exists) is carried unchanged.
 #[inline]
 pub(crate) fn apply(phi: &Propagator, y: &Vector, t: f64) -> Vector {
-    let z = [y[0], y[1], y[2], y[3], y[4], y[5], t, 1.0];
+    let q = step(phi, &[y[0], y[1], y[2], y[3], y[4], y[5]], t);
     let mut out = *y;
-    for (o, row) in out.iter_mut().zip(phi) {
-        // Two partial sums halve the dependency chain.
-        let (mut a, mut b) = (0.0, 0.0);
-        for j in (0..AUG).step_by(2) {
-            a += row[j] * z[j];
-            b += row[j + 1] * z[j + 1];
-        }
-        *o = a + b;
-    }
+    out[..ROWS].copy_from_slice(&q);
     out
+}
+
+/// Repeated [`apply`] along sample times: `out[j]` is the state at `times[j]`,
+/// reached from `y` at `t` by steps of the same Φ, each starting at the previous
+/// sample (at `t` for the first). The same products as `apply` one step at a
+/// time, but the state stays in registers from step to step: a state written to
+/// memory and read back as the next step's input stalls on store forwarding.
+#[inline]
+pub(crate) fn apply_along(phi: &Propagator, y: &Vector, t: f64, times: &[f64], out: &mut [Vector]) {
+    let mut q = [y[0], y[1], y[2], y[3], y[4], y[5]];
+    let mut tk = t;
+    for (o, &tn) in out.iter_mut().zip(times) {
+        q = step(phi, &q, tk);
+        *o = [q[0], q[1], q[2], q[3], q[4], q[5], y[ROWS]];
+        tk = tn;
+    }
+}
+
+/// Φ [q t 1]: row i is Σ_j Φ_ij z_j in two partial sums, of the even and of
+/// the odd columns (halving the dependency chain), added at the end. The six
+/// rows advance together column by column, which the compiler turns into
+/// products of row pairs without shuffles.
+#[inline(always)]
+fn step(phi: &Propagator, q: &[f64; ROWS], t: f64) -> [f64; ROWS] {
+    let z = [q[0], q[1], q[2], q[3], q[4], q[5], t, 1.0];
+    let (mut even, mut odd) = ([0.0; ROWS], [0.0; ROWS]);
+    for j in (0..AUG).step_by(2) {
+        for i in 0..ROWS {
+            even[i] += phi[j][i] * z[j];
+            odd[i] += phi[j + 1][i] * z[j + 1];
+        }
+    }
+    std::array::from_fn(|i| even[i] + odd[i])
 }
 
 #[cfg(test)]

@@ -241,6 +241,23 @@ pub fn simulate_with_stats(
     sample_times_s: &[f64],
     opts: &SimOptions,
 ) -> Result<(Trajectory, SimStats), ModelError> {
+    let mut traj = Trajectory::default();
+    let stats = simulate_into(params, input, sample_times_s, opts, &mut traj)?;
+    Ok((traj, stats))
+}
+
+/// [`simulate_with_stats`] into `out`, whose channels are emptied and refilled
+/// (their allocations reused): a batch of runs (a map, a campaign) that keeps
+/// one trajectory per thread writes its samples into memory it already owns,
+/// instead of faulting in fresh pages for every run (at 500 Hz over 40 s the
+/// nine channels are 1.4 MB). On an error `out` holds the samples before it.
+pub fn simulate_into(
+    params: &RigParams,
+    input: &RunInput,
+    sample_times_s: &[f64],
+    opts: &SimOptions,
+    out: &mut Trajectory,
+) -> Result<SimStats, ModelError> {
     validate(params, opts)?;
     check_samples(sample_times_s, 0.0)?;
     let (drive, n0, breakpoints) = match *input {
@@ -259,8 +276,8 @@ pub fn simulate_with_stats(
     let sys = System::new(params, drive, n0);
     let y0 = [0.0; dopri::DIM];
     let mode0 = sys.mode_at_rest(0.0, &y0);
-    let (traj, _, stats) = sim::run(&sys, 0.0, y0, mode0, sample_times_s, &breakpoints, opts)?;
-    Ok((traj, stats))
+    let (_, stats) = sim::run(&sys, (0.0, y0, mode0), sample_times_s, &breakpoints, opts, out)?;
+    Ok(stats)
 }
 
 /// Continues from `state` with the drive holding a constant motor-speed set-point
@@ -305,7 +322,8 @@ pub fn simulate_from(
     let drive = Drive::Pi { setpoint_rad_s: rpm_to_rad_s(motor_rpm_setpoint), ramp_s: 0.0, t_start_s: state.time_s };
     let sys = System::new(params, drive, normal_force_n);
     let mode0 = sys.mode_of(state.time_s, &y0, state.stuck);
-    let (traj, end, _) = sim::run(&sys, state.time_s, y0, mode0, sample_times_s, &[], opts)?;
+    let mut traj = Trajectory::default();
+    let (end, _) = sim::run(&sys, (state.time_s, y0, mode0), sample_times_s, &[], opts, &mut traj)?;
     Ok((traj, end))
 }
 

@@ -3,7 +3,7 @@
 //! trajectory channel at the requested times.
 
 use crate::dopri::{DIM, Dopri, StepFailure, Vector, locate_root};
-use crate::exact::{Compute, Exact, apply, same_step};
+use crate::exact::{Compute, Exact, apply, apply_along, same_step};
 use crate::system::{CUR, INT, Mode, PHI1, PHI2, Region, System, W1, W2};
 use crate::{ModelError, SimOptions, State};
 use rig_types::{FrictionLaw, ModelKind, Trajectory};
@@ -96,47 +96,70 @@ fn exact_end(
     (!crossed && same_region && y1.iter().all(|v| v.is_finite())).then(|| end.map(|r| (r, g1)))
 }
 
+/// Whether `mode` at state `y` counts as stuck in the output's `stuck` channel.
 #[inline]
-fn push_sample(out: &mut Trajectory, sys: &System, mode: Mode, t: f64, y: &Vector) {
-    out.time_s.push(t);
-    out.rotor_angle_rad.push(y[PHI1]);
-    out.rotor_speed_rad_s.push(y[W1]);
-    out.motor_angle_rad.push(y[PHI2]);
-    out.motor_speed_rad_s.push(y[W2]);
-    out.current_a.push(y[CUR]);
-    out.voltage_v.push(sys.voltage(t, y).0);
-    out.friction_torque_nm.push(sys.friction_torque_nm(mode, t, y));
-    out.stuck.push(match (sys.kind, mode) {
+fn stuck_flag(sys: &System, mode: Mode, y: &Vector) -> bool {
+    match (sys.kind, mode) {
         (ModelKind::Thesis, _) => sys.brake_closed() && thesis_stuck(sys, y),
         (_, Mode::Stick) => true,
         _ => false,
-    });
+    }
 }
 
-/// Integrates from (t0, y0) in `mode0` to the last sample time, stopping
+#[inline]
+fn push_sample(out: &mut Trajectory, sys: &System, mode: Mode, t: f64, y: &Vector) {
+    push_block(out, sys, mode, &[t], std::slice::from_ref(y));
+}
+
+/// Appends the samples at `times` (states `ys`, all in `mode`) channel by
+/// channel: one capacity check per channel and block instead of per sample.
+#[inline]
+fn push_block(out: &mut Trajectory, sys: &System, mode: Mode, times: &[f64], ys: &[Vector]) {
+    out.time_s.extend_from_slice(times);
+    out.rotor_angle_rad.extend(ys.iter().map(|y| y[PHI1]));
+    out.rotor_speed_rad_s.extend(ys.iter().map(|y| y[W1]));
+    out.motor_angle_rad.extend(ys.iter().map(|y| y[PHI2]));
+    out.motor_speed_rad_s.extend(ys.iter().map(|y| y[W2]));
+    out.current_a.extend(ys.iter().map(|y| y[CUR]));
+    out.voltage_v.extend(times.iter().zip(ys).map(|(&t, y)| sys.voltage(t, y).0));
+    out.friction_torque_nm.extend(times.iter().zip(ys).map(|(&t, y)| sys.friction_torque_nm(mode, t, y)));
+    out.stuck.extend(ys.iter().map(|y| stuck_flag(sys, mode, y)));
+}
+
+/// Empties every channel of `out`, keeping its allocations, and makes room for `n` samples.
+fn clear(out: &mut Trajectory, n: usize) {
+    for c in [
+        &mut out.time_s,
+        &mut out.rotor_angle_rad,
+        &mut out.rotor_speed_rad_s,
+        &mut out.motor_angle_rad,
+        &mut out.motor_speed_rad_s,
+        &mut out.current_a,
+        &mut out.voltage_v,
+        &mut out.friction_torque_nm,
+    ] {
+        c.clear();
+        c.reserve(n);
+    }
+    out.stuck.clear();
+    out.stuck.reserve(n);
+}
+
+/// Integrates from `start` = (t0, y0, mode0) to the last sample time, stopping
 /// exactly at each `breakpoints` time (kinks of the input, e.g. the end of the
-/// ramp). Samples must be sorted and >= t0 (checked by the caller).
+/// ramp), into `out` (emptied first; its allocations are reused). Samples
+/// must be sorted and >= t0 (checked by the caller).
 pub(crate) fn run(
     sys: &System,
-    t0: f64,
-    y0: Vector,
-    mode0: Mode,
+    start: (f64, Vector, Mode),
     samples: &[f64],
     breakpoints: &[f64],
     opts: &SimOptions,
-) -> Result<(Trajectory, State, SimStats), ModelError> {
+    out: &mut Trajectory,
+) -> Result<(State, SimStats), ModelError> {
+    let (t0, y0, mode0) = start;
     let n = samples.len();
-    let mut out = Trajectory {
-        time_s: Vec::with_capacity(n),
-        rotor_angle_rad: Vec::with_capacity(n),
-        rotor_speed_rad_s: Vec::with_capacity(n),
-        motor_angle_rad: Vec::with_capacity(n),
-        motor_speed_rad_s: Vec::with_capacity(n),
-        current_a: Vec::with_capacity(n),
-        voltage_v: Vec::with_capacity(n),
-        friction_torque_nm: Vec::with_capacity(n),
-        stuck: Vec::with_capacity(n),
-    };
+    clear(out, n);
     let t_end = samples.last().copied().unwrap_or(t0).max(t0);
     let (mut t, mut y, mut mode) = (t0, y0, mode0);
     if mode == Mode::Stick {
@@ -144,7 +167,7 @@ pub(crate) fn run(
     }
     let mut idx = 0;
     while idx < n && samples[idx] <= t0 {
-        push_sample(&mut out, sys, mode, samples[idx], &y);
+        push_sample(out, sys, mode, samples[idx], &y);
         idx += 1;
     }
     let mut dp = Dopri::new(opts.rtol, opts.atol, opts.max_step_s).with_norm_dim(if sys.has_thermal_state() {
@@ -203,20 +226,13 @@ pub(crate) fn run(
                     }
                 }
                 if k > 1 {
-                    let mut yk = y;
-                    let mut tk = t;
-                    for j in 0..k {
-                        yk = apply(phi, &yk, tk);
-                        tk = samples[idx + j];
-                        block[j] = yk;
-                    }
+                    apply_along(phi, &y, t, &samples[idx..idx + k], &mut block[..k]);
+                    let (tk, yk) = (samples[idx + k - 1], block[k - 1]);
                     if let Some(end) = exact_end(sys, mode, &region, g0, tk, &yk) {
                         carried = end;
                         exact.steps += k as u64;
                         kink_hugs = 0;
-                        for (j, yj) in block[..k].iter().enumerate() {
-                            push_sample(&mut out, sys, mode, samples[idx + j], yj);
-                        }
+                        push_block(out, sys, mode, &samples[idx..idx + k], &block[..k]);
                         idx += k;
                         t = tk;
                         y = yk;
@@ -230,7 +246,7 @@ pub(crate) fn run(
                     exact.steps += 1;
                     kink_hugs = 0;
                     while idx < n && samples[idx] <= t1 {
-                        push_sample(&mut out, sys, mode, samples[idx], &y1);
+                        push_sample(out, sys, mode, samples[idx], &y1);
                         idx += 1;
                     }
                     t = t1;
@@ -302,7 +318,7 @@ pub(crate) fn run(
             (None, false) => kink_hugs,
         };
         while idx < n && samples[idx] <= t_next {
-            push_sample(&mut out, sys, mode, samples[idx], &step.dense(samples[idx]));
+            push_sample(out, sys, mode, samples[idx], &step.dense(samples[idx]));
             idx += 1;
         }
         let advanced = t_next - t;
@@ -328,7 +344,7 @@ pub(crate) fn run(
     }
     // Samples at exactly t_end when the loop ended on an event or never ran.
     while idx < n {
-        push_sample(&mut out, sys, mode, samples[idx], &y);
+        push_sample(out, sys, mode, samples[idx], &y);
         idx += 1;
     }
     stats.accepted_steps = dp.n_accept;
@@ -346,5 +362,5 @@ pub(crate) fn run(
         pi_integral_rad: y[INT],
         stuck: mode == Mode::Stick,
     };
-    Ok((out, end, stats))
+    Ok((end, stats))
 }

@@ -202,14 +202,21 @@ impl<'a> System<'a> {
         }
     }
 
+    /// The speed error e and the unclamped voltage kp·e + ki·∫e of a PI drive.
+    #[inline(always)]
+    fn pi_raw(&self, t: f64, y: &Vector) -> (f64, f64) {
+        let d = &self.p.drive;
+        let e = self.reference_rad_s(t) - y[W2];
+        (e, d.kp_v_s_rad * e + d.ki_v_rad * y[INT])
+    }
+
     #[inline]
     fn pi_voltage(&self, t: f64, y: &Vector) -> (f64, f64) {
         match self.drive {
             Drive::Voltage { voltage_v } => (voltage_v, 0.0),
             Drive::Pi { .. } => {
                 let d = &self.p.drive;
-                let e = self.reference_rad_s(t) - y[W2];
-                let raw = d.kp_v_s_rad * e + d.ki_v_rad * y[INT];
+                let (e, raw) = self.pi_raw(t, y);
                 let v = raw.clamp(-d.limit_v, d.limit_v);
                 let rate = if d.ki_v_rad == 0.0 { e } else { e + (v - raw) / (d.ki_v_rad * ANTI_WINDUP_TRACKING_S) };
                 (v, rate)
@@ -420,7 +427,7 @@ impl<'a> System<'a> {
             Drive::Voltage { .. } => (0, false),
             Drive::Pi { .. } => {
                 let d = &self.p.drive;
-                let raw = d.kp_v_s_rad * (self.reference_rad_s(t) - y[W2]) + d.ki_v_rad * y[INT];
+                let raw = self.pi_raw(t, y).1;
                 let sat = if raw > d.limit_v {
                     1
                 } else if raw < -d.limit_v {
@@ -463,7 +470,7 @@ impl<'a> System<'a> {
         let mut s = [1.0; 5];
         if let Drive::Pi { .. } = self.drive {
             let d = &self.p.drive;
-            let raw = d.kp_v_s_rad * (self.reference_rad_s(t) - y[W2]) + d.ki_v_rad * y[INT];
+            let raw = self.pi_raw(t, y).1;
             s[0] = raw - d.limit_v;
             s[1] = raw + d.limit_v;
         }

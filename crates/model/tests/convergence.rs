@@ -87,3 +87,26 @@ fn absurdly_stiff_parameters_fail_with_a_budget_error() {
     assert!(reason.contains("L/R = 1.00e-9 s"), "{reason}");
     assert!(start.elapsed().as_secs() < 60);
 }
+
+/// A trajectory reused by `simulate_into` (a map's per-thread buffer) holds
+/// exactly what a fresh `simulate` returns, whatever it held before: a long
+/// 500 Hz stick-slip run, then a shorter run of the thesis model, then a
+/// 100 Hz run of the rig model.
+#[test]
+fn a_reused_trajectory_holds_exactly_what_a_fresh_run_returns() {
+    let mut out = rig_types::Trajectory::default();
+    for (p, rate, t_end, rpm) in [
+        (common::rig_params(), 500.0, 40.0, 20.0),
+        (common::thesis_params(), 250.0, 12.0, 60.0),
+        (common::rig_params(), 100.0, 20.0, 40.0),
+    ] {
+        let input = RunInput::OperatingPoint { motor_rpm_setpoint: rpm, normal_force_n: 15.0, ramp_s: 2.0 };
+        let t = common::grid(t_end, rate);
+        let stats = rig_model::simulate_into(&p, &input, &t, &SimOptions::default(), &mut out).expect("reused");
+        let (fresh, fresh_stats) =
+            rig_model::simulate_with_stats(&p, &input, &t, &SimOptions::default()).expect("fresh");
+        assert_eq!(out.len(), t.len());
+        assert_eq!(out, fresh, "{rate} Hz, {t_end} s");
+        assert_eq!(stats, fresh_stats);
+    }
+}
