@@ -192,7 +192,13 @@ pub(crate) fn run(
         };
         if let Some((region, g0)) = start {
             // An exact step to the next sample (or by max_step_s, or to the breakpoint).
-            let t1 = (t + opts.max_step_s).min(if idx < n { samples[idx] } else { t_end }).min(t_stop);
+            // A sample a rounding error beyond max_step_s is stepped to directly: a grid
+            // spaced by max_step_s (100 Hz at the default 10 ms) would otherwise alternate
+            // a step of t + max_step_s, which falls an ulp short of k/rate, with an
+            // ulp-long Dormand–Prince step to the sample.
+            let next = if idx < n { samples[idx] } else { t_end };
+            let t1 = if next - t <= opts.max_step_s * (1.0 + H_GRID_REL) { next } else { t + opts.max_step_s };
+            let t1 = t1.min(t_stop);
             let h = t1 - t;
             // Cache propagators of step lengths the run repeats (max_step_s, sample to
             // sample); compute a one-off one where Dormand–Prince would need more than

@@ -110,3 +110,24 @@ fn a_reused_trajectory_holds_exactly_what_a_fresh_run_returns() {
         assert_eq!(stats, fresh_stats);
     }
 }
+
+/// A sample grid spaced by exactly max_step_s (100 Hz at the default 10 ms)
+/// is stepped along by exact steps: the run takes no more Dormand–Prince steps
+/// than the same run sampled once at its end (the start-up before the motor
+/// friction saturates, and the break-away). Stepping by t + max_step_s fell
+/// an ulp short of each sample and added an ulp-long step to it: 863 steps
+/// against 350.
+#[test]
+fn a_grid_at_the_maximum_step_takes_no_extra_dormand_prince_steps() {
+    let p = rig_params();
+    let input = RunInput::OperatingPoint { motor_rpm_setpoint: 40.0, normal_force_n: 15.0, ramp_s: 2.0 };
+    let o = SimOptions::default();
+    let (_, once) = simulate_with_stats(&p, &input, &[40.0], &o).expect("sampled once");
+    for rate in [100.0, 50.0] {
+        let (_, grid) = simulate_with_stats(&p, &input, &grid(40.0, rate), &o).expect("on the grid");
+        assert!(
+            grid.accepted_steps + grid.rejected_steps <= once.accepted_steps + once.rejected_steps + 2,
+            "{rate} Hz: {grid:?} against {once:?} sampled once"
+        );
+    }
+}
