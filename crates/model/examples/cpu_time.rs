@@ -59,6 +59,15 @@ fn peer_case(input: &RunInput, t: &[f64]) {
     }
     let (cpu_ms, wall_ms) = ((cpu_s() - c0) / n as f64 * 1e3, w0.elapsed().as_secs_f64() / n as f64 * 1e3);
     let tr = tr.unwrap();
+    // The same runs into one reused trajectory (how a map or a campaign runs them).
+    let mut out = rig_types::Trajectory::default();
+    let (c0, w0) = (cpu_s(), std::time::Instant::now());
+    for _ in 0..n {
+        simulate_into(&p, input, t, &SimOptions::default(), &mut out).unwrap();
+    }
+    let (cpu_reused_ms, wall_reused_ms) =
+        ((cpu_s() - c0) / n as f64 * 1e3, w0.elapsed().as_secs_f64() / n as f64 * 1e3);
+    assert_eq!(out, tr, "a reused trajectory holds what a fresh run returns");
     // Break-aways as in tests/scipy_crosscheck.rs: Ω1 grew from 0 at (μs − μk) N r / J1.
     let accel = (mu_static - mu_kinetic) * normal_force_n * p.brake_disc_radius_m / p.rotor_inertia_kgm2;
     let releases: Vec<f64> = (1..tr.len())
@@ -77,6 +86,8 @@ fn peer_case(input: &RunInput, t: &[f64]) {
             "options": "SimOptions::default() (rtol 1e-8, atol 1e-10, max_step 0.01 s)",
             "cpu_ms_per_run": cpu_ms,
             "wall_ms_per_run": wall_ms,
+            "cpu_ms_per_run_reused": cpu_reused_ms,
+            "wall_ms_per_run_reused": wall_reused_ms,
             "rotor_speed_rad_s": tr.rotor_speed_rad_s,
             "release_times_s": releases,
         },

@@ -437,6 +437,17 @@ fn positive(name: &'static str, value: f64) -> Result<(), ModelError> {
 }
 
 fn check_samples(times: &[f64], t0: f64) -> Result<(), ModelError> {
+    // Fast path without early exits (the compiler vectorises it): strictly
+    // increasing (NaN compares false), a finite last and a first >= t0 make
+    // every time finite and >= t0. Otherwise the loop below names the index.
+    let increasing = times.windows(2).fold(true, |ok, w| ok & (w[1] > w[0]));
+    if increasing
+        && t0.is_finite()
+        && times.first().is_none_or(|&t| t >= t0)
+        && times.last().is_none_or(|t| t.is_finite())
+    {
+        return Ok(());
+    }
     let mut prev = t0;
     for (index, &t) in times.iter().enumerate() {
         let ok = t.is_finite() && t >= t0 && (index == 0 || t > prev);
@@ -553,5 +564,27 @@ fn ratio(name: &'static str, value: f64) -> Result<(), ModelError> {
         Ok(())
     } else {
         Err(ModelError::InvalidParameter { name, value, rule: "must be in [0, 1] so that N stays >= 0" })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The fast path accepts exactly what the loop accepts, and a rejection
+    /// names the first offending index.
+    #[test]
+    fn sample_times_are_rejected_at_the_first_bad_index() {
+        let bad = |index| Err(ModelError::BadSampleTimes { index });
+        assert_eq!(check_samples(&[], 0.0), Ok(()));
+        assert_eq!(check_samples(&[0.0, 0.5, 1.0], 0.0), Ok(()));
+        assert_eq!(check_samples(&[2.0, 2.5], 2.0), Ok(()));
+        assert_eq!(check_samples(&[1.5, 2.5], 2.0), bad(0));
+        assert_eq!(check_samples(&[0.0, 0.5, 0.5, 1.0], 0.0), bad(2));
+        assert_eq!(check_samples(&[0.0, 0.5, 0.4, 1.0], 0.0), bad(2));
+        assert_eq!(check_samples(&[0.0, f64::NAN, 1.0], 0.0), bad(1));
+        assert_eq!(check_samples(&[f64::NAN], 0.0), bad(0));
+        assert_eq!(check_samples(&[0.0, 1.0, f64::INFINITY], 0.0), bad(2));
+        assert_eq!(check_samples(&[f64::NEG_INFINITY, 1.0], f64::NEG_INFINITY), bad(0));
     }
 }
