@@ -35,6 +35,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    rig_pipeline::check_built_from(&super::workspace_root())?;
     let toml = super::workspace_root().join("pipeline.toml");
     let only: Vec<&str> = args.only.iter().map(String::as_str).collect();
     let mut runner = Runner::new(&toml)?.jobs(args.jobs).dry_run(args.dry_run).only(&only).all(args.all).progress(true);

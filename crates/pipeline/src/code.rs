@@ -13,8 +13,9 @@
 //! that nothing a stage names is left unresolved.
 
 use crate::error::PipelineError;
+use crate::fingerprint::{includes, join_rel};
 use std::collections::{BTreeMap, BTreeSet};
-use std::path::{Component, Path, PathBuf};
+use std::path::{Path, PathBuf};
 
 /// One workspace crate: its folder (relative to the root) and the library
 /// names of the workspace crates it depends on (normal and build dependencies).
@@ -257,37 +258,6 @@ fn module_file(root: &Path, dir: &str, name: &str) -> Option<String> {
     }
     let nested = format!("{dir}/{name}");
     root.join(&nested).join("mod.rs").is_file().then_some(nested)
-}
-
-/// `include_str!("p")` and `include_bytes!("p")` arguments.
-fn includes(text: &str) -> Vec<String> {
-    let mut out = Vec::new();
-    for mac in ["include_str!(\"", "include_bytes!(\""] {
-        let mut rest = text;
-        while let Some(i) = rest.find(mac) {
-            rest = &rest[i + mac.len()..];
-            if let Some(end) = rest.find('"') {
-                out.push(rest[..end].to_string());
-            }
-        }
-    }
-    out
-}
-
-/// `inc` (relative to the folder of `file`) as a normalised path relative to the root.
-fn join_rel(file: &str, inc: &str) -> String {
-    let mut parts: Vec<String> = Vec::new();
-    let base = Path::new(file).parent().unwrap_or(Path::new("")).join(inc);
-    for c in base.components() {
-        match c {
-            Component::ParentDir => {
-                parts.pop();
-            }
-            Component::Normal(s) => parts.push(s.to_string_lossy().into_owned()),
-            _ => {}
-        }
-    }
-    parts.join("/")
 }
 
 /// Every `head::first` path in `text` (with `use head::{a, b::c}` groups

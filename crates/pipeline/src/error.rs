@@ -33,6 +33,16 @@ pub enum PipelineError {
     #[error("campaign refused: {0}")]
     Campaign(#[from] rig_ingest::IngestError),
 
+    /// The running binary was built from other sources than are on disk (see
+    /// [`crate::fingerprint`]): its results would be stored under the new code's keys.
+    #[error(
+        "this binary was built from other sources than are in {} now (fingerprint {built}, on disk {on_disk}): \
+         a source changed after the build. Run `cargo xtask reproduce`, which rebuilds first; a stale binary \
+         would store its old results under the new code's cache keys",
+        root.display()
+    )]
+    StaleBinary { root: PathBuf, built: String, on_disk: String },
+
     /// A cache record or the manifest could not be (de)serialised.
     #[error("{}: {reason}", path.display())]
     Json { path: PathBuf, reason: String },

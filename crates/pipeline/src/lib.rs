@@ -18,6 +18,7 @@ pub mod code;
 mod config;
 mod ctx;
 mod error;
+pub mod fingerprint;
 pub mod graph;
 mod hash;
 mod manifest;
@@ -36,3 +37,18 @@ pub mod shards;
 /// `cargo xtask diff` (xtask's one door is this crate): the comparison lives in rig-report.
 pub use rig_report::diff;
 pub mod testing;
+
+/// The fingerprint of the sources this crate (and so the binary) was built from.
+pub const BUILT_FROM: &str = env!("RIG_SOURCE_FINGERPRINT");
+
+/// Refuses to run when the workspace sources under `root` are not the ones
+/// this binary was built from ([`PipelineError::StaleBinary`]; module [`fingerprint`]).
+pub fn check_built_from(root: &std::path::Path) -> Result<(), PipelineError> {
+    let on_disk =
+        fingerprint::fingerprint(root).map_err(|source| PipelineError::Io { path: root.to_path_buf(), source })?;
+    if on_disk == BUILT_FROM {
+        Ok(())
+    } else {
+        Err(PipelineError::StaleBinary { root: root.to_path_buf(), built: BUILT_FROM.to_string(), on_disk })
+    }
+}

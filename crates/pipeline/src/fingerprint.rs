@@ -1,0 +1,181 @@
+//! The fingerprint of the workspace sources a binary is built from.
+//!
+//! A stage's cache key covers its code as it is on disk (module `code`), so a
+//! binary built from older sources (`target/debug/xtask` run directly after
+//! an edit, without the rebuild `cargo xtask` does) would store its old
+//! results under the new code's keys, and every later run would trust them.
+//! The build script of this crate hashes the sources into the binary
+//! (`RIG_SOURCE_FINGERPRINT`) and `cargo xtask reproduce` refuses to run when
+//! the sources on disk hash differently ([`crate::check_built_from`]).
+//!
+//! Covered: the root `Cargo.toml` and `Cargo.lock`; for `xtask` and every
+//! folder under `crates/`, its `Cargo.toml` and every file under `src/`;
+//! and every file those sources pull in with `include_str!` or
+//! `include_bytes!`. The hash is 64-bit FNV-1a over each file's path, length
+//! and bytes in path order: it detects an edit, it is not a security measure.
+//!
+//! This file is also compiled into the build script (`#[path]`), so it uses
+//! the standard library only.
+
+use std::path::{Component, Path};
+
+/// `include_str!("p")` and `include_bytes!("p")` arguments.
+pub fn includes(text: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    for mac in ["include_str!(\"", "include_bytes!(\""] {
+        let mut rest = text;
+        while let Some(i) = rest.find(mac) {
+            rest = &rest[i + mac.len()..];
+            if let Some(end) = rest.find('"') {
+                out.push(rest[..end].to_string());
+            }
+        }
+    }
+    out
+}
+
+/// `inc` (relative to the folder of `file`) as a normalised path relative to the root.
+pub fn join_rel(file: &str, inc: &str) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    let base = Path::new(file).parent().unwrap_or(Path::new("")).join(inc);
+    for c in base.components() {
+        match c {
+            Component::ParentDir => {
+                parts.pop();
+            }
+            Component::Normal(s) => parts.push(s.to_string_lossy().into_owned()),
+            _ => {}
+        }
+    }
+    parts.join("/")
+}
+
+/// Files under `root/rel` (a folder), as `/`-separated paths relative to the root.
+fn walk(root: &Path, rel: &str, out: &mut Vec<String>) -> std::io::Result<()> {
+    let mut entries: Vec<_> = std::fs::read_dir(root.join(rel))?.collect::<Result<_, _>>()?;
+    entries.sort_by_key(|e| e.file_name());
+    for e in entries {
+        let child = format!("{rel}/{}", e.file_name().to_string_lossy());
+        if e.file_type()?.is_dir() {
+            walk(root, &child, out)?;
+        } else {
+            out.push(child);
+        }
+    }
+    Ok(())
+}
+
+/// The covered files (see the module docs) and the `src` folders they come
+/// from, relative to `root`, sorted.
+pub fn source_files(root: &Path) -> std::io::Result<(Vec<String>, Vec<String>)> {
+    let mut members = vec!["xtask".to_string()];
+    let mut crates: Vec<_> = std::fs::read_dir(root.join("crates"))?.collect::<Result<_, _>>()?;
+    crates.sort_by_key(|e| e.file_name());
+    for e in crates {
+        if e.path().join("Cargo.toml").is_file() {
+            members.push(format!("crates/{}", e.file_name().to_string_lossy()));
+        }
+    }
+    let mut files = vec!["Cargo.toml".to_string(), "Cargo.lock".to_string()];
+    let mut src_dirs = Vec::new();
+    for m in &members {
+        files.push(format!("{m}/Cargo.toml"));
+        let src = format!("{m}/src");
+        if root.join(&src).is_dir() {
+            walk(root, &src, &mut files)?;
+            src_dirs.push(src);
+        }
+    }
+    let mut pulled = Vec::new();
+    for f in files.iter().filter(|f| f.ends_with(".rs")) {
+        let text = std::fs::read_to_string(root.join(f))?;
+        pulled.extend(includes(&text).iter().map(|inc| join_rel(f, inc)).filter(|p| root.join(p).is_file()));
+    }
+    files.extend(pulled);
+    files.sort();
+    files.dedup();
+    Ok((files, src_dirs))
+}
+
+/// The fingerprint of the sources under `root` (16 hex digits).
+pub fn fingerprint(root: &Path) -> std::io::Result<String> {
+    const PRIME: u64 = 0x0000_0100_0000_01b3;
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut feed = |bytes: &[u8]| {
+        for &b in bytes {
+            h = (h ^ u64::from(b)).wrapping_mul(PRIME);
+        }
+    };
+    for f in source_files(root)?.0 {
+        let bytes = std::fs::read(root.join(&f))?;
+        feed(f.as_bytes());
+        feed(&(bytes.len() as u64).to_le_bytes());
+        feed(&bytes);
+    }
+    Ok(format!("{h:016x}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(root: &Path, rel: &str, text: &str) {
+        let p = root.join(rel);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(p, text).unwrap();
+    }
+
+    /// An edit to a covered file (a source, a manifest, the lock file, a file
+    /// pulled in by include_str!) changes the fingerprint; a test file does not.
+    #[test]
+    fn an_edit_to_what_is_compiled_changes_the_fingerprint_and_a_test_edit_does_not() {
+        let dir = tempfile::tempdir().unwrap();
+        let root = dir.path();
+        write(root, "Cargo.toml", "[workspace]\n");
+        write(root, "Cargo.lock", "# lock\n");
+        write(root, "xtask/Cargo.toml", "[package]\n");
+        write(root, "xtask/src/main.rs", "fn main() {}\n");
+        write(root, "crates/a/Cargo.toml", "[package]\n");
+        write(root, "crates/a/src/lib.rs", "static T: &str = include_str!(\"../../../data/t.toml\");\n");
+        write(root, "crates/a/src/inner/m.rs", "pub fn f() {}\n");
+        write(root, "crates/a/tests/t.rs", "#[test] fn t() {}\n");
+        write(root, "data/t.toml", "x = 1\n");
+        let (files, srcs) = source_files(root).unwrap();
+        assert_eq!(
+            files,
+            [
+                "Cargo.lock",
+                "Cargo.toml",
+                "crates/a/Cargo.toml",
+                "crates/a/src/inner/m.rs",
+                "crates/a/src/lib.rs",
+                "data/t.toml",
+                "xtask/Cargo.toml",
+                "xtask/src/main.rs"
+            ]
+        );
+        assert_eq!(srcs, ["xtask/src", "crates/a/src"]);
+        let base = fingerprint(root).unwrap();
+        assert_eq!(fingerprint(root).unwrap(), base, "deterministic");
+        write(root, "crates/a/tests/t.rs", "#[test] fn t2() {}\n");
+        assert_eq!(fingerprint(root).unwrap(), base, "a test file is not compiled into the binary");
+        for (rel, text) in [
+            ("crates/a/src/inner/m.rs", "pub fn g() {}\n"),
+            ("data/t.toml", "x = 2\n"),
+            ("Cargo.lock", "# lock 2\n"),
+            ("crates/a/src/new.rs", "\n"),
+        ] {
+            let before = fingerprint(root).unwrap();
+            write(root, rel, text);
+            assert_ne!(fingerprint(root).unwrap(), before, "{rel}");
+        }
+    }
+
+    /// The binary under test was built from the sources on disk, so the
+    /// build script and the runtime cover the same files the same way.
+    #[test]
+    fn this_build_matches_the_workspace_sources() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        crate::check_built_from(&root).expect("built from the sources on disk");
+    }
+}
