@@ -23,10 +23,10 @@ fn rows(phi1: &[f64], phi2: &[f64], force_n: &[f64], dt: f64, w: usize, r_m: f64
     let mut b = from.max(w);
     while b + w < n {
         let (mut s_tw, mut s_f, mut s_k) = (0.0, 0.0, 0.0);
-        for k in b - w..=b + w {
+        for (k, &f) in force_n.iter().enumerate().take(b + w + 1).skip(b - w) {
             let wt = (w - k.abs_diff(b)) as f64;
             s_tw += wt * tw(k);
-            s_f += wt * force_n[k];
+            s_f += wt * f;
             s_k += wt;
         }
         let w1_prev = (phi1[b] - phi1[b - w]) / big_t;
