@@ -547,11 +547,6 @@ fn ywy(d: &SlipData) -> f64 {
     (0..d.len()).map(|i| d.w(i) * d.mu[i] * d.mu[i]).sum()
 }
 
-fn sine_scan_rss(d: &SlipData, arg: impl Fn(usize) -> f64) -> Option<(f64, Vec<f64>)> {
-    let sc: Vec<(f64, f64)> = (0..d.len()).map(|i| arg(i).sin_cos()).collect();
-    sine_rss_from(d, &sc, ywy(d))
-}
-
 /// RSS of the time-sine regression on a frequency grid, coarse to fine: every
 /// second grid point first, then every grid point within ±2 steps of the five
 /// best coarse minima. With runs of T ≥ 30 s the main lobe of a modulation is
@@ -714,16 +709,20 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeIn
     let scored: Vec<(f64, f64)> =
         if time_kind { time_scan(&d.subsample(SEARCH_EVERY), freqs_hz) } else { order_scan(d, &orders) };
     let (psi0, _) = scored.iter().copied().min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.total_cmp(&b.0)))?;
-    let (_, p) = sine_scan_rss(d, |i| xarg(psi0, i))?;
-    // Angle kind: the regressor n·φ does not move during Gauss–Newton, so its
-    // sine and cosine are computed once and each run's phase enters by angle
-    // addition, sin(x + θ) = sin x cos θ + cos x sin θ (no trigonometry per sample).
-    let sc0: Vec<(f64, f64)> =
-        if time_kind { Vec::new() } else { (0..d.len()).map(|i| xarg(psi0, i).sin_cos()).collect() };
-    // Time kind: sin/cos of 2πf·t by rotation along each run's uniform
-    // sample steps ([`time_sin_cos`]), recomputed for each trial f; each
-    // run's phase enters by angle addition as for the angle kind.
-    let mut base = Vec::with_capacity(if time_kind { d.len() } else { 0 });
+    // sin/cos of the scan's best argument: the start of Gauss–Newton (per-run
+    // linear fit) and, for the angle kind, its regressor throughout — n·φ does
+    // not move during Gauss–Newton, so each run's phase enters by angle
+    // addition, sin(x + θ) = sin x cos θ + cos x sin θ (no trigonometry per
+    // sample). Time kind: sin/cos of 2πf·t by rotation along each run's
+    // uniform sample steps ([`time_sin_cos`]), recomputed for each trial f.
+    let mut base = Vec::with_capacity(d.len());
+    let sc0: Vec<(f64, f64)> = if time_kind {
+        time_sin_cos(d, psi0, &mut base);
+        base.clone()
+    } else {
+        (0..d.len()).map(|i| xarg(psi0, i).sin_cos()).collect()
+    };
+    let (_, p) = sine_rss_from(d, &sc0, ywy(d))?;
     let sin_cos_at = |i: usize, trig: &[(f64, f64)], base: &[(f64, f64)]| -> (f64, f64) {
         let (sx, cx) = if time_kind { base[i] } else { sc0[i] };
         let (st, ct) = trig[d.run[i]];
