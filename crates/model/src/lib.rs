@@ -250,7 +250,8 @@ pub fn simulate_with_stats(
 /// (their allocations reused): a batch of runs (a map, a campaign) that keeps
 /// one trajectory per thread writes its samples into memory it already owns,
 /// instead of faulting in fresh pages for every run (at 500 Hz over 40 s the
-/// nine channels are 1.4 MB). On an error `out` holds the samples before it.
+/// nine channels are 1.4 MB). After an error `out` holds no complete run: the
+/// samples before an integrator failure, or, for rejected input, what it held before.
 pub fn simulate_into(
     params: &RigParams,
     input: &RunInput,

@@ -145,19 +145,19 @@ fn clear(out: &mut Trajectory, n: usize) {
     out.stuck.reserve(n);
 }
 
-/// Integrates from `start` = (t0, y0, mode0) to the last sample time, stopping
+/// Integrates from `from` = (t0, y0, mode0) to the last sample time, stopping
 /// exactly at each `breakpoints` time (kinks of the input, e.g. the end of the
 /// ramp), into `out` (emptied first; its allocations are reused). Samples
 /// must be sorted and >= t0 (checked by the caller).
 pub(crate) fn run(
     sys: &System,
-    start: (f64, Vector, Mode),
+    from: (f64, Vector, Mode),
     samples: &[f64],
     breakpoints: &[f64],
     opts: &SimOptions,
     out: &mut Trajectory,
 ) -> Result<(State, SimStats), ModelError> {
-    let (t0, y0, mode0) = start;
+    let (t0, y0, mode0) = from;
     let n = samples.len();
     clear(out, n);
     let t_end = samples.last().copied().unwrap_or(t0).max(t0);
