@@ -45,7 +45,7 @@ def main():
     print(f"rig-model   default tol : CPU {rust['cpu_ms_per_run']:9.3f} ms  wall {rust['wall_ms_per_run']:9.3f} ms per run"
           f"  ({len(rust['release_times_s'])} break-aways; a fresh trajectory per run)")
     print(f"rig-model   default tol : CPU {rust['cpu_ms_per_run_reused']:9.3f} ms  wall {rust['wall_ms_per_run_reused']:9.3f} ms per run"
-          f"  (into one reused trajectory, as a map or a campaign runs)")
+          f"  (into one reused trajectory, simulate_into)")
     w_rust = np.array(rust["rotor_speed_rad_s"])
     rel_rust = np.array(rust["release_times_s"])
     for method, rtol, atol in [("LSODA", 1e-8, 1e-10), ("DOP853", 1e-10, 1e-12)]:

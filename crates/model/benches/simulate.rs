@@ -20,7 +20,7 @@ fn bench(c: &mut Criterion) {
     c.bench_function("rig model 40 s, 40 rpm, 15 N, default tol", |b| {
         b.iter(|| simulate_with_stats(black_box(&p), black_box(&input), black_box(&t), &o).unwrap())
     });
-    // A map or a campaign keeps one trajectory per thread: the samples go into
+    // A batch that keeps one trajectory per thread (simulate_into): the samples go into
     // memory it already owns instead of 1.4 MB of freshly faulted pages per run.
     let mut out = rig_types::Trajectory::default();
     c.bench_function("rig model 40 s, 40 rpm, 15 N, default tol, into a reused trajectory", |b| {

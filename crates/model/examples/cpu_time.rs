@@ -59,7 +59,7 @@ fn peer_case(input: &RunInput, t: &[f64]) {
     }
     let (cpu_ms, wall_ms) = ((cpu_s() - c0) / n as f64 * 1e3, w0.elapsed().as_secs_f64() / n as f64 * 1e3);
     let tr = tr.unwrap();
-    // The same runs into one reused trajectory (how a map or a campaign runs them).
+    // The same runs into one reused trajectory (simulate_into, a batch's per-thread buffer).
     let mut out = rig_types::Trajectory::default();
     let (c0, w0) = (cpu_s(), std::time::Instant::now());
     for _ in 0..n {
