@@ -661,7 +661,7 @@ const RESYNC_EVERY: usize = 64;
 /// of the diagnosis bench (10.2 against 9.8 s).
 ///
 /// Returns how many samples took the exact `sin_cos`.
-fn time_sin_cos(d: &SlipData, f_hz: f64, out: &mut Vec<(f64, f64)>) -> usize {
+pub(crate) fn time_sin_cos(d: &SlipData, f_hz: f64, out: &mut Vec<(f64, f64)>) -> usize {
     out.clear();
     let w = 2.0 * PI * f_hz;
     let mut step = (f64::NAN, (0.0, 1.0));
