@@ -133,11 +133,22 @@ pub fn fit_limit(runs: &[&RunSignals], supply_v: f64) -> Option<(Pi, f64, usize,
         _ => eval_at(l),
     };
     // Coarse grid first (the RSS is not unimodal far from the optimum), then Brent's method.
+    // The grid is scored from the top down, and a limit whose RSS cannot beat the best
+    // so far is not fitted (branch and bound): a sample measured beyond ±l is predicted
+    // within ±l, so RSS(l) ≥ Σ w (|V| − l)² over those samples. A skipped limit's RSS
+    // is above the best score, so the grid's minimum (the first of equal ones) is the
+    // one scoring every limit finds; the limits far below what the runs drive, each
+    // fitted with every sample clamped in up to eight passes, were 18 % of a diagnosis.
     let grid: Vec<f64> = (0..=38).map(|j| supply_v * (0.05 + 0.025 * j as f64)).collect();
-    let scores: Vec<f64> = {
-        use rayon::prelude::*;
-        grid.par_iter().map(|&l| eval(l)).collect()
-    };
+    let mut scores = vec![f64::INFINITY; grid.len()];
+    let mut best_rss = f64::INFINITY;
+    for (j, &l) in grid.iter().enumerate().rev() {
+        if rss_lower_bound(runs, l) > best_rss {
+            continue;
+        }
+        scores[j] = eval(l);
+        best_rss = best_rss.min(scores[j]);
+    }
     let best = (0..grid.len()).min_by(|&a, &b| scores[a].total_cmp(&scores[b]))?;
     let lo = grid[best.saturating_sub(1)];
     let hi = grid[(best + 1).min(grid.len() - 1)];
@@ -160,6 +171,18 @@ pub fn fit_limit(runs: &[&RunSignals], supply_v: f64) -> Option<(Pi, f64, usize,
     let d2 = (eval(l + h) - 2.0 * rss + eval(l - h)) / (h * h);
     let se = if d2 > 0.0 { (2.0 * (rss / n as f64) / d2).sqrt() } else { f64::NAN };
     Some((pi, rss, n, se))
+}
+
+/// A lower bound of the voltage RSS (noise units, as [`voltage_rss`]) of any
+/// gains at limit `l`: the prediction is clamped to ±l, so a sample measured
+/// at |V| > l misses by at least |V| − l.
+fn rss_lower_bound(runs: &[&RunSignals], l: f64) -> f64 {
+    runs.iter()
+        .map(|s| {
+            let w = 1.0 / s.voltage_noise_v.max(1e-6).powi(2);
+            w * s.voltage_v.iter().map(|v| (v.abs() - l).max(0.0).powi(2)).sum::<f64>()
+        })
+        .sum()
 }
 
 /// The lowest limit from which on the drive-limit fit no longer depends on
@@ -238,6 +261,31 @@ mod tests {
                 s
             })
             .collect()
+    }
+
+    /// The bound that lets the limit's grid skip fits holds: at every grid limit
+    /// the fitted gains' RSS is at least [`rss_lower_bound`], which is zero where
+    /// no sample is beyond the limit; and it prunes: far below the driven
+    /// voltage it exceeds the grid's best RSS, so those limits are not fitted.
+    #[test]
+    fn the_lower_bound_is_below_every_fitted_rss_and_prunes_hopeless_limits() {
+        let limited = runs(Pi { kp_v_s_rad: 2.0, ki_v_rad: 10.0, limit_v: 5.0 }, &[1.0, 2.0, 3.0]);
+        let r: Vec<&RunSignals> = limited.iter().collect();
+        let scored: Vec<(f64, f64, f64)> = (0..=38)
+            .map(|j| {
+                let l = 24.0 * (0.05 + 0.025 * j as f64);
+                (l, rss_lower_bound(&r, l), fit_gains(&r, l).map(|p| voltage_rss(&p, &r).0).expect("fit"))
+            })
+            .collect();
+        let best = scored.iter().map(|x| x.2).fold(f64::INFINITY, f64::min);
+        for &(l, bound, rss) in &scored {
+            assert!(bound <= rss, "limit {l}: bound {bound} > rss {rss}");
+            if l > 5.1 {
+                assert_eq!(bound, 0.0, "limit {l}");
+            }
+        }
+        let pruned = scored.iter().filter(|x| x.1 > best).count();
+        assert!(pruned >= 5, "{pruned} of {} limits pruned", scored.len());
     }
 
     /// A limit the training runs never reach fits no better than the supply's,
