@@ -585,7 +585,6 @@ const MAX_SCAN_FFT: usize = 1 << 22;
 /// would exceed [`MAX_SCAN_FFT`].
 fn time_scan_fft(d: &SlipData, freqs_hz: &[f64]) -> Option<Vec<(f64, f64)>> {
     use rayon::prelude::*;
-    use realfft::RealFftPlanner;
     if freqs_hz.len() < 2 || d.is_empty() {
         return None;
     }
@@ -625,7 +624,7 @@ fn time_scan_fft(d: &SlipData, freqs_hz: &[f64]) -> Option<Vec<(f64, f64)>> {
     if n > MAX_SCAN_FFT || top > n / 2 {
         return None;
     }
-    let fft = RealFftPlanner::<f64>::new().plan_fft_forward(n);
+    let fft = rig_spectra::forward_plan(n);
     // Per run: the seven sums at every frequency.
     let per_run: Vec<Vec<[f64; 7]>> = ranges
         .par_iter()

@@ -17,7 +17,8 @@ pub use error::SpectraError;
 pub use lines::{Line, LineAnalysis, LineClass, LineOptions, LineRow, RatioTest, analyse_lines, ratio_test};
 pub use peaks::{Peak, PeakOptions, RawPeak, find_peaks, interpolate_gaussian, spectral_peaks};
 pub use spectrum::{
-    CrossSpectra, Frf, Psd, Spectrum, WelchOptions, amplitude_spectrum, cross_spectra, frf_h1, lowpass_fft, welch_psd,
+    CrossSpectra, Frf, Psd, Spectrum, WelchOptions, amplitude_spectrum, cross_spectra, forward_plan, frf_h1,
+    inverse_plan, lowpass_fft, welch_psd,
 };
 pub use window::{Detrend, Window, WindowGains, detrend, gains};
 
