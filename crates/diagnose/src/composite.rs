@@ -253,9 +253,8 @@ fn refine_speed_time(
             ne.add_sparse(&row[..k], sw * e);
         }
         let Some(step) = ne.solve() else {
-            if ne_last.is_none() {
-                return None;
-            }
+            // Singular at the start: no joint step (the caller keeps the block fits).
+            ne_last.as_ref()?;
             break;
         };
         ne_last = Some(ne);

@@ -7,9 +7,9 @@
 //! (The integral is driven by the measured error, so the prediction is a
 //! one-step filter of the data, not a free-run simulation.)
 
-use crate::friction::brent_min;
 use crate::linalg::Normal;
 use crate::prepare::RunSignals;
+use rig_types::minimize::brent_min;
 
 /// PI gains and limit of the teacher-forced drive.
 #[derive(Debug, Clone, Copy, PartialEq)]
