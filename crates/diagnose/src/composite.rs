@@ -483,13 +483,17 @@ pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order
             break;
         }
     }
-    // The speed law's μk is reported after the modulations rescaled it.
+    // The speed law's coefficients are reported after the modulations rescaled
+    // them (Composite::scale multiplies μk, μs and c alike).
     for p in params.iter_mut() {
         if p.1 == "mu_kinetic" {
             p.2 = m.mu_k;
         }
         if p.1 == "mu_static" {
             p.2 = m.stribeck.map_or(p.2, |s| s.0);
+        }
+        if p.1 == "viscous_per_rad_s" {
+            p.2 = m.viscous.unwrap_or(p.2);
         }
     }
     // Correlated residuals: standard errors × √τ (effective sample size).
@@ -628,6 +632,19 @@ mod tests {
             let vertex = 0.5 * (lo - hi) / curvature;
             assert!(vertex.abs() < 0.02, "{key}: vertex at {vertex:.3} δ ({lo}, {r0}, {hi})");
         }
+    }
+
+    /// What the fit reports is the law it returns: after the angle block
+    /// rescaled the speed law, μk and c in `params` are the model's.
+    #[test]
+    fn reported_speed_law_is_the_fitted_model() {
+        let d = synth(4, |r, _, phi, w| (0.4 + 0.01 * w) * (1.0 + 0.1 * (3.0 * phi + 0.5 * r as f64).sin()));
+        let set = FrictionSet::default().with(EffectId::ViscousBrakeFriction).with(EffectId::AnglePeriodicFriction);
+        let f = fit_composite(&d, set, &[], 8).unwrap();
+        let value = |key: &str| f.params.iter().find(|p| p.1 == key).map(|p| p.2).unwrap();
+        assert_eq!(value("viscous_per_rad_s"), f.model.viscous.unwrap());
+        assert_eq!(value("mu_kinetic"), f.model.mu_k);
+        assert!((f.model.viscous.unwrap() - 0.01).abs() < 1e-3 && (f.model.mu_k - 0.4).abs() < 1e-2, "{:?}", f.model);
     }
 
     #[test]
