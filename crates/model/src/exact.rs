@@ -144,7 +144,8 @@ impl Exact {
         self.computed < 32 + self.steps / 16
     }
 
-    /// The propagator of `region` over `h`: cached; or computed and cached when
+    /// The propagator of `region` over `h` and the step length it was computed
+    /// for (which `h` matches by [`same_step`]): cached; or computed and cached when
     /// [`Compute::Cache`] (a step length the run will reuse); or computed for
     /// this step alone when [`Compute::Once`]. Computing stops when the run has computed many more
     /// than it used (a jittered sample grid would need one per step).
@@ -157,7 +158,7 @@ impl Exact {
         t: f64,
         h: f64,
         compute: Compute,
-    ) -> Option<&Propagator> {
+    ) -> Option<(&Propagator, f64)> {
         let (cache, once) = (compute == Compute::Cache, compute == Compute::Once);
         let hit = |(r, hh, _): &(Region, f64, Propagator)| r == region && same_step(*hh, h, t);
         let found = if self.entries.get(self.last).is_some_and(hit) {
@@ -176,7 +177,7 @@ impl Exact {
                 let phi: Propagator = std::array::from_fn(|j| std::array::from_fn(|i| e[i][j]));
                 if !cache {
                     self.once = phi;
-                    return Some(&self.once);
+                    return Some((&self.once, h));
                 }
                 if self.entries.len() < CACHE {
                     self.entries.push((*region, h, phi));
@@ -190,7 +191,7 @@ impl Exact {
             }
         };
         self.last = k;
-        Some(&self.entries[k].2)
+        Some((&self.entries[k].2, self.entries[k].1))
     }
 }
 

@@ -4,7 +4,7 @@
 
 use crate::dopri::{DIM, Dopri, StepFailure, Vector, locate_root};
 use crate::exact::{Compute, Exact, apply, apply_along, same_step};
-use crate::system::{CUR, INT, Mode, PHI1, PHI2, Region, System, W1, W2};
+use crate::system::{CUR, INT, Mode, PHI1, PHI2, Region, System, VoltageIn, W1, W2};
 use crate::{ModelError, SimOptions, State};
 use rig_types::{FrictionLaw, ModelKind, Trajectory};
 use std::f64::consts::PI;
@@ -108,22 +108,56 @@ fn stuck_flag(sys: &System, mode: Mode, y: &Vector) -> bool {
 
 #[inline]
 fn push_sample(out: &mut Trajectory, sys: &System, mode: Mode, t: f64, y: &Vector) {
-    push_block(out, sys, mode, &[t], std::slice::from_ref(y));
+    push_block(out, sys, mode, None, &[t], std::slice::from_ref(y));
 }
 
-/// Appends the samples at `times` (states `ys`, all in `mode`) channel by
-/// channel: one capacity check per channel and block instead of per sample.
+/// Appends the samples at `times` (states `ys`, all in `mode` and, if given,
+/// in `region`) channel by channel: one capacity check per channel and block
+/// instead of per sample. Inside a region the voltage and the friction torque
+/// take the shortcuts [`System::voltage_in`] and
+/// [`System::friction_torque_constant_in`] allow (the same values).
 #[inline]
-fn push_block(out: &mut Trajectory, sys: &System, mode: Mode, times: &[f64], ys: &[Vector]) {
+fn push_block(out: &mut Trajectory, sys: &System, mode: Mode, region: Option<&Region>, times: &[f64], ys: &[Vector]) {
     out.time_s.extend_from_slice(times);
     out.rotor_angle_rad.extend(ys.iter().map(|y| y[PHI1]));
     out.rotor_speed_rad_s.extend(ys.iter().map(|y| y[W1]));
     out.motor_angle_rad.extend(ys.iter().map(|y| y[PHI2]));
     out.motor_speed_rad_s.extend(ys.iter().map(|y| y[W2]));
     out.current_a.extend(ys.iter().map(|y| y[CUR]));
-    out.voltage_v.extend(times.iter().zip(ys).map(|(&t, y)| sys.voltage(t, y).0));
-    out.friction_torque_nm.extend(times.iter().zip(ys).map(|(&t, y)| sys.friction_torque_nm(mode, t, y)));
+    let voltage = |(&t, y): (&f64, &Vector)| sys.voltage(t, y).0;
+    match region.map(|r| sys.voltage_in(r)) {
+        Some(VoltageIn::Constant(v)) => out.voltage_v.extend(ys.iter().map(|_| v)),
+        Some(VoltageIn::Unclamped) => {
+            out.voltage_v.extend(times.iter().zip(ys).map(|(&t, y)| sys.pi_unclamped_v(t, y)))
+        }
+        None => out.voltage_v.extend(times.iter().zip(ys).map(voltage)),
+    }
+    let friction = |(&t, y): (&f64, &Vector)| sys.friction_torque_nm(mode, t, y);
+    match (region, times.first(), ys.first()) {
+        (Some(r), Some(&t0), Some(y0)) if sys.friction_torque_constant_in(r) => {
+            let f = friction((&t0, y0));
+            out.friction_torque_nm.extend(ys.iter().map(|_| f));
+        }
+        _ => out.friction_torque_nm.extend(times.iter().zip(ys).map(friction)),
+    }
     out.stuck.extend(ys.iter().map(|y| stuck_flag(sys, mode, y)));
+}
+
+/// Samples in the block that starts at `samples[idx]`, one step `h` after `t`:
+/// the run of samples after it spaced by the same `h`, at most [`MAX_BLOCK`],
+/// none past `t_stop` or more than `max_step_s` after `t` (see `run`).
+#[inline]
+fn block_len(samples: &[f64], idx: usize, t: f64, h: f64, t_stop: f64, max_step_s: f64) -> usize {
+    let mut k = 1;
+    while k < MAX_BLOCK
+        && idx + k < samples.len()
+        && samples[idx + k] <= t_stop
+        && samples[idx + k] - t <= max_step_s * (1.0 + H_GRID_REL)
+        && same_step(samples[idx + k] - samples[idx + k - 1], h, samples[idx + k])
+    {
+        k += 1;
+    }
+    k
 }
 
 /// Empties every channel of `out`, keeping its allocations, and makes room for `n` samples.
@@ -212,7 +246,7 @@ pub(crate) fn run(
             } else {
                 Compute::No
             };
-            if let Some(phi) = exact.propagator(sys, &region, &y, t, h, compute) {
+            if let Some((phi, h_phi)) = exact.propagator(sys, &region, &y, t, h, compute) {
                 // A block: where the samples are denser than max_step_s, the step to
                 // the next sample is repeated along the uniform grid for up to
                 // max_step_s (the step the run takes where it samples less often),
@@ -220,43 +254,62 @@ pub(crate) fn run(
                 // The states are the same products as sample-by-sample steps; if the
                 // block's end fails a check, only its first step is taken (below), as
                 // without blocks.
-                let mut k = 1;
-                if compute == Compute::Cache && idx < n && samples[idx] == t1 {
-                    while k < MAX_BLOCK
-                        && idx + k < n
-                        && samples[idx + k] <= t_stop
-                        && samples[idx + k] - t <= opts.max_step_s * (1.0 + H_GRID_REL)
-                        && same_step(samples[idx + k] - samples[idx + k - 1], h, samples[idx + k])
-                    {
-                        k += 1;
+                //
+                // After an exact step (or block), the steps that follow are taken in
+                // this inner loop while the next pass of the outer one would take them
+                // with the same propagator: the same region, a cached step length, the
+                // same entry (checked first, as the last used). The same steps and
+                // checks as the outer loop's, without its set-up; where one fails, the
+                // outer loop takes over and repeats that step's checks.
+                let cached = compute == Compute::Cache;
+                let (mut t1, mut h, mut g0, mut steps) = (t1, h, g0, 0u64);
+                let taken = loop {
+                    let k = if cached && idx < n && samples[idx] == t1 {
+                        block_len(samples, idx, t, h, t_stop, opts.max_step_s)
+                    } else {
+                        1
+                    };
+                    let mut ok = false;
+                    if k > 1 {
+                        apply_along(phi, &y, t, &samples[idx..idx + k], &mut block[..k]);
+                        let (tk, yk) = (samples[idx + k - 1], block[k - 1]);
+                        if let Some(end) = exact_end(sys, mode, &region, g0, tk, &yk) {
+                            push_block(out, sys, mode, Some(&region), &samples[idx..idx + k], &block[..k]);
+                            (carried, steps, idx, t, y, ok) = (end, steps + k as u64, idx + k, tk, yk, true);
+                        }
                     }
-                }
-                if k > 1 {
-                    apply_along(phi, &y, t, &samples[idx..idx + k], &mut block[..k]);
-                    let (tk, yk) = (samples[idx + k - 1], block[k - 1]);
-                    if let Some(end) = exact_end(sys, mode, &region, g0, tk, &yk) {
-                        carried = end;
-                        exact.steps += k as u64;
-                        kink_hugs = 0;
-                        push_block(out, sys, mode, &samples[idx..idx + k], &block[..k]);
-                        idx += k;
-                        t = tk;
-                        y = yk;
-                        fsal_valid = false;
-                        continue;
+                    if !ok {
+                        let y1 = apply(phi, &y, t);
+                        if let Some(end) = exact_end(sys, mode, &region, g0, t1, &y1) {
+                            while idx < n && samples[idx] <= t1 {
+                                push_sample(out, sys, mode, samples[idx], &y1);
+                                idx += 1;
+                            }
+                            (carried, steps, t, y, ok) = (end, steps + 1, t1, y1, true);
+                        }
                     }
-                }
-                let y1 = apply(phi, &y, t);
-                if let Some(end) = exact_end(sys, mode, &region, g0, t1, &y1) {
-                    carried = end;
-                    exact.steps += 1;
+                    if !ok {
+                        break steps > 0;
+                    }
+                    // Would the outer loop's next pass take the same propagator?
+                    let Some((end_region, g)) = carried.filter(|_| cached && t < t_stop) else { break true };
+                    if (Region { ramping: sys.ramping(t), ..end_region }) != region {
+                        break true;
+                    }
+                    let next = if idx < n { samples[idx] } else { t_end };
+                    let t1_next =
+                        if next - t <= opts.max_step_s * (1.0 + H_GRID_REL) { next } else { t + opts.max_step_s };
+                    let t1_next = t1_next.min(t_stop);
+                    let h_next = t1_next - t;
+                    let nominal = same_step(h_next, opts.max_step_s, t) || (idx > 0 && samples[idx - 1] == t);
+                    if !nominal || !same_step(h_phi, h_next, t) {
+                        break true;
+                    }
+                    (t1, h, g0) = (t1_next, h_next, g);
+                };
+                exact.steps += steps;
+                if taken {
                     kink_hugs = 0;
-                    while idx < n && samples[idx] <= t1 {
-                        push_sample(out, sys, mode, samples[idx], &y1);
-                        idx += 1;
-                    }
-                    t = t1;
-                    y = y1;
                     fsal_valid = false;
                     continue;
                 }

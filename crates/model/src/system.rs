@@ -60,6 +60,17 @@ pub(crate) struct Region {
     pub ramping: bool,
 }
 
+/// How the drive voltage follows from the state inside one [`Region`]
+/// ([`System::voltage_in`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum VoltageIn {
+    /// The same value at every state of the region (clamped, or a voltage step).
+    Constant(f64),
+    /// The PI's unclamped kp·e + ki·∫e ([`System::pi_unclamped_v`]): the clamp is
+    /// inactive in the region and there is no current limit.
+    Unclamped,
+}
+
 /// What drives the motor.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum Drive {
@@ -199,6 +210,50 @@ impl<'a> System<'a> {
                 let r_i = self.p.motor.resistance_ohm * i_max;
                 (v.clamp(emf - r_i, emf + r_i), rate)
             }
+        }
+    }
+
+    /// [`System::voltage`] inside `region`, where the clamp is decided and no
+    /// current limit exists (regions require its absence): bit for bit the
+    /// same values (test `affine_matrix_reproduces_rhs_and_output_shortcuts_are_exact`).
+    #[inline]
+    pub fn voltage_in(&self, region: &Region) -> VoltageIn {
+        match self.drive {
+            Drive::Voltage { voltage_v } => VoltageIn::Constant(voltage_v),
+            Drive::Pi { .. } if region.saturation != 0 => {
+                VoltageIn::Constant(f64::from(region.saturation) * self.p.drive.limit_v)
+            }
+            Drive::Pi { .. } => VoltageIn::Unclamped,
+        }
+    }
+
+    /// The PI's unclamped voltage kp·e + ki·∫e, V.
+    #[inline]
+    pub fn pi_unclamped_v(&self, t: f64, y: &Vector) -> f64 {
+        self.pi_raw(t, y).1
+    }
+
+    /// Whether [`System::friction_torque_nm`] takes one value at every state
+    /// of `region`: the brake open, or rig-model slip (or the thesis lookup)
+    /// on a segment whose coefficient does not depend on Ω1 (μ1 = 0: then
+    /// μ0 + 0·|Ω1| is μ0 exactly).
+    #[inline]
+    pub fn friction_torque_constant_in(&self, region: &Region) -> bool {
+        if !self.brake_closed() {
+            return true;
+        }
+        let flat = |law: &FrictionLaw| match law {
+            FrictionLaw::Coulomb { .. } => true,
+            // Thesis lookup: the segments below zero (μneg) and above the dynamic set-point (μdyn).
+            FrictionLaw::Thesis(_) => region.friction_segment == 0 || region.friction_segment == 3,
+            FrictionLaw::Viscous { viscous_per_rad_s, .. } => *viscous_per_rad_s == 0.0,
+            FrictionLaw::Stribeck { .. } => false,
+        };
+        match (self.kind, region.mode) {
+            (ModelKind::Rig, Mode::Slip { .. }) => flat(&self.p.friction),
+            (ModelKind::Rig, Mode::Continuous) => true,
+            (ModelKind::Rig, Mode::Stick) => false,
+            (ModelKind::Thesis, _) => matches!(self.p.friction, FrictionLaw::Thesis(_)) && flat(&self.p.friction),
         }
     }
 
@@ -500,7 +555,7 @@ impl<'a> System<'a> {
 
     /// M of ż = M z, z = [φ1 φ2 Ω1 Ω2 i ∫e t 1], in `region`: the terms of
     /// [`System::rhs`] with every switch fixed by the region (the unit test
-    /// `affine_matrix_reproduces_rhs` holds the two to the same equations).
+    /// `affine_matrix_reproduces_rhs_and_output_shortcuts_are_exact` holds the two to the same equations).
     /// `y` is any state of the region (it fixes the friction segment).
     pub fn affine_matrix(&self, r: &Region, y: &Vector) -> Mat {
         let p = self.p;
@@ -639,7 +694,7 @@ mod tests {
     /// the region (all switches, both kinds, every affine law, ramp and hold):
     /// the exact propagator integrates the same equations as Dormand–Prince.
     #[test]
-    fn affine_matrix_reproduces_rhs() {
+    fn affine_matrix_reproduces_rhs_and_output_shortcuts_are_exact() {
         let thesis = crate::friction::tests::table_4_7();
         let laws = [
             FrictionLaw::Coulomb { mu_static: 0.5, mu_kinetic: 0.35 },
@@ -648,6 +703,7 @@ mod tests {
         ];
         let mut checked = 0;
         let mut regions = Vec::new();
+        let mut constant_friction = Vec::new();
         for kind in [ModelKind::Rig, ModelKind::Thesis] {
             for law in &laws {
                 let p = params(kind, law.clone());
@@ -701,6 +757,22 @@ mod tests {
                                         f[i]
                                     );
                                 }
+                                // The output shortcuts of the exact path give the same bits.
+                                let v = sys.voltage(t, &y).0;
+                                match sys.voltage_in(&r) {
+                                    VoltageIn::Constant(c) => assert_eq!(v.to_bits(), c.to_bits(), "{r:?}"),
+                                    VoltageIn::Unclamped => {
+                                        assert_eq!(v.to_bits(), sys.pi_unclamped_v(t, &y).to_bits(), "{r:?}")
+                                    }
+                                }
+                                if sys.friction_torque_constant_in(&r) {
+                                    let f = sys.friction_torque_nm(mode, t, &y);
+                                    let key = (kind, law.clone(), drive, n0.to_bits(), r);
+                                    match constant_friction.iter().find(|(k, _)| *k == key) {
+                                        Some((_, f0)) => assert_eq!(f.to_bits(), f64::to_bits(*f0), "{key:?}"),
+                                        None => constant_friction.push((key, f)),
+                                    }
+                                }
                                 if !regions.contains(&r) {
                                     regions.push(r);
                                 }
@@ -711,6 +783,8 @@ mod tests {
                 }
             }
         }
+        // Constant friction was checked across states of one region, on both kinds.
+        assert!(constant_friction.len() > 20, "{}", constant_friction.len());
         // Every kind of switch was visited: clamps, motor friction signs, lookup segments, the ramp.
         assert!(checked > 2000, "{checked}");
         for probe in [
