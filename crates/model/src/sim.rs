@@ -33,6 +33,10 @@ const KINK_HUG_DT_S: f64 = 1e-5;
 const MAX_ZENO_EVENTS: u32 = 100;
 /// Most sample steps of one exact block (see `run`): the default 10 ms at up to 1.6 kHz.
 const MAX_BLOCK: usize = 16;
+/// Samples of consecutive blocks held before they are appended to the
+/// trajectory together (a channel's append has a fixed cost that a 5-sample
+/// block would pay nine times).
+const PENDING: usize = 128;
 /// Slack of a block's extent against max_step_s: sample times are sums that
 /// miss k·h by a few ulps.
 const H_GRID_REL: f64 = 1e-9;
@@ -214,7 +218,7 @@ pub(crate) fn run(
     let mut kink_hugs = 0u32;
     let budget = MAX_STEPS + (MAX_STEPS_PER_S * (t_end - t0)) as u64;
     let mut exact = Exact::default();
-    let mut block = [[0.0; DIM]; MAX_BLOCK];
+    let mut pending = [[0.0; DIM]; PENDING];
     let mut fsal_valid = true;
     // The region and event value at the end of an accepted exact step (the next one's start).
     let mut carried = None;
@@ -263,6 +267,9 @@ pub(crate) fn run(
                 // outer loop takes over and repeats that step's checks.
                 let cached = compute == Compute::Cache;
                 let (mut t1, mut h, mut g0, mut steps) = (t1, h, g0, 0u64);
+                // Samples of accepted blocks not yet appended: samples[idx - held..idx],
+                // states pending[..held].
+                let mut held = 0;
                 let taken = loop {
                     let k = if cached && idx < n && samples[idx] == t1 {
                         block_len(samples, idx, t, h, t_stop, opts.max_step_s)
@@ -271,16 +278,23 @@ pub(crate) fn run(
                     };
                     let mut ok = false;
                     if k > 1 {
-                        apply_along(phi, &y, t, &samples[idx..idx + k], &mut block[..k]);
+                        if held + k > PENDING {
+                            push_block(out, sys, mode, Some(&region), &samples[idx - held..idx], &pending[..held]);
+                            held = 0;
+                        }
+                        let block = &mut pending[held..held + k];
+                        apply_along(phi, &y, t, &samples[idx..idx + k], block);
                         let (tk, yk) = (samples[idx + k - 1], block[k - 1]);
                         if let Some(end) = exact_end(sys, mode, &region, g0, tk, &yk) {
-                            push_block(out, sys, mode, Some(&region), &samples[idx..idx + k], &block[..k]);
-                            (carried, steps, idx, t, y, ok) = (end, steps + k as u64, idx + k, tk, yk, true);
+                            (carried, steps, idx, t, y, ok, held) =
+                                (end, steps + k as u64, idx + k, tk, yk, true, held + k);
                         }
                     }
                     if !ok {
                         let y1 = apply(phi, &y, t);
                         if let Some(end) = exact_end(sys, mode, &region, g0, t1, &y1) {
+                            push_block(out, sys, mode, Some(&region), &samples[idx - held..idx], &pending[..held]);
+                            held = 0;
                             while idx < n && samples[idx] <= t1 {
                                 push_sample(out, sys, mode, samples[idx], &y1);
                                 idx += 1;
@@ -307,6 +321,7 @@ pub(crate) fn run(
                     }
                     (t1, h, g0) = (t1_next, h_next, g);
                 };
+                push_block(out, sys, mode, Some(&region), &samples[idx - held..idx], &pending[..held]);
                 exact.steps += steps;
                 if taken {
                     kink_hugs = 0;
