@@ -25,7 +25,7 @@ pub(crate) const TIME: usize = 6;
 /// Index of the constant 1 in the augmented state.
 pub(crate) const ONE: usize = 7;
 /// Rows of e^{M h} that are propagated (the rows of t and 1 are trivial).
-const ROWS: usize = 6;
+pub(crate) const ROWS: usize = 6;
 pub(crate) type Mat = [[f64; AUG]; AUG];
 /// The first [`ROWS`] rows of e^{M h}, stored by column: `p[j][i]` is row i,
 /// column j, so that the six rows' products with one z_j are contiguous (see [`apply`]).
@@ -205,20 +205,32 @@ pub(crate) fn apply(phi: &Propagator, y: &Vector, t: f64) -> Vector {
     out
 }
 
-/// Repeated [`apply`] along sample times: `out[j]` is the state at `times[j]`,
-/// reached from `y` at `t` by steps of the same Φ, each starting at the previous
-/// sample (at `t` for the first). The same products as `apply` one step at a
-/// time, but the state stays in registers from step to step: a state written to
-/// memory and read back as the next step's input stalls on store forwarding.
+/// Repeated [`apply`] along sample times: the state at `times[j]`, reached
+/// from `y` at `t` by steps of the same Φ, each starting at the previous
+/// sample (at `t` for the first), is written channel by channel to
+/// `out[c][at + j]`; the last is returned. The same products as `apply` one
+/// step at a time, but the state stays in registers from step to step (a
+/// state written to memory and read back as the next step's input stalls on
+/// store forwarding), and the stores of one sample overlap the next step.
 #[inline]
-pub(crate) fn apply_along(phi: &Propagator, y: &Vector, t: f64, times: &[f64], out: &mut [Vector]) {
+pub(crate) fn apply_along<const P: usize>(
+    phi: &Propagator,
+    y: &Vector,
+    t: f64,
+    times: &[f64],
+    out: &mut [[f64; P]; ROWS],
+    at: usize,
+) -> Vector {
     let mut q = [y[0], y[1], y[2], y[3], y[4], y[5]];
     let mut tk = t;
-    for (o, &tn) in out.iter_mut().zip(times) {
+    for (j, &tn) in times.iter().enumerate() {
         q = step(phi, &q, tk);
-        *o = [q[0], q[1], q[2], q[3], q[4], q[5], y[ROWS]];
+        for (c, v) in out.iter_mut().zip(q) {
+            c[at + j] = v;
+        }
         tk = tn;
     }
+    [q[0], q[1], q[2], q[3], q[4], q[5], y[ROWS]]
 }
 
 /// Φ [q t 1]: row i is Σ_j Φ_ij z_j in two partial sums, of the even and of

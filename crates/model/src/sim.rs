@@ -3,7 +3,7 @@
 //! trajectory channel at the requested times.
 
 use crate::dopri::{DIM, Dopri, StepFailure, Vector, locate_root};
-use crate::exact::{Compute, Exact, apply, apply_along, same_step};
+use crate::exact::{Compute, Exact, ROWS, apply, apply_along, same_step};
 use crate::system::{CUR, INT, Mode, PHI1, PHI2, Region, System, VoltageIn, W1, W2};
 use crate::{ModelError, SimOptions, State};
 use rig_types::{FrictionLaw, ModelKind, Trajectory};
@@ -112,39 +112,60 @@ fn stuck_flag(sys: &System, mode: Mode, y: &Vector) -> bool {
 
 #[inline]
 fn push_sample(out: &mut Trajectory, sys: &System, mode: Mode, t: f64, y: &Vector) {
-    push_block(out, sys, mode, None, &[t], std::slice::from_ref(y));
+    out.time_s.push(t);
+    out.rotor_angle_rad.push(y[PHI1]);
+    out.rotor_speed_rad_s.push(y[W1]);
+    out.motor_angle_rad.push(y[PHI2]);
+    out.motor_speed_rad_s.push(y[W2]);
+    out.current_a.push(y[CUR]);
+    out.voltage_v.push(sys.voltage(t, y).0);
+    out.friction_torque_nm.push(sys.friction_torque_nm(mode, t, y));
+    out.stuck.push(stuck_flag(sys, mode, y));
 }
 
-/// Appends the samples at `times` (states `ys`, all in `mode` and, if given,
-/// in `region`) channel by channel: one capacity check per channel and block
-/// instead of per sample. Inside a region the voltage and the friction torque
-/// take the shortcuts [`System::voltage_in`] and
-/// [`System::friction_torque_constant_in`] allow (the same values).
-#[inline]
-fn push_block(out: &mut Trajectory, sys: &System, mode: Mode, region: Option<&Region>, times: &[f64], ys: &[Vector]) {
+/// Appends the samples at `times`, whose states are held channel by channel
+/// in `states[..][..times.len()]`, all in `mode` and `region`: one append per
+/// channel. The voltage and the friction torque take the shortcuts
+/// [`System::voltage_in`] and [`System::friction_torque_constant_in`] allow
+/// (the same values as [`push_sample`] writes).
+fn push_pending<const P: usize>(
+    out: &mut Trajectory,
+    sys: &System,
+    mode: Mode,
+    region: &Region,
+    times: &[f64],
+    states: &[[f64; P]; ROWS],
+) {
+    let n = times.len();
+    if n == 0 {
+        return;
+    }
+    let [phi1, phi2, w1, w2, cur, int] = states.each_ref().map(|c| &c[..n]);
     out.time_s.extend_from_slice(times);
-    out.rotor_angle_rad.extend(ys.iter().map(|y| y[PHI1]));
-    out.rotor_speed_rad_s.extend(ys.iter().map(|y| y[W1]));
-    out.motor_angle_rad.extend(ys.iter().map(|y| y[PHI2]));
-    out.motor_speed_rad_s.extend(ys.iter().map(|y| y[W2]));
-    out.current_a.extend(ys.iter().map(|y| y[CUR]));
-    let voltage = |(&t, y): (&f64, &Vector)| sys.voltage(t, y).0;
-    match region.map(|r| sys.voltage_in(r)) {
-        Some(VoltageIn::Constant(v)) => out.voltage_v.extend(ys.iter().map(|_| v)),
-        Some(VoltageIn::Unclamped) => {
-            out.voltage_v.extend(times.iter().zip(ys).map(|(&t, y)| sys.pi_unclamped_v(t, y)))
-        }
-        None => out.voltage_v.extend(times.iter().zip(ys).map(voltage)),
+    out.rotor_angle_rad.extend_from_slice(phi1);
+    out.motor_angle_rad.extend_from_slice(phi2);
+    out.rotor_speed_rad_s.extend_from_slice(w1);
+    out.motor_speed_rad_s.extend_from_slice(w2);
+    out.current_a.extend_from_slice(cur);
+    let y = |j: usize| -> Vector { [phi1[j], phi2[j], w1[j], w2[j], cur[j], int[j], 0.0] };
+    match sys.voltage_in(region) {
+        VoltageIn::Constant(v) => out.voltage_v.extend(times.iter().map(|_| v)),
+        VoltageIn::Unclamped => out
+            .voltage_v
+            .extend(times.iter().zip(w2.iter().zip(int)).map(|(&t, (&w, &i))| sys.pi_unclamped_of_v(t, w, i))),
     }
-    let friction = |(&t, y): (&f64, &Vector)| sys.friction_torque_nm(mode, t, y);
-    match (region, times.first(), ys.first()) {
-        (Some(r), Some(&t0), Some(y0)) if sys.friction_torque_constant_in(r) => {
-            let f = friction((&t0, y0));
-            out.friction_torque_nm.extend(ys.iter().map(|_| f));
-        }
-        _ => out.friction_torque_nm.extend(times.iter().zip(ys).map(friction)),
+    if sys.friction_torque_constant_in(region) {
+        let f = sys.friction_torque_nm(mode, times[0], &y(0));
+        out.friction_torque_nm.extend(times.iter().map(|_| f));
+    } else {
+        out.friction_torque_nm.extend(times.iter().enumerate().map(|(j, &t)| sys.friction_torque_nm(mode, t, &y(j))));
     }
-    out.stuck.extend(ys.iter().map(|y| stuck_flag(sys, mode, y)));
+    if sys.kind == ModelKind::Rig {
+        let stuck = stuck_flag(sys, mode, &y(0));
+        out.stuck.extend(times.iter().map(|_| stuck));
+    } else {
+        out.stuck.extend((0..n).map(|j| stuck_flag(sys, mode, &y(j))));
+    }
 }
 
 /// Samples in the block that starts at `samples[idx]`, one step `h` after `t`:
@@ -218,7 +239,8 @@ pub(crate) fn run(
     let mut kink_hugs = 0u32;
     let budget = MAX_STEPS + (MAX_STEPS_PER_S * (t_end - t0)) as u64;
     let mut exact = Exact::default();
-    let mut pending = [[0.0; DIM]; PENDING];
+    // States of accepted blocks not yet appended, channel by channel (φ1 φ2 Ω1 Ω2 i ∫e).
+    let mut pending = [[0.0; PENDING]; ROWS];
     let mut fsal_valid = true;
     // The region and event value at the end of an accepted exact step (the next one's start).
     let mut carried = None;
@@ -268,7 +290,7 @@ pub(crate) fn run(
                 let cached = compute == Compute::Cache;
                 let (mut t1, mut h, mut g0, mut steps) = (t1, h, g0, 0u64);
                 // Samples of accepted blocks not yet appended: samples[idx - held..idx],
-                // states pending[..held].
+                // states pending[..][..held].
                 let mut held = 0;
                 let taken = loop {
                     let k = if cached && idx < n && samples[idx] == t1 {
@@ -279,12 +301,11 @@ pub(crate) fn run(
                     let mut ok = false;
                     if k > 1 {
                         if held + k > PENDING {
-                            push_block(out, sys, mode, Some(&region), &samples[idx - held..idx], &pending[..held]);
+                            push_pending(out, sys, mode, &region, &samples[idx - held..idx], &pending);
                             held = 0;
                         }
-                        let block = &mut pending[held..held + k];
-                        apply_along(phi, &y, t, &samples[idx..idx + k], block);
-                        let (tk, yk) = (samples[idx + k - 1], block[k - 1]);
+                        let yk = apply_along(phi, &y, t, &samples[idx..idx + k], &mut pending, held);
+                        let tk = samples[idx + k - 1];
                         if let Some(end) = exact_end(sys, mode, &region, g0, tk, &yk) {
                             (carried, steps, idx, t, y, ok, held) =
                                 (end, steps + k as u64, idx + k, tk, yk, true, held + k);
@@ -293,7 +314,7 @@ pub(crate) fn run(
                     if !ok {
                         let y1 = apply(phi, &y, t);
                         if let Some(end) = exact_end(sys, mode, &region, g0, t1, &y1) {
-                            push_block(out, sys, mode, Some(&region), &samples[idx - held..idx], &pending[..held]);
+                            push_pending(out, sys, mode, &region, &samples[idx - held..idx], &pending);
                             held = 0;
                             while idx < n && samples[idx] <= t1 {
                                 push_sample(out, sys, mode, samples[idx], &y1);
@@ -321,7 +342,7 @@ pub(crate) fn run(
                     }
                     (t1, h, g0) = (t1_next, h_next, g);
                 };
-                push_block(out, sys, mode, Some(&region), &samples[idx - held..idx], &pending[..held]);
+                push_pending(out, sys, mode, &region, &samples[idx - held..idx], &pending);
                 exact.steps += steps;
                 if taken {
                     kink_hugs = 0;

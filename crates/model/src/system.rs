@@ -66,7 +66,7 @@ pub(crate) struct Region {
 pub(crate) enum VoltageIn {
     /// The same value at every state of the region (clamped, or a voltage step).
     Constant(f64),
-    /// The PI's unclamped kp·e + ki·∫e ([`System::pi_unclamped_v`]): the clamp is
+    /// The PI's unclamped kp·e + ki·∫e ([`System::pi_unclamped_of_v`]): the clamp is
     /// inactive in the region and there is no current limit.
     Unclamped,
 }
@@ -227,10 +227,13 @@ impl<'a> System<'a> {
         }
     }
 
-    /// The PI's unclamped voltage kp·e + ki·∫e, V.
-    #[inline]
-    pub fn pi_unclamped_v(&self, t: f64, y: &Vector) -> f64 {
-        self.pi_raw(t, y).1
+    /// The PI's unclamped voltage kp·e + ki·∫e, V, from the two states it
+    /// reads, Ω2 and ∫e (the arithmetic of `pi_raw`).
+    #[inline(always)]
+    pub fn pi_unclamped_of_v(&self, t: f64, motor_speed_rad_s: f64, pi_integral_rad: f64) -> f64 {
+        let d = &self.p.drive;
+        let e = self.reference_rad_s(t) - motor_speed_rad_s;
+        d.kp_v_s_rad * e + d.ki_v_rad * pi_integral_rad
     }
 
     /// Whether [`System::friction_torque_nm`] takes one value at every state
@@ -762,7 +765,11 @@ mod tests {
                                 match sys.voltage_in(&r) {
                                     VoltageIn::Constant(c) => assert_eq!(v.to_bits(), c.to_bits(), "{r:?}"),
                                     VoltageIn::Unclamped => {
-                                        assert_eq!(v.to_bits(), sys.pi_unclamped_v(t, &y).to_bits(), "{r:?}")
+                                        assert_eq!(
+                                            v.to_bits(),
+                                            sys.pi_unclamped_of_v(t, y[W2], y[INT]).to_bits(),
+                                            "{r:?}"
+                                        )
                                     }
                                 }
                                 if sys.friction_torque_constant_in(&r) {
