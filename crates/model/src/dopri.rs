@@ -56,9 +56,11 @@ const SAFETY: f64 = 0.9;
 const BETA: f64 = 0.04;
 const FAC_MIN: f64 = 0.2; // largest shrink 1/5
 const FAC_MAX: f64 = 10.0; // largest growth
+/// ln 10⁻⁴: dopri5's floor of `facold`.
+const FAC_OLD_MIN_LN: f64 = -9.210340371976182;
 
 /// One accepted step with its continuous extension.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub(crate) struct Step {
     pub t0: f64,
     pub h: f64,
@@ -100,13 +102,17 @@ pub(crate) struct Dopri {
     max_step: f64,
     /// Step size proposed for the next step (0 = choose one).
     h: f64,
-    fac_old: f64,
+    /// ln of the previous accepted step's error (at least 10⁻⁴), dopri5's `facold`.
+    ln_fac_old: f64,
     /// Number of components in the RMS error norm: the leading `norm_dim`
     /// states (6 unless the thermal state is in use, so that a run without
     /// it steps exactly as it did before the state existed).
     norm_dim: f64,
     /// f(t, y) at the current point when still valid (first-same-as-last).
     k1: Option<Vector>,
+    /// The last accepted step (kept here: returning its 44 numbers by value
+    /// cost a copy per step).
+    last: Step,
     /// Number of right-hand-side evaluations, accepted and rejected steps.
     pub n_eval: u64,
     pub n_accept: u64,
@@ -138,9 +144,10 @@ impl Dopri {
             atol,
             max_step,
             h: 0.0,
-            fac_old: 1e-4,
+            ln_fac_old: FAC_OLD_MIN_LN,
             norm_dim: DIM as f64,
             k1: None,
+            last: Step::default(),
             n_eval: 0,
             n_accept: 0,
             n_reject: 0,
@@ -186,14 +193,20 @@ impl Dopri {
         (100.0 * h0).min(h1).min(self.max_step)
     }
 
-    /// Takes one accepted step from (t, y) that does not pass `t_stop`.
+    /// The step [`Dopri::step`] accepted last.
+    pub fn last_step(&self) -> &Step {
+        &self.last
+    }
+
+    /// Takes one accepted step from (t, y) that does not pass `t_stop`
+    /// ([`Dopri::last_step`] then holds it).
     pub fn step(
         &mut self,
         t: f64,
         y: &Vector,
         t_stop: f64,
         f: &mut impl FnMut(f64, &Vector) -> Vector,
-    ) -> Result<Step, StepFailure> {
+    ) -> Result<(), StepFailure> {
         let k1 = match self.k1 {
             Some(k) => k,
             None => {
@@ -246,12 +259,15 @@ impl Dopri {
                 }
                 continue;
             }
-            let fac11 = err.powf(0.2 - BETA * 0.75);
+            // err^(0.2 − 0.75 β) and fac_old^β by one logarithm each (fac_old's is kept):
+            // dopri5's two powers of a step, for an exp and a ln.
+            let ln_err = err.ln();
             if err <= 1.0 {
-                let fac = (fac11 / self.fac_old.powf(BETA) / SAFETY).clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
-                self.fac_old = err.max(1e-4);
+                let fac = (((0.2 - BETA * 0.75) * ln_err - BETA * self.ln_fac_old).exp() / SAFETY)
+                    .clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
+                self.ln_fac_old = ln_err.max(FAC_OLD_MIN_LN);
                 self.n_accept += 1;
-                let mut rcont = [[0.0; DIM]; 5];
+                let rcont = &mut self.last.rcont;
                 for j in 0..DIM {
                     let ydiff = y1[j] - y[j];
                     let bspl = h * k1[j] - ydiff;
@@ -269,10 +285,11 @@ impl Dopri {
                     self.h = h_new;
                 }
                 self.k1 = Some(k7);
-                return Ok(Step { t0: t, h: t1 - t, y1, rcont });
+                (self.last.t0, self.last.h, self.last.y1) = (t, t1 - t, y1);
+                return Ok(());
             }
             self.n_reject += 1;
-            h /= (fac11 / SAFETY).min(1.0 / FAC_MIN);
+            h /= (((0.2 - BETA * 0.75) * ln_err).exp() / SAFETY).min(1.0 / FAC_MIN);
             last = false;
         }
     }
@@ -334,7 +351,8 @@ mod tests {
             let mut dp = Dopri::new(1.0, 1.0, h);
             dp.h = h;
             let mut f = rhs;
-            let s = dp.step(0.0, &exact(0.0), 1.0, &mut f).unwrap();
+            dp.step(0.0, &exact(0.0), 1.0, &mut f).unwrap();
+            let s = dp.last_step();
             assert_eq!(s.h, h);
             let e_end = (0..DIM).map(|j| (s.y1[j] - exact(h)[j]).abs()).fold(0.0, f64::max);
             let e_mid = [0.3, 0.5, 0.8]

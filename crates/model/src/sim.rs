@@ -361,10 +361,11 @@ pub(crate) fn run(
             dp.reset();
             fsal_valid = true;
         }
-        let step = dp.step(t, &y, t_stop, &mut |tt, yy| sys.rhs(mode, tt, yy)).map_err(|e| match e {
+        dp.step(t, &y, t_stop, &mut |tt, yy| sys.rhs(mode, tt, yy)).map_err(|e| match e {
             StepFailure::StepTooSmall { h } => failed(t, format!("step size {h:e} s fell below round-off")),
             StepFailure::NonFinite => failed(t, "the right-hand side is not finite"),
         })?;
+        let step = dp.last_step();
         if dp.n_accept + dp.n_reject > budget {
             let m = &sys.p.motor;
             return Err(failed(
