@@ -7,6 +7,9 @@
 //! every channel: a change that claims byte-identical trajectories must print
 //! the same hash.
 //!
+//! `... --example fingerprint -- dump <rpm> <N> <rig|thesis>` prints every
+//! channel of one 40 s run at 500 Hz, to compare two builds' trajectories.
+//!
 //! `... --example fingerprint -- best [rig|one|thesis] [runs]` times the
 //! criterion bench's problem into a reused trajectory and prints the best
 //! batch of 100 runs: on a shared machine the minimum is what an A/B
@@ -19,6 +22,32 @@ use std::hash::{Hash, Hasher};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().map(String::as_str) == Some("dump") {
+        // dump <rpm> <N> <rig|thesis>: every sample of that run at 500 Hz as text.
+        let num = |i: usize| args[i].parse::<f64>().expect("a number");
+        let input = RunInput::OperatingPoint { motor_rpm_setpoint: num(1), normal_force_n: num(2), ramp_s: 2.0 };
+        let p = if args[3] == "thesis" { common::thesis_params() } else { common::rig_params() };
+        // RTOL=<x> in the environment: that rtol (atol 10⁻² of it) instead of the default.
+        let o = std::env::var("RTOL").map_or(SimOptions::default(), |r| {
+            let rtol: f64 = r.parse().expect("RTOL: a number");
+            SimOptions { rtol, atol: rtol * 1e-2, ..SimOptions::default() }
+        });
+        let (tr, _) = simulate_with_stats(&p, &input, &common::grid(40.0, 500.0), &o).unwrap();
+        for k in 0..tr.len() {
+            println!(
+                "{:e} {:e} {:e} {:e} {:e} {:e} {:e} {:e}",
+                tr.rotor_angle_rad[k],
+                tr.rotor_speed_rad_s[k],
+                tr.motor_angle_rad[k],
+                tr.motor_speed_rad_s[k],
+                tr.current_a[k],
+                tr.voltage_v[k],
+                tr.friction_torque_nm[k],
+                f64::from(u8::from(tr.stuck[k]))
+            );
+        }
+        return;
+    }
     if args.first().map(String::as_str) == Some("best") {
         let which = args.get(1).map_or("rig", String::as_str);
         let runs: usize = args.get(2).map_or(1500, |s| s.parse().expect("runs: an integer"));
