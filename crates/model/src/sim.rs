@@ -327,8 +327,9 @@ pub(crate) fn run(
                         break steps > 0;
                     }
                     // Would the outer loop's next pass take the same propagator?
-                    let Some((end_region, g)) = carried.filter(|_| cached && t < t_stop) else { break true };
-                    if (Region { ramping: sys.ramping(t), ..end_region }) != region {
+                    // exact_end found the end in `region` up to the ramp flag.
+                    let Some((_, g)) = carried.filter(|_| cached && t < t_stop) else { break true };
+                    if sys.ramping(t) != region.ramping {
                         break true;
                     }
                     let next = if idx < n { samples[idx] } else { t_end };
