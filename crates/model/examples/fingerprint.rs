@@ -82,7 +82,12 @@ fn main() {
 
 fn best(which: &str, runs: usize) {
     let input = RunInput::OperatingPoint { motor_rpm_setpoint: 40.0, normal_force_n: 15.0, ramp_s: 2.0 };
-    let t = if which == "one" { vec![40.0] } else { common::grid(40.0, 500.0) };
+    // "one": sampled once, at 40 s; "at:<T>": once, at T s (the start-up alone, say).
+    let t = match which {
+        "one" => vec![40.0],
+        w if w.starts_with("at:") => vec![w[3..].parse().expect("at:<seconds>")],
+        _ => common::grid(40.0, 500.0),
+    };
     let p = if which == "thesis" { common::thesis_params() } else { common::rig_params() };
     let (mut out, o) = (rig_types::Trajectory::default(), SimOptions::default());
     let mut best_ms = f64::INFINITY;

@@ -84,7 +84,7 @@ fn ends_mode(mode: Mode, g0: f64, g1: f64) -> bool {
 /// Whether an exact step that started in `region` with event value `g0` may
 /// end at (t1, y1): no event crossed, the same region (up to the ramp flag),
 /// a finite state. If so, the region and event value carried to the next step.
-#[inline]
+#[inline(always)]
 fn exact_end(
     sys: &System,
     mode: Mode,
@@ -314,8 +314,10 @@ pub(crate) fn run(
                     if !ok {
                         let y1 = apply(phi, &y, t);
                         if let Some(end) = exact_end(sys, mode, &region, g0, t1, &y1) {
-                            push_pending(out, sys, mode, &region, &samples[idx - held..idx], &pending);
-                            held = 0;
+                            if held > 0 {
+                                push_pending(out, sys, mode, &region, &samples[idx - held..idx], &pending);
+                                held = 0;
+                            }
                             while idx < n && samples[idx] <= t1 {
                                 push_sample(out, sys, mode, samples[idx], &y1);
                                 idx += 1;
