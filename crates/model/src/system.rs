@@ -438,7 +438,7 @@ impl<'a> System<'a> {
 
     /// Event function of `mode`: the mode ends where it crosses from ≤ 0 to > 0
     /// (stick) or from ≥ 0 to < 0 (slip). `None` for modes without events.
-    #[inline]
+    #[inline(always)]
     pub fn event(&self, mode: Mode, t: f64, y: &Vector) -> Option<f64> {
         match mode {
             Mode::Continuous => None,
