@@ -10,7 +10,7 @@
 //! `... --example fingerprint -- dump <rpm> <N> <rig|thesis>` prints every
 //! channel of one 40 s run at 500 Hz, to compare two builds' trajectories.
 //!
-//! `... --example fingerprint -- best [rig|one|thesis] [runs]` times the
+//! `... --example fingerprint -- best [rig|rig100|one|at:<s>|thesis] [runs]` times the
 //! criterion bench's problem into a reused trajectory and prints the best
 //! batch of 100 runs: on a shared machine the minimum is what an A/B
 //! comparison of two builds can trust (criterion's mean moves with the load).
@@ -86,6 +86,7 @@ fn best(which: &str, runs: usize) {
     let t = match which {
         "one" => vec![40.0],
         w if w.starts_with("at:") => vec![w[3..].parse().expect("at:<seconds>")],
+        "rig100" => common::grid(40.0, 100.0),
         _ => common::grid(40.0, 500.0),
     };
     let p = if which == "thesis" { common::thesis_params() } else { common::rig_params() };

@@ -140,6 +140,9 @@
 //!   grid costs one 6 × 8 matrix-vector product per sample. A step is taken
 //!   only if it ends in the region it started in and no event function
 //!   changed sign; its length is min(`max_step_s`, next sample, breakpoint).
+//!   Steps that follow one another with the same propagator run in an inner
+//!   loop with the state in registers, and the samples of consecutive blocks
+//!   are appended to the trajectory together, channel by channel.
 //! - **Dormand–Prince 5(4) steps** (module `dopri`), with Hairer's PI step
 //!   control and 4th-order dense output, everywhere else: across an event
 //!   (located on the dense output by the Illinois method and restarting
@@ -147,11 +150,18 @@
 //!   side (the voltage clamp, a kink of the lookup — located the same way, so
 //!   that no step integrates across a kink), and wherever the equations are
 //!   not affine (effects, the Stribeck law, the motor friction's tanh at low
-//!   armature speed, brake fade). Its fast mode bounds the explicit step to
-//!   roughly 5–10 ms, no tighter than the default `max_step_s` = 10 ms.
+//!   armature speed, brake fade). The drive's fast modes (|λ| ≤ 480 1/s)
+//!   would allow ≈ 7 ms; in the knee of the motor friction's tanh
+//!   (|n Ω2| ≲ 3 rad/s at the armature) the step is held to ≈ 1.1 ms by
+//!   accuracy instead, the armature current following T_f·tanh(n Ω2): 87,
+//!   200 and 484 steps in the first 0.2 s at rtol 10⁻⁶, 10⁻⁸ and 10⁻¹⁰
+//!   (tol^(−1/5)). Neither a higher order (scipy's DOP853 needs 2030
+//!   evaluations to 0.9 s where RK45 needs 2024) nor an exponential
+//!   integrator with the linear drive exact (Cox–Matthews ETDRK4: 400 times
+//!   the tolerance at h = 1 ms, the tanh's slope being explicit) does better.
 //!
 //! Measured (example `cpu_time`, criterion bench `simulate`): the rig model at
-//! 40 rpm / 15 N takes 3904 exact and 350 Dormand–Prince steps for 40 s
+//! 40 rpm / 15 N takes 3904 exact and 351 Dormand–Prince steps for 40 s
 //! sampled once (19 520 exact steps sampled at 500 Hz); the Dormand–Prince
 //! steps fall in the first 1.9 s, while the motor turns slower than 15 rad/s
 //! at the armature. Before the exact steps it took 4291 Dormand–Prince steps. At
