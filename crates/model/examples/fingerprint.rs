@@ -60,16 +60,7 @@ fn main() {
             for rate in [500.0, 100.0, 1000.0] {
                 let (tr, st) =
                     simulate_with_stats(&p, &input, &common::grid(40.0, rate), &SimOptions::default()).unwrap();
-                for c in [
-                    &tr.time_s,
-                    &tr.rotor_angle_rad,
-                    &tr.rotor_speed_rad_s,
-                    &tr.motor_angle_rad,
-                    &tr.motor_speed_rad_s,
-                    &tr.current_a,
-                    &tr.voltage_v,
-                    &tr.friction_torque_nm,
-                ] {
+                for c in tr.numeric_channels() {
                     c.iter().for_each(|v| v.to_bits().hash(&mut h));
                 }
                 tr.stuck.hash(&mut h);

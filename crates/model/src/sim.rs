@@ -187,16 +187,7 @@ fn block_len(samples: &[f64], idx: usize, t: f64, h: f64, t_stop: f64, max_step_
 
 /// Empties every channel of `out`, keeping its allocations, and makes room for `n` samples.
 fn clear(out: &mut Trajectory, n: usize) {
-    for c in [
-        &mut out.time_s,
-        &mut out.rotor_angle_rad,
-        &mut out.rotor_speed_rad_s,
-        &mut out.motor_angle_rad,
-        &mut out.motor_speed_rad_s,
-        &mut out.current_a,
-        &mut out.voltage_v,
-        &mut out.friction_torque_nm,
-    ] {
+    for c in out.numeric_channels_mut() {
         c.clear();
         c.reserve(n);
     }

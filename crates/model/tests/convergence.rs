@@ -59,15 +59,7 @@ fn no_nan_over_the_operating_range() {
                 let tr = simulate(&p, &input, &t, &SimOptions::default())
                     .unwrap_or_else(|e| panic!("{:?} {rpm} rpm {n} N: {e}", p.kind));
                 assert_eq!(tr.len(), t.len());
-                let channels = [
-                    &tr.rotor_angle_rad,
-                    &tr.rotor_speed_rad_s,
-                    &tr.motor_angle_rad,
-                    &tr.motor_speed_rad_s,
-                    &tr.current_a,
-                    &tr.voltage_v,
-                    &tr.friction_torque_nm,
-                ];
+                let channels = tr.numeric_channels();
                 assert!(channels.iter().all(|c| c.iter().all(|x| x.is_finite())), "{:?} {rpm} rpm {n} N", p.kind);
             }
         }

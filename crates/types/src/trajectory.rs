@@ -33,4 +33,32 @@ impl Trajectory {
     pub fn is_empty(&self) -> bool {
         self.time_s.is_empty()
     }
+
+    /// The eight numeric channels, time first, in declaration order (all but `stuck`).
+    pub fn numeric_channels(&self) -> [&Vec<f64>; 8] {
+        [
+            &self.time_s,
+            &self.rotor_angle_rad,
+            &self.rotor_speed_rad_s,
+            &self.motor_angle_rad,
+            &self.motor_speed_rad_s,
+            &self.current_a,
+            &self.voltage_v,
+            &self.friction_torque_nm,
+        ]
+    }
+
+    /// [`Trajectory::numeric_channels`], mutable.
+    pub fn numeric_channels_mut(&mut self) -> [&mut Vec<f64>; 8] {
+        [
+            &mut self.time_s,
+            &mut self.rotor_angle_rad,
+            &mut self.rotor_speed_rad_s,
+            &mut self.motor_angle_rad,
+            &mut self.motor_speed_rad_s,
+            &mut self.current_a,
+            &mut self.voltage_v,
+            &mut self.friction_torque_nm,
+        ]
+    }
 }
