@@ -150,9 +150,17 @@ fn push_pending<const P: usize>(
     let y = |j: usize| -> Vector { [phi1[j], phi2[j], w1[j], w2[j], cur[j], int[j], 0.0] };
     match sys.voltage_in(region) {
         VoltageIn::Constant(v) => out.voltage_v.extend(times.iter().map(|_| v)),
-        VoltageIn::Unclamped => out
-            .voltage_v
-            .extend(times.iter().zip(w2.iter().zip(int)).map(|(&t, (&w, &i))| sys.pi_unclamped_of_v(t, w, i))),
+        // Outside the ramp the reference is one constant: a loop over the two channels alone.
+        VoltageIn::Unclamped if !region.ramping => {
+            let r = sys.reference_rad_s(times[0]);
+            out.voltage_v.extend(w2.iter().zip(int).map(|(&w, &i)| sys.pi_unclamped_of_v(r, w, i)))
+        }
+        VoltageIn::Unclamped => out.voltage_v.extend(
+            times
+                .iter()
+                .zip(w2.iter().zip(int))
+                .map(|(&t, (&w, &i))| sys.pi_unclamped_of_v(sys.reference_rad_s(t), w, i)),
+        ),
     }
     if sys.friction_torque_constant_in(region) {
         let f = sys.friction_torque_nm(mode, times[0], &y(0));

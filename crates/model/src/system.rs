@@ -231,13 +231,18 @@ impl<'a> System<'a> {
         }
     }
 
-    /// The PI's unclamped voltage kp·e + ki·∫e, V, from the two states it
-    /// reads, Ω2 and ∫e (the arithmetic of `pi_raw`).
+    /// The PI's unclamped voltage kp·e + ki·∫e, V, from the reference at t and
+    /// the two states it reads, Ω2 and ∫e (the arithmetic of `pi_raw`).
     #[inline(always)]
-    pub fn pi_unclamped_of_v(&self, t: f64, motor_speed_rad_s: f64, pi_integral_rad: f64) -> f64 {
+    pub fn pi_unclamped_of_v(&self, reference_rad_s: f64, motor_speed_rad_s: f64, pi_integral_rad: f64) -> f64 {
+        self.pi_law_v(reference_rad_s - motor_speed_rad_s, pi_integral_rad)
+    }
+
+    /// The PI law kp·e + ki·∫e, V: the one place it is written.
+    #[inline(always)]
+    fn pi_law_v(&self, error_rad_s: f64, pi_integral_rad: f64) -> f64 {
         let d = &self.p.drive;
-        let e = self.reference_rad_s(t) - motor_speed_rad_s;
-        d.kp_v_s_rad * e + d.ki_v_rad * pi_integral_rad
+        d.kp_v_s_rad * error_rad_s + d.ki_v_rad * pi_integral_rad
     }
 
     /// Whether [`System::friction_torque_nm`] takes one value at every state
@@ -267,9 +272,8 @@ impl<'a> System<'a> {
     /// The speed error e and the unclamped voltage kp·e + ki·∫e of a PI drive.
     #[inline(always)]
     fn pi_raw(&self, t: f64, y: &Vector) -> (f64, f64) {
-        let d = &self.p.drive;
         let e = self.reference_rad_s(t) - y[W2];
-        (e, d.kp_v_s_rad * e + d.ki_v_rad * y[INT])
+        (e, self.pi_law_v(e, y[INT]))
     }
 
     #[inline]
