@@ -798,7 +798,7 @@ mod tests {
                                     VoltageIn::Unclamped => {
                                         assert_eq!(
                                             v.to_bits(),
-                                            sys.pi_unclamped_of_v(t, y[W2], y[INT]).to_bits(),
+                                            sys.pi_unclamped_of_v(sys.reference_rad_s(t), y[W2], y[INT]).to_bits(),
                                             "{r:?}"
                                         )
                                     }
