@@ -176,6 +176,23 @@ fn push_pending<const P: usize>(
     }
 }
 
+/// The end of the exact step from `t` toward the next sample `samples[idx]`
+/// (or `t_end` past the last): the next sample where it lies within
+/// `max_step_s` (a sample a rounding error beyond it too: a grid spaced by
+/// max_step_s, 100 Hz at the default 10 ms, would otherwise alternate a step
+/// of t + max_step_s, which falls an ulp short of k/rate, with an ulp-long
+/// Dormand–Prince step to the sample), else t + `max_step_s`; never past
+/// `t_stop`. And whether the step is nominal, one the run repeats: of
+/// `max_step_s` or from one sample to the next (its propagator is cached).
+#[inline]
+fn exact_step_end(samples: &[f64], idx: usize, t: f64, (t_stop, t_end): (f64, f64), max_step_s: f64) -> (f64, bool) {
+    let next = samples.get(idx).copied().unwrap_or(t_end);
+    let t1 = if next - t <= max_step_s * (1.0 + H_GRID_REL) { next } else { t + max_step_s };
+    let t1 = t1.min(t_stop);
+    let nominal = same_step(t1 - t, max_step_s, t) || (idx > 0 && samples[idx - 1] == t);
+    (t1, nominal)
+}
+
 /// Samples in the block that starts at `samples[idx]`, one step `h` after `t`:
 /// the run of samples after it spaced by the same `h`, at most [`MAX_BLOCK`],
 /// none past `t_stop` or more than `max_step_s` after `t` (see `run`).
@@ -251,18 +268,11 @@ pub(crate) fn run(
         };
         if let Some((region, g0)) = start {
             // An exact step to the next sample (or by max_step_s, or to the breakpoint).
-            // A sample a rounding error beyond max_step_s is stepped to directly: a grid
-            // spaced by max_step_s (100 Hz at the default 10 ms) would otherwise alternate
-            // a step of t + max_step_s, which falls an ulp short of k/rate, with an
-            // ulp-long Dormand–Prince step to the sample.
-            let next = if idx < n { samples[idx] } else { t_end };
-            let t1 = if next - t <= opts.max_step_s * (1.0 + H_GRID_REL) { next } else { t + opts.max_step_s };
-            let t1 = t1.min(t_stop);
-            let h = t1 - t;
             // Cache propagators of step lengths the run repeats (max_step_s, sample to
             // sample); compute a one-off one where Dormand–Prince would need more than
             // 16 steps (a stiff region, e.g. the thesis lookup's creep segment).
-            let nominal = same_step(h, opts.max_step_s, t) || (idx > 0 && samples[idx - 1] == t);
+            let (t1, nominal) = exact_step_end(samples, idx, t, (t_stop, t_end), opts.max_step_s);
+            let h = t1 - t;
             let stiff = dp.proposed_step() * 16.0 < h;
             let compute = if nominal {
                 Compute::Cache
@@ -333,12 +343,8 @@ pub(crate) fn run(
                     if sys.ramping(t) != region.ramping {
                         break true;
                     }
-                    let next = if idx < n { samples[idx] } else { t_end };
-                    let t1_next =
-                        if next - t <= opts.max_step_s * (1.0 + H_GRID_REL) { next } else { t + opts.max_step_s };
-                    let t1_next = t1_next.min(t_stop);
+                    let (t1_next, nominal) = exact_step_end(samples, idx, t, (t_stop, t_end), opts.max_step_s);
                     let h_next = t1_next - t;
-                    let nominal = same_step(h_next, opts.max_step_s, t) || (idx > 0 && samples[idx - 1] == t);
                     if !nominal || !same_step(h_phi, h_next, t) {
                         break true;
                     }
