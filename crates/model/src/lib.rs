@@ -157,8 +157,8 @@
 //!   200 and 484 steps in the first 0.2 s at rtol 10⁻⁶, 10⁻⁸ and 10⁻¹⁰
 //!   (tol^(−1/5)). Neither a higher order (scipy's DOP853 needs 2030
 //!   evaluations to 0.9 s where RK45 needs 2024) nor an exponential
-//!   integrator with the linear drive exact (Cox–Matthews ETDRK4: 400 times
-//!   the tolerance at h = 1 ms, the tanh's slope being explicit) does better.
+//!   integrator with the linear drive exact (Cox–Matthews ETDRK4: 400–750
+//!   times the tolerance at h = 1 ms, the tanh's slope being explicit) does better.
 //!
 //! Measured (example `cpu_time`, criterion bench `simulate`): the rig model at
 //! 40 rpm / 15 N takes 3904 exact and 351 Dormand–Prince steps for 40 s

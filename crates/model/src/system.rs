@@ -122,8 +122,8 @@ pub(crate) struct System<'a> {
     fade: Option<(f64, f64, f64)>,
     /// Current limit I_max of the amplifier, A, if any.
     current_limit_a: Option<f64>,
-    /// 1 / (ki T_t) of the anti-windup, inverted once (a division on every
-    /// right-hand side was a third of its time).
+    /// 1 / (ki T_t) of the anti-windup, inverted once instead of divided by
+    /// on every right-hand side.
     inv_ki_tracking: f64,
 }
 
