@@ -238,6 +238,7 @@ mod tests {
             rotor_inertia_kgm2: 0.03,
             shaft_stiffness_nm_rad: 0.27,
             shaft_damping_nm_s_rad: 0.005,
+            rotor_damping_nm_s_rad: 0.0,
             motor: rig_types::MotorParams {
                 inertia_kgm2: 4.7e-4,
                 inductance_h: 8.4e-4,

@@ -88,6 +88,7 @@ fn initial_params(c: &Campaign, cal: &CampaignCalibration, o: &EstimateOptions) 
         rotor_inertia_kgm2: j1,
         shaft_stiffness_nm_rad: k,
         shaft_damping_nm_s_rad: 2.0 * xi * (j1 * k).sqrt(),
+        rotor_damping_nm_s_rad: 0.0,
         motor: MotorParams {
             inertia_kgm2: i.motor_inertia_kgm2,
             inductance_h: i.inductance_h,

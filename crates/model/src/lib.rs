@@ -367,6 +367,7 @@ pub fn thesis_model_params(inp: &ThesisModelInputs) -> RigParams {
         rotor_inertia_kgm2: inp.rotor_inertia_kgm2,
         shaft_stiffness_nm_rad: inp.shaft_stiffness_nm_rad,
         shaft_damping_nm_s_rad: 2.0 * inp.damping_ratio * (inp.rotor_inertia_kgm2 * inp.shaft_stiffness_nm_rad).sqrt(),
+        rotor_damping_nm_s_rad: 0.0,
         motor: MotorParams { gear_ratio: 1.0, ..inp.motor.clone() },
         drive: inp.drive.clone(),
         friction: FrictionLaw::Thesis(inp.friction.clone()),
@@ -476,6 +477,7 @@ fn validate(p: &RigParams, o: &SimOptions) -> Result<(), ModelError> {
     positive("rotor_inertia_kgm2", p.rotor_inertia_kgm2)?;
     positive("shaft_stiffness_nm_rad", p.shaft_stiffness_nm_rad)?;
     non_negative("shaft_damping_nm_s_rad", p.shaft_damping_nm_s_rad)?;
+    non_negative("rotor_damping_nm_s_rad", p.rotor_damping_nm_s_rad)?;
     let m = &p.motor;
     positive("motor.inertia_kgm2", m.inertia_kgm2)?;
     positive("motor.inductance_h", m.inductance_h)?;

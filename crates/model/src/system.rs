@@ -420,10 +420,11 @@ impl<'a> System<'a> {
             }
             return dy;
         }
-        // Eq. 4-7, first row: J1 Ω̇1 = T_shaft − C Ω1 (thesis only) − T1.
+        // Eq. 4-7, first row: J1 Ω̇1 = T_shaft − C Ω1 (thesis only) − C_r Ω1 − T1
+        // (C_r: `rotor_damping_nm_s_rad`, 0 in the baseline).
         let absolute_damping = match self.kind {
-            ModelKind::Thesis => p.shaft_damping_nm_s_rad * y[W1],
-            ModelKind::Rig => 0.0,
+            ModelKind::Thesis => (p.shaft_damping_nm_s_rad + p.rotor_damping_nm_s_rad) * y[W1],
+            ModelKind::Rig => p.rotor_damping_nm_s_rad * y[W1],
         };
         let t1 = self.friction_torque_nm(mode, t, y);
         let gravity = if self.imbalance { imbalance_torque_nm(&p.effects, y[PHI1]) } else { 0.0 };
@@ -652,7 +653,8 @@ impl<'a> System<'a> {
                 }
             },
         };
-        let absolute_damping = if self.kind == ModelKind::Thesis { p.shaft_damping_nm_s_rad } else { 0.0 };
+        let absolute_damping =
+            p.rotor_damping_nm_s_rad + if self.kind == ModelKind::Thesis { p.shaft_damping_nm_s_rad } else { 0.0 };
         a[PHI1][W1] = 1.0;
         for j in 0..AUG {
             a[W1][j] = ts[j] * self.inv_j1;
@@ -690,6 +692,7 @@ mod tests {
             rotor_inertia_kgm2: 0.0298,
             shaft_stiffness_nm_rad: 0.271,
             shaft_damping_nm_s_rad: 0.0176,
+            rotor_damping_nm_s_rad: 0.0,
             motor: MotorParams {
                 inertia_kgm2: 4.698e-4,
                 inductance_h: 8.437e-4,

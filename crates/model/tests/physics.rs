@@ -77,6 +77,36 @@ fn rig_voltage_step_reaches_analytic_steady_speed() {
     assert!(tr.friction_torque_nm.iter().all(|&x| x == 0.0) && tr.stuck.iter().all(|&s| !s));
 }
 
+/// Open brake, constant V, with a drag C_r on the absolute rotor speed
+/// (`rotor_damping_nm_s_rad`, Eq. 4-7's placement of the damping): in steady
+/// state Ω1 = Ω2 = Ω and the shaft carries C_r Ω, so the twist is C_r Ω / K;
+/// the motor balance n (k_T i − T_f − C_m n Ω) = C_r Ω with V = R i + k_e n Ω
+/// gives Ω = (V − R T_f / k_T) / (n k_e + R (n C_m + C_r / n) / k_T).
+#[test]
+fn rotor_drag_loads_the_shaft_with_its_analytic_twist() {
+    let mut p = rig_params();
+    p.rotor_damping_nm_s_rad = 0.02;
+    let m = &p.motor;
+    let n = m.gear_ratio;
+    let v = 8.0;
+    let t = grid(120.0, 10.0);
+    let tr = simulate(&p, &RunInput::VoltageStep { voltage_v: v }, &t, &opts(1e-10)).unwrap();
+    let cr = p.rotor_damping_nm_s_rad;
+    let omega = (v - m.resistance_ohm * m.friction_torque_nm / m.torque_constant_nm_a)
+        / (n * m.voltage_constant_v_s_rad
+            + m.resistance_ohm * (n * m.speed_regulation_nm_s_rad + cr / n) / m.torque_constant_nm_a);
+    let last = tr.len() - 1;
+    assert!((tr.rotor_speed_rad_s[last] - omega).abs() < 1e-6, "{} vs {omega}", tr.rotor_speed_rad_s[last]);
+    assert!((tr.motor_speed_rad_s[last] - omega).abs() < 1e-6);
+    let twist = tr.motor_angle_rad[last] - tr.rotor_angle_rad[last];
+    let expected = cr * omega / p.shaft_stiffness_nm_rad;
+    assert!((twist - expected).abs() < 1e-6 * expected.max(1.0), "twist {twist} vs {expected}");
+    // Without the drag the same run carries no shaft load.
+    p.rotor_damping_nm_s_rad = 0.0;
+    let tr0 = simulate(&p, &RunInput::VoltageStep { voltage_v: v }, &t, &opts(1e-10)).unwrap();
+    assert!((tr0.motor_angle_rad[last] - tr0.rotor_angle_rad[last]).abs() < 1e-6);
+}
+
 /// Thesis model (n = 1, C on Ω1, constant T_f): the steady state carries the
 /// damping load C Ω on rotor 1 through a constant twist C Ω / K.
 #[test]

@@ -318,6 +318,7 @@ pub fn draw_rig(seed: u64) -> Truth {
         rotor_inertia_kgm2: j1,
         shaft_stiffness_nm_rad: k,
         shaft_damping_nm_s_rad: 2.0 * xi * (j1 * k).sqrt(),
+        rotor_damping_nm_s_rad: 0.0,
         motor,
         drive,
         friction: FrictionLaw::Coulomb { mu_static: mu_s, mu_kinetic: mu_k },

@@ -25,6 +25,7 @@ pub fn truth() -> RigParams {
         rotor_inertia_kgm2: 0.031,
         shaft_stiffness_nm_rad: 0.262,
         shaft_damping_nm_s_rad: 0.006,
+        rotor_damping_nm_s_rad: 0.0,
         motor: MotorParams {
             inertia_kgm2: 4.7e-4,
             inductance_h: 8.4e-4,

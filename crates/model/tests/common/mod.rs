@@ -52,6 +52,7 @@ pub fn rig_params() -> RigParams {
     RigParams {
         kind: ModelKind::Rig,
         shaft_damping_nm_s_rad: thesis_damping(),
+        rotor_damping_nm_s_rad: 0.0,
         motor: table_4_5_motor(8.0),
         drive: DriveParams { kp_v_s_rad: 2.0, ki_v_rad: 10.0, limit_v: 24.0 },
         friction: FrictionLaw::Coulomb { mu_static: 0.5, mu_kinetic: 0.35 },
