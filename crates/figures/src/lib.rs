@@ -4,12 +4,14 @@
 //! Everything here is deterministic: one embedded font (DejaVu Sans, see
 //! `assets/LICENSE-DejaVu.txt`), no system font lookup, axis ranges computed
 //! from the data with fixed padding, one colour-blind-safe palette (Okabe–Ito),
-//! no clock. Besides single figures: multi-panel [`Sheet`]s (log-x panels,
-//! one shared legend), marker shapes, shaded bands and hatched heat-map regions.
+//! no clock. Besides single figures: multi-panel [`Sheet`]s (log-x panels, whose
+//! ticks come from one place, `log_axis`; one shared legend), marker shapes,
+//! shaded bands and hatched heat-map regions.
 
 mod csv;
 mod draw;
 mod glyph;
+mod log_axis;
 mod png_io;
 mod range;
 
