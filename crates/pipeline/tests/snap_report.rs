@@ -80,6 +80,10 @@ fn empty_out_dir_gives_a_page_of_not_produced_notes() {
         assert!(html.contains(&format!("id=\"fig-4.{n}\"")), "figure 4.{n} missing");
     }
     assert!(html.contains("cargo xtask reproduce --campaign DIR --out OUT"));
+    // The summary comes first and says what is missing.
+    assert!(html.find("<section id=\"summary\">").unwrap() < html.find("<nav>").unwrap());
+    assert!(html.contains("<th><a href=\"#diagnosis\">Verdict</a></th><td class=\"missing\">not produced</td>"));
+    assert!(html.contains("<th><a href=\"#audit\">Published numbers</a></th><td>not produced</td>"));
     let md = text(&staged, "figures.md");
     assert!(md.contains("| 4.1 | Test rig set-up. | not reproducible (photo) |  |  |"), "{md}");
     assert!(
@@ -103,21 +107,82 @@ fn populated_out_dir_shows_audit_figures_and_diagnosis() {
         br#"{"campaign":"emulated-rig-2026","verdict":"normal_force_modulation",
             "findings":[{"effect":"normal_force_modulation","params":{"amplitude_ratio":0.2,"frequency_hz":1.3},
               "params_stderr":{"amplitude_ratio":0.01,"frequency_hz":0.002},"evidence":"a line at 1.3 Hz <not a tag>",
-              "heldout_runs":["op-07","op-12"],"heldout_misfit_baseline":0.41,"heldout_misfit_extended":0.12,"relative_gain":0.71}],
-            "candidates":[{"effect":"velocity_weakening_friction","heldout_misfit_extended":0.39,"criterion":1234.5}]}"#,
+              "heldout_runs":["op-07","op-12"],"heldout_misfit_baseline":0.41,"heldout_misfit_extended":0.12,"relative_gain":0.71,
+              "relative_gain_fold_sd":0.031}],
+            "candidates":[{"effect":"velocity_weakening_friction","heldout_misfit_extended":0.39,"criterion":1234.5}],
+            "structure":{"damping":"rotor_absolute","notes":"the damping acts on the rotor speed"},
+            "parameters_at_bounds":[{"parameter":"shaft_damping_nm_s_rad","bound":0.0,"unconstrained":-0.245,"meaning":"m"}],
+            "adequacy":{"residual_over_noise":1.38,"threshold":4.0,"adequate":true}}"#,
     );
     write(out, "tables/campaign-stiffness.csv", b"trial,k_nm_rad\n1,0.262\n");
+    write(
+        out,
+        "lavi-diagnosis.json",
+        br#"{"campaign":"ufrj-lavi-2018/run-175","verdict":"unexplained",
+            "findings":[{"effect":"friction_law","relative_gain":0.7143,"heldout_misfit_baseline":7.42504,
+              "heldout_misfit_extended":2.1208,"heldout_runs":["4-8","10-14"]},
+             {"effect":"unexplained","residual_over_noise":1.64,
+              "signature":[{"signal":"bit_speed_rad_s","heldout_gain":0.938}]}]}"#,
+    );
+    write(
+        out,
+        "slider-diagnosis.json",
+        br#"{"campaign":"slider-2026","verdict":"none","findings":[],"adequacy":{"adequate":false}}"#,
+    );
+    write(out, "slider.md", b"# Slider\n\nThe slider rig's own report.\n");
+    write(out, "broken-diagnosis.json", b"{not json");
     write_figure(out, &figure("fig-4-08-campaign", "Free decay"));
     write_figure(out, &figure("fig-4-17a", "Limit cycle (a)"));
     write_figure(out, &figure("overlay-op-01", "Overlay op-01"));
 
     let staged = run_report(out);
     let html = text(&staged, "index.html");
+    // The findings summary: first, one linked row per item, every *-diagnosis.json picked up.
+    let pos = |s: &str| html.find(s).unwrap_or_else(|| panic!("{s} missing"));
+    assert!(pos("<section id=\"summary\">") < pos("<nav>"));
+    assert!(pos("</section>") < pos("<nav>"));
+    for row in [
+        "<th><a href=\"#diagnosis\">Verdict</a></th><td><strong><code>normal_force_modulation</code></strong>\
+         <ul class=\"findings\"><li><code>normal_force_modulation</code> (amplitude_ratio 0.2, frequency_hz 1.3) \
+         gain 71.0 % ± 3.1 % (fold s.d.) misfit 0.41 → 0.12 on 2 held out</li></ul></td>",
+        "<th><a href=\"#diagnosis\">Structure</a></th><td>damping <code>rotor_absolute</code> — the damping acts on the rotor speed</td>",
+        "<th><a href=\"#diagnosis\">At a bound</a></th><td><code>shaft_damping_nm_s_rad</code> at 0 (unconstrained -0.245)</td>",
+        "<th><a href=\"#diagnosis\">Adequacy</a></th><td><strong>adequate</strong>, residual 1.38 × noise (threshold 4)</td>",
+        "<th><a href=\"#audit\">Published numbers</a></th><td><span class=\"ok\">1 ok</span> <span class=\"rounding\">1 rounding</span> \
+         <span class=\"inconsistent\">1 inconsistent</span> <span class=\"note\">0 note</span> of 3",
+        "<th><a href=\"#lavi\">Real data: ufrj-lavi-2018/run-175</a></th><td><strong><code>unexplained</code></strong>\
+         <ul class=\"findings\"><li><code>friction_law</code> gain 71.4 % misfit 7.43 → 2.12 on 2 held out</li>\
+         <li><code>unexplained</code> residual 1.64 × noise follows <code>bit_speed_rad_s</code> (held-out gain 93.8 %)</li></ul></td>",
+        "<th><a href=\"#slider\">Real data: slider-2026</a></th><td><strong><code>none</code></strong>\
+         <div>Adequacy: <strong>not adequate</strong></div></td>",
+        "<th>broken</th><td class=\"missing\">broken-diagnosis.json is not valid JSON</td>",
+    ] {
+        assert!(
+            html.contains(row),
+            "summary row missing: {row}\n{}",
+            &html[pos("<section id=\"summary\">")..pos("<nav>")]
+        );
+    }
+    // Absent fields say nothing: the LAVI row has no structure, bound or adequacy part.
+    let lavi_row = &html[pos("<th><a href=\"#lavi\">")..];
+    let lavi_row = &lavi_row[..lavi_row.find("</tr>").unwrap()];
+    assert!(!lavi_row.contains("structure") && !lavi_row.contains("adequacy") && !lavi_row.contains("bound"));
+    // A diagnosis without a section of its own gets one, with its Markdown, listed in the contents.
+    assert!(pos("<li><a href=\"#slider\">slider-2026</a></li>") < pos("<li><a href=\"#tables\">"));
+    assert!(pos("<h2 id=\"slider\">slider-2026</h2>") < pos("<h2 id=\"tables\">"));
+    assert!(html.contains("The slider rig&#39;s own report."));
+    // Every summary link has its target on the page.
+    let summary = &html[pos("<section id=\"summary\">")..pos("<nav>")];
+    for (i, _) in summary.match_indices("href=\"#") {
+        let id = &summary[i + 7..][..summary[i + 7..].find('"').unwrap()];
+        assert!(html.contains(&format!("id=\"{id}\"")), "summary links to #{id}, which is not on the page");
+    }
     assert!(html.contains("<tr class=\"ok\"><td>K_sA</td>"));
     assert!(html.contains("<tr class=\"rounding\"><td>xi_1</td>"));
     assert!(html.contains("<tr class=\"inconsistent\"><td>J_1E</td>"));
     assert!(html.contains(
-        "1 ok</span> <span class=\"rounding\">1 rounding</span> <span class=\"inconsistent\">1 inconsistent</span> of 3"
+        "1 ok</span> <span class=\"rounding\">1 rounding</span> <span class=\"inconsistent\">1 inconsistent</span> \
+         <span class=\"note\">0 note</span> of 3 audited"
     ));
     assert!(html.contains("<strong>J_1E</strong> does not follow"));
     assert!(html.contains("<td>k_T</td><td>0.126</td>"));
@@ -129,7 +194,6 @@ fn populated_out_dir_shows_audit_figures_and_diagnosis() {
     assert!(html.contains("<th>effect</th><th>criterion</th><th>heldout_misfit_extended</th>"));
     assert!(html.contains("<code>tables/campaign-stiffness.csv</code> (1 rows)"));
     // Figures sit under their catalogue entry, the rest under "Further figures".
-    let pos = |s: &str| html.find(s).unwrap_or_else(|| panic!("{s} missing"));
     assert!(pos("id=\"fig-4.8\"") < pos("<figure id=\"fig-4-08-campaign\">"));
     assert!(pos("<figure id=\"fig-4-08-campaign\">") < pos("id=\"fig-4.9\""));
     assert!(pos("id=\"fig-4.17\"") < pos("<figure id=\"fig-4-17a\">"));

@@ -1,5 +1,6 @@
 //! The report: one self-contained HTML page (reports/index.html) a
-//! researcher reads first — how to rerun, the audit of the thesis' published
+//! researcher reads first — the findings summary on the first screen
+//! (`summary.rs`), how to rerun, the audit of the thesis' published
 //! numbers, every chapter-4 figure with its caption (or why it is not
 //! reproduced), the estimation, the diagnosis and the other stages' reports —
 //! plus figures.md, the figure list with its reproducibility status. The
@@ -19,6 +20,7 @@
 
 pub mod diff;
 mod markdown;
+mod summary;
 
 use crate::diff::parse_csv;
 use anyhow::{Context, Result};
@@ -152,12 +154,22 @@ fn page(out: &Path, campaign_dir: &Path, entries: &[CatalogueEntry], figures: &F
         ("tables", "All tables"),
     ];
     body.push_str(&format!("<h1>rig-lab report — campaign <code>{}</code></h1>\n", escape(&campaign)));
+    let others = other_diagnoses(out);
+    body.push_str(&section_summary(out, diagnosis.as_ref(), &others));
     body.push_str(
         "<p>Chapter 4 of the thesis (torsional-vibration test rig) recomputed from its published tables and from a \
          measuring campaign: calibrated models, the chapter's figures and a diagnosis of what the model gets wrong.</p>\n",
     );
+    // A `<stem>-diagnosis.json` whose stem has no section of its own gets one
+    // (its `<stem>.md`, titled by its campaign), before the tables.
+    let extra: Vec<(&str, &str)> = others
+        .iter()
+        .filter(|(stem, _)| !sections.iter().any(|(id, _)| id == stem))
+        .map(|(stem, d)| (stem.as_str(), d.get("campaign").and_then(|c| c.as_str()).unwrap_or(stem.as_str())))
+        .collect();
     body.push_str("<nav><ol>");
-    for (id, title) in sections {
+    let (fixed, tables) = sections.split_at(sections.len() - 1);
+    for (id, title) in fixed.iter().chain(&extra).chain(tables) {
         body.push_str(&format!("<li><a href=\"#{id}\">{}</a></li>", escape(title)));
     }
     body.push_str("</ol></nav>\n");
@@ -173,6 +185,9 @@ fn page(out: &Path, campaign_dir: &Path, entries: &[CatalogueEntry], figures: &F
     body.push_str(&section_md(out, "harmonic", "Eq. 4-11 (harmonic friction)", "harmonic.md", "harmonic"));
     body.push_str(&section_md(out, "lavi", "UFRJ LAVI 2018 recording", "lavi.md", "lavi"));
     body.push_str(&section_md(out, "confusion", "Blind diagnosis of hidden effects", "confusion.md", "confusion"));
+    for (stem, title) in extra {
+        body.push_str(&section_md(out, stem, title, &format!("{stem}.md"), stem));
+    }
     body.push_str(&section_tables(out));
 
     let n_svg = body.matches("<svg").count();
@@ -180,9 +195,79 @@ fn page(out: &Path, campaign_dir: &Path, entries: &[CatalogueEntry], figures: &F
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
          <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n\
          <title>rig-lab report — {}</title>\n<style>\n{CSS}</style>\n</head>\n<body data-figures=\"{n_svg}\">\n<main>\n{body}\
-         <p id=\"page-check\" hidden>script did not run</p>\n</main>\n<script>\n{CHECK_SCRIPT}</script>\n</body>\n</html>\n",
+         <p id=\"page-check\" hidden>script did not run</p>\n<p id=\"summary-check\" hidden>script did not run</p>\n</main>\n<script>\n{CHECK_SCRIPT}</script>\n</body>\n</html>\n",
         escape(&campaign)
     ))
+}
+
+/// Every `<stem>-diagnosis.json` of the out dir but the campaign's own
+/// diagnosis.json (the real recordings: lavi, slider …), sorted by stem; a file
+/// that is not valid JSON is skipped here and named in the summary.
+fn other_diagnoses(out: &Path) -> Vec<(String, serde_json::Value)> {
+    diagnosis_files(out)
+        .into_iter()
+        .filter_map(|(stem, name)| {
+            let v = serde_json::from_str(&read_opt(out, &name)?).ok()?;
+            Some((stem, v))
+        })
+        .collect()
+}
+
+/// (stem, file name) of every `<stem>-diagnosis.json` in the out dir, sorted.
+fn diagnosis_files(out: &Path) -> Vec<(String, String)> {
+    let mut files: Vec<(String, String)> = std::fs::read_dir(out)
+        .map(|rd| {
+            rd.flatten()
+                .filter_map(|e| {
+                    let name = e.file_name().to_str()?.to_string();
+                    let stem = name.strip_suffix("-diagnosis.json").filter(|s| !s.is_empty())?.to_string();
+                    Some((stem, name))
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    files.sort();
+    files
+}
+
+/// The findings summary (`summary.rs`): the first thing on the page.
+fn section_summary(
+    out: &Path,
+    diagnosis: Option<&serde_json::Value>,
+    others: &[(String, serde_json::Value)],
+) -> String {
+    let mut rows = String::new();
+    match diagnosis {
+        Some(d) => rows.push_str(&summary::diagnosis_rows(d, "diagnosis", "Verdict", true)),
+        None => rows.push_str(&format!(
+            "<tr><th><a href=\"#diagnosis\">Verdict</a></th><td class=\"missing\">{}</td></tr>\n",
+            if out.join("diagnosis.json").exists() { "diagnosis.json is not valid JSON" } else { "not produced" }
+        )),
+    }
+    let audit = match read_opt(out, "audit.csv").map(|t| parse_csv(&t)) {
+        Some(rows) => match audit_counts(&rows) {
+            Some((counts, total)) => {
+                format!("{} of {total} numbers and statements the chapter prints, recomputed", audit_badges(counts))
+            }
+            None => "audit.csv has no status column".to_string(),
+        },
+        None => "not produced".to_string(),
+    };
+    rows.push_str(&format!("<tr><th><a href=\"#audit\">Published numbers</a></th><td>{audit}</td></tr>\n"));
+    for (stem, d) in others {
+        let campaign = d.get("campaign").and_then(|c| c.as_str()).unwrap_or(stem.as_str());
+        rows.push_str(&summary::diagnosis_rows(d, stem, &format!("Real data: {campaign}"), false));
+    }
+    for (stem, name) in diagnosis_files(out).iter().filter(|(stem, _)| !others.iter().any(|(s, _)| s == stem)) {
+        rows.push_str(&format!(
+            "<tr><th>{}</th><td class=\"missing\">{} is not valid JSON</td></tr>\n",
+            escape(stem),
+            escape(name)
+        ));
+    }
+    format!(
+        "<section id=\"summary\">\n<h2>What was found</h2>\n<table class=\"summary\">\n<tbody>\n{rows}</tbody>\n</table>\n</section>\n"
+    )
 }
 
 /// Inline style: system fonts only, audit colours, figures scaled to the column.
@@ -194,9 +279,13 @@ pre{background:#f3f3f3;padding:.7em 1em;overflow-x:auto}
 table{border-collapse:collapse;margin:.8em 0;font-size:.9em}
 th,td{border:1px solid #ccc;padding:.25em .55em;vertical-align:top}th{background:#f0f0f0}
 td.num{text-align:right;font-variant-numeric:tabular-nums}
-tr.ok td{background:#e3f4e6}tr.rounding td{background:#fff1cc}tr.inconsistent td{background:#fbdcdc}
-span.ok,span.rounding,span.inconsistent{padding:0 .4em;border-radius:3px}
-span.ok{background:#bfe6c6}span.rounding{background:#ffe08a}span.inconsistent{background:#f5b5b5}
+tr.ok td{background:#e3f4e6}tr.rounding td{background:#fff1cc}tr.inconsistent td{background:#fbdcdc}tr.note td{background:#e6eef8}
+span.ok,span.rounding,span.inconsistent,span.note{padding:0 .4em;border-radius:3px}
+span.ok{background:#bfe6c6}span.rounding{background:#ffe08a}span.inconsistent{background:#f5b5b5}span.note{background:#c9d9ef}
+#summary{margin:.4em 0 1em}#summary h2{margin-top:.2em;font-size:1.25em}
+table.summary{font-size:.92em;margin:.3em 0;width:100%}table.summary th{text-align:left;white-space:nowrap;width:1%}
+table.summary th a{color:inherit}table.summary td{line-height:1.35}
+ul.findings{margin:.1em 0 0;padding-left:1.3em}
 .missing{color:#8a5a00;background:#fff6e0;border-left:4px solid #e0a000;padding:.4em .8em}
 figure{margin:1.2em 0;padding:.6em;border:1px solid #e4e4e4}figure svg{max-width:100%;height:auto;display:block}
 figcaption{font-size:.92em;color:#333}figcaption .thesis{color:#555;font-style:italic}
@@ -205,8 +294,9 @@ details{margin:.4em 0}summary{cursor:pointer}
 ";
 
 /// Proves in a browser that the page parsed, every inline figure is an SVG
-/// element with a size and nothing external is loaded;
-/// scripts/check-report.sh reads the result from the DOM.
+/// element with a size and nothing external is loaded, and measures where the
+/// findings summary ends (it must fit the first screen);
+/// scripts/check-report.sh reads both results from the DOM.
 const CHECK_SCRIPT: &str = "(function(){
   var el=document.getElementById('page-check');
   var want=parseInt(document.body.getAttribute('data-figures'),10);
@@ -216,6 +306,9 @@ const CHECK_SCRIPT: &str = "(function(){
   // A self-contained page loads nothing: no element that fetches a resource.
   var ext=document.querySelectorAll('img,link,iframe,object,embed,script[src],use[href]').length+performance.getEntriesByType('resource').length;
   el.textContent=(figs.length===want&&bad===0&&ext===0)?('page-check ok: '+figs.length+' figures'):('page-check FAILED: '+figs.length+' of '+want+' figures, '+bad+' without size, '+ext+' external resources');
+  // Where the findings summary ends, in CSS pixels from the top of the page at this window's width.
+  var sum=document.getElementById('summary');
+  document.getElementById('summary-check').textContent=sum?('summary-bottom '+Math.ceil(sum.getBoundingClientRect().bottom+window.scrollY)+' width '+window.innerWidth):'summary missing';
 })();
 ";
 
@@ -232,14 +325,37 @@ fn section_rerun() -> String {
         .to_string()
 }
 
-/// The audit status of a row: `ok`, `rounding` or `inconsistent`.
+/// The audit's classes, in the order they are counted and shown.
+const AUDIT_CLASSES: [&str; 4] = ["ok", "rounding", "inconsistent", "note"];
+
+/// The counts as coloured badges: "27 ok 19 rounding …".
+fn audit_badges(counts: [usize; 4]) -> String {
+    let parts: Vec<String> = AUDIT_CLASSES
+        .iter()
+        .zip(counts)
+        .map(|(class, n)| format!("<span class=\"{class}\">{n} {class}</span>"))
+        .collect();
+    parts.join(" ")
+}
+
+/// The audit status of a row: one of [`AUDIT_CLASSES`].
 fn status_class(cell: &str) -> Option<&'static str> {
-    match cell.trim().to_ascii_lowercase().as_str() {
-        "ok" => Some("ok"),
-        "rounding" => Some("rounding"),
-        "inconsistent" => Some("inconsistent"),
-        _ => None,
+    let c = cell.trim().to_ascii_lowercase();
+    AUDIT_CLASSES.iter().find(|k| **k == c).copied()
+}
+
+/// Rows per audit class (in [`AUDIT_CLASSES`] order) and the number of rows,
+/// when the table has a status column.
+fn audit_counts(rows: &[Vec<String>]) -> Option<([usize; 4], usize)> {
+    let j = status_column(rows)?;
+    let mut counts = [0usize; 4];
+    for r in rows.iter().skip(1) {
+        if let Some(k) = r.get(j).and_then(|c| status_class(c)).and_then(|c| AUDIT_CLASSES.iter().position(|k| *k == c))
+        {
+            counts[k] += 1;
+        }
     }
+    Some((counts, rows.len().saturating_sub(1)))
 }
 
 /// The column holding the audit status: one named status/verdict/class, else
@@ -296,32 +412,16 @@ fn section_audit(out: &Path) -> String {
         "<p>Every number the chapter prints, beside the value recomputed from its own inputs. \
          <span class=\"ok\">ok</span>: equal at the printed precision; <span class=\"rounding\">rounding</span>: \
          off by about a unit of the last printed digit; <span class=\"inconsistent\">inconsistent</span>: \
-         the printed inputs do not give the printed result.</p>\n",
+         the printed inputs do not give the printed result; <span class=\"note\">note</span>: a finding \
+         that is not an error.</p>\n",
     );
     match read_opt(out, "audit.csv") {
         Some(text) => {
             let rows = parse_csv(&text);
-            let status = status_column(&rows);
-            if let Some(j) = status {
-                let mut counts = [0usize; 3];
-                for r in rows.iter().skip(1) {
-                    match r.get(j).and_then(|c| status_class(c)) {
-                        Some("ok") => counts[0] += 1,
-                        Some("rounding") => counts[1] += 1,
-                        Some("inconsistent") => counts[2] += 1,
-                        _ => {}
-                    }
-                }
-                s.push_str(&format!(
-                    "<p><span class=\"ok\">{} ok</span> <span class=\"rounding\">{} rounding</span> \
-                     <span class=\"inconsistent\">{} inconsistent</span> of {} audited numbers.</p>\n",
-                    counts[0],
-                    counts[1],
-                    counts[2],
-                    rows.len().saturating_sub(1)
-                ));
+            if let Some((counts, total)) = audit_counts(&rows) {
+                s.push_str(&format!("<p>{} of {total} audited numbers.</p>\n", audit_badges(counts)));
             }
-            s.push_str(&csv_table(&rows, status));
+            s.push_str(&csv_table(&rows, status_column(&rows)));
         }
         None => s.push_str(&not_produced("audit.csv", "thesis-tables")),
     }
