@@ -28,7 +28,8 @@ pub enum Outcome {
     UpToDate,
     /// `--dry-run`: would run for the reasons given.
     WouldRun,
-    /// An `optional` stage whose inputs are missing.
+    /// An `optional` stage whose inputs are missing; stages after it read its
+    /// last outputs, if intact.
     SkippedOptional,
     /// An `on_demand` stage not asked for (`--only NAME` or `--all`) whose
     /// inputs, params or code changed since its last run (the reasons say
@@ -49,14 +50,15 @@ pub struct StageReport {
     pub outcome: Outcome,
     /// Why it ran, would run, was skipped or up to date (for `--why`).
     pub reasons: Vec<String>,
-    /// The record of its outputs when it ran or was up to date.
+    /// The record of its outputs when it ran or was up to date, or of its
+    /// last intact outputs when it was skipped (on demand or optional).
     pub record: Option<CacheRecord>,
     /// How long it took (not reproducible: kept out of every artifact, see `timing`).
     pub timing: Timing,
 }
 
 impl StageReport {
-    /// The stage's outputs (relative to the out dir) when it ran or was up to date.
+    /// The stage's outputs (relative to the out dir), as [`StageReport::record`] has them.
     pub fn outputs(&self) -> BTreeMap<String, FileHash> {
         self.record.as_ref().map(|r| r.outputs.clone()).unwrap_or_default()
     }
@@ -425,7 +427,7 @@ impl Runner {
                     running.insert(name.clone());
                     bar.set_message(running.iter().cloned().collect::<Vec<_>>().join(", "));
                     let (tx, pool, dirs, memo, index) = (tx.clone(), &pool, &dirs, &memo, &index);
-                    let listed = decl.on_demand.then(|| listed.get(&name).map(|l| l.record.clone())).flatten();
+                    let listed = listed.get(&name).map(|l| l.record.clone());
                     let campaign = campaign.clone();
                     scope.spawn(move || {
                         let watch = Stopwatch::start();
@@ -498,11 +500,12 @@ impl Runner {
             if !path.exists() {
                 let label = input.label();
                 if decl.optional {
-                    return report(
-                        Outcome::SkippedOptional,
-                        vec![format!("input {label} ({}) is missing", path.display())],
-                        None,
-                    );
+                    // Its last outputs, when intact, stay what stages after it read.
+                    let last = store::load_record(&dirs.out, &name)
+                        .or(listed)
+                        .filter(|r| store::output_problems(&dirs.out, &r.outputs).is_empty());
+                    let reasons = vec![format!("input {label} ({}) is missing", path.display())];
+                    return report(Outcome::SkippedOptional, reasons, last);
                 }
                 let err = PipelineError::MissingInput { stage: name.clone(), label, path };
                 return report(Outcome::Failed(err.into()), vec!["an input is missing".into()], None);
@@ -524,8 +527,9 @@ impl Runner {
             }
             Err(e) => return report(Outcome::Failed(e.into()), vec!["hashing inputs failed".into()], None),
         };
-        // An on-demand stage's record may be only in the manifest (a fresh clone has no `.cache/`).
-        let previous = store::load_record(&dirs.out, &name).or(listed);
+        // An on-demand stage's record may be only in the manifest (a fresh clone has no
+        // `.cache/`); every other stage re-runs without a cache record.
+        let previous = store::load_record(&dirs.out, &name).or(listed.filter(|_| decl.on_demand));
         let reasons = reasons_to_run(&record, previous.as_ref(), &dirs.out);
         if reasons.is_empty() {
             let previous = previous.expect("no reasons implies a record");
