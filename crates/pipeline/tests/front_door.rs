@@ -144,3 +144,33 @@ fn every_refusal_says_each_clause_once() {
     let e = anyhow::Error::from(io).context("reading the manifest");
     assert_eq!(rig_pipeline::describe(&e), format!("reading the manifest: {}: no such file", missing.display()));
 }
+
+/// The calibration's declared needs are the crate's own limits: one run
+/// fewer than a declared minimum, and `rig_calibrate` itself refuses the
+/// campaign; at the minimum the pre-flight lets it through and so does the crate.
+#[test]
+fn the_calibration_needs_are_what_rig_calibrate_refuses() {
+    let root = rig_pipeline::testing::workspace_root();
+    let shipped = rig_ingest::read_campaign(&root.join("data/emulated-rig-2026")).unwrap();
+    let needs = rig_pipeline::stages::needs("campaign-calibration");
+    assert_eq!(needs.len(), 3, "{needs:?}");
+    for need in needs {
+        for keep in [need.min_runs, need.min_runs - 1] {
+            let mut c = shipped.clone();
+            let mut seen = 0;
+            c.runs.retain(|r| {
+                seen += usize::from(r.kind.name() == need.kind);
+                r.kind.name() != need.kind || seen <= keep
+            });
+            let unmet = rig_pipeline::needs::unmet(rig_pipeline::stages::needs, ["campaign-calibration"], &c);
+            let calibrated = rig_calibrate::calibrate_campaign(&c);
+            if keep == need.min_runs {
+                assert!(unmet.is_empty(), "{keep} {}: {unmet:?}", need.kind);
+                assert!(calibrated.is_ok(), "{keep} {}: {:?}", need.kind, calibrated.err());
+            } else {
+                assert_eq!(unmet.len(), 1, "{keep} {}: {unmet:?}", need.kind);
+                assert!(calibrated.is_err(), "{keep} {}: the crate accepts what the pre-flight refuses", need.kind);
+            }
+        }
+    }
+}
