@@ -710,14 +710,8 @@ fn shared_tables_reach_the_stages_that_list_them() {
     assert!(e.contains("stage d") && e.contains("declared once in [shared.integrator]"), "{e}");
 }
 
-/// An `on_demand` stage (like the confusion battery) does not run in a default
-/// run: it is assessed (up to date, or skipped as stale with the reasons), a
-/// stage `after` it reads its last outputs, and `--only NAME` or `--all` runs it.
-#[test]
-fn an_on_demand_stage_runs_only_when_asked_for() {
-    let stages = format!(
-        "{DIAMOND}{}",
-        r#"
+/// An on-demand stage reading b's output (like the confusion battery).
+const SLOW: &str = r#"
 [[stage]]
 name = "slow"
 inputs = ["@b/b.txt"]
@@ -726,7 +720,16 @@ on_demand = true
 [stage.params]
 read = ["out:b.txt"]
 write = ["slow.txt"]
+"#;
 
+/// An `on_demand` stage (like the confusion battery) does not run in a default
+/// run: it is assessed (up to date, or skipped as stale with the reasons), a
+/// stage `after` it reads its last outputs, and `--only NAME` or `--all` runs it.
+#[test]
+fn an_on_demand_stage_runs_only_when_asked_for() {
+    let stages = format!(
+        "{DIAMOND}{SLOW}{}",
+        r#"
 [[stage]]
 name = "page"
 after = ["slow"]
@@ -779,17 +782,8 @@ write = ["page.txt"]
 #[test]
 fn a_fresh_clone_keeps_the_manifest_of_stages_it_does_not_rerun() {
     let stages = format!(
-        "{DIAMOND}{}",
+        "{DIAMOND}{SLOW}{}",
         r#"
-[[stage]]
-name = "slow"
-inputs = ["@b/b.txt"]
-outputs = ["slow.txt"]
-on_demand = true
-[stage.params]
-read = ["out:b.txt"]
-write = ["slow.txt"]
-
 [[stage]]
 name = "extra"
 inputs = ["{shared}/x.txt"]
