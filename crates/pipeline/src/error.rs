@@ -33,6 +33,12 @@ pub enum PipelineError {
     #[error("campaign refused: {0}")]
     Campaign(#[from] rig_ingest::IngestError),
 
+    /// The campaign the reader accepted lacks runs a stage of this run needs
+    /// (refused before any stage runs): each clause names the run kind, what
+    /// the campaign has, and each stage that needs more and what for.
+    #[error("campaign refused: {}: {}", path.display(), unmet.join("; "))]
+    CampaignUnfit { path: PathBuf, unmet: Vec<String> },
+
     /// The running binary was built from other sources than are on disk (see
     /// [`crate::fingerprint`]): its results would be stored under the new code's keys.
     #[error(
@@ -46,4 +52,27 @@ pub enum PipelineError {
     /// A cache record or the manifest could not be (de)serialised.
     #[error("{}: {reason}", path.display())]
     Json { path: PathBuf, reason: String },
+}
+
+/// An error and its causes as one line, each clause said once: `a: b: c`
+/// like anyhow's `{:#}`, but a cause whose text the line already holds (an
+/// error type that prints its source and also returns it from `source()`,
+/// like [`PipelineError::Campaign`] or `Io`) is not said again. The one way
+/// `xtask` and [`crate::RunReport::into_result`] print an error.
+pub fn describe(e: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in e.chain() {
+        let clause = cause.to_string();
+        if line.contains(&clause) {
+            continue;
+        }
+        if clause.starts_with(&line) {
+            // A cause that restates the line and adds to it: the longer text, once.
+            line = clause;
+            continue;
+        }
+        line.push_str(": ");
+        line.push_str(&clause);
+    }
+    line
 }

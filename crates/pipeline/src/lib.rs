@@ -22,6 +22,7 @@ pub mod fingerprint;
 pub mod graph;
 mod hash;
 mod manifest;
+pub mod needs;
 pub mod parquet;
 mod runner;
 pub mod stages;
@@ -30,7 +31,7 @@ pub mod timing;
 
 pub use config::{Input, OutputPattern, ParamsCheck, PipelineConfig, Registry, Settings, Sources, StageDecl};
 pub use ctx::{StageCtx, StageFn, parse_params};
-pub use error::PipelineError;
+pub use error::{PipelineError, describe};
 pub use runner::{CampaignReader, Outcome, RunReport, Runner, StageReport};
 pub use store::{CacheRecord, FileHash};
 pub mod shards;

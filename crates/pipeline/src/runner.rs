@@ -5,6 +5,7 @@ use crate::code::CodeIndex;
 use crate::config::{Input, ParamsCheck, PipelineConfig, Registry, Sources, StageDecl};
 use crate::error::PipelineError;
 use crate::hash::{canonical_params, hash_path};
+use crate::needs::{self, Needs};
 use crate::store::{self, CacheRecord, Fault, FileHash};
 use crate::timing::{Stopwatch, Timing};
 use crate::{StageCtx, graph, manifest};
@@ -27,7 +28,8 @@ pub enum Outcome {
     UpToDate,
     /// `--dry-run`: would run for the reasons given.
     WouldRun,
-    /// An `optional` stage whose inputs are missing.
+    /// An `optional` stage whose inputs are missing; stages after it read its
+    /// last outputs, if intact.
     SkippedOptional,
     /// An `on_demand` stage not asked for (`--only NAME` or `--all`) whose
     /// inputs, params or code changed since its last run (the reasons say
@@ -48,14 +50,15 @@ pub struct StageReport {
     pub outcome: Outcome,
     /// Why it ran, would run, was skipped or up to date (for `--why`).
     pub reasons: Vec<String>,
-    /// The record of its outputs when it ran or was up to date.
+    /// The record of its outputs when it ran or was up to date, or of its
+    /// last intact outputs when it was skipped (on demand or optional).
     pub record: Option<CacheRecord>,
     /// How long it took (not reproducible: kept out of every artifact, see `timing`).
     pub timing: Timing,
 }
 
 impl StageReport {
-    /// The stage's outputs (relative to the out dir) when it ran or was up to date.
+    /// The stage's outputs (relative to the out dir), as [`StageReport::record`] has them.
     pub fn outputs(&self) -> BTreeMap<String, FileHash> {
         self.record.as_ref().map(|r| r.outputs.clone()).unwrap_or_default()
     }
@@ -119,7 +122,7 @@ impl RunReport {
             .stages
             .iter()
             .filter_map(|s| match &s.outcome {
-                Outcome::Failed(e) => Some(format!("stage {}: {e:#}", s.name)),
+                Outcome::Failed(e) => Some(format!("stage {}: {}", s.name, crate::describe(e))),
                 _ => None,
             })
             .collect();
@@ -134,6 +137,7 @@ pub struct Runner {
     sources: Sources,
     params_check: ParamsCheck,
     campaign_reader: Option<CampaignReader>,
+    needs: Needs,
     campaign: Option<PathBuf>,
     out: Option<PathBuf>,
     jobs: usize,
@@ -159,7 +163,8 @@ impl Runner {
         Ok(Self::with_registry(path, crate::stages::lookup)?
             .stage_sources(crate::stages::source)
             .params_check(crate::stages::check_params)
-            .campaign_reader(rig_ingest::read_campaign))
+            .campaign_reader(rig_ingest::read_campaign)
+            .campaign_needs(crate::stages::needs))
     }
 
     /// The pipeline at `path` with another registry (tests use fake stages).
@@ -171,6 +176,7 @@ impl Runner {
             sources: |_| None,
             params_check: |_, _| Ok(()),
             campaign_reader: None,
+            needs: |_| &[],
             campaign: None,
             out: None,
             jobs: 2,
@@ -204,6 +210,16 @@ impl Runner {
     /// registries) stages read the campaign themselves.
     pub fn campaign_reader(mut self, read: CampaignReader) -> Self {
         self.campaign_reader = Some(read);
+        self
+    }
+
+    /// What each stage needs of the campaign (run kinds, counts, metadata):
+    /// the enabled stages' needs are checked against the campaign the reader
+    /// accepted, before any stage runs or anything is written under the out
+    /// dir; a campaign that falls short is refused naming the file, the rule
+    /// and the stage ([`PipelineError::CampaignUnfit`]).
+    pub fn campaign_needs(mut self, needs: Needs) -> Self {
+        self.needs = needs;
         self
     }
 
@@ -328,6 +344,14 @@ impl Runner {
         };
         let order: Vec<String> =
             graph::topological_order(&self.config)?.into_iter().filter(|n| selected.contains(n)).collect();
+        if let Some(campaign) = &campaign {
+            // Every stage that may run this time: on-demand ones only when asked for.
+            let enabled = order.iter().filter(|n| self.may_run(self.config.stage(n).expect("validated")));
+            let unmet = needs::unmet(self.needs, enabled.map(String::as_str), campaign);
+            if !unmet.is_empty() {
+                return Err(PipelineError::CampaignUnfit { path: dirs.campaign.join("campaign.toml"), unmet });
+            }
+        }
         if !self.dry_run {
             std::fs::create_dir_all(&dirs.out)
                 .map_err(|source| PipelineError::Io { path: dirs.out.clone(), source })?;
@@ -346,6 +370,9 @@ impl Runner {
             indicatif::ProgressBar::hidden()
         };
         let index = CodeIndex::load(&self.config.root)?;
+        // The manifest this run replaces: the record of an on-demand stage when
+        // `.cache/` has none (a fresh clone), and entries kept for stages not run.
+        let listed = manifest::load(&dirs.out);
         let memo = Mutex::new(BTreeMap::new());
         let mut done: BTreeMap<String, StageReport> = BTreeMap::new();
         std::thread::scope(|scope| {
@@ -396,15 +423,17 @@ impl Runner {
                         })
                         .collect();
                     // An on-demand stage runs only when asked for.
-                    let may_run = !decl.on_demand || self.all || self.only.iter().any(|o| o == &name);
+                    let may_run = self.may_run(decl);
                     running.insert(name.clone());
                     bar.set_message(running.iter().cloned().collect::<Vec<_>>().join(", "));
                     let (tx, pool, dirs, memo, index) = (tx.clone(), &pool, &dirs, &memo, &index);
+                    let listed = listed.get(&name).map(|l| l.record.clone());
                     let campaign = campaign.clone();
                     scope.spawn(move || {
                         let watch = Stopwatch::start();
                         let mut report = pool.install(|| {
-                            self.run_one(decl, dirs, memo, index, campaign, &upstream_runs, &after_outputs, may_run)
+                            let up = (&upstream_runs[..], &after_outputs[..]);
+                            self.run_one(decl, dirs, memo, index, campaign, up, listed, may_run)
                         });
                         report.timing = watch.stop();
                         // The receiver lives until every stage has reported.
@@ -423,8 +452,14 @@ impl Runner {
         });
         bar.finish_and_clear();
         let stages: Vec<StageReport> = order.iter().filter_map(|n| done.remove(n)).collect();
-        let manifest = if self.dry_run { None } else { Some(manifest::write(&self.config, &dirs.out, &stages)?) };
+        let manifest =
+            if self.dry_run { None } else { Some(manifest::write(&self.config, &dirs.out, &stages, &listed)?) };
         Ok(RunReport { stages, manifest, total: whole.stop() })
+    }
+
+    /// An on-demand stage runs only when asked for (`--only NAME` or `--all`); every other may.
+    fn may_run(&self, decl: &StageDecl) -> bool {
+        !decl.on_demand || self.all || self.only.iter().any(|o| o == &decl.name)
     }
 
     /// Assesses one stage and, unless it is up to date (or this is a dry run,
@@ -437,8 +472,8 @@ impl Runner {
         memo: &Mutex<BTreeMap<PathBuf, String>>,
         index: &CodeIndex,
         campaign: Option<Arc<Campaign>>,
-        upstream_runs: &[String],
-        after_outputs: &[(String, String)],
+        (upstream_runs, after_outputs): (&[String], &[(String, String)]),
+        listed: Option<CacheRecord>,
         may_run: bool,
     ) -> StageReport {
         let name = decl.name.clone();
@@ -465,11 +500,12 @@ impl Runner {
             if !path.exists() {
                 let label = input.label();
                 if decl.optional {
-                    return report(
-                        Outcome::SkippedOptional,
-                        vec![format!("input {label} ({}) is missing", path.display())],
-                        None,
-                    );
+                    // Its last outputs, when intact, stay what stages after it read.
+                    let last = store::load_record(&dirs.out, &name)
+                        .or(listed)
+                        .filter(|r| store::output_problems(&dirs.out, &r.outputs).is_empty());
+                    let reasons = vec![format!("input {label} ({}) is missing", path.display())];
+                    return report(Outcome::SkippedOptional, reasons, last);
                 }
                 let err = PipelineError::MissingInput { stage: name.clone(), label, path };
                 return report(Outcome::Failed(err.into()), vec!["an input is missing".into()], None);
@@ -491,7 +527,9 @@ impl Runner {
             }
             Err(e) => return report(Outcome::Failed(e.into()), vec!["hashing inputs failed".into()], None),
         };
-        let previous = store::load_record(&dirs.out, &name);
+        // An on-demand stage's record may be only in the manifest (a fresh clone has no
+        // `.cache/`); every other stage re-runs without a cache record.
+        let previous = store::load_record(&dirs.out, &name).or(listed.filter(|_| decl.on_demand));
         let reasons = reasons_to_run(&record, previous.as_ref(), &dirs.out);
         if reasons.is_empty() {
             let previous = previous.expect("no reasons implies a record");

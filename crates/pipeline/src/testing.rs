@@ -74,7 +74,7 @@ pub fn shared_outputs(names: &[&str]) -> SharedOut {
     let dir = shared_out_dir();
     let lock = lock_shared_out_dir(&dir);
     if let Err(e) = run_report(&dir, names) {
-        panic!("running stages {names:?}: {e:#}");
+        panic!("running stages {names:?}: {}", crate::describe(&e));
     }
     SharedOut { dir, _lock: lock, _guard: guard }
 }
@@ -102,7 +102,7 @@ pub fn snapshot_stage(name: &str) {
     let _lock = lock_shared_out_dir(&dir);
     let report = match run_report(&dir, &[name]) {
         Ok(r) => r,
-        Err(e) => panic!("running stage {name}: {e:#}"),
+        Err(e) => panic!("running stage {name}: {}", crate::describe(&e)),
     };
     let stage = report.stage(name).unwrap_or_else(|| panic!("stage {name} is not in pipeline.toml"));
     if matches!(stage.outcome, Outcome::SkippedOptional) {

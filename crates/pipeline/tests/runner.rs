@@ -710,14 +710,8 @@ fn shared_tables_reach_the_stages_that_list_them() {
     assert!(e.contains("stage d") && e.contains("declared once in [shared.integrator]"), "{e}");
 }
 
-/// An `on_demand` stage (like the confusion battery) does not run in a default
-/// run: it is assessed (up to date, or skipped as stale with the reasons), a
-/// stage `after` it reads its last outputs, and `--only NAME` or `--all` runs it.
-#[test]
-fn an_on_demand_stage_runs_only_when_asked_for() {
-    let stages = format!(
-        "{DIAMOND}{}",
-        r#"
+/// An on-demand stage reading b's output (like the confusion battery).
+const SLOW: &str = r#"
 [[stage]]
 name = "slow"
 inputs = ["@b/b.txt"]
@@ -726,7 +720,16 @@ on_demand = true
 [stage.params]
 read = ["out:b.txt"]
 write = ["slow.txt"]
+"#;
 
+/// An `on_demand` stage (like the confusion battery) does not run in a default
+/// run: it is assessed (up to date, or skipped as stale with the reasons), a
+/// stage `after` it reads its last outputs, and `--only NAME` or `--all` runs it.
+#[test]
+fn an_on_demand_stage_runs_only_when_asked_for() {
+    let stages = format!(
+        "{DIAMOND}{SLOW}{}",
+        r#"
 [[stage]]
 name = "page"
 after = ["slow"]
@@ -768,4 +771,71 @@ write = ["page.txt"]
         "{stages}[[stage]]\nname = \"reader\"\ninputs = [\"@slow/slow.txt\"]\noutputs = [\"r.txt\"]\n"
     ));
     assert!(e.contains("stage reader: input @slow/slow.txt: stage slow is on_demand"), "{e}");
+}
+
+/// A fresh clone has the committed out dir (outputs and manifest) but no
+/// `.cache/`: a default run re-runs the default stages and keeps the on-demand
+/// stage's entries (its record is read from the manifest, its outputs are
+/// intact and its key unchanged, so it is up to date), leaving the manifest
+/// byte-identical. When its inputs change it is kept, marked stale; an
+/// optional stage whose input is missing keeps its last outputs, marked.
+#[test]
+fn a_fresh_clone_keeps_the_manifest_of_stages_it_does_not_rerun() {
+    let stages = format!(
+        "{DIAMOND}{SLOW}{}",
+        r#"
+[[stage]]
+name = "extra"
+inputs = ["{shared}/x.txt"]
+outputs = ["extra.txt"]
+optional = true
+[stage.params]
+write = ["extra.txt"]
+
+[[stage]]
+name = "page"
+after = ["slow", "extra"]
+outputs = ["page.txt"]
+[stage.params]
+write = ["page.txt"]
+"#
+    );
+    let f = Fixture::new(&stages);
+    f.write("shared/x.txt", "x\n");
+    f.runner().all(true).run().unwrap();
+    let committed = tree(&f.out());
+    let manifest = f.read_out("manifest.json");
+    assert!(manifest.contains("\"on_demand\": true") && !manifest.contains("\"kept\""), "{manifest}");
+    // The clone: no cache, and ../shared absent.
+    std::fs::remove_dir_all(f.out().join(".cache")).unwrap();
+    std::fs::remove_dir_all(f.root().join("shared")).unwrap();
+    let r = f.run();
+    assert_eq!(outcome(&r, "slow"), "UpToDate", "{}", r.summary(true));
+    assert_eq!(outcome(&r, "extra"), "SkippedOptional");
+    assert_eq!(r.ran(), ["a", "b", "c", "d", "page"]);
+    let m = f.read_out("manifest.json");
+    let v: serde_json::Value = serde_json::from_str(&m).unwrap();
+    assert_eq!(v["artifacts"]["slow.txt"]["stage"], "slow");
+    assert_eq!(v["artifacts"]["extra.txt"]["stage"], "extra");
+    assert!(v["stages"]["extra"]["kept"].as_str().unwrap().starts_with("optional, skipped"), "{m}");
+    let committed_page = serde_json::from_str::<serde_json::Value>(&manifest).unwrap()["stages"]["page"].clone();
+    assert_eq!(v["stages"]["page"], committed_page, "the page's key covers the kept outputs it reads");
+    // With the input back (the usual clone, beside ../shared) the out dir is
+    // the committed one, byte for byte, apart from the rebuilt cache.
+    f.write("shared/x.txt", "x\n");
+    f.run();
+    let mut now = tree(&f.out());
+    now.retain(|k, _| !k.starts_with(".cache"));
+    let mut want = committed.clone();
+    want.retain(|k, _| !k.starts_with(".cache"));
+    assert_eq!(now, want);
+    // Its input changes: kept with its last outputs, marked stale with the reason.
+    std::fs::remove_dir_all(f.out().join(".cache")).unwrap();
+    f.write("campaign/b.txt", "gamma\n");
+    let r = f.run();
+    assert_eq!(outcome(&r, "slow"), "SkippedOnDemand");
+    let v: serde_json::Value = serde_json::from_str(&f.read_out("manifest.json")).unwrap();
+    assert_eq!(v["artifacts"]["slow.txt"]["stage"], "slow");
+    let kept = v["stages"]["slow"]["kept"].as_str().unwrap();
+    assert!(kept.starts_with("stale, not rerun (input @b/b.txt changed)") && kept.contains("--only slow"), "{kept}");
 }

@@ -340,6 +340,26 @@ fn stage_files_are_thin() {
 /// factor; owned by others, to switch to `rig_types::units::RAD_S_TO_RPM`.
 const RPM_NOT_YET: [&str; 1] = ["crates/model/src/friction.rs"];
 
+/// `const RAD_S_TO_RPM` with any visibility (`pub`, `pub(crate)`, none).
+fn defines_rpm_factor(line: &str) -> bool {
+    let mut l = line.trim_start();
+    if let Some(rest) = l.strip_prefix("pub") {
+        l = match rest.strip_prefix('(') {
+            Some(r) => r.split_once(')').map_or("", |(_, after)| after),
+            None => rest,
+        };
+    }
+    l.trim_start().starts_with("const RAD_S_TO_RPM")
+}
+
+#[test]
+fn the_rpm_factor_is_found_with_any_visibility() {
+    for l in ["const RAD_S_TO_RPM: f64 = 1.0;", "pub const RAD_S_TO_RPM", "  pub(crate) const RAD_S_TO_RPM: f64"] {
+        assert!(defines_rpm_factor(l), "{l}");
+    }
+    assert!(!defines_rpm_factor("let rpm = w * RAD_S_TO_RPM;") && !defines_rpm_factor("use units::RAD_S_TO_RPM;"));
+}
+
 /// One unit conversion, one home: `rig_types::units`.
 #[test]
 fn unit_conversions_have_one_home() {
@@ -349,7 +369,7 @@ fn unit_conversions_have_one_home() {
         .iter()
         .filter(|f| {
             let text = std::fs::read_to_string(f).unwrap();
-            text.lines().any(|l| l.trim_start().trim_start_matches("pub ").starts_with("const RAD_S_TO_RPM"))
+            text.lines().any(defines_rpm_factor)
         })
         .filter(|f| !RPM_NOT_YET.iter().any(|n| f.ends_with(n)))
         .map(|f| format!("{}: defines RAD_S_TO_RPM; use rig_types::units::RAD_S_TO_RPM", f.display()))
@@ -359,8 +379,9 @@ fn unit_conversions_have_one_home() {
 
 /// One rendering convention: the module that turns a crate's results into
 /// `Table`s, `FigureSpec`s and markdown is `render` (`render.rs` or
-/// `render/`), in every crate; `report` is only the HTML/markdown report of
-/// the pipeline (`crates/pipeline/src/report/`) and its stage.
+/// `render/`), in every crate; `report` is only the crate of the HTML page
+/// (`rig-report`, whose files are `lib.rs`, `markdown.rs`, `diff.rs`) and
+/// the pipeline's stage that calls it (`stages/report.rs`).
 #[test]
 fn rendering_has_one_name() {
     let allowed = ["crates/pipeline/src/stages/report.rs"];

@@ -14,6 +14,7 @@ mod sweeps;
 mod thesis;
 
 use crate::StageFn;
+use crate::needs::RunNeed;
 
 /// Checks a stage's `[stage.params]` against its params type; `Err` is a
 /// reason naming the key (the runner adds file and stage).
@@ -31,6 +32,9 @@ struct Entry {
     /// stage before any stage runs. `None` only for stages not converted yet
     /// (tidy.rs lists them; their bodies check their own params when they run).
     params: Option<TypedCheck>,
+    /// What it needs of the campaign, checked by the runner before any stage
+    /// runs (`crate::needs`); the counts are the ones its crate refuses below.
+    needs: &'static [RunNeed],
 }
 
 /// `params` deserialise as `T` (a `#[serde(deny_unknown_fields)]` struct).
@@ -38,25 +42,50 @@ fn typed<T: serde::de::DeserializeOwned>(params: &toml::Table) -> Result<(), Str
     crate::ctx::parse_params::<T>(params).map(|_| ())
 }
 
-/// Every stage, one line each. A stage owner converting its params adds
-/// `Some(typed::<its Params>)` in the last column.
+/// Every stage, one line each, with what it needs of the campaign (`.needs`).
 const STAGES: &[Entry] = &[
     entry("thesis-tables", thesis::run, "thesis.rs", Some(typed::<thesis::Params>)),
-    entry("campaign-calibration", campaign_cal::run, "campaign_cal.rs", Some(typed::<campaign_cal::Params>)),
-    entry("estimation", estimation::run, "estimation.rs", Some(typed::<estimation::Params>)),
+    entry("campaign-calibration", campaign_cal::run, "campaign_cal.rs", Some(typed::<campaign_cal::Params>))
+        .needs(CALIBRATION_NEEDS),
+    entry("estimation", estimation::run, "estimation.rs", Some(typed::<estimation::Params>)).needs(ESTIMATION_NEEDS),
     entry("simulation", simulation::run, "simulation.rs", Some(typed::<simulation::Params>)),
     entry("sweeps", sweeps::run, "sweeps.rs", Some(typed::<sweeps::Params>)),
     entry("spectra", spectra::run, "spectra.rs", Some(typed::<spectra::Params>)),
     entry("harmonic", harmonic::run, "harmonic.rs", Some(typed::<harmonic::Params>)),
-    entry("diagnosis", diagnosis::run, "diagnosis.rs", Some(typed::<rig_diagnose::DiagnoseOptions>)),
+    entry("diagnosis", diagnosis::run, "diagnosis.rs", Some(typed::<rig_diagnose::DiagnoseOptions>))
+        .needs(DIAGNOSIS_NEEDS),
     entry("lavi", lavi::run, "lavi.rs", Some(typed::<rig_lavi::StudyParams>)),
     entry("confusion", confusion::run, "confusion.rs", Some(typed::<confusion::ConfusionParams>)),
     entry("report", report::run, "report.rs", Some(typed::<report::Params>)),
 ];
 
+/// `rig_calibrate::calibrate_campaign_with` refuses fewer than 3 force
+/// calibrations and 2 static twists, and needs one voltage step's free decay.
+const CALIBRATION_NEEDS: &[RunNeed] = &[
+    RunNeed::runs("force_calibration", 3, "the force-sensor line of Table 4.6 with its interval").distinct(2),
+    RunNeed::runs("static_twist", 2, "the static stiffness of Table 4.3"),
+    RunNeed::runs("voltage_step", 1, "the free decay of Table 4.2 and the inertia of Eq. 4-4"),
+];
+
+/// `rig_estimate::estimate_rig` fits the voltage steps (Tables 4.4-4.5) and
+/// takes the PI gains and Coulomb friction from the operating points.
+const ESTIMATION_NEEDS: &[RunNeed] = &[
+    RunNeed::runs("voltage_step", 1, "the least-squares fit of Tables 4.4-4.5"),
+    RunNeed::runs("operating_point", 1, "the PI gains and the Coulomb friction"),
+];
+
+/// `rig_diagnose::select::diagnose_signals` cross-validates over at least 3 operating points.
+const DIAGNOSIS_NEEDS: &[RunNeed] = &[RunNeed::runs("operating_point", 3, "cross-validation over runs")];
+
 const fn entry(name: &'static str, run: StageFn, file: &'static str, params: Option<TypedCheck>) -> Entry {
     // `file` is relative to this folder; `source` below adds the folder.
-    Entry { name, run, source: file, params }
+    Entry { name, run, source: file, params, needs: &[] }
+}
+
+impl Entry {
+    const fn needs(self, needs: &'static [RunNeed]) -> Entry {
+        Entry { needs, ..self }
+    }
 }
 
 /// This folder, relative to the workspace root.
@@ -85,6 +114,11 @@ pub fn check_params(name: &str, params: &toml::Table) -> Result<(), String> {
         Some(check) => check(params),
         None => Ok(()),
     }
+}
+
+/// What the stage called `name` needs of the campaign (nothing for an unknown name).
+pub fn needs(name: &str) -> &'static [RunNeed] {
+    find(name).map(|s| s.needs).unwrap_or(&[])
 }
 
 /// The names of every registered stage, in registry order.
