@@ -26,7 +26,7 @@ pub fn describe(
 ) -> Result<String, LaviError> {
     let n = rec.len();
     let fs_hz = d.fs_hz;
-    let (top_fixed, glitches) = (&d.top_repaired_rpm, d.glitches);
+    let glitches = d.glitches;
     let (top, bit, torque) = (&d.top_rpm, &d.bit_rpm, &d.torque_nm);
     let win: Vec<usize> =
         (0..n).filter(|&i| rec.time_s[i] >= p.window_start_s && rec.time_s[i] < p.window_end_s).collect();
@@ -43,7 +43,6 @@ pub fn describe(
     }
     let pick = |x: &[f64]| win.iter().map(|&i| x[i]).collect::<Vec<f64>>();
     let (t_w, top_w, bit_w, tq_w) = (pick(&rec.time_s), pick(top), pick(bit), pick(torque));
-    let glitch_in_window = win.iter().filter(|&&i| (rec.top_speed_rpm[i] - top_fixed[i]).abs() > 0.0).count();
 
     // 3. Friction torque against bit speed (slip samples for the fit).
     let vmax = bit_w.iter().cloned().fold(0.0, f64::max);
@@ -107,10 +106,27 @@ pub fn describe(
         |q: &str, v: String, u: &str, how: &str| summary.push([q.to_string(), v, u.to_string(), how.to_string()]);
     row("samples", n.to_string(), "", "rows of run-175.csv");
     row("sample_rate", fmt_fixed(fs_hz, 1), "Hz", "from the time column");
-    row("glitch_runs", glitches.runs.to_string(), "", "runs of top-speed samples flagged (whole record)");
-    row("glitch_samples", glitches.samples.to_string(), "", "samples bridged (whole record)");
-    row("glitch_longest", glitches.longest_run.to_string(), "samples", "longest bridged run");
-    row("glitch_samples_in_window", glitch_in_window.to_string(), "", "bridged samples inside the window");
+    row("dip_runs", glitches.runs.to_string(), "", "runs of top-speed samples flagged as dips (whole record)");
+    row("dip_samples", glitches.samples.to_string(), "", "samples flagged (whole record)");
+    row("dip_longest", glitches.longest_run.to_string(), "samples", "longest flagged run");
+    row(
+        "twist_min",
+        fmt_fixed(d.twist_excursion_rad.0, 3),
+        "rad",
+        "raw record: min of the integral of top - bit speed",
+    );
+    row(
+        "twist_max",
+        fmt_fixed(d.twist_excursion_rad.1, 3),
+        "rad",
+        "raw record: max of the integral of top - bit speed",
+    );
+    row(
+        "top_speed_noise",
+        fmt_fixed(d.top_noise_rad_s, 3),
+        "rad/s",
+        "rms of raw - low-passed top speed outside the dips",
+    );
     row("window", format!("{}-{}", p.window_start_s, p.window_end_s), "s", "the authors' calibration window");
     row("bit_speed_min", fmt_fixed(sev_bit.min, 1), "rpm", "10 Hz low-passed, window");
     row("bit_speed_max", fmt_fixed(sev_bit.max, 1), "rpm", "10 Hz low-passed, window");
@@ -289,20 +305,7 @@ pub fn describe(
          doi:10.1016/j.ijmecsci.2020.105578).\n",
         p.window_start_s, p.window_end_s, p.cutoff_hz
     );
-    let _ = writeln!(
-        md,
-        "**Glitches.** A top-speed sample is a glitch when it is more than {} rpm from the {}-sample running median or \
-         below {} rpm; flagged runs are widened by {} samples each side and bridged by a straight line between the good \
-         neighbours. {} runs, {} samples (longest {}), {} of them inside the window.\n",
-        p.glitch_threshold_rpm,
-        p.glitch_median_window,
-        p.glitch_floor_rpm,
-        p.glitch_dilate,
-        glitches.runs,
-        glitches.samples,
-        glitches.longest_run,
-        glitch_in_window
-    );
+    let _ = writeln!(md, "{}", repairs_paragraph(d, p));
     let weakening = wfit.b > 0.0 && wfit.rmse < 0.9 * wfit.rmse_constant;
     let _ = writeln!(
         md,
@@ -391,6 +394,75 @@ pub fn describe(
         opt(lines_win.0.f0_hz, 2)
     );
     Ok(md)
+}
+
+/// The record as measured: the dips, the twist they carry, and the audit of every repair (tables/lavi-repairs.csv).
+fn repairs_paragraph(d: &Prepared, p: &StudyParams) -> String {
+    let g = d.glitches;
+    let mut s = format!(
+        "**The record as measured.** The top speed has {} dips (samples more than {} rpm from the {}-sample running median \
+         or below {} rpm, widened by {} samples each side: {} samples, longest {}). They carry angle: the twist \
+         ∫(top − bit speed) dt of the raw record stays within {:.2}..{:+.2} rad over the {:.0} s. Every repair of the \
+         top speed is audited by what it changes in that twist (averaged over ±{:.0} ms, the compared band) against \
+         the channel's noise integrated over the same span (top-speed noise {:.3} rad/s rms outside the dips, as a \
+         random walk): ",
+        g.runs,
+        p.glitch_threshold_rpm,
+        p.glitch_median_window,
+        p.glitch_floor_rpm,
+        p.glitch_dilate,
+        g.samples,
+        g.longest_run,
+        d.twist_excursion_rad.0,
+        d.twist_excursion_rad.1,
+        d.time_s[d.len() - 1] - d.time_s[0],
+        500.0 / p.cutoff_hz,
+        d.top_noise_rad_s
+    );
+    let parts: Vec<String> = d
+        .repairs
+        .iter()
+        .map(|r| {
+            let worst = r.window_change_rad.iter().cloned().fold(0.0, f64::max);
+            let noise = r.window_noise_rad.iter().cloned().fold(f64::INFINITY, f64::min);
+            format!(
+                "`{}` changes it by up to {:.3} rad over the record (noise {:.3} rad; {:+.3} rad at the end) and by up to \
+                 {:.3} rad within a window's span (noise at least {:.3} rad): {}",
+                r.repair,
+                r.record_change_rad,
+                r.record_noise_rad,
+                r.record_end_change_rad,
+                worst,
+                noise,
+                if r.applied { "applied" } else { "**refused**, the record is used as measured" }
+            )
+        })
+        .collect();
+    s.push_str(&parts.join("; "));
+    s.push_str(". Every free run below is driven by the top speed as measured (low-passed).\n");
+    s
+}
+
+/// The repair audit, one row per repair and span (the record, then each window).
+pub fn repairs_table(d: &Prepared, labels: &[String]) -> Table {
+    let mut t = Table::new(["repair", "span", "twist_change_rad", "noise_rad", "above_noise", "applied"]);
+    for r in &d.repairs {
+        let mut push = |span: &str, c: f64, n: f64| {
+            t.push([
+                r.repair.to_string(),
+                span.to_string(),
+                fmt_fixed(c, 4),
+                fmt_fixed(n, 4),
+                (c > n).to_string(),
+                r.applied.to_string(),
+            ])
+        };
+        push("record", r.record_change_rad, r.record_noise_rad);
+        for ((l, c), n) in labels.iter().zip(&r.window_change_rad).zip(&r.window_noise_rad) {
+            push(l, *c, *n);
+        }
+    }
+    t
 }
 
 /// Line analysis of a speed record (`rig_spectra::line_analysis` with the

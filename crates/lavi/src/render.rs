@@ -173,6 +173,8 @@ pub fn render(s: &Study, d: &Prepared, rec: &LaviRecording) -> Result<StudyOutpu
         mt.push(row);
     }
     out.tables.push(("tables/lavi-heldout-misfits.csv".into(), mt));
+    let labels: Vec<String> = s.windows.iter().map(|w| w.label.clone()).collect();
+    out.tables.push(("tables/lavi-repairs.csv".into(), crate::describe::repairs_table(d, &labels)));
 
     figures(s, d, &mut out)?;
     out.diagnosis = diagnosis_json(s);

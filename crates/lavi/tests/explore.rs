@@ -34,3 +34,20 @@ fn explore() {
     }
     println!("wob {:?} adequate {}", s.wob, s.adequate);
 }
+
+/// Developer aid (ignored): prints the repair audit of run 175.
+#[test]
+#[ignore]
+fn repairs() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/ufrj-lavi-2018/run-175.csv");
+    let text =
+        std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../pipeline.toml")).unwrap();
+    let v: toml::Value = toml::from_str(&text).unwrap();
+    let st = v["stage"].as_array().unwrap().iter().find(|s| s["name"].as_str() == Some("lavi")).unwrap();
+    let p: rig_lavi::StudyParams = st["params"].clone().try_into().unwrap();
+    let (_, d) = rig_lavi::data::prepare(&path, &p).unwrap();
+    println!("noise {} rad/s, twist {:?}, dips {:?}", d.top_noise_rad_s, d.twist_excursion_rad, d.glitches);
+    for r in &d.repairs {
+        println!("{r:?}");
+    }
+}

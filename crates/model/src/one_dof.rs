@@ -87,8 +87,9 @@ fn check_times(time_s: &[f64]) -> Result<(), ModelError> {
     Ok(())
 }
 
-/// Twist φ(t) − φ(t0) = ∫ (Ω_top − Ω) dt by the trapezoid rule.
-fn twist_increment(time_s: &[f64], top: &[f64], bit: &[f64]) -> Vec<f64> {
+/// Twist φ(t) − φ(t0) = ∫ (Ω_top − Ω) dt by the trapezoid rule (rad, for speeds in rad/s):
+/// the angle a model driven by `top` is wound by; one home for every caller.
+pub fn integrated_twist_rad(time_s: &[f64], top: &[f64], bit: &[f64]) -> Vec<f64> {
     let mut phi = vec![0.0; time_s.len()];
     for i in 1..time_s.len() {
         let dt = time_s[i] - time_s[i - 1];
@@ -159,7 +160,7 @@ pub fn fit_one_dof(
         return Err(ModelError::InvalidParameter { name: "time_s.len()", value: n as f64, rule: "at least 8 samples" });
     }
     check_times(time_s)?;
-    let dphi = twist_increment(time_s, top_speed_rad_s, bit_speed_rad_s);
+    let dphi = integrated_twist_rad(time_s, top_speed_rad_s, bit_speed_rad_s);
     // Columns: Δφ, [Ω_top − Ω], −T (or c(Ω_top − Ω) − T), 1. Index of 1/J in p: `ij`.
     let row = |i: usize| -> Vec<f64> {
         let rate = top_speed_rad_s[i] - bit_speed_rad_s[i];
