@@ -1,16 +1,19 @@
 //! The recording described as before issue 10 (moved from the `lavi` stage):
-//! glitch repair, friction torque against bit speed with a velocity-weakening
-//! fit, the stick-slip fundamental, severity, and the 1-DOF least-squares
-//! model of rig_model::one_dof on the calibration window.
+//! the record as measured (dips and the repair audit), friction torque against
+//! bit speed with a velocity-weakening fit, the stick-slip fundamental,
+//! severity, and the study's least-squares baseline run free over the
+//! calibration window.
 //!
 //! Only derived numbers leave here: binned curves, fits, spectra and summary
 //! values.
 
+use crate::data::derivative;
 use crate::data::{Prepared, RPM_TO_RAD_S};
+use crate::fit::Derivation;
 use crate::render::StudyOutput;
+use crate::sim::{Inputs, Model, Start, simulate};
 use crate::{LaviError, StudyParams};
 use rig_ingest::lavi::LaviRecording;
-use rig_model::one_dof::{OneDofFriction, OneDofParams, fit_one_dof, simulate_one_dof};
 use rig_spectra::stickslip::{bin_means, fit_weakening, severity};
 use rig_spectra::{Detrend, Window, amplitude_spectrum};
 use rig_types::{SeriesStyle, Table, fmt_fixed};
@@ -22,6 +25,8 @@ pub fn describe(
     rec: &LaviRecording,
     d: &Prepared,
     p: &StudyParams,
+    base: &Model,
+    der: &Derivation,
     out: &mut StudyOutput,
 ) -> Result<String, LaviError> {
     let n = rec.len();
@@ -42,7 +47,7 @@ pub fn describe(
         });
     }
     let pick = |x: &[f64]| win.iter().map(|&i| x[i]).collect::<Vec<f64>>();
-    let (t_w, top_w, bit_w, tq_w) = (pick(&rec.time_s), pick(top), pick(bit), pick(torque));
+    let (top_w, bit_w, tq_w) = (pick(top), pick(bit), pick(torque));
 
     // 3. Friction torque against bit speed (slip samples for the fit).
     let vmax = bit_w.iter().cloned().fold(0.0, f64::max);
@@ -66,36 +71,18 @@ pub fn describe(
     let sev_bit = severity(&bit_w);
     let sev_top = severity(&top_w);
 
-    // 6. 1-DOF model: J, k, c by least squares on the window; friction from step 3.
-    let to_rad = |x: &[f64]| x.iter().map(|v| v * RPM_TO_RAD_S).collect::<Vec<f64>>();
-    let (top_r, bit_r) = (to_rad(&top_w), to_rad(&bit_w));
-    let acc: Vec<f64> = (0..t_w.len())
-        .map(|i| {
-            let (a, b) = (i.saturating_sub(1), (i + 1).min(t_w.len() - 1));
-            (bit_r[b] - bit_r[a]) / (t_w[b] - t_w[a])
-        })
-        .collect();
-    let dof_free = fit_one_dof(&t_w, &top_r, &bit_r, &acc, &tq_w, None)?;
-    // Negative damping would feed energy in and the simulation would diverge:
-    // then c is fixed at 0 and J, k are refitted (stated in lavi.md).
-    let dof = if dof_free.damping_nm_s_rad < 0.0 {
-        fit_one_dof(&t_w, &top_r, &bit_r, &acc, &tq_w, Some(0.0))?
-    } else {
-        dof_free
-    };
-    let model = OneDofParams {
-        inertia_kgm2: dof.inertia_kgm2,
-        stiffness_nm_rad: dof.stiffness_nm_rad,
-        damping_nm_s_rad: dof.damping_nm_s_rad,
-        friction: OneDofFriction {
-            kinetic_nm: wfit.a,
-            weakening_nm: wfit.b,
-            stribeck_speed_rad_s: wfit.vs * RPM_TO_RAD_S,
-            shape_exponent: wfit.shape_exponent,
-        },
-    };
-    let sim = simulate_one_dof(&model, &t_w, &top_r, dof.initial_twist_rad, bit_r[0], 10)?;
-    let sim_rpm: Vec<f64> = sim.bit_speed_rad_s.iter().map(|v| v / RPM_TO_RAD_S).collect();
+    // 6. 1-DOF model: the study's baseline (J, k, c by least squares on the window,
+    // rig_lavi::fit::derive; friction from step 3), run free over the window from its measured start.
+    let (dof_free, dof) = (&der.free, &der.used);
+    let i0 = win[0];
+    let span = i0..i0 + win.len();
+    let rad = |x: &[f64]| x.iter().map(|v| v * RPM_TO_RAD_S).collect::<Vec<f64>>();
+    let top_r = rad(&top[span.clone()]);
+    let acc0 = derivative(&rad(&bit[span.clone()]), fs_hz)[0];
+    let inputs = Inputs { fs_hz, top_rad_s: &top_r, wob_n: &d.wob_n[span.clone()], top_ref_rad_s: &top_r };
+    let start = Start { bit_rad_s: bit[i0] * RPM_TO_RAD_S, bit_acc_rad_s2: acc0, torque_nm: torque[i0] };
+    let sim = simulate(base, &inputs, start, p.substeps)?;
+    let sim_rpm: Vec<f64> = sim.bit_rad_s.iter().map(|v| v / RPM_TO_RAD_S).collect();
     let nrmse = rms(&sim_rpm.iter().zip(&bit_w).map(|(a, b)| a - b).collect::<Vec<_>>()) / rms(&bit_w);
     let sev_sim = severity(&sim_rpm);
     let lines_sim = line_analysis(&sim_rpm, fs_hz, p.cutoff_hz)?;
@@ -376,7 +363,9 @@ pub fn describe(
         dof.r_squared,
         if dof_free.damping_nm_s_rad < 0.0 {
             format!(
-                "; the unconstrained fit gave c = {:.4} ± {:.4} N m s/rad (negative: energy input, unstable), so c is fixed at 0 and J, k refitted",
+                "; the unconstrained fit gave c = {:.4} ± {:.4} N m s/rad, negative: an energy input. c is pinned at its \
+                 bound 0 and J, k refitted, and this is reported as a finding (`parameters_at_bounds` of \
+                 lavi-diagnosis.json), not a fix: the structural candidates of rung 2 try what it points at",
                 dof_free.damping_nm_s_rad, dof_free.damping_stderr
             )
         } else {

@@ -69,7 +69,7 @@ fn met(meas: &Features, sim: &Features) -> [bool; 5] {
 /// Renders the study (see the module docs).
 pub fn render(s: &Study, d: &Prepared, rec: &LaviRecording) -> Result<StudyOutput, LaviError> {
     let mut out = StudyOutput::default();
-    let description = describe(rec, d, &s.params, &mut out)?;
+    let description = describe(rec, d, &s.params, &s.baseline, &s.derivation, &mut out)?;
     let held: Vec<usize> = (1..s.windows.len()).collect();
     let sel = &s.selection;
 
@@ -363,8 +363,12 @@ fn markdown(s: &Study, met_base: &[usize; 5], met_ext: &[usize; 5], description:
         b.inertia_kgm2,
         b.stiffness_nm_rad,
         b.damping_nm_s_rad,
-        s.derivation.damping_unconstrained_nm_s_rad,
-        if s.derivation.damping_fixed { ", negative, so fixed at 0" } else { "" },
+        s.derivation.free.damping_nm_s_rad,
+        if s.derivation.at_bounds.is_empty() {
+            ""
+        } else {
+            ", negative: pinned at its bound 0 and reported as a parameter at its bound, a symptom the structural candidates below examine"
+        },
         b.friction.kinetic_nm,
         b.friction.static_nm - b.friction.kinetic_nm,
         b.friction.stribeck_speed_rad_s,

@@ -2,7 +2,7 @@
 //! selection, the chapter's hypothesis (WOB), adequacy and signature.
 
 use crate::data::{Prepared, RPM_TO_RAD_S, WindowSpec, prepare, windows};
-use crate::fit::{Derivation, derive};
+use crate::fit::{Derivation, Structure, derive};
 use crate::render::{StudyOutput, render};
 use crate::score::Evaluator;
 use crate::select::{Selection, forward_select, mean};
@@ -63,7 +63,7 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
         stick_speed_rpm: p.stick_speed_rpm,
     };
     let ev = Evaluator::new(&d, wins.clone(), fopts, p.substeps, p.slip_speed_rpm, p.drive_ref_window_s)?;
-    let (baseline, derivation) = derive(&d, &wins[0], p.slip_speed_rpm, false, 0.0)?;
+    let (baseline, derivation) = derive(&d, &wins[0], p.slip_speed_rpm, Structure::BASELINE)?;
     let sim_features =
         |m: &Model| -> Vec<Features> { (0..wins.len()).map(|w| ev.features(m, w).unwrap_or(NAN_FEATURES)).collect() };
     let baseline_features = sim_features(&baseline);
@@ -106,7 +106,7 @@ const NAN_FEATURES: Features = Features {
 
 fn wob_hypothesis(ev: &Evaluator, sel: &Selection) -> Result<WobHypothesis, LaviError> {
     let d = ev.data;
-    let (m, _) = derive(d, &ev.windows[0], ev.slip_speed_rpm, true, 0.0)?;
+    let (m, _) = derive(d, &ev.windows[0], ev.slip_speed_rpm, Structure { wob: true, ..Structure::BASELINE })?;
     let w_ref = m.wob_ref_n.unwrap_or(1.0);
     let mut loop_fraction = Vec::new();
     for (wi, w) in ev.windows.iter().enumerate() {
