@@ -59,7 +59,7 @@ pub fn describe(
     let fit_gauss = fit_weakening(&vs, &ts, 2.0, 0.5, 2000.0)?;
     let wfit = if fit_gauss.rmse <= fit_exp.rmse { fit_gauss } else { fit_exp };
     // Break-away: the largest torque of each stick phase (bit speed below the slip threshold), averaged.
-    let breakaway = stick_phase_maxima(&bit_w, &tq_w, p.slip_speed_rpm);
+    let breakaway = crate::features::stick_phase_maxima(&bit_w, &tq_w, p.slip_speed_rpm);
     let breakaway_mean = mean(&breakaway);
     let fastest_bin = bins.iter().rev().find(|b| b.count > 0).map_or(f64::NAN, |b| b.mean);
 
@@ -459,20 +459,6 @@ pub fn repairs_table(d: &Prepared, labels: &[String]) -> Table {
 fn line_analysis(x: &[f64], fs_hz: f64, max_hz: f64) -> Result<(rig_spectra::LineAnalysis, f64), LaviError> {
     let sl = rig_spectra::line_analysis(x, fs_hz, &crate::features::line_options(max_hz))?;
     Ok((sl.lines, sl.spectrum.resolution_hz))
-}
-
-/// The largest torque of each stick phase (consecutive samples with speed below `slip`).
-fn stick_phase_maxima(speed: &[f64], torque: &[f64], slip: f64) -> Vec<f64> {
-    let mut out = Vec::new();
-    let mut cur: Option<f64> = None;
-    for (v, t) in speed.iter().zip(torque) {
-        if *v < slip {
-            cur = Some(cur.map_or(*t, |c| c.max(*t)));
-        } else if let Some(c) = cur.take() {
-            out.push(c);
-        }
-    }
-    out
 }
 
 /// Why a fit's parameters sit on a bound, for the text.

@@ -129,7 +129,10 @@ mod tests {
 
     /// Stick-slip under a top speed 1 + 0.5 sin(2π 0.3 t) rad/s, simulated by the one core;
     /// acceleration by central difference of the simulated speed (what the study does on filtered data).
-    fn record(twist_c: f64, abs_c: f64) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+    /// Time, top speed, bit speed, bit acceleration, contact torque.
+    type Record = (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>);
+
+    fn record(twist_c: f64, abs_c: f64) -> Record {
         let n = 20_000;
         let t: Vec<f64> = (0..n).map(|i| i as f64 / FS).collect();
         let u: Vec<f64> = t.iter().map(|x| 1.0 + 0.5 * (std::f64::consts::TAU * 0.3 * x).sin()).collect();

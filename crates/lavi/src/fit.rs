@@ -163,17 +163,23 @@ pub fn derive(
 }
 
 /// The torque channel's delay on the speed channels that fits the equation of
-/// motion best (least residual of the unconstrained fit under `st`) on the
-/// calibration window, over ±`max_s` in steps of one sample.
-pub fn best_delay_s(d: &Prepared, cal: &WindowSpec, slip_speed_rpm: f64, st: Structure, max_s: f64) -> f64 {
+/// motion best (least residual of the unconstrained fit under `st`'s damping and
+/// sensor inertia) on the calibration window, over ±`max_s` in steps of one sample.
+pub fn best_delay_s(d: &Prepared, cal: &WindowSpec, st: Structure, max_s: f64) -> f64 {
+    let r = (cal.span.start + cal.window.start)..(cal.span.start + cal.window.end);
+    let t = &d.time_s[r.clone()];
+    let rad = |x: &[f64]| x.iter().map(|v| v * RPM_TO_RAD_S).collect::<Vec<f64>>();
+    let (top, bit) = (rad(&d.top_rpm[r.clone()]), rad(&d.bit_rpm[r.clone()]));
+    let acc = derivative(&bit, d.fs_hz);
     let m = (max_s * d.fs_hz).round() as isize;
     let mut best = (f64::NEG_INFINITY, 0.0);
     for k in -m..=m {
-        let tau = k as f64 / d.fs_hz;
-        if let Ok((_, info)) = derive(d, cal, slip_speed_rpm, Structure { torque_delay_s: tau, ..st })
-            && info.free.r_squared > best.0
+        let at = |i: usize| d.torque_nm[(i as isize + k).clamp(0, d.len() as isize - 1) as usize];
+        let tf: Vec<f64> = r.clone().zip(&acc).map(|(i, a)| at(i) - st.sensor_inertia_kgm2 * a).collect();
+        if let Ok(f) = fit_equation_of_motion(t, &top, &bit, &acc, &tf, st.damping)
+            && f.r_squared > best.0
         {
-            best = (info.free.r_squared, tau);
+            best = (f.r_squared, k as f64 / d.fs_hz);
         }
     }
     best.1
@@ -183,6 +189,8 @@ pub fn best_delay_s(d: &Prepared, cal: &WindowSpec, slip_speed_rpm: f64, st: Str
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Fitted {
     pub model: Model,
+    /// Parameters the fit left at a bound of their range (a finding, reported).
+    pub at_bounds: Vec<AtBound>,
     /// The candidate's own parameters (JSON keys of diagnosis.json), in a fixed order.
     pub params: BTreeMap<String, f64>,
     pub calibration_misfit: f64,
@@ -203,6 +211,7 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
     let misfit = |m: &Model| ev.misfit(m, cal);
     let j = current.inertia_kgm2;
     let mut params = BTreeMap::new();
+    let mut at_bounds = Vec::new();
     let (model, evals) = match c {
         Candidate::WobNormalForce => {
             // A least-squares law is refitted as μ = T/W (torque = WOB·μ); a simulation-fitted law is kept.
@@ -236,7 +245,7 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
         }
         Candidate::ChannelDelay => {
             // The delay that best fits the equation of motion (teacher-forced, calibration window).
-            let tau = best_delay_s(ev.data, &ev.windows[cal], ev.slip_speed_rpm, current.structure, MAX_DELAY_S);
+            let tau = best_delay_s(ev.data, &ev.windows[cal], current.structure, MAX_DELAY_S);
             let m = restructure(current, ev, Structure { torque_delay_s: tau, ..current.structure })?;
             params.insert("torque_delay_s".into(), m.torque_delay_s);
             (m, 2 * (MAX_DELAY_S * ev.data.fs_hz).round() as usize + 1)
@@ -280,6 +289,21 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
             let build = |x: &[f64]| Model { friction_lag_s: x[0].clamp(-9.2, 0.0).exp(), ..*current };
             let (x, _, n) = nelder_mead(|x| misfit(&build(x)), &[(0.02f64).ln()], &[1.0], max_evals);
             let m = build(&x);
+            if !(-9.2..0.0).contains(&x[0]) {
+                at_bounds.push(AtBound {
+                    parameter: "lag_s",
+                    bound: m.friction_lag_s,
+                    unconstrained: x[0].exp(),
+                    stderr: f64::NAN,
+                    meaning: if x[0] >= 0.0 {
+                        "a friction lag of a second or more is longer than a stick-slip cycle: the slip friction does \
+                         not follow the speed at all, a frozen (constant) slip level, not a memory"
+                    } else {
+                        "a lag below 0.1 ms is no memory at all"
+                    }
+                    .into(),
+                });
+            }
             params.insert("lag_s".into(), m.friction_lag_s);
             (m, n)
         }
@@ -291,6 +315,16 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
             let (x, _, n) = nelder_mead(|x| misfit(&build(x)), &[0.0, 0.0], &[1.0, 1.0], max_evals);
             let m = build(&x);
             let mid = m.mid.expect("set above");
+            if !(0.02..0.98).contains(&logistic(x[1])) {
+                at_bounds.push(AtBound {
+                    parameter: "stiffness_split",
+                    bound: mid.split,
+                    unconstrained: logistic(x[1]),
+                    stderr: f64::NAN,
+                    meaning: "the mid inertia sits at an end of the shaft: no second degree of freedom inside it"
+                        .into(),
+                });
+            }
             params.insert("mid_inertia_kgm2".into(), mid.inertia_kgm2);
             params.insert("stiffness_split".into(), mid.split);
             (m, n)
@@ -318,7 +352,12 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
         }
     };
     let calibration_misfit = misfit(&model);
-    Ok(Fitted { model, params, calibration_misfit, evaluations: evals })
+    // A structural re-derivation reports the dampings its least squares pinned.
+    if model.structure != current.structure {
+        let (_, info) = derive(ev.data, &ev.windows[cal], ev.slip_speed_rpm, model.structure)?;
+        at_bounds.extend(info.at_bounds);
+    }
+    Ok(Fitted { model, at_bounds, params, calibration_misfit, evaluations: evals })
 }
 
 /// Largest channel delay the `channel_delay` candidate scans, s (±50 ms: a fifth

@@ -4,7 +4,7 @@
 //!
 //! Pipeline of the study ([`run_study`]): read and repair the recording
 //! ([`data`]), cut the calibration window (37–41 s, Lobo et al. 2020) and the
-//! held-out windows, measure the five [`features`] (one function for
+//! held-out windows, measure the seven [`features`] (one function for
 //! measurement and simulation, 10 Hz low-pass), fit the baseline on the
 //! calibration window ([`fit::derive`]), fit every candidate cause on the
 //! calibration window and score it on the held-out windows with the
@@ -35,7 +35,7 @@
 //! # Adequacy
 //!
 //! The final model is adequate when its mean held-out misfit is at most
-//! `adequacy_threshold` (1: the five features within their issue-10 targets in
+//! `adequacy_threshold` (1: the seven features within their targets in
 //! RMS, [`score`]). Otherwise the verdict is `unexplained`, the selected
 //! effects stay as a partial explanation, and the residual signature
 //! ([`signature`]) says what the leftover torque follows.

@@ -90,13 +90,19 @@ fn read_plain(path: &std::path::Path) -> Vec<[f64; 3]> {
         .collect()
 }
 
-#[test]
-fn run_175_as_measured_keeps_its_twist() {
+/// Run 175 in ../shared, or None (with a message) when ../shared is not mounted.
+fn run_175() -> Option<PathBuf> {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/ufrj-lavi-2018/run-175.csv");
     if !path.exists() {
         println!("skipped: {} is absent (../shared not mounted)", path.display());
-        return;
+        return None;
     }
+    Some(path)
+}
+
+#[test]
+fn run_175_as_measured_keeps_its_twist() {
+    let Some(path) = run_175() else { return };
     // Independent computation: rectangle rule on the raw columns (the study uses the trapezoid rule).
     let rows = read_plain(&path);
     let (mut phi, mut lo, mut hi) = (0.0f64, 0.0f64, 0.0f64);
@@ -153,11 +159,7 @@ fn windows_are_checked_and_ordered() {
 
 #[test]
 fn run_175_reads_and_cuts_its_windows() {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/ufrj-lavi-2018/run-175.csv");
-    if !path.exists() {
-        println!("skipped: {} is absent (../shared not mounted)", path.display());
-        return;
-    }
+    let Some(path) = run_175() else { return };
     let p = StudyParams {
         window_start_s: 37.0,
         window_end_s: 41.0,
