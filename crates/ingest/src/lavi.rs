@@ -3,9 +3,11 @@
 //!
 //! Validated like a campaign run (header with exactly these columns in any
 //! order, every cell a finite number, `time_s` strictly increasing) but the
-//! recording need not start at t = 0. Sensor glitches (the top speed dips to
-//! about -263 rpm) are finite numbers and are kept: repairing them is the
-//! analysis' job, not the reader's.
+//! recording need not start at t = 0. The top speed's dips (to about
+//! -263 rpm, about 10 ms each) are finite numbers and are kept: they carry
+//! angle (the twist integrated from the raw top and bit speeds stays within
+//! about ±0.5 rad, README of the data), and any repair is the analysis' job,
+//! audited there by what it changes in the twist (rig_lavi::data).
 
 use crate::IngestError;
 use crate::columns::{ColSpec, ColType, ColValues, TIME_COLUMN, TimeStart, read_numeric_csv};
@@ -16,7 +18,7 @@ use std::path::Path;
 pub struct LaviRecording {
     /// Sample times, strictly increasing (1 kHz in run 175).
     pub time_s: Vec<f64>,
-    /// Drive-side (top) speed, rpm; contains sensor glitches.
+    /// Drive-side (top) speed, rpm, as recorded (dips included).
     pub top_speed_rpm: Vec<f64>,
     /// Bottom-rotor (bit) speed, rpm.
     pub bit_speed_rpm: Vec<f64>,

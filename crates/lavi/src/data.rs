@@ -1,9 +1,32 @@
-//! The recording made ready for the study: read (rig_ingest), top-speed
-//! glitches repaired, every channel low-passed once over the whole record, and
-//! the windows (calibration and held-out) as sample ranges.
+//! The recording made ready for the study, as measured: read (rig_ingest),
+//! every channel low-passed once over the whole record, and the windows
+//! (calibration and held-out) as sample ranges.
+//!
+//! # Repairs that conserve what the physics conserves (issue 26.4)
+//!
+//! The models are driven by the top speed, so what they use of it is its
+//! integral, the top-drive angle, and through it the twist
+//! φ(t) = ∫ (Ω_top − Ω_bit) dt (rig_model::one_dof::integrated_twist_rad).
+//! Every repair of the top speed is audited ([`RepairCheck`]) by what it
+//! changes in that twist: Δ(t) = φ_repaired(t) − φ_raw(t), averaged over
+//! ±1/(2 f_c) (the band the study compares, f_c the low-pass cut-off), and
+//! per window the largest |Δ(t) − Δ(span start)| over the span a free run
+//! integrates (warm-up and window): the twist error it would start or end with.
+//! The channel's noise in the same unit: the top speed's noise σ_Ω (rms of
+//! raw − low-passed, outside the dips) integrated as a random walk over the
+//! span, σ_φ = σ_Ω · Δt · √N. A repair whose change exceeds σ_φ on any window
+//! or over the record is refused and the record is used as measured.
+//!
+//! Two repairs are audited: the zero-phase low-pass (the study's own, kept:
+//! it changes the twist by far less than the noise, as a filter of unit DC
+//! gain must) and the straight-line bridging of the top-speed dips
+//! (rig_spectra::stickslip::repair_glitches). On run 175 the dips carry angle
+//! (the README of the data: the twist stays within ±0.5 rad with them, it
+//! drifts by tens of radians without): the bridge is refused.
 
 use crate::{LaviError, StudyParams};
 use rig_ingest::lavi::{LaviRecording, read_lavi};
+use rig_model::one_dof::integrated_twist_rad;
 use rig_spectra::lowpass_fft;
 use rig_spectra::stickslip::{GlitchOptions, GlitchReport, repair_glitches};
 use serde::Serialize;
@@ -13,18 +36,43 @@ use std::path::Path;
 /// rpm → rad/s (2π/60).
 pub use rig_types::units::RPM_TO_RAD_S;
 
-/// The recording after glitch repair and the 10 Hz low-pass (every channel).
+/// The recording as measured after the 10 Hz low-pass (every channel), with
+/// the audit of every repair considered.
 #[derive(Debug, Clone)]
 pub struct Prepared {
     pub fs_hz: f64,
     pub time_s: Vec<f64>,
-    /// Top speed, glitches bridged, not filtered (the glitch table compares it with the raw one).
-    pub top_repaired_rpm: Vec<f64>,
     pub top_rpm: Vec<f64>,
     pub bit_rpm: Vec<f64>,
     pub torque_nm: Vec<f64>,
     pub wob_n: Vec<f64>,
+    /// The top-speed dips found by the glitch detector (not bridged unless its audit accepts it).
     pub glitches: GlitchReport,
+    /// The top speed's noise outside the dips: rms of raw − low-passed, rad/s.
+    pub top_noise_rad_s: f64,
+    /// Twist of the raw record ∫(Ω_top − Ω_bit) dt from its first sample: (min, max), rad.
+    pub twist_excursion_rad: (f64, f64),
+    /// Every repair considered, in the order applied: low-pass, then dip bridging.
+    pub repairs: Vec<RepairCheck>,
+}
+
+/// What one repair of the top speed changes in the integrated twist, against the channel's noise.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RepairCheck {
+    /// `lowpass` or `bridge_dips`.
+    pub repair: &'static str,
+    /// Largest |Δ(t)| over the record (band-averaged), rad.
+    pub record_change_rad: f64,
+    /// Δ at the record's end, rad (the drift it leaves).
+    pub record_end_change_rad: f64,
+    /// σ_φ over the whole record, rad.
+    pub record_noise_rad: f64,
+    /// Per window (the order of [`windows`]): largest |Δ(t) − Δ(span start)| over the span, rad.
+    pub window_change_rad: Vec<f64>,
+    /// Per window: σ_φ over the span, rad.
+    pub window_noise_rad: Vec<f64>,
+    /// Applied (change within the noise everywhere) or refused.
+    pub applied: bool,
 }
 
 impl Prepared {
@@ -73,9 +121,10 @@ pub struct WindowSpec {
     pub window: Range<usize>,
 }
 
-/// Reads run 175 (or any LAVI CSV), repairs the top-speed glitches and
-/// low-passes every channel at `cutoff_hz` (zero-phase FFT filter, as the
-/// authors compare below 10 Hz: Lobo et al. 2020).
+/// Reads run 175 (or any LAVI CSV), low-passes every channel at `cutoff_hz`
+/// (zero-phase FFT filter, as the authors compare below 10 Hz: Lobo et al.
+/// 2020) and audits the repairs of the top speed (module docs); a refused
+/// repair is not applied.
 pub fn prepare(path: &Path, p: &StudyParams) -> Result<(LaviRecording, Prepared), LaviError> {
     let rec = read_lavi(path)?;
     let n = rec.len();
@@ -92,37 +141,102 @@ pub fn prepare(path: &Path, p: &StudyParams) -> Result<(LaviRecording, Prepared)
         floor: p.glitch_floor_rpm,
         dilate: p.glitch_dilate,
     };
-    let (top_fixed, glitches) = repair_glitches(&rec.top_speed_rpm, &glitch)?;
+    let (bridged, glitches) = repair_glitches(&rec.top_speed_rpm, &glitch)?;
     let lp = |x: &[f64]| lowpass_fft(x, fs_hz, p.cutoff_hz, p.transition_hz);
+    let top_lp = lp(&rec.top_speed_rpm)?;
+    let rad = |x: &[f64]| x.iter().map(|v| v * RPM_TO_RAD_S).collect::<Vec<f64>>();
+    let dip = |i: usize| bridged[i] != rec.top_speed_rpm[i];
+    let clean: Vec<f64> =
+        (0..n).filter(|&i| !dip(i)).map(|i| (rec.top_speed_rpm[i] - top_lp[i]) * RPM_TO_RAD_S).collect();
+    let top_noise_rad_s = (clean.iter().map(|x| x * x).sum::<f64>() / clean.len().max(1) as f64).sqrt();
+    let bit = rad(&rec.bit_speed_rpm);
+    let twist = |top_rpm: &[f64]| integrated_twist_rad(&rec.time_s, &rad(top_rpm), &bit);
+    let raw_twist = twist(&rec.top_speed_rpm);
+    let twist_excursion_rad = (
+        raw_twist.iter().cloned().fold(f64::INFINITY, f64::min),
+        raw_twist.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+    );
+    let wins = window_specs(&rec.time_s, p)?;
+    let half = ((fs_hz / (2.0 * p.cutoff_hz)).round() as usize).max(1);
+    let check = |repair: &'static str, top_rpm: &[f64]| -> RepairCheck {
+        let delta: Vec<f64> = twist(top_rpm).iter().zip(&raw_twist).map(|(a, b)| a - b).collect();
+        let delta = centred_mean(&delta, half);
+        let noise = |len: usize| top_noise_rad_s / fs_hz * (len as f64).sqrt();
+        let (window_change_rad, window_noise_rad): (Vec<f64>, Vec<f64>) = wins
+            .iter()
+            .map(|w| {
+                let d0 = delta[w.span.start];
+                (delta[w.span.clone()].iter().map(|d| (d - d0).abs()).fold(0.0, f64::max), noise(w.span.len()))
+            })
+            .unzip();
+        let record_change_rad = delta.iter().map(|d| d.abs()).fold(0.0, f64::max);
+        let record_noise_rad = noise(n);
+        let applied = record_change_rad <= record_noise_rad
+            && window_change_rad.iter().zip(&window_noise_rad).all(|(c, s)| c <= s);
+        RepairCheck {
+            repair,
+            record_change_rad,
+            record_end_change_rad: delta[n - 1],
+            record_noise_rad,
+            window_change_rad,
+            window_noise_rad,
+            applied,
+        }
+    };
+    let lowpass = check("lowpass", &top_lp);
+    let bridge = check("bridge_dips", &bridged);
+    let top_rpm = if bridge.applied { lp(&bridged)? } else { top_lp };
     let prepared = Prepared {
         fs_hz,
         time_s: rec.time_s.clone(),
-        top_rpm: lp(&top_fixed)?,
-        top_repaired_rpm: top_fixed,
+        top_rpm,
         bit_rpm: lp(&rec.bit_speed_rpm)?,
         torque_nm: lp(&rec.bit_torque_nm)?,
         wob_n: lp(&rec.wob_n)?,
         glitches,
+        top_noise_rad_s,
+        twist_excursion_rad,
+        repairs: vec![lowpass, bridge],
     };
     Ok((rec, prepared))
+}
+
+/// Centred moving mean over ±`half` samples (shortened at the ends).
+fn centred_mean(x: &[f64], half: usize) -> Vec<f64> {
+    let n = x.len();
+    let mut prefix = vec![0.0; n + 1];
+    for (i, v) in x.iter().enumerate() {
+        prefix[i + 1] = prefix[i] + v;
+    }
+    (0..n)
+        .map(|i| {
+            let (a, b) = (i.saturating_sub(half), (i + half + 1).min(n));
+            (prefix[b] - prefix[a]) / (b - a) as f64
+        })
+        .collect()
 }
 
 /// The calibration window first, then the held-out windows in time order.
 /// Each window must fit in the record with its warm-up, and no held-out window
 /// may overlap the calibration window.
 pub fn windows(d: &Prepared, p: &StudyParams) -> Result<Vec<WindowSpec>, LaviError> {
+    window_specs(&d.time_s, p)
+}
+
+fn window_specs(time_s: &[f64], p: &StudyParams) -> Result<Vec<WindowSpec>, LaviError> {
     let mut out = Vec::new();
-    let t_end = d.time_s[d.len() - 1];
+    let t_end = time_s[time_s.len() - 1];
+    let index_at = |t: f64| time_s.partition_point(|x| *x < t - 1e-9);
     let mut starts: Vec<(f64, f64, Split)> = vec![(p.window_start_s, p.window_end_s, Split::Train)];
     let mut held = p.heldout_starts_s.clone();
     held.sort_by(f64::total_cmp);
     starts.extend(held.iter().map(|s| (*s, s + p.heldout_length_s, Split::Heldout)));
     for (a, b, split) in starts {
         let bad = |rule: String| LaviError::Params { key: "heldout_starts_s", rule };
-        if !(b > a && a - p.warmup_s >= d.time_s[0] - 1e-9 && b <= t_end + 1e-9) {
+        if !(b > a && a - p.warmup_s >= time_s[0] - 1e-9 && b <= t_end + 1e-9) {
             return Err(bad(format!(
                 "window {a}-{b} s with {} s of warm-up must lie inside the record ({}-{t_end} s)",
-                p.warmup_s, d.time_s[0]
+                p.warmup_s, time_s[0]
             )));
         }
         if split == Split::Heldout && a < p.window_end_s && b > p.window_start_s {
@@ -131,7 +245,7 @@ pub fn windows(d: &Prepared, p: &StudyParams) -> Result<Vec<WindowSpec>, LaviErr
                 p.window_start_s, p.window_end_s
             )));
         }
-        let (i0, iw, i1) = (d.index_at(a - p.warmup_s), d.index_at(a), d.index_at(b));
+        let (i0, iw, i1) = (index_at(a - p.warmup_s), index_at(a), index_at(b));
         out.push(WindowSpec {
             label: format!("{}-{}", fmt_s(a), fmt_s(b)),
             split,

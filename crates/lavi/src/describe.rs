@@ -1,16 +1,19 @@
 //! The recording described as before issue 10 (moved from the `lavi` stage):
-//! glitch repair, friction torque against bit speed with a velocity-weakening
-//! fit, the stick-slip fundamental, severity, and the 1-DOF least-squares
-//! model of rig_model::one_dof on the calibration window.
+//! the record as measured (dips and the repair audit), friction torque against
+//! bit speed with a velocity-weakening fit, the stick-slip fundamental,
+//! severity, and the study's least-squares baseline run free over the
+//! calibration window.
 //!
 //! Only derived numbers leave here: binned curves, fits, spectra and summary
 //! values.
 
+use crate::data::derivative;
 use crate::data::{Prepared, RPM_TO_RAD_S};
+use crate::fit::Derivation;
 use crate::render::StudyOutput;
+use crate::sim::{Inputs, Model, Start, simulate};
 use crate::{LaviError, StudyParams};
 use rig_ingest::lavi::LaviRecording;
-use rig_model::one_dof::{OneDofFriction, OneDofParams, fit_one_dof, simulate_one_dof};
 use rig_spectra::stickslip::{bin_means, fit_weakening, severity};
 use rig_spectra::{Detrend, Window, amplitude_spectrum};
 use rig_types::{SeriesStyle, Table, fmt_fixed};
@@ -22,11 +25,13 @@ pub fn describe(
     rec: &LaviRecording,
     d: &Prepared,
     p: &StudyParams,
+    base: &Model,
+    der: &Derivation,
     out: &mut StudyOutput,
 ) -> Result<String, LaviError> {
     let n = rec.len();
     let fs_hz = d.fs_hz;
-    let (top_fixed, glitches) = (&d.top_repaired_rpm, d.glitches);
+    let glitches = d.glitches;
     let (top, bit, torque) = (&d.top_rpm, &d.bit_rpm, &d.torque_nm);
     let win: Vec<usize> =
         (0..n).filter(|&i| rec.time_s[i] >= p.window_start_s && rec.time_s[i] < p.window_end_s).collect();
@@ -42,8 +47,7 @@ pub fn describe(
         });
     }
     let pick = |x: &[f64]| win.iter().map(|&i| x[i]).collect::<Vec<f64>>();
-    let (t_w, top_w, bit_w, tq_w) = (pick(&rec.time_s), pick(top), pick(bit), pick(torque));
-    let glitch_in_window = win.iter().filter(|&&i| (rec.top_speed_rpm[i] - top_fixed[i]).abs() > 0.0).count();
+    let (top_w, bit_w, tq_w) = (pick(top), pick(bit), pick(torque));
 
     // 3. Friction torque against bit speed (slip samples for the fit).
     let vmax = bit_w.iter().cloned().fold(0.0, f64::max);
@@ -55,7 +59,7 @@ pub fn describe(
     let fit_gauss = fit_weakening(&vs, &ts, 2.0, 0.5, 2000.0)?;
     let wfit = if fit_gauss.rmse <= fit_exp.rmse { fit_gauss } else { fit_exp };
     // Break-away: the largest torque of each stick phase (bit speed below the slip threshold), averaged.
-    let breakaway = stick_phase_maxima(&bit_w, &tq_w, p.slip_speed_rpm);
+    let breakaway = crate::features::stick_phase_maxima(&bit_w, &tq_w, p.slip_speed_rpm);
     let breakaway_mean = mean(&breakaway);
     let fastest_bin = bins.iter().rev().find(|b| b.count > 0).map_or(f64::NAN, |b| b.mean);
 
@@ -67,36 +71,18 @@ pub fn describe(
     let sev_bit = severity(&bit_w);
     let sev_top = severity(&top_w);
 
-    // 6. 1-DOF model: J, k, c by least squares on the window; friction from step 3.
-    let to_rad = |x: &[f64]| x.iter().map(|v| v * RPM_TO_RAD_S).collect::<Vec<f64>>();
-    let (top_r, bit_r) = (to_rad(&top_w), to_rad(&bit_w));
-    let acc: Vec<f64> = (0..t_w.len())
-        .map(|i| {
-            let (a, b) = (i.saturating_sub(1), (i + 1).min(t_w.len() - 1));
-            (bit_r[b] - bit_r[a]) / (t_w[b] - t_w[a])
-        })
-        .collect();
-    let dof_free = fit_one_dof(&t_w, &top_r, &bit_r, &acc, &tq_w, None)?;
-    // Negative damping would feed energy in and the simulation would diverge:
-    // then c is fixed at 0 and J, k are refitted (stated in lavi.md).
-    let dof = if dof_free.damping_nm_s_rad < 0.0 {
-        fit_one_dof(&t_w, &top_r, &bit_r, &acc, &tq_w, Some(0.0))?
-    } else {
-        dof_free
-    };
-    let model = OneDofParams {
-        inertia_kgm2: dof.inertia_kgm2,
-        stiffness_nm_rad: dof.stiffness_nm_rad,
-        damping_nm_s_rad: dof.damping_nm_s_rad,
-        friction: OneDofFriction {
-            kinetic_nm: wfit.a,
-            weakening_nm: wfit.b,
-            stribeck_speed_rad_s: wfit.vs * RPM_TO_RAD_S,
-            shape_exponent: wfit.shape_exponent,
-        },
-    };
-    let sim = simulate_one_dof(&model, &t_w, &top_r, dof.initial_twist_rad, bit_r[0], 10)?;
-    let sim_rpm: Vec<f64> = sim.bit_speed_rad_s.iter().map(|v| v / RPM_TO_RAD_S).collect();
+    // 6. 1-DOF model: the study's baseline (J, k, c by least squares on the window,
+    // rig_lavi::fit::derive; friction from step 3), run free over the window from its measured start.
+    let (dof_free, dof) = (&der.free, &der.used);
+    let i0 = win[0];
+    let span = i0..i0 + win.len();
+    let rad = |x: &[f64]| x.iter().map(|v| v * RPM_TO_RAD_S).collect::<Vec<f64>>();
+    let top_r = rad(&top[span.clone()]);
+    let acc0 = derivative(&rad(&bit[span.clone()]), fs_hz)[0];
+    let inputs = Inputs { fs_hz, top_rad_s: &top_r, wob_n: &d.wob_n[span.clone()], top_ref_rad_s: &top_r };
+    let start = Start { bit_rad_s: bit[i0] * RPM_TO_RAD_S, bit_acc_rad_s2: acc0, torque_nm: torque[i0] };
+    let sim = simulate(base, &inputs, start, p.substeps)?;
+    let sim_rpm: Vec<f64> = sim.bit_rad_s.iter().map(|v| v / RPM_TO_RAD_S).collect();
     let nrmse = rms(&sim_rpm.iter().zip(&bit_w).map(|(a, b)| a - b).collect::<Vec<_>>()) / rms(&bit_w);
     let sev_sim = severity(&sim_rpm);
     let lines_sim = line_analysis(&sim_rpm, fs_hz, p.cutoff_hz)?;
@@ -107,10 +93,27 @@ pub fn describe(
         |q: &str, v: String, u: &str, how: &str| summary.push([q.to_string(), v, u.to_string(), how.to_string()]);
     row("samples", n.to_string(), "", "rows of run-175.csv");
     row("sample_rate", fmt_fixed(fs_hz, 1), "Hz", "from the time column");
-    row("glitch_runs", glitches.runs.to_string(), "", "runs of top-speed samples flagged (whole record)");
-    row("glitch_samples", glitches.samples.to_string(), "", "samples bridged (whole record)");
-    row("glitch_longest", glitches.longest_run.to_string(), "samples", "longest bridged run");
-    row("glitch_samples_in_window", glitch_in_window.to_string(), "", "bridged samples inside the window");
+    row("dip_runs", glitches.runs.to_string(), "", "runs of top-speed samples flagged as dips (whole record)");
+    row("dip_samples", glitches.samples.to_string(), "", "samples flagged (whole record)");
+    row("dip_longest", glitches.longest_run.to_string(), "samples", "longest flagged run");
+    row(
+        "twist_min",
+        fmt_fixed(d.twist_excursion_rad.0, 3),
+        "rad",
+        "raw record: min of the integral of top - bit speed",
+    );
+    row(
+        "twist_max",
+        fmt_fixed(d.twist_excursion_rad.1, 3),
+        "rad",
+        "raw record: max of the integral of top - bit speed",
+    );
+    row(
+        "top_speed_noise",
+        fmt_fixed(d.top_noise_rad_s, 3),
+        "rad/s",
+        "rms of raw - low-passed top speed outside the dips",
+    );
     row("window", format!("{}-{}", p.window_start_s, p.window_end_s), "s", "the authors' calibration window");
     row("bit_speed_min", fmt_fixed(sev_bit.min, 1), "rpm", "10 Hz low-passed, window");
     row("bit_speed_max", fmt_fixed(sev_bit.max, 1), "rpm", "10 Hz low-passed, window");
@@ -289,20 +292,7 @@ pub fn describe(
          doi:10.1016/j.ijmecsci.2020.105578).\n",
         p.window_start_s, p.window_end_s, p.cutoff_hz
     );
-    let _ = writeln!(
-        md,
-        "**Glitches.** A top-speed sample is a glitch when it is more than {} rpm from the {}-sample running median or \
-         below {} rpm; flagged runs are widened by {} samples each side and bridged by a straight line between the good \
-         neighbours. {} runs, {} samples (longest {}), {} of them inside the window.\n",
-        p.glitch_threshold_rpm,
-        p.glitch_median_window,
-        p.glitch_floor_rpm,
-        p.glitch_dilate,
-        glitches.runs,
-        glitches.samples,
-        glitches.longest_run,
-        glitch_in_window
-    );
+    let _ = writeln!(md, "{}", repairs_paragraph(d, p));
     let weakening = wfit.b > 0.0 && wfit.rmse < 0.9 * wfit.rmse_constant;
     let _ = writeln!(
         md,
@@ -373,7 +363,9 @@ pub fn describe(
         dof.r_squared,
         if dof_free.damping_nm_s_rad < 0.0 {
             format!(
-                "; the unconstrained fit gave c = {:.4} ± {:.4} N m s/rad (negative: energy input, unstable), so c is fixed at 0 and J, k refitted",
+                "; the unconstrained fit gave c = {:.4} ± {:.4} N m s/rad, negative: an energy input. c is pinned at its \
+                 bound 0 and J, k refitted, and this is reported as a finding (`parameters_at_bounds` of \
+                 lavi-diagnosis.json), not a fix: the structural candidates of rung 2 try what it points at",
                 dof_free.damping_nm_s_rad, dof_free.damping_stderr
             )
         } else {
@@ -393,25 +385,80 @@ pub fn describe(
     Ok(md)
 }
 
+/// The record as measured: the dips, the twist they carry, and the audit of every repair (tables/lavi-repairs.csv).
+fn repairs_paragraph(d: &Prepared, p: &StudyParams) -> String {
+    let g = d.glitches;
+    let mut s = format!(
+        "**The record as measured.** The top speed has {} dips (samples more than {} rpm from the {}-sample running median \
+         or below {} rpm, widened by {} samples each side: {} samples, longest {}). They carry angle: the twist \
+         ∫(top − bit speed) dt of the raw record stays within {:.2}..{:+.2} rad over the {:.0} s. Every repair of the \
+         top speed is audited by what it changes in that twist (averaged over ±{:.0} ms, the compared band) against \
+         the channel's noise integrated over the same span (top-speed noise {:.3} rad/s rms outside the dips, as a \
+         random walk): ",
+        g.runs,
+        p.glitch_threshold_rpm,
+        p.glitch_median_window,
+        p.glitch_floor_rpm,
+        p.glitch_dilate,
+        g.samples,
+        g.longest_run,
+        d.twist_excursion_rad.0,
+        d.twist_excursion_rad.1,
+        d.time_s[d.len() - 1] - d.time_s[0],
+        500.0 / p.cutoff_hz,
+        d.top_noise_rad_s
+    );
+    let parts: Vec<String> = d
+        .repairs
+        .iter()
+        .map(|r| {
+            let worst = r.window_change_rad.iter().cloned().fold(0.0, f64::max);
+            let noise = r.window_noise_rad.iter().cloned().fold(f64::INFINITY, f64::min);
+            format!(
+                "`{}` changes it by up to {:.3} rad over the record (noise {:.3} rad; {:+.3} rad at the end) and by up to \
+                 {:.3} rad within a window's span (noise at least {:.3} rad): {}",
+                r.repair,
+                r.record_change_rad,
+                r.record_noise_rad,
+                r.record_end_change_rad,
+                worst,
+                noise,
+                if r.applied { "applied" } else { "**refused**, the record is used as measured" }
+            )
+        })
+        .collect();
+    s.push_str(&parts.join("; "));
+    s.push_str(". Every free run below is driven by the top speed as measured (low-passed).\n");
+    s
+}
+
+/// The repair audit, one row per repair and span (the record, then each window).
+pub fn repairs_table(d: &Prepared, labels: &[String]) -> Table {
+    let mut t = Table::new(["repair", "span", "twist_change_rad", "noise_rad", "above_noise", "applied"]);
+    for r in &d.repairs {
+        let mut push = |span: &str, c: f64, n: f64| {
+            t.push([
+                r.repair.to_string(),
+                span.to_string(),
+                fmt_fixed(c, 4),
+                fmt_fixed(n, 4),
+                (c > n).to_string(),
+                r.applied.to_string(),
+            ])
+        };
+        push("record", r.record_change_rad, r.record_noise_rad);
+        for ((l, c), n) in labels.iter().zip(&r.window_change_rad).zip(&r.window_noise_rad) {
+            push(l, *c, *n);
+        }
+    }
+    t
+}
+
 /// Line analysis of a speed record (`rig_spectra::line_analysis` with the
 /// study's band, `features::line_options`): the lines and the resolution.
 fn line_analysis(x: &[f64], fs_hz: f64, max_hz: f64) -> Result<(rig_spectra::LineAnalysis, f64), LaviError> {
     let sl = rig_spectra::line_analysis(x, fs_hz, &crate::features::line_options(max_hz))?;
     Ok((sl.lines, sl.spectrum.resolution_hz))
-}
-
-/// The largest torque of each stick phase (consecutive samples with speed below `slip`).
-fn stick_phase_maxima(speed: &[f64], torque: &[f64], slip: f64) -> Vec<f64> {
-    let mut out = Vec::new();
-    let mut cur: Option<f64> = None;
-    for (v, t) in speed.iter().zip(torque) {
-        if *v < slip {
-            cur = Some(cur.map_or(*t, |c| c.max(*t)));
-        } else if let Some(c) = cur.take() {
-            out.push(c);
-        }
-    }
-    out
 }
 
 /// Why a fit's parameters sit on a bound, for the text.

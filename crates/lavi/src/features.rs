@@ -1,7 +1,11 @@
-//! The five window features, one function for measurement and simulation:
+//! The seven window features, one function for measurement and simulation:
 //! bit-speed maximum and minimum (means over stick-slip cycles), stick
-//! fraction, stick-slip fundamental (line analysis of rig_spectra) and the
-//! mean torque–bit-speed loop area per cycle.
+//! fraction, stick-slip fundamental (line analysis of rig_spectra), the
+//! mean torque–bit-speed loop area per cycle, and the torque levels (issue 26):
+//! the mean slip torque (mean torque while the bit turns faster than the
+//! stick speed) and the break-away torque (mean over the window's complete
+//! stick phases of each phase's largest torque). A free run that reproduces
+//! the motion with a friction level off the measured one misses these two.
 
 use crate::LaviError;
 use rig_spectra::{LineAnalysisOptions, LineOptions, line_analysis, lowpass_fft};
@@ -28,17 +32,39 @@ pub struct Features {
     pub fundamental_hz: f64,
     /// Mean |∮ T dΩ| per cycle, N m·rpm.
     pub loop_area: f64,
+    /// Mean torque over the samples with bit speed ≥ the stick speed, N m (NaN: none).
+    pub slip_torque_nm: f64,
+    /// Mean over the complete stick phases of each one's largest torque, N m (NaN: no stick phase ends in the window).
+    pub breakaway_torque_nm: f64,
     /// Complete cycles found (0: the window is one pseudo-cycle).
     pub cycles: usize,
 }
 
 /// Feature names in table order.
-pub const FEATURES: [&str; 5] =
-    ["bit_speed_max_rpm", "bit_speed_min_rpm", "stick_fraction", "fundamental_hz", "loop_area"];
+pub const FEATURES: [&str; N_FEATURES] = [
+    "bit_speed_max_rpm",
+    "bit_speed_min_rpm",
+    "stick_fraction",
+    "fundamental_hz",
+    "loop_area",
+    "slip_torque_nm",
+    "breakaway_torque_nm",
+];
+
+/// Number of window features.
+pub const N_FEATURES: usize = 7;
 
 impl Features {
     pub fn get(&self, i: usize) -> f64 {
-        [self.bit_speed_max_rpm, self.bit_speed_min_rpm, self.stick_fraction, self.fundamental_hz, self.loop_area][i]
+        [
+            self.bit_speed_max_rpm,
+            self.bit_speed_min_rpm,
+            self.stick_fraction,
+            self.fundamental_hz,
+            self.loop_area,
+            self.slip_torque_nm,
+            self.breakaway_torque_nm,
+        ][i]
     }
 }
 
@@ -67,6 +93,10 @@ pub fn window_features(
     let t_all = lowpass_fft(torque_nm, o.fs_hz, o.cutoff_hz, o.transition_hz)?;
     let (v, t) = (&v_all[window.clone()], &t_all[window]);
     let stick_fraction = v.iter().filter(|x| **x < o.stick_speed_rpm).count() as f64 / v.len() as f64;
+    let slip: Vec<f64> = v.iter().zip(t).filter(|(x, _)| **x >= o.stick_speed_rpm).map(|(_, y)| *y).collect();
+    let slip_torque_nm = if slip.is_empty() { f64::NAN } else { mean(&slip) };
+    let phases = stick_phase_maxima(v, t, o.stick_speed_rpm);
+    let breakaway_torque_nm = if phases.is_empty() { f64::NAN } else { mean(&phases) };
     let starts = cycle_starts(v);
     let (mut maxs, mut mins, mut areas) = (Vec::new(), Vec::new(), Vec::new());
     for w in starts.windows(2) {
@@ -87,6 +117,8 @@ pub fn window_features(
         stick_fraction,
         fundamental_hz: fundamental_hz(v, o.fs_hz, o.cutoff_hz)?.unwrap_or(f64::NAN),
         loop_area: mean(&areas),
+        slip_torque_nm,
+        breakaway_torque_nm,
         cycles,
     })
 }
@@ -123,6 +155,21 @@ fn cycle_starts(v: &[f64]) -> Vec<usize> {
         } else if armed && *x > m + h {
             out.push(i);
             armed = false;
+        }
+    }
+    out
+}
+
+/// The largest torque of each complete stick phase (consecutive samples with
+/// speed below `stick`, followed by a slip); a phase still open at the end is left out.
+pub fn stick_phase_maxima(speed: &[f64], torque: &[f64], stick: f64) -> Vec<f64> {
+    let mut out = Vec::new();
+    let mut cur: Option<f64> = None;
+    for (v, t) in speed.iter().zip(torque) {
+        if *v < stick {
+            cur = Some(cur.map_or(*t, |c| c.max(*t)));
+        } else if let Some(c) = cur.take() {
+            out.push(c);
         }
     }
     out
@@ -180,6 +227,13 @@ mod tests {
         assert_eq!(f.cycles, 15);
         // The torque is a single-valued function of speed: no loop.
         assert!(f.loop_area < 1.0, "{f:?}");
+        // Torque 1 + 0.002 v: in slip (v ≥ 5 rpm) its mean is 1 + 0.002 · mean(100 sin) over the
+        // arc above 5 rpm, 1 + 0.2 · (2/π)·cos(asin 0.05)/(1 − 2 asin(0.05)/π); stuck, the torque is 1
+        // at v = 0 and at most 1.01 at 5 rpm: the phase maximum is 1.01 (the filter rounds the kink).
+        let a = (0.05f64).asin();
+        let slip = 1.0 + 0.2 * (2.0 / std::f64::consts::PI) * a.cos() / (1.0 - 2.0 * a / std::f64::consts::PI);
+        assert!((f.slip_torque_nm - slip).abs() < 0.01, "{f:?} vs {slip}");
+        assert!((f.breakaway_torque_nm - 1.01).abs() < 0.01, "{f:?}");
     }
 
     #[test]

@@ -4,53 +4,129 @@
 //! feature misfit, starting from the current model.
 
 use crate::data::{Prepared, RPM_TO_RAD_S, WindowSpec, derivative};
+use crate::eom::{Damping, EomFit, fit_equation_of_motion};
 use crate::score::Evaluator;
 use crate::sim::{Drive, FrictionLaw, MidDof, Model};
 use crate::{Candidate, LaviError};
-use rig_model::one_dof::fit_one_dof;
 use rig_spectra::stickslip::fit_weakening;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
+/// How the equation of motion is fitted: where the damping acts, and what
+/// the torque sensor reads relative to the contact (the structural candidates).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Structure {
+    pub damping: Damping,
+    /// Friction = T_m − J_s Ω̇ (an inertia between the sensor and the contact).
+    pub sensor_inertia_kgm2: f64,
+    /// The torque channel is late on the speed channels by this much: T(t) = T_m(t + τ), s.
+    pub torque_delay_s: f64,
+    /// The law is fitted to T·W_ref/W (torque = WOB·μ).
+    pub wob: bool,
+}
+
+impl Structure {
+    /// The baseline: damping on the twist rate (Real et al. 2018), torque read at the contact, no WOB.
+    pub const BASELINE: Structure =
+        Structure { damping: Damping::TwistRate, sensor_inertia_kgm2: 0.0, torque_delay_s: 0.0, wob: false };
+}
+
+/// A physically constrained parameter the least squares put beyond its bound:
+/// the finding (`parameters_at_bounds` of diagnosis.md), never a silent fix.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AtBound {
+    pub parameter: &'static str,
+    pub bound: f64,
+    pub unconstrained: f64,
+    pub stderr: f64,
+    pub meaning: String,
+}
+
 /// What the least-squares derivation found (for the report).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Derivation {
-    pub damping_unconstrained_nm_s_rad: f64,
-    /// True when the unconstrained damping came out negative and was fixed at 0.
-    pub damping_fixed: bool,
-    pub r_squared: f64,
+    pub structure: Structure,
+    /// The fit with the structure's damping, unconstrained.
+    pub free: EomFit,
+    /// The fit the model uses (dampings beyond their bound 0 pinned there).
+    pub used: EomFit,
+    pub at_bounds: Vec<AtBound>,
     pub law_rmse_nm: f64,
     pub law_constant_rmse_nm: f64,
 }
 
-/// The baseline procedure on the calibration window, with two switches the
-/// candidates use: `wob` (fit the law to T·W_ref/W, torque = WOB·μ) and
-/// `sensor_inertia_kgm2` (friction = T_m − J_s Ω̇ before anything is fitted).
-/// J, k, c: linear least squares of rig_model::one_dof::fit_one_dof; c fixed at
-/// 0 when negative (negative damping feeds energy in). Law: the better (lower
+/// The baseline procedure on the calibration window under `st` ([`Structure`]).
+/// J, k, c (and c_a): linear least squares of [`crate::eom`]; a damping that
+/// comes out negative (it would feed energy in) is pinned at 0 and J, k refitted,
+/// and the unconstrained value is reported in `at_bounds`. Law: the better (lower
 /// rmse) of T = a + b exp(−(v/v_s)^δ), δ = 1, 2, on samples with v > slip_speed_rpm.
 pub fn derive(
     d: &Prepared,
     cal: &WindowSpec,
     slip_speed_rpm: f64,
-    wob: bool,
-    sensor_inertia_kgm2: f64,
+    st: Structure,
 ) -> Result<(Model, Derivation), LaviError> {
     let r = (cal.span.start + cal.window.start)..(cal.span.start + cal.window.end);
     let t = &d.time_s[r.clone()];
     let rad = |x: &[f64]| x.iter().map(|v| v * RPM_TO_RAD_S).collect::<Vec<f64>>();
     let (top, bit) = (rad(&d.top_rpm[r.clone()]), rad(&d.bit_rpm[r.clone()]));
     let acc = derivative(&bit, d.fs_hz);
-    let tf: Vec<f64> = d.torque_nm[r.clone()].iter().zip(&acc).map(|(tm, a)| tm - sensor_inertia_kgm2 * a).collect();
+    let shift = (st.torque_delay_s * d.fs_hz).round() as isize;
+    let torque_at = |i: usize| d.torque_nm[(i as isize + shift).clamp(0, d.len() as isize - 1) as usize];
+    let tf: Vec<f64> = r.clone().zip(&acc).map(|(i, a)| torque_at(i) - st.sensor_inertia_kgm2 * a).collect();
     let w = &d.wob_n[r.clone()];
     let w_ref = w.iter().sum::<f64>() / w.len() as f64;
-    let free = fit_one_dof(t, &top, &bit, &acc, &tf, None)?;
-    let fixed = free.damping_nm_s_rad < 0.0;
-    let dof = if fixed { fit_one_dof(t, &top, &bit, &acc, &tf, Some(0.0))? } else { free };
+    let fit = |damping| fit_equation_of_motion(t, &top, &bit, &acc, &tf, damping);
+    let free = fit(st.damping)?;
+    let mut at_bounds = Vec::new();
+    let neg_c = matches!(st.damping, Damping::TwistRate | Damping::Both) && free.damping_nm_s_rad < 0.0;
+    let neg_ca = matches!(st.damping, Damping::Absolute | Damping::Both) && free.absolute_damping_nm_s_rad < 0.0;
+    if neg_c {
+        at_bounds.push(AtBound {
+            parameter: "shaft_damping_nm_s_rad",
+            bound: 0.0,
+            unconstrained: free.damping_nm_s_rad,
+            stderr: free.damping_stderr,
+            meaning:
+                "a negative damping on the twist rate feeds energy in: the equation of motion with this structure \
+                      explains the measured acceleration only with an energy source, a structural error the damping \
+                      placement, a channel delay or a sensor inertia may be"
+                    .into(),
+        });
+    }
+    if neg_ca {
+        at_bounds.push(AtBound {
+            parameter: "absolute_damping_nm_s_rad",
+            bound: 0.0,
+            unconstrained: free.absolute_damping_nm_s_rad,
+            stderr: free.absolute_damping_stderr,
+            meaning: "a negative drag on the absolute bit speed feeds energy in: not a dissipation the data support"
+                .into(),
+        });
+    }
+    let pinned = match (st.damping, neg_c, neg_ca) {
+        (_, false, false) => st.damping,
+        (Damping::Both, true, false) => Damping::Absolute,
+        (Damping::Both, false, true) => Damping::TwistRate,
+        _ => Damping::Fixed0,
+    };
+    let mut dof = if pinned == st.damping { free } else { fit(pinned)? };
+    // A refit after pinning can push the other damping below 0 too: pin it as well (reported).
+    if pinned != Damping::Fixed0 && (dof.damping_nm_s_rad < 0.0 || dof.absolute_damping_nm_s_rad < 0.0) {
+        at_bounds.push(AtBound {
+            parameter: if dof.damping_nm_s_rad < 0.0 { "shaft_damping_nm_s_rad" } else { "absolute_damping_nm_s_rad" },
+            bound: 0.0,
+            unconstrained: dof.damping_nm_s_rad.min(dof.absolute_damping_nm_s_rad),
+            stderr: if dof.damping_nm_s_rad < 0.0 { dof.damping_stderr } else { dof.absolute_damping_stderr },
+            meaning: "negative after the other damping was pinned at 0: no damping of this structure is positive"
+                .into(),
+        });
+        dof = fit(Damping::Fixed0)?;
+    }
     let bit_rpm = &d.bit_rpm[r];
     let (vs, ys): (Vec<f64>, Vec<f64>) = (0..t.len())
         .filter(|&i| bit_rpm[i] > slip_speed_rpm)
-        .map(|i| (bit_rpm[i], if wob { tf[i] * w_ref / w[i] } else { tf[i] }))
+        .map(|i| (bit_rpm[i], if st.wob { tf[i] * w_ref / w[i] } else { tf[i] }))
         .unzip();
     let e = fit_weakening(&vs, &ys, 1.0, 0.5, 2000.0)?;
     let g = fit_weakening(&vs, &ys, 2.0, 0.5, 2000.0)?;
@@ -59,6 +135,8 @@ pub fn derive(
         inertia_kgm2: dof.inertia_kgm2,
         stiffness_nm_rad: dof.stiffness_nm_rad,
         damping_nm_s_rad: dof.damping_nm_s_rad,
+        absolute_damping_nm_s_rad: dof.absolute_damping_nm_s_rad,
+        torque_delay_s: shift as f64 / d.fs_hz,
         friction: FrictionLaw {
             static_nm: f.a + f.b.max(0.0),
             kinetic_nm: f.a,
@@ -66,26 +144,53 @@ pub fn derive(
             shape_exponent: f.shape_exponent,
             viscous_nm_s_rad: 0.0,
         },
-        wob_ref_n: wob.then_some(w_ref),
-        sensor_inertia_kgm2,
+        wob_ref_n: st.wob.then_some(w_ref),
+        sensor_inertia_kgm2: st.sensor_inertia_kgm2,
         friction_lag_s: 0.0,
         mid: None,
         drive: None,
+        structure: st,
     };
     let info = Derivation {
-        damping_unconstrained_nm_s_rad: free.damping_nm_s_rad,
-        damping_fixed: fixed,
-        r_squared: dof.r_squared,
+        structure: st,
+        free,
+        used: dof,
+        at_bounds,
         law_rmse_nm: f.rmse,
         law_constant_rmse_nm: f.rmse_constant,
     };
     Ok((model, info))
 }
 
+/// The torque channel's delay on the speed channels that fits the equation of
+/// motion best (least residual of the unconstrained fit under `st`'s damping and
+/// sensor inertia) on the calibration window, over ±`max_s` in steps of one sample.
+pub fn best_delay_s(d: &Prepared, cal: &WindowSpec, st: Structure, max_s: f64) -> f64 {
+    let r = (cal.span.start + cal.window.start)..(cal.span.start + cal.window.end);
+    let t = &d.time_s[r.clone()];
+    let rad = |x: &[f64]| x.iter().map(|v| v * RPM_TO_RAD_S).collect::<Vec<f64>>();
+    let (top, bit) = (rad(&d.top_rpm[r.clone()]), rad(&d.bit_rpm[r.clone()]));
+    let acc = derivative(&bit, d.fs_hz);
+    let m = (max_s * d.fs_hz).round() as isize;
+    let mut best = (f64::NEG_INFINITY, 0.0);
+    for k in -m..=m {
+        let at = |i: usize| d.torque_nm[(i as isize + k).clamp(0, d.len() as isize - 1) as usize];
+        let tf: Vec<f64> = r.clone().zip(&acc).map(|(i, a)| at(i) - st.sensor_inertia_kgm2 * a).collect();
+        if let Ok(f) = fit_equation_of_motion(t, &top, &bit, &acc, &tf, st.damping)
+            && f.r_squared > best.0
+        {
+            best = (f.r_squared, k as f64 / d.fs_hz);
+        }
+    }
+    best.1
+}
+
 /// A candidate fitted on the calibration window.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Fitted {
     pub model: Model,
+    /// Parameters the fit left at a bound of their range (a finding, reported).
+    pub at_bounds: Vec<AtBound>,
     /// The candidate's own parameters (JSON keys of diagnosis.json), in a fixed order.
     pub params: BTreeMap<String, f64>,
     pub calibration_misfit: f64,
@@ -103,21 +208,14 @@ fn logit(p: f64) -> f64 {
 /// Fits candidate `c` on top of `current` on the calibration window of `ev`.
 pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: usize) -> Result<Fitted, LaviError> {
     let cal = ev.calibration();
-    let carry = |mut m: Model| {
-        m.friction_lag_s = current.friction_lag_s;
-        m.mid = current.mid;
-        m.drive = current.drive;
-        m
-    };
     let misfit = |m: &Model| ev.misfit(m, cal);
     let j = current.inertia_kgm2;
     let mut params = BTreeMap::new();
+    let mut at_bounds = Vec::new();
     let (model, evals) = match c {
         Candidate::WobNormalForce => {
-            // The law stays as the current model has it when a simulation fit chose it;
-            // a least-squares law is refitted as μ = T/W (torque = WOB·μ).
-            let (m, _) = derive(ev.data, &ev.windows[cal], ev.slip_speed_rpm, true, current.sensor_inertia_kgm2)?;
-            let m = if law_is_derived(current, ev)? { carry(m) } else { Model { wob_ref_n: m.wob_ref_n, ..*current } };
+            // A least-squares law is refitted as μ = T/W (torque = WOB·μ); a simulation-fitted law is kept.
+            let m = restructure(current, ev, Structure { wob: true, ..current.structure })?;
             let w_ref = m.wob_ref_n.unwrap_or(1.0);
             params.insert("reference_wob_n".into(), w_ref);
             params.insert("mu_static".into(), m.friction.static_nm / w_ref);
@@ -125,14 +223,9 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
             (m, 1)
         }
         Candidate::SensorInertia => {
-            let wob = current.wob_ref_n.is_some();
-            let keep_law = !law_is_derived(current, ev)?;
             let build = |x: &[f64]| -> Option<Model> {
-                let js = j * x[0].exp();
-                derive(ev.data, &ev.windows[cal], ev.slip_speed_rpm, wob, js).ok().map(|(m, _)| {
-                    let m = carry(m);
-                    if keep_law { Model { friction: current.friction, ..m } } else { m }
-                })
+                let st = Structure { sensor_inertia_kgm2: j * x[0].exp(), ..current.structure };
+                restructure(current, ev, st).ok()
             };
             let (x, _, n) = nelder_mead(|x| build(x).map_or(1e9, |m| misfit(&m)), &[-2.0], &[1.0], max_evals);
             let m = build(&x).ok_or(LaviError::Input {
@@ -141,6 +234,21 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
             })?;
             params.insert("sensor_inertia_kgm2".into(), m.sensor_inertia_kgm2);
             (m, n)
+        }
+        Candidate::AbsoluteDamping => {
+            // Where the damping acts, decided by the equation of motion: c and c_a both
+            // free, each pinned at 0 (and reported) when it comes out negative.
+            let m = restructure(current, ev, Structure { damping: Damping::Both, ..current.structure })?;
+            params.insert("damping_nm_s_rad".into(), m.damping_nm_s_rad);
+            params.insert("absolute_damping_nm_s_rad".into(), m.absolute_damping_nm_s_rad);
+            (m, 1)
+        }
+        Candidate::ChannelDelay => {
+            // The delay that best fits the equation of motion (teacher-forced, calibration window).
+            let tau = best_delay_s(ev.data, &ev.windows[cal], current.structure, MAX_DELAY_S);
+            let m = restructure(current, ev, Structure { torque_delay_s: tau, ..current.structure })?;
+            params.insert("torque_delay_s".into(), m.torque_delay_s);
+            (m, 2 * (MAX_DELAY_S * ev.data.fs_hz).round() as usize + 1)
         }
         Candidate::FrictionLaw => {
             // Three families, each fitted; the best on the calibration window is kept.
@@ -181,6 +289,21 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
             let build = |x: &[f64]| Model { friction_lag_s: x[0].clamp(-9.2, 0.0).exp(), ..*current };
             let (x, _, n) = nelder_mead(|x| misfit(&build(x)), &[(0.02f64).ln()], &[1.0], max_evals);
             let m = build(&x);
+            if !(-9.2..0.0).contains(&x[0]) {
+                at_bounds.push(AtBound {
+                    parameter: "lag_s",
+                    bound: m.friction_lag_s,
+                    unconstrained: x[0].exp(),
+                    stderr: f64::NAN,
+                    meaning: if x[0] >= 0.0 {
+                        "a friction lag of a second or more is longer than a stick-slip cycle: the slip friction does \
+                         not follow the speed at all, a frozen (constant) slip level, not a memory"
+                    } else {
+                        "a lag below 0.1 ms is no memory at all"
+                    }
+                    .into(),
+                });
+            }
             params.insert("lag_s".into(), m.friction_lag_s);
             (m, n)
         }
@@ -192,6 +315,16 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
             let (x, _, n) = nelder_mead(|x| misfit(&build(x)), &[0.0, 0.0], &[1.0, 1.0], max_evals);
             let m = build(&x);
             let mid = m.mid.expect("set above");
+            if !(0.02..0.98).contains(&logistic(x[1])) {
+                at_bounds.push(AtBound {
+                    parameter: "stiffness_split",
+                    bound: mid.split,
+                    unconstrained: logistic(x[1]),
+                    stderr: f64::NAN,
+                    meaning: "the mid inertia sits at an end of the shaft: no second degree of freedom inside it"
+                        .into(),
+                });
+            }
             params.insert("mid_inertia_kgm2".into(), mid.inertia_kgm2);
             params.insert("stiffness_split".into(), mid.split);
             (m, n)
@@ -219,18 +352,36 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
         }
     };
     let calibration_misfit = misfit(&model);
-    Ok(Fitted { model, params, calibration_misfit, evaluations: evals })
+    // A structural re-derivation reports the dampings its least squares pinned.
+    if model.structure != current.structure {
+        let (_, info) = derive(ev.data, &ev.windows[cal], ev.slip_speed_rpm, model.structure)?;
+        at_bounds.extend(info.at_bounds);
+    }
+    Ok(Fitted { model, at_bounds, params, calibration_misfit, evaluations: evals })
+}
+
+/// Largest channel delay the `channel_delay` candidate scans, s (±50 ms: a fifth
+/// of a stick-slip cycle, far beyond any filter or sampling lag of the rig).
+pub const MAX_DELAY_S: f64 = 0.05;
+
+/// `current` re-derived by least squares under structure `st`: J, k, c (and
+/// c_a) refitted; the law too unless a simulation fit chose `current`'s law (kept
+/// then); the other effects carried over.
+fn restructure(current: &Model, ev: &Evaluator, st: Structure) -> Result<Model, LaviError> {
+    let keep_law = !law_is_derived(current, ev)?;
+    let (mut m, _) = derive(ev.data, &ev.windows[ev.calibration()], ev.slip_speed_rpm, st)?;
+    m.friction_lag_s = current.friction_lag_s;
+    m.mid = current.mid;
+    m.drive = current.drive;
+    if keep_law {
+        m.friction = current.friction;
+    }
+    Ok(m)
 }
 
 /// True when `current`'s law is still the least-squares one of [`derive`] (no simulation fit chose it).
 fn law_is_derived(current: &Model, ev: &Evaluator) -> Result<bool, LaviError> {
-    let (m, _) = derive(
-        ev.data,
-        &ev.windows[ev.calibration()],
-        ev.slip_speed_rpm,
-        current.wob_ref_n.is_some(),
-        current.sensor_inertia_kgm2,
-    )?;
+    let (m, _) = derive(ev.data, &ev.windows[ev.calibration()], ev.slip_speed_rpm, current.structure)?;
     Ok(m.friction == current.friction)
 }
 

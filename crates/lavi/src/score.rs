@@ -6,31 +6,43 @@
 //! stick fraction but at least 0.01 (25 % of 0.04, so a window that hardly sticks
 //! does not divide by zero; `stick_fraction`), 3 % of the measured fundamental
 //! (`fundamental_hz`; a run without a line scores the cap) and 30 % of the
-//! measured loop area (`loop_area`). Each |e| is capped at 10 so that one
+//! measured loop area (`loop_area`), 10 % of the measured mean slip torque
+//! (`slip_torque_nm`) and of the measured break-away torque
+//! (`breakaway_torque_nm`: issue 26). A feature the measurement lacks (no stick
+//! phase ends in the window) scores 0 when the run lacks it too, the cap
+//! otherwise. Each |e| is capped at 10 so that one
 //! diverging feature cannot hide the others; M = √(mean e²). M ≤ 1 means the
 //! features are, in RMS, within their targets; a feature meets its target when |e| ≤ 1.
 
 use crate::LaviError;
 use crate::data::{Prepared, RPM_TO_RAD_S, WindowSpec, derivative};
-use crate::features::{FeatureOptions, Features, window_features};
+use crate::features::{FeatureOptions, Features, N_FEATURES, window_features};
 use crate::sim::{Inputs, Model, Run, Start, simulate};
 
 /// Cap on one feature's normalised error.
 pub const ERROR_CAP: f64 = 10.0;
 
-/// Normalised errors of the five features (order of [`crate::features::FEATURES`]).
-pub fn feature_errors(meas: &Features, sim: &Features) -> [f64; 5] {
+/// Normalised errors of the features (order of [`crate::features::FEATURES`]).
+pub fn feature_errors(meas: &Features, sim: &Features) -> [f64; N_FEATURES] {
     let tol = [
         0.10 * meas.bit_speed_max_rpm.abs(),
         10.0,
         0.25 * meas.stick_fraction.max(0.04),
         0.03 * meas.fundamental_hz,
         0.30 * meas.loop_area,
+        0.10 * meas.slip_torque_nm.abs(),
+        0.10 * meas.breakaway_torque_nm.abs(),
     ];
-    let mut e = [0.0; 5];
+    let mut e = [0.0; N_FEATURES];
     for (i, ei) in e.iter_mut().enumerate() {
         let x = (sim.get(i) - meas.get(i)) / tol[i];
-        *ei = if x.is_finite() { x.clamp(-ERROR_CAP, ERROR_CAP) } else { ERROR_CAP };
+        *ei = if x.is_finite() {
+            x.clamp(-ERROR_CAP, ERROR_CAP)
+        } else if meas.get(i).is_nan() && sim.get(i).is_nan() {
+            0.0
+        } else {
+            ERROR_CAP
+        };
     }
     e
 }

@@ -58,43 +58,12 @@ fn samples(ev: &Evaluator, m: &Model, wi: usize) -> Samples {
     s
 }
 
-/// Least squares with an intercept on the columns `cols` of `x`; returns (intercept, coefficients).
+/// Least squares with an intercept on the columns `cols` of `x` (the study's one
+/// path, [`crate::lsq::least_squares`]); returns (intercept, coefficients).
 fn lsq(x: &[[f64; 5]], y: &[f64], cols: &[usize]) -> Option<(f64, Vec<f64>)> {
-    let m = cols.len() + 1;
     let row = |i: usize| -> Vec<f64> { std::iter::once(1.0).chain(cols.iter().map(|&c| x[i][c])).collect() };
-    let (mut a, mut b) = (vec![vec![0.0; m]; m], vec![0.0; m]);
-    for (i, yi) in y.iter().enumerate() {
-        let xi = row(i);
-        for r in 0..m {
-            b[r] += xi[r] * yi;
-            for c in 0..m {
-                a[r][c] += xi[r] * xi[c];
-            }
-        }
-    }
-    // Gaussian elimination with partial pivoting.
-    #[allow(clippy::needless_range_loop)]
-    for col in 0..m {
-        let piv = (col..m).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        if a[piv][col].abs() < 1e-12 {
-            return None;
-        }
-        a.swap(col, piv);
-        b.swap(col, piv);
-        for r in col + 1..m {
-            let f = a[r][col] / a[col][col];
-            for c in col..m {
-                a[r][c] -= f * a[col][c];
-            }
-            b[r] -= f * b[col];
-        }
-    }
-    let mut sol = vec![0.0; m];
-    for r in (0..m).rev() {
-        let s: f64 = (r + 1..m).map(|c| a[r][c] * sol[c]).sum();
-        sol[r] = (b[r] - s) / a[r][r];
-    }
-    Some((sol[0], sol[1..].to_vec()))
+    let fit = crate::lsq::least_squares(y, cols.len() + 1, row)?;
+    Some((fit.coef[0], fit.coef[1..].to_vec()))
 }
 
 /// The signature of `m`'s leftover torque, best held-out gain first (terms with gain > 0 only).

@@ -4,7 +4,8 @@
 //! Baseline (Real et al. 2018, the lumped 1-DOF model of the rig; physics of a
 //! torsion spring driven at its top end):
 //!
-//! J Ω̇ = k φ + c (Ω_top − Ω) − T_f,   φ̇ = Ω_top − Ω,
+//! J Ω̇ = k φ + c (Ω_top − Ω) − c_a Ω − T_f,   φ̇ = Ω_top − Ω
+//! (c_a = 0 in the baseline; the `absolute_damping` candidate sets it),
 //!
 //! T_f(Ω) = sign(Ω) [T_k + (T_s − T_k) exp(−(|Ω|/v_s)^δ) + c_v |Ω|] in slip,
 //! and stick (Ω = 0) while the holding torque |k φ + c Ω_top| ≤ T_s (Karnopp).
@@ -22,11 +23,16 @@
 //!   plus K_i ∫(Ω_ref − Ω_top) minus the torque into the shaft, with Ω_ref the
 //!   measured top speed's moving mean (a PI speed loop; Newton on the motor).
 //!
-//! Integration: semi-implicit Euler with `substeps` steps per sample (0.2 ms
-//! at 1 kHz and 5 substeps; the compared band is below 10 Hz). Inputs are held
-//! linear between samples.
+//! - `channel_delay`: the torque channel reads T_m(t) = T_f(t − τ).
+//!
+//! Every model runs on the one simulator core, rig_model::one_dof (its docs
+//! state the integration: semi-implicit Euler, `substeps` steps per sample,
+//! inputs linear between samples); this module maps a [`Model`] onto it and
+//! applies the sensor's inertia and delay to the torque channel.
 
 use crate::LaviError;
+use crate::fit::Structure;
+use rig_model::one_dof::{self, Friction, MAX_FRICTION_STATES, MidInertia, OneDofState, Shaft};
 use serde::Serialize;
 
 /// Friction law at the reference normal force: T_k + (T_s − T_k) e^{−(|Ω|/v_s)^δ} + c_v |Ω| (N m).
@@ -72,7 +78,12 @@ pub struct Drive {
 pub struct Model {
     pub inertia_kgm2: f64,
     pub stiffness_nm_rad: f64,
+    /// c on the twist rate Ω_top − Ω.
     pub damping_nm_s_rad: f64,
+    /// c_a on the absolute bit speed Ω (a drag; 0 in the baseline).
+    pub absolute_damping_nm_s_rad: f64,
+    /// The torque channel is late on the speed channels by this much (0 in the baseline), s.
+    pub torque_delay_s: f64,
     pub friction: FrictionLaw,
     /// Some(W_ref): friction scales with W(t)/W_ref.
     pub wob_ref_n: Option<f64>,
@@ -81,6 +92,8 @@ pub struct Model {
     pub friction_lag_s: f64,
     pub mid: Option<MidDof>,
     pub drive: Option<Drive>,
+    /// How J, k, c (and the least-squares law) were derived (rig_lavi::fit).
+    pub structure: Structure,
 }
 
 /// What a free run is driven by (rad/s and N, one value per sample).
@@ -112,117 +125,95 @@ pub struct Run {
 
 const STICK_RAD_S: f64 = 1e-3;
 
-/// Integrates `m` from `start` under `u` (see the module docs).
+/// The contact of [`Model`] as a law of the one simulator core: the
+/// reference law scaled by W/W_ref, with the first-order memory as its state.
+struct Contact {
+    law: FrictionLaw,
+    lag_s: f64,
+}
+
+impl Friction for Contact {
+    fn static_nm(&self, scale: f64, _: &[f64; MAX_FRICTION_STATES]) -> Option<f64> {
+        Some(scale * self.law.static_nm)
+    }
+    fn slip_nm(&self, speed_rad_s: f64, scale: f64, state: &[f64; MAX_FRICTION_STATES]) -> f64 {
+        if self.lag_s > 0.0 { state[0] } else { scale * self.law.slip_nm(speed_rad_s) }
+    }
+    /// τ ṁ = |T_ss(Ω)| − m in slip (explicit step, clamped at one time constant); m = held torque in stick.
+    fn step_state(&self, state: &mut [f64; MAX_FRICTION_STATES], speed: f64, scale: f64, held: Option<f64>, h: f64) {
+        if self.lag_s > 0.0 {
+            let target = held.unwrap_or_else(|| scale * self.law.slip_nm(speed));
+            state[0] += if held.is_some() { 1.0 } else { (h / self.lag_s).min(1.0) } * (target - state[0]);
+        }
+    }
+}
+
+/// Integrates `m` from `start` under `u` (see the module docs) on the one
+/// simulator core, rig_model::one_dof; the sensor's inertia and delay act on its torque channel.
 pub fn simulate(m: &Model, u: &Inputs, start: Start, substeps: usize) -> Result<Run, LaviError> {
     let n = u.top_rad_s.len();
     if u.wob_n.len() != n || u.top_ref_rad_s.len() != n || n < 2 {
         return Err(LaviError::Input { what: "simulate", rule: "inputs must have equal lengths >= 2".into() });
     }
-    for (name, v) in [("inertia_kgm2", m.inertia_kgm2), ("stiffness_nm_rad", m.stiffness_nm_rad)] {
-        if !(v > 0.0 && v.is_finite()) {
-            return Err(LaviError::Input { what: "simulate", rule: format!("{name} = {v} must be finite and > 0") });
-        }
-    }
-    let steps = substeps.max(1);
-    let h = 1.0 / (u.fs_hz * steps as f64);
     let (k, c, jb) = (m.stiffness_nm_rad, m.damping_nm_s_rad, m.inertia_kgm2);
-    let (k1, k2, c1, c2) = match m.mid {
-        Some(d) => (k / d.split, k / (1.0 - d.split), c / d.split, c / (1.0 - d.split)),
-        None => (k, k, c, c),
+    let shaft = Shaft {
+        inertia_kgm2: jb,
+        stiffness_nm_rad: k,
+        twist_damping_nm_s_rad: c,
+        absolute_damping_nm_s_rad: m.absolute_damping_nm_s_rad,
+        mid: m.mid.map(|d| MidInertia { inertia_kgm2: d.inertia_kgm2, split: d.split }),
     };
     let w_ref = m.wob_ref_n.unwrap_or(1.0);
-    // Initial state from the measured start (quasi-static twist: J Ω̇ = k φ + c(Ω_top − Ω) − T_f).
+    let scale: Option<Vec<f64>> = m.wob_ref_n.map(|_| u.wob_n.iter().map(|w| w / w_ref).collect());
+    // Initial state from the measured start (quasi-static twist: J Ω̇ = k φ + c(Ω_top − Ω) − c_a Ω − T_f).
     let top0 = u.top_rad_s[0];
     let tf0 = start.torque_nm - m.sensor_inertia_kgm2 * start.bit_acc_rad_s2;
-    let tau0 = jb * start.bit_acc_rad_s2 + tf0;
-    let mut om = start.bit_rad_s;
-    let mut om1 = 0.5 * (top0 + om);
-    let (mut phi1, mut phi2) = match m.mid {
-        Some(_) => (tau0 / k1, tau0 / k2),
-        None => ((tau0 - c * (top0 - om)) / k, 0.0),
+    let om = start.bit_rad_s;
+    let tau0 = jb * start.bit_acc_rad_s2 + tf0 + m.absolute_damping_nm_s_rad * om;
+    let (upper, lower) = match m.mid {
+        Some(d) => (tau0 * d.split / k, tau0 * (1.0 - d.split) / k),
+        None => (0.0, (tau0 - c * (top0 - om)) / k),
     };
-    let mut om_top = top0;
-    let mut integ = match m.drive {
-        Some(d) if d.ki_nm_rad > 0.0 => tau0 / d.ki_nm_rad,
-        _ => 0.0,
+    let scale0 = scale.as_ref().map_or(1.0, |g| g[0]);
+    let state = OneDofState {
+        bit_rad_s: om,
+        twist_rad: lower,
+        upper_twist_rad: upper,
+        mid_rad_s: 0.5 * (top0 + om),
+        top_rad_s: top0,
+        loop_integral_rad: match m.drive {
+            Some(d) if d.ki_nm_rad > 0.0 => tau0 / d.ki_nm_rad,
+            _ => 0.0,
+        },
+        friction_state: [tf0.abs(), 0.0],
+        stuck: om.abs() < STICK_RAD_S && tau0.abs() <= scale0 * m.friction.static_nm,
     };
-    let mut mag = tf0.abs();
-    let scale0 = u.wob_n[0] / w_ref;
-    let mut stuck = om.abs() < STICK_RAD_S && tau0.abs() <= scale0 * m.friction.static_nm;
-    if stuck {
-        om = 0.0;
-    }
-    let mut out =
-        Run { bit_rad_s: Vec::with_capacity(n), torque_nm: Vec::with_capacity(n), top_rad_s: Vec::with_capacity(n) };
-    out.bit_rad_s.push(om);
-    out.torque_nm.push(start.torque_nm);
-    out.top_rad_s.push(om_top);
-    for i in 1..n {
-        let mut acc = 0.0;
-        let mut fric = 0.0;
-        for sub in 0..steps {
-            let a = (sub as f64 + 0.5) / steps as f64;
-            let lin = |x: &[f64]| x[i - 1] + a * (x[i] - x[i - 1]);
-            let top = if m.drive.is_some() { om_top } else { lin(u.top_rad_s) };
-            let g = if m.wob_ref_n.is_some() { lin(u.wob_n) / w_ref } else { 1.0 };
-            let ts = g * m.friction.static_nm;
-            // Torque the shaft applies to the bit, and at the top.
-            let (drive_bit, shaft_top) = match m.mid {
-                Some(_) => (k2 * phi2 + c2 * (om1 - om), k1 * phi1 + c1 * (top - om1)),
-                None => {
-                    let t = k * phi1 + c * (top - om);
-                    (t, t)
+    let drive = match m.drive {
+        Some(d) => one_dof::Drive::SpeedLoop {
+            inertia_kgm2: d.inertia_kgm2,
+            kp_nm_s_rad: d.kp_nm_s_rad,
+            ki_nm_rad: d.ki_nm_rad,
+            reference_rad_s: u.top_ref_rad_s,
+        },
+        None => one_dof::Drive::Speed(u.top_rad_s),
+    };
+    let contact = Contact { law: m.friction, lag_s: m.friction_lag_s };
+    let r =
+        one_dof::simulate(&shaft, &contact, drive, scale.as_deref(), state, u.fs_hz, n, substeps).map_err(
+            |e| match e {
+                rig_model::ModelError::IntegratorFailed { time_s, .. } => {
+                    LaviError::Diverged { sample: (time_s * u.fs_hz).round() as usize }
                 }
-            };
-            if stuck && drive_bit.abs() > ts {
-                stuck = false;
-                mag = ts;
-            }
-            if stuck {
-                acc = 0.0;
-                fric = drive_bit;
-                mag = drive_bit.abs();
-            } else {
-                let dir = if om.abs() > 0.0 { om.signum() } else { drive_bit.signum() };
-                let target = if om.abs() > 0.0 { g * m.friction.slip_nm(om) } else { ts };
-                if m.friction_lag_s > 0.0 {
-                    mag += (h / m.friction_lag_s).min(1.0) * (target - mag);
-                } else {
-                    mag = target;
-                }
-                fric = dir * mag;
-                acc = (drive_bit - fric) / jb;
-                let next = om + h * acc;
-                if (next == 0.0 || next.signum() != dir) && drive_bit.abs() <= ts {
-                    stuck = true;
-                    om = 0.0;
-                    acc = 0.0;
-                } else {
-                    om = next;
-                }
-            }
-            if let Some(d) = m.mid {
-                om1 += h * (shaft_top - drive_bit) / d.inertia_kgm2;
-                phi1 += h * (top - om1);
-                phi2 += h * (om1 - om);
-            } else {
-                phi1 += h * (top - om);
-            }
-            if let Some(d) = m.drive {
-                let r = lin(u.top_ref_rad_s);
-                let motor = d.kp_nm_s_rad * (r - om_top) + d.ki_nm_rad * integ;
-                om_top += h * (motor - shaft_top) / d.inertia_kgm2;
-                integ += h * (r - om_top);
-            }
-        }
-        if !(om.is_finite() && phi1.is_finite() && phi2.is_finite() && om_top.is_finite()) || om.abs() > 1e4 {
-            return Err(LaviError::Diverged { sample: i });
-        }
-        out.bit_rad_s.push(om);
-        out.torque_nm.push(fric + m.sensor_inertia_kgm2 * acc);
-        out.top_rad_s.push(if m.drive.is_some() { om_top } else { u.top_rad_s[i] });
-    }
-    Ok(out)
+                e => LaviError::Model(e),
+            },
+        )?;
+    let mut sensor: Vec<f64> =
+        r.friction_nm.iter().zip(&r.accel_rad_s2).map(|(f, a)| f + m.sensor_inertia_kgm2 * a).collect();
+    sensor[0] = start.torque_nm;
+    // A torque channel late by `torque_delay_s` reads, at sample i, the torque of sample i − d.
+    let d = (m.torque_delay_s * u.fs_hz).round() as usize;
+    let torque_nm = (0..n).map(|i| sensor[i.saturating_sub(d)]).collect();
+    Ok(Run { bit_rad_s: r.bit_rad_s, torque_nm, top_rad_s: r.top_rad_s })
 }
 
 #[cfg(test)]
@@ -234,6 +225,8 @@ mod tests {
             inertia_kgm2: 0.05,
             stiffness_nm_rad: 2.0,
             damping_nm_s_rad: 0.02,
+            absolute_damping_nm_s_rad: 0.0,
+            torque_delay_s: 0.0,
             friction: FrictionLaw {
                 static_nm: 1.8,
                 kinetic_nm: 1.0,
@@ -246,6 +239,7 @@ mod tests {
             friction_lag_s: 0.0,
             mid: None,
             drive: None,
+            structure: Structure::BASELINE,
         }
     }
 

@@ -2,7 +2,8 @@
 //! selection, the chapter's hypothesis (WOB), adequacy and signature.
 
 use crate::data::{Prepared, RPM_TO_RAD_S, WindowSpec, prepare, windows};
-use crate::fit::{Derivation, derive};
+use crate::eom::Damping;
+use crate::fit::{AtBound, Derivation, MAX_DELAY_S, Structure, best_delay_s, derive};
 use crate::render::{StudyOutput, render};
 use crate::score::Evaluator;
 use crate::select::{Selection, forward_select, mean};
@@ -39,6 +40,12 @@ pub struct Study {
     pub wob: WobHypothesis,
     pub adequate: bool,
     pub signature: Vec<SignatureTerm>,
+    /// Features of every step-1 candidate's free run per window (candidate order of the trials).
+    pub candidate_features: Vec<(Candidate, Vec<Features>)>,
+    /// The equation of motion under each structure tried, unconstrained (structure lead).
+    pub structures: Vec<(String, Derivation)>,
+    /// Parameters of the final model at a bound (least squares and simulation fits).
+    pub parameters_at_bounds: Vec<AtBound>,
 }
 
 impl Study {
@@ -63,7 +70,7 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
         stick_speed_rpm: p.stick_speed_rpm,
     };
     let ev = Evaluator::new(&d, wins.clone(), fopts, p.substeps, p.slip_speed_rpm, p.drive_ref_window_s)?;
-    let (baseline, derivation) = derive(&d, &wins[0], p.slip_speed_rpm, false, 0.0)?;
+    let (baseline, derivation) = derive(&d, &wins[0], p.slip_speed_rpm, Structure::BASELINE)?;
     let sim_features =
         |m: &Model| -> Vec<Features> { (0..wins.len()).map(|w| ev.features(m, w).unwrap_or(NAN_FEATURES)).collect() };
     let baseline_features = sim_features(&baseline);
@@ -73,6 +80,18 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
     let wob = wob_hypothesis(&ev, &selection)?;
     let adequate = mean(&selection.final_heldout) <= p.adequacy_threshold;
     let signature = if adequate { Vec::new() } else { residual_signature(&ev, &selection.final_model)? };
+    let candidate_features =
+        selection.trials.iter().filter(|t| t.step == 1).map(|t| (t.candidate, sim_features(&t.fitted.model))).collect();
+    let structures = structure_lead(&d, &wins[0], p.slip_speed_rpm, &selection)?;
+    let (_, final_der) = derive(&d, &wins[0], p.slip_speed_rpm, selection.final_model.structure)?;
+    let mut parameters_at_bounds = final_der.at_bounds;
+    for &i in &selection.chosen {
+        for b in &selection.trials[i].fitted.at_bounds {
+            if parameters_at_bounds.iter().all(|x| x.parameter != b.parameter) {
+                parameters_at_bounds.push(b.clone());
+            }
+        }
+    }
     let study = Study {
         params: p.clone(),
         windows: wins,
@@ -85,6 +104,9 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
         wob,
         adequate,
         signature,
+        candidate_features,
+        structures,
+        parameters_at_bounds,
     };
     Ok((study, d, rec))
 }
@@ -95,18 +117,48 @@ pub fn run_study(path: &Path, p: &StudyParams) -> Result<StudyOutput, LaviError>
     render(&study, &d, &rec)
 }
 
+/// The equation of motion of the calibration window under each structure the
+/// negative damping may point at: the damping on the twist rate (baseline), on
+/// the absolute bit speed, on both; a torque-channel delay (the best one by
+/// least squares within ±50 ms); the sensor inertia the `sensor_inertia`
+/// candidate fitted at step 1. Each unconstrained, with what it pins.
+fn structure_lead(
+    d: &Prepared,
+    cal: &WindowSpec,
+    slip_speed_rpm: f64,
+    sel: &Selection,
+) -> Result<Vec<(String, Derivation)>, LaviError> {
+    let b = Structure::BASELINE;
+    let tau = best_delay_s(d, cal, b, MAX_DELAY_S);
+    let js = sel
+        .trials
+        .iter()
+        .find(|t| t.step == 1 && t.candidate == Candidate::SensorInertia)
+        .map_or(0.0, |t| t.fitted.model.sensor_inertia_kgm2);
+    let list = [
+        ("damping on the twist rate (baseline)".to_string(), b),
+        ("damping on the absolute bit speed".to_string(), Structure { damping: Damping::Absolute, ..b }),
+        ("damping on both".to_string(), Structure { damping: Damping::Both, ..b }),
+        (format!("torque channel late by {:.0} ms", 1e3 * tau), Structure { torque_delay_s: tau, ..b }),
+        (format!("sensor inertia {js:.4} kg m2"), Structure { sensor_inertia_kgm2: js, ..b }),
+    ];
+    list.into_iter().map(|(name, st)| Ok((name, derive(d, cal, slip_speed_rpm, st)?.1))).collect()
+}
+
 const NAN_FEATURES: Features = Features {
     bit_speed_max_rpm: f64::NAN,
     bit_speed_min_rpm: f64::NAN,
     stick_fraction: f64::NAN,
     fundamental_hz: f64::NAN,
     loop_area: f64::NAN,
+    slip_torque_nm: f64::NAN,
+    breakaway_torque_nm: f64::NAN,
     cycles: 0,
 };
 
 fn wob_hypothesis(ev: &Evaluator, sel: &Selection) -> Result<WobHypothesis, LaviError> {
     let d = ev.data;
-    let (m, _) = derive(d, &ev.windows[0], ev.slip_speed_rpm, true, 0.0)?;
+    let (m, _) = derive(d, &ev.windows[0], ev.slip_speed_rpm, Structure { wob: true, ..Structure::BASELINE })?;
     let w_ref = m.wob_ref_n.unwrap_or(1.0);
     let mut loop_fraction = Vec::new();
     for (wi, w) in ev.windows.iter().enumerate() {

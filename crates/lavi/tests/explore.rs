@@ -1,13 +1,19 @@
 //! Developer aid (ignored): runs the study on ../shared and prints the numbers.
-#[test]
-#[ignore]
-fn explore() {
+
+/// Run 175's path and the `lavi` stage's params of pipeline.toml.
+fn setup() -> (std::path::PathBuf, rig_lavi::StudyParams) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/ufrj-lavi-2018/run-175.csv");
     let text =
         std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../pipeline.toml")).unwrap();
     let v: toml::Value = toml::from_str(&text).unwrap();
     let st = v["stage"].as_array().unwrap().iter().find(|s| s["name"].as_str() == Some("lavi")).unwrap();
-    let p: rig_lavi::StudyParams = st["params"].clone().try_into().unwrap();
+    (path, st["params"].clone().try_into().unwrap())
+}
+
+#[test]
+#[ignore]
+fn explore() {
+    let (path, p) = setup();
     let (s, _, _) = rig_lavi::study::analyse(&path, &p).unwrap();
     println!("baseline {:?}\n{:?}", s.baseline, s.derivation);
     for (i, w) in s.windows.iter().enumerate() {
@@ -33,4 +39,16 @@ fn explore() {
         );
     }
     println!("wob {:?} adequate {}", s.wob, s.adequate);
+}
+
+/// Developer aid (ignored): prints the repair audit of run 175.
+#[test]
+#[ignore]
+fn repairs() {
+    let (path, p) = setup();
+    let (_, d) = rig_lavi::data::prepare(&path, &p).unwrap();
+    println!("noise {} rad/s, twist {:?}, dips {:?}", d.top_noise_rad_s, d.twist_excursion_rad, d.glitches);
+    for r in &d.repairs {
+        println!("{r:?}");
+    }
 }

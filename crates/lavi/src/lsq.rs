@@ -1,0 +1,108 @@
+//! The study's one linear least-squares path (moved from rig_model, which does
+//! no fitting): normal equations solved by Gauss–Jordan elimination with
+//! partial pivoting, with (XᵀX)⁻¹ for the covariance. The equation-of-motion
+//! fit ([`crate::eom`]) and the residual signature ([`crate::signature`]) call
+//! [`least_squares`]; nothing else here solves a linear system, so moving to
+//! the workspace's shared solver is a change of this file.
+
+/// A least-squares solution of y ≈ X β.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LeastSquares {
+    pub coef: Vec<f64>,
+    /// (XᵀX)⁻¹: times the residual variance, the covariance of `coef`.
+    pub inverse: Vec<Vec<f64>>,
+    /// Σ (y − X β)².
+    pub sse: f64,
+    pub points: usize,
+}
+
+impl LeastSquares {
+    /// Residual variance s² = SSE / (n − p).
+    pub fn residual_variance(&self) -> f64 {
+        self.sse / (self.points.saturating_sub(self.coef.len())).max(1) as f64
+    }
+
+    /// Standard error of coefficient `j` (white-residual assumption).
+    pub fn stderr(&self, j: usize) -> f64 {
+        (self.residual_variance() * self.inverse[j][j]).max(0.0).sqrt()
+    }
+}
+
+/// Least squares of `y` on the rows produced by `row(i)` for i in 0..y.len()
+/// (each of the same length p). `None` when XᵀX is singular.
+pub fn least_squares(y: &[f64], p: usize, row: impl Fn(usize) -> Vec<f64>) -> Option<LeastSquares> {
+    let (mut ata, mut atb) = (vec![vec![0.0; p]; p], vec![0.0; p]);
+    for (i, yi) in y.iter().enumerate() {
+        let x = row(i);
+        for r in 0..p {
+            atb[r] += x[r] * yi;
+            for c in 0..p {
+                ata[r][c] += x[r] * x[c];
+            }
+        }
+    }
+    let (coef, inverse) = solve_with_inverse(ata, atb)?;
+    let sse = y
+        .iter()
+        .enumerate()
+        .map(|(i, yi)| {
+            let pred: f64 = row(i).iter().zip(&coef).map(|(x, b)| x * b).sum();
+            (yi - pred).powi(2)
+        })
+        .sum();
+    Some(LeastSquares { coef, inverse, sse, points: y.len() })
+}
+
+/// Solves `a x = b` (a small normal-equation matrix) by Gauss–Jordan elimination
+/// with partial pivoting; also returns a⁻¹ for the covariance.
+fn solve_with_inverse(mut a: Vec<Vec<f64>>, mut rhs: Vec<f64>) -> Option<(Vec<f64>, Vec<Vec<f64>>)> {
+    let m = rhs.len();
+    let mut inv: Vec<Vec<f64>> = (0..m).map(|i| (0..m).map(|j| if i == j { 1.0 } else { 0.0 }).collect()).collect();
+    let scale = (0..m).map(|i| a[i][i].abs()).fold(0.0, f64::max);
+    for col in 0..m {
+        let piv = (col..m).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
+        if a[piv][col].abs() <= 1e-13 * scale || a[piv][col].abs() < 1e-300 {
+            return None;
+        }
+        a.swap(col, piv);
+        inv.swap(col, piv);
+        rhs.swap(col, piv);
+        for r in 0..m {
+            if r != col {
+                let f = a[r][col] / a[col][col];
+                for c in 0..m {
+                    a[r][c] -= f * a[col][c];
+                    inv[r][c] -= f * inv[col][c];
+                }
+                rhs[r] -= f * rhs[col];
+            }
+        }
+    }
+    let x = (0..m).map(|i| rhs[i] / a[i][i]).collect();
+    for (i, row) in inv.iter_mut().enumerate() {
+        let d = a[i][i];
+        row.iter_mut().for_each(|v| *v /= d);
+    }
+    Some((x, inv))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_line_is_recovered_with_its_textbook_stderr() {
+        // y = 1 + 2x + e, e = ±0.1 alternating on x = 0..9: β exact up to the
+        // alternating residual, whose projection on (1, x) is known.
+        let y: Vec<f64> = (0..10).map(|i| 1.0 + 2.0 * i as f64 + if i % 2 == 0 { 0.1 } else { -0.1 }).collect();
+        let f = least_squares(&y, 2, |i| vec![1.0, i as f64]).unwrap();
+        // Slope = 2 + Σ(x − x̄)e / Σ(x − x̄)² (the normal equations of a line).
+        let sxx = 82.5;
+        let sxe: f64 = (0..10).map(|i| (i as f64 - 4.5) * if i % 2 == 0 { 0.1 } else { -0.1 }).sum();
+        assert!((f.coef[1] - (2.0 + sxe / sxx)).abs() < 1e-12, "{f:?}");
+        let s2 = f.sse / 8.0;
+        assert!((f.stderr(1) - (s2 / sxx).sqrt()).abs() < 1e-12);
+        // Collinear columns are refused.
+        assert!(least_squares(&y, 2, |i| vec![i as f64, 2.0 * i as f64]).is_none());
+    }
+}
