@@ -9,6 +9,7 @@ mod harmonic;
 mod lavi;
 mod report;
 mod simulation;
+mod slider;
 mod spectra;
 mod sweeps;
 mod thesis;
@@ -50,6 +51,7 @@ const STAGES: &[Entry] = &[
     entry("harmonic", harmonic::run, "harmonic.rs", Some(typed::<harmonic::Params>)),
     entry("diagnosis", diagnosis::run, "diagnosis.rs", Some(typed::<rig_diagnose::DiagnoseOptions>)),
     entry("lavi", lavi::run, "lavi.rs", Some(typed::<rig_lavi::StudyParams>)),
+    entry("slider", slider::run, "slider.rs", Some(typed::<rig_slider::StudyParams>)),
     entry("confusion", confusion::run, "confusion.rs", Some(typed::<confusion::ConfusionParams>)),
     entry("report", report::run, "report.rs", Some(typed::<report::Params>)),
 ];
