@@ -270,15 +270,20 @@ fn diagnosis_json(s: &Study) -> Value {
             "relative_gain": 1.0 - c.heldout_mean / base.heldout_mean,
         }));
     }
-    let adequate = final_mean <= s.params.adequacy_threshold;
     let final_c = s.chosen.map(|c| &s.candidates[c]).unwrap_or(base);
+    let adequate = adequate(s, final_c);
     if !adequate {
-        let where_: Vec<String> = final_c.heldout.iter().filter(|h| h.1 > s.params.adequacy_threshold).map(|h| s.runs[h.0].name.clone()).collect();
+        let where_: Vec<String> = final_c
+            .heldout
+            .iter()
+            .filter(|h| h.1 > s.params.adequacy_threshold || h.2.regime != s.runs[h.0].features.regime)
+            .map(|h| s.runs[h.0].name.clone())
+            .collect();
         let ext = extension(s);
         findings.push(json!({
             "effect": "unexplained",
             "evidence": format!(
-                "mean held-out misfit {:.2} of the final model ({}) is above the adequacy threshold {}; runs above it: {}",
+                "the final model ({1}) has a mean held-out misfit of {0:.2} (adequacy threshold {2}) and misses the regime or exceeds the threshold at: {3}",
                 final_mean, final_c.fitted.candidate.id(), s.params.adequacy_threshold, where_.join(", ")),
             "residual_over_noise": final_mean / s.params.adequacy_threshold,
             "where": where_,
@@ -321,6 +326,11 @@ fn diagnosis_json(s: &Study) -> Value {
         "structure": {"notes": "one mass on one spring with an imposed drive speed; the friction law is the only thing the candidates change"},
         "parameters_at_bounds": at_bounds,
     })
+}
+
+/// Adequate: mean held-out misfit at most the threshold and every held-out regime right.
+fn adequate(s: &Study, c: &CandidateResult) -> bool {
+    c.heldout_mean <= s.params.adequacy_threshold && c.heldout.iter().all(|h| h.2.regime == s.runs[h.0].features.regime)
 }
 
 fn evidence(s: &Study, c: &CandidateResult) -> String {

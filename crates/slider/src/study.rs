@@ -41,7 +41,8 @@ pub struct StudyParams {
     pub fit_evals: usize,
     /// An extension must lower the mean held-out misfit by this fraction...
     pub min_relative_gain: f64,
-    /// ...and the model is adequate when its mean held-out misfit is at most this.
+    /// ...and the model is adequate when its mean held-out misfit is at most
+    /// this and it gets the regime of every held-out run right.
     pub adequacy_threshold: f64,
     pub features: FeatureOptions,
 }
