@@ -66,8 +66,8 @@
 mod columns;
 mod error;
 pub mod lavi;
-pub mod slider;
 mod manifest;
+pub mod slider;
 pub mod thesis;
 
 pub use error::IngestError;

@@ -66,7 +66,11 @@ pub fn read_slider_folder(dir: &Path) -> Result<Vec<SliderRun>, IngestError> {
     }
     files.sort();
     if files.is_empty() {
-        return Err(IngestError::rule(&runs_dir, None, "no runs: expected files named k<k>-v<V>.csv (k in N/m, V in µm/s)"));
+        return Err(IngestError::rule(
+            &runs_dir,
+            None,
+            "no runs: expected files named k<k>-v<V>.csv (k in N/m, V in µm/s)",
+        ));
     }
     let mut runs: Vec<SliderRun> = Vec::with_capacity(files.len());
     for path in files {
@@ -79,7 +83,11 @@ pub fn read_slider_folder(dir: &Path) -> Result<Vec<SliderRun>, IngestError> {
             ));
         };
         if let Some(twin) = runs.iter().find(|r| r.stiffness_n_m == k && r.drive_speed_um_s == v) {
-            return Err(IngestError::rule(&path, None, format!("(k, V) = ({k} N/m, {v} µm/s) already given by {}.csv", twin.name)));
+            return Err(IngestError::rule(
+                &path,
+                None,
+                format!("(k, V) = ({k} N/m, {v} µm/s) already given by {}.csv", twin.name),
+            ));
         }
         let mut cols = read_numeric_csv(&path, COLUMNS, TimeStart::Any)?.into_iter().map(|c| match c {
             ColValues::Float(v) => v,
@@ -92,7 +100,9 @@ pub fn read_slider_folder(dir: &Path) -> Result<Vec<SliderRun>, IngestError> {
         }
         runs.push(SliderRun { name: stem, stiffness_n_m: k, drive_speed_um_s: v, time_s, force_over_weight });
     }
-    runs.sort_by(|a, b| a.stiffness_n_m.total_cmp(&b.stiffness_n_m).then(a.drive_speed_um_s.total_cmp(&b.drive_speed_um_s)));
+    runs.sort_by(|a, b| {
+        a.stiffness_n_m.total_cmp(&b.stiffness_n_m).then(a.drive_speed_um_s.total_cmp(&b.drive_speed_um_s))
+    });
     Ok(runs)
 }
 

@@ -33,14 +33,30 @@ fn main() {
     let s = run_study(std::path::Path::new(&dir), &p).expect("study");
     println!("wall {:.2} s", t.elapsed().as_secs_f64());
     for c in &s.candidates {
-        println!("{:?} params {:?} cal {:.3} heldout {:.3} at_bounds {:?}", c.fitted.candidate, c.fitted.params, c.fitted.calibration_misfit, c.heldout_mean, c.fitted.at_bounds);
+        println!(
+            "{:?} params {:?} cal {:.3} heldout {:.3} at_bounds {:?}",
+            c.fitted.candidate, c.fitted.params, c.fitted.calibration_misfit, c.heldout_mean, c.fitted.at_bounds
+        );
         for (i, r) in s.runs.iter().enumerate() {
             let f = &c.predicted[i];
             let h = c.heldout.iter().find(|h| h.0 == i).unwrap();
-            println!("  {:12} meas {:?} P={:.3} D={:.3} O={:.3} | fit {:?} P={:.3} D={:.3} O={:.3} | heldout {:?} P={:.3} D={:.3} O={:.3} m={:.2}", r.name,
-                r.features.regime, r.features.period_s.median, r.features.drop.median, r.features.onset.median,
-                f.regime, f.period_s.median, f.drop.median, f.onset.median,
-                h.2.regime, h.2.period_s.median, h.2.drop.median, h.2.onset.median, h.1);
+            println!(
+                "  {:12} meas {:?} P={:.3} D={:.3} O={:.3} | fit {:?} P={:.3} D={:.3} O={:.3} | heldout {:?} P={:.3} D={:.3} O={:.3} m={:.2}",
+                r.name,
+                r.features.regime,
+                r.features.period_s.median,
+                r.features.drop.median,
+                r.features.onset.median,
+                f.regime,
+                f.period_s.median,
+                f.drop.median,
+                f.onset.median,
+                h.2.regime,
+                h.2.period_s.median,
+                h.2.drop.median,
+                h.2.onset.median,
+                h.1
+            );
         }
     }
     println!("chosen {:?}", s.chosen);

@@ -159,7 +159,7 @@ pub fn features(time_s: &[f64], force: &[f64], c: &RunConstants, o: &FeatureOpti
     assert_eq!(time_s.len(), force.len(), "one time per sample");
     let n = time_s.len();
     let fs = (n.max(2) - 1) as f64 / (time_s[n - 1] - time_s[0]);
-    let half = ((o.median_window_s * fs / 2.0).round() as usize).max(0);
+    let half = (o.median_window_s * fs / 2.0).round() as usize;
     let f = running_median(force, half);
     let natural_period_s = 2.0 * std::f64::consts::PI * (c.mass_kg / c.stiffness_n_m).sqrt();
     let load_rate = c.stiffness_n_m * c.drive_speed_m_s / (c.mass_kg * c.gravity_m_s2);
@@ -311,7 +311,15 @@ mod tests {
     use super::*;
 
     fn opts() -> FeatureOptions {
-        FeatureOptions { median_window_s: 0.0025, min_drop: 0.02, segments: 5, min_events: 3, noise_multiple: 3.0, stick_regime_fraction: 0.5, inertial_ratio: 3.0 }
+        FeatureOptions {
+            median_window_s: 0.0025,
+            min_drop: 0.02,
+            segments: 5,
+            min_events: 3,
+            noise_multiple: 3.0,
+            stick_regime_fraction: 0.5,
+            inertial_ratio: 3.0,
+        }
     }
 
     #[test]
@@ -342,11 +350,13 @@ mod tests {
         let c = RunConstants { stiffness_n_m: 2254.0, drive_speed_m_s: 1.1e-3, mass_kg: 0.0307, gravity_m_s2: 9.81 };
         let t0 = 2.0 * std::f64::consts::PI * (c.mass_kg / c.stiffness_n_m).sqrt();
         let t: Vec<f64> = (0..4000).map(|i| i as f64 / 2000.0).collect();
-        let f: Vec<f64> = t.iter().map(|&t| 0.33 + 0.04 * (2.0 * std::f64::consts::PI * t / (1.1 * t0)).sin()).collect();
+        let f: Vec<f64> =
+            t.iter().map(|&t| 0.33 + 0.04 * (2.0 * std::f64::consts::PI * t / (1.1 * t0)).sin()).collect();
         let r = features(&t, &f, &c, &opts());
         assert_eq!(r.regime, Regime::InertialOscillation);
         assert!((r.period_s.median / (1.1 * t0) - 1.0).abs() < 0.03, "{:?}", r.period_s);
-        let quiet: Vec<f64> = t.iter().enumerate().map(|(i, _)| 0.33 + 0.005 * ((i * 7919) % 13) as f64 / 13.0).collect();
+        let quiet: Vec<f64> =
+            t.iter().enumerate().map(|(i, _)| 0.33 + 0.005 * ((i * 7919) % 13) as f64 / 13.0).collect();
         assert_eq!(features(&t, &quiet, &c, &opts()).regime, Regime::SteadySliding);
     }
 }

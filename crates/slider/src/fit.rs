@@ -122,16 +122,28 @@ pub fn run_misfit(m: &Features, s: &Features) -> f64 {
     (terms.iter().map(|t| t * t).sum::<f64>() / terms.len() as f64).sqrt()
 }
 
+/// A map of a parameter onto the search axis and back.
+type AxisMap = fn(f64) -> f64;
+const LN: AxisMap = f64::ln;
+const EXP: AxisMap = f64::exp;
+const IDENTITY: AxisMap = |v| v;
+
 /// Coordinate descent: `sweeps` passes of Brent over each parameter within
 /// its bounds (in log where flagged), `evals` evaluations per line search.
 /// Returns the best vector and its cost.
-pub fn fit(cand: Candidate, start: &[f64], sweeps: usize, evals: usize, cost: impl Fn(&[f64]) -> f64) -> (Vec<f64>, f64) {
+pub fn fit(
+    cand: Candidate,
+    start: &[f64],
+    sweeps: usize,
+    evals: usize,
+    cost: impl Fn(&[f64]) -> f64,
+) -> (Vec<f64>, f64) {
     let specs = cand.params();
     let mut x: Vec<f64> = start.iter().zip(specs).map(|(v, s)| v.clamp(s.lo, s.hi)).collect();
     let mut best = cost(&x);
     for _ in 0..sweeps {
         for (j, s) in specs.iter().enumerate() {
-            let (to, from): (fn(f64) -> f64, fn(f64) -> f64) = if s.log { (f64::ln, f64::exp) } else { (|v| v, |v| v) };
+            let (to, from) = if s.log { (LN, EXP) } else { (IDENTITY, IDENTITY) };
             let mut trial = x.clone();
             let u = brent_min(to(s.lo), to(s.hi), 1e-3 * (to(s.hi) - to(s.lo)).abs(), evals, |u| {
                 trial[j] = from(u);

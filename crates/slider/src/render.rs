@@ -21,6 +21,19 @@ pub struct StudyOutput {
     pub diagnosis: Value,
 }
 
+/// What the literature says a Coulomb law misses on paper on paper, and what
+/// this study could and could not show of it (the text of slider.md).
+const CAUSE: &str = "The cause, from the literature on paper on paper (Heslot, Baumberger, Perrin, Caroli & Caroli, \
+Phys. Rev. E 49, 4973 (1994); Baumberger & Caroli, Adv. Phys. 55, 279 (2006)): the interface has a memory. At rest its \
+static threshold grows with the time stuck, μs(t) ≈ μs0 + B ln(1 + t/τ) (contacts age); sliding, the friction relaxes over \
+a length Dc of about a micrometre; before a slip the slider creeps. A Coulomb law has no memory: it sticks rigidly \
+(no creep), its threshold does not depend on the stick time, and it stick-slips at any stiffness. Rate-and-state \
+friction (Dieterich–Ruina) turns this into a stability boundary in (k, V): below k_c = m g (b − a)/Dc the sliding is \
+unstable (stick-slip; creep-dominated near k_c), above it the slider slides steadily, and at high V inertia turns the \
+bifurcation into nearly harmonic oscillations near 2π√(m/k) (the inertial regime). The candidates here are two forms of that \
+memory (static ageing with a rate-strengthening kinetic law; rate-and-state with the ageing law), fitted by simulation \
+on the calibration runs; whether they earn their place is the held-out test below.";
+
 /// The issue's bounds on a prediction at an unseen stiffness, checked on one run.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Bounds {
@@ -75,8 +88,25 @@ pub fn render(s: &Study) -> StudyOutput {
     let mut out = StudyOutput::default();
     // Measured features with their spread over events.
     let mut ft = Table::new([
-        "run", "k_n_m", "v_um_s", "regime", "events", "natural_period_s", "period_s", "period_sd_s", "drop", "drop_sd", "onset",
-        "onset_sd", "stick_fraction", "stick_fraction_sd", "creep", "creep_sd", "mean_force", "noise_sd", "hysteresis",
+        "run",
+        "k_n_m",
+        "v_um_s",
+        "regime",
+        "events",
+        "natural_period_s",
+        "period_s",
+        "period_sd_s",
+        "drop",
+        "drop_sd",
+        "onset",
+        "onset_sd",
+        "stick_fraction",
+        "stick_fraction_sd",
+        "creep",
+        "creep_sd",
+        "mean_force",
+        "noise_sd",
+        "hysteresis",
     ]);
     for r in &s.runs {
         let f = &r.features;
@@ -104,7 +134,15 @@ pub fn render(s: &Study) -> StudyOutput {
     }
     out.tables.push(("tables/slider-features.csv".into(), ft));
     // Candidates.
-    let mut ct = Table::new(["candidate", "params", "at_bounds", "calibration_misfit", "heldout_misfit", "regimes_right_fitted", "regimes_right_heldout"]);
+    let mut ct = Table::new([
+        "candidate",
+        "params",
+        "at_bounds",
+        "calibration_misfit",
+        "heldout_misfit",
+        "regimes_right_fitted",
+        "regimes_right_heldout",
+    ]);
     for c in &s.candidates {
         ct.push([
             c.fitted.candidate.id().into(),
@@ -113,14 +151,32 @@ pub fn render(s: &Study) -> StudyOutput {
             f4(c.fitted.calibration_misfit),
             f4(c.heldout_mean),
             format!("{}/{}", regimes_right(s, &c.predicted), s.runs.len()),
-            format!("{}/{}", c.heldout.iter().filter(|h| s.runs[h.0].features.regime == h.2.regime).count(), c.heldout.len()),
+            format!(
+                "{}/{}",
+                c.heldout.iter().filter(|h| s.runs[h.0].features.regime == h.2.regime).count(),
+                c.heldout.len()
+            ),
         ]);
     }
     out.tables.push(("tables/slider-candidates.csv".into(), ct));
     // Held-out predictions and the issue's bounds.
     let mut pt = Table::new([
-        "candidate", "run", "misfit", "regime_measured", "regime_predicted", "period_s", "drop", "onset", "regime_ok", "inertial_period_15pc",
-        "period_factor2", "drop_factor2", "onset_005", "period_resolved", "drop_resolved", "onset_resolved",
+        "candidate",
+        "run",
+        "misfit",
+        "regime_measured",
+        "regime_predicted",
+        "period_s",
+        "drop",
+        "onset",
+        "regime_ok",
+        "inertial_period_15pc",
+        "period_factor2",
+        "drop_factor2",
+        "onset_005",
+        "period_resolved",
+        "drop_resolved",
+        "onset_resolved",
     ]);
     for c in &s.candidates {
         for (i, m, f) in &c.heldout {
@@ -164,7 +220,8 @@ fn regimes_right(s: &Study, pred: &[Features]) -> usize {
 
 /// The extension: the chosen candidate, else the best non-baseline one.
 fn extension(s: &Study) -> &CandidateResult {
-    let best = (1..s.candidates.len()).min_by(|&a, &b| s.candidates[a].heldout_mean.total_cmp(&s.candidates[b].heldout_mean));
+    let best =
+        (1..s.candidates.len()).min_by(|&a, &b| s.candidates[a].heldout_mean.total_cmp(&s.candidates[b].heldout_mean));
     &s.candidates[s.chosen.or(best).unwrap_or(0)]
 }
 
@@ -209,7 +266,12 @@ fn figures(s: &Study, out: &mut StudyOutput) {
         for k in distinct(s.runs.iter().map(|r| r.stiffness_n_m)) {
             let idx: Vec<usize> = (0..s.runs.len()).filter(|&i| s.runs[i].stiffness_n_m == k).collect();
             let x: Vec<f64> = idx.iter().map(|&i| s.runs[i].drive_speed_um_s.log10()).collect();
-            sers.push(series(&format!("measured, k = {k} N/m"), x.clone(), idx.iter().map(|&i| pick(&s.runs[i].features)).collect(), SeriesStyle::Markers));
+            sers.push(series(
+                &format!("measured, k = {k} N/m"),
+                x.clone(),
+                idx.iter().map(|&i| pick(&s.runs[i].features)).collect(),
+                SeriesStyle::Markers,
+            ));
             for (c, style) in [(&s.candidates[0], SeriesStyle::Dashed), (ext, SeriesStyle::Line)] {
                 let y: Vec<f64> = idx
                     .iter()
@@ -248,8 +310,14 @@ fn heldout_names(s: &Study, c: &CandidateResult) -> Vec<String> {
 fn diagnosis_json(s: &Study) -> Value {
     let base = &s.candidates[0];
     let params_of = |c: &CandidateResult| -> Value {
-        let m: serde_json::Map<String, Value> =
-            c.fitted.candidate.params().iter().zip(&c.fitted.params).map(|(p, v)| (p.name.to_string(), json!(v))).collect();
+        let m: serde_json::Map<String, Value> = c
+            .fitted
+            .candidate
+            .params()
+            .iter()
+            .zip(&c.fitted.params)
+            .map(|(p, v)| (p.name.to_string(), json!(v)))
+            .collect();
         Value::Object(m)
     };
     let nulls = |c: &CandidateResult| -> Value {
@@ -368,7 +436,10 @@ fn markdown(s: &Study) -> String {
         }
     );
     let _ = writeln!(md, "## Measured features (median ± sd over slip events)\n");
-    let _ = writeln!(md, "| run | regime | events | T0 [s] | period [s] | drop | onset | stick fraction | creep before slip |");
+    let _ = writeln!(
+        md,
+        "| run | regime | events | T0 [s] | period [s] | drop | onset | stick fraction | creep before slip |"
+    );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|");
     for r in &s.runs {
         let f = &r.features;
@@ -388,7 +459,10 @@ fn markdown(s: &Study) -> String {
         );
     }
     let _ = writeln!(md, "\n## Candidates (fitted on all calibration runs; held-out misfit from the held-out fits)\n");
-    let _ = writeln!(md, "| law | parameters | calibration misfit | held-out misfit | regimes right (fitted) | regimes right (held out) | at bounds |");
+    let _ = writeln!(
+        md,
+        "| law | parameters | calibration misfit | held-out misfit | regimes right (fitted) | regimes right (held out) | at bounds |"
+    );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|");
     for c in &s.candidates {
         let _ = writeln!(
@@ -406,7 +480,10 @@ fn markdown(s: &Study) -> String {
         );
     }
     let _ = writeln!(md, "\n## Held-out predictions against the issue's bounds\n");
-    let _ = writeln!(md, "| law | run | regime (measured → predicted) | inertial period ±15 % | period ×2 | drop ×2 | onset ±0.05 |");
+    let _ = writeln!(
+        md,
+        "| law | run | regime (measured → predicted) | inertial period ±15 % | period ×2 | drop ×2 | onset ±0.05 |"
+    );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|");
     for c in &s.candidates {
         for (i, _, f) in &c.heldout {
@@ -426,6 +503,40 @@ fn markdown(s: &Study) -> String {
             );
         }
     }
+    let _ = writeln!(md, "\n## What the Coulomb law gets wrong, held out\n");
+    let base = &s.candidates[0];
+    let mut any = false;
+    for (i, m, f) in &base.heldout {
+        let r = &s.runs[*i];
+        let b = bounds(&r.features, f);
+        let bad = !b.regime || [b.inertial_period, b.period, b.drop, b.onset].contains(&Some(false));
+        if !bad {
+            continue;
+        }
+        any = true;
+        let _ = writeln!(
+            md,
+            "- {}: measured {} (period {:.4} s, drop {:.4}, onset {:.4}, stick fraction {:.2}, creep before slip {:.2}); \
+             Coulomb predicts {} (period {:.4} s, drop {:.4}, onset {:.4}, stick fraction {:.2}); misfit {:.2}.",
+            r.name,
+            r.features.regime.label(),
+            r.features.period_s.median,
+            r.features.drop.median,
+            r.features.onset.median,
+            r.features.stick_fraction.median,
+            r.features.creep.median,
+            f.regime.label(),
+            f.period_s.median,
+            f.drop.median,
+            f.onset.median,
+            f.stick_fraction.median,
+            m
+        );
+    }
+    if !any {
+        let _ = writeln!(md, "- nothing outside the issue's bounds on the held-out runs.");
+    }
+    let _ = writeln!(md, "\n{CAUSE}\n");
     let verdict = diagnosis_json(s)["verdict"].as_str().unwrap_or("").to_string();
     let _ = writeln!(md, "\n## Verdict: `{verdict}`\n");
     match s.chosen {
@@ -456,6 +567,12 @@ fn markdown(s: &Study) -> String {
         "Misfit (defined in `rig_slider::fit`): RMS over a run of the regime term (0 or 2), ln(period ratio)/ln 2 \
          (ln 1.15 for inertial oscillations), ln(drop ratio)/ln 2 and onset difference/0.05; 1 is a run at the issue's bounds.\n"
     );
-    let _ = writeln!(md, "Candidate ids: `{}`, `{}`, `{}` (crate docs of `rig_slider`).", Candidate::Coulomb.id(), Candidate::StaticAgeing.id(), Candidate::RateState.id());
+    let _ = writeln!(
+        md,
+        "Candidate ids: `{}`, `{}`, `{}` (crate docs of `rig_slider`).",
+        Candidate::Coulomb.id(),
+        Candidate::StaticAgeing.id(),
+        Candidate::RateState.id()
+    );
     md
 }

@@ -107,7 +107,8 @@ pub fn simulate(law: &Law, s: &Setup) -> Vec<f64> {
                     }
                     Law::StaticAgeing { mu_static0, ageing_beta, ageing_time_s, mu_kinetic0, alpha, v1_m_s } => {
                         let mu_s = mu_static0 + ageing_beta * (1.0 + stuck_s / ageing_time_s).ln();
-                        let v = coulomb_step(p, h * g, mu_s, |v| mu_kinetic0 + alpha * (1.0 + v / v1_m_s).ln(), &mut stuck);
+                        let v =
+                            coulomb_step(p, h * g, mu_s, |v| mu_kinetic0 + alpha * (1.0 + v / v1_m_s).ln(), &mut stuck);
                         stuck_s = if stuck { stuck_s + h } else { 0.0 };
                         v
                     }

@@ -7,10 +7,10 @@
 //! the default list), every stiffness is held out in turn and the laws are
 //! fitted on the others (leave one stiffness out); the study says which.
 
-use crate::fit::{CANDIDATES, Candidate, fit, run_misfit};
-use crate::features::{FeatureOptions, Features, RunConstants, features};
-use crate::sim::{Setup, simulate};
 use crate::SliderError;
+use crate::features::{FeatureOptions, Features, RunConstants, features};
+use crate::fit::{CANDIDATES, Candidate, fit, run_misfit};
+use crate::sim::{Setup, simulate};
 use rayon::prelude::*;
 use rig_ingest::slider::{SliderRun, read_slider_folder};
 use serde::{Deserialize, Serialize};
@@ -197,7 +197,10 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
     let is_cal = |k: f64| p.calibration_stiffnesses_n_m.iter().any(|&c| (c - k).abs() < 1e-9 * c.abs().max(1.0));
     let cal: Vec<usize> = (0..runs.len()).filter(|&i| is_cal(runs[i].stiffness_n_m)).collect();
     if cal.is_empty() {
-        return Err(SliderError::NoCalibration { listed: p.calibration_stiffnesses_n_m.clone(), folder: dir.to_path_buf() });
+        return Err(SliderError::NoCalibration {
+            listed: p.calibration_stiffnesses_n_m.clone(),
+            folder: dir.to_path_buf(),
+        });
     }
     let mut calibration_stiffnesses: Vec<f64> = cal.iter().map(|&i| runs[i].stiffness_n_m).collect();
     calibration_stiffnesses.dedup();
@@ -215,27 +218,30 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
     } else {
         vec![(cal.clone(), (0..runs.len()).filter(|i| !cal.contains(i)).collect())]
     };
-    let candidates: Vec<CandidateResult> = CANDIDATES.par_iter().map(|&cand| {
-        let all: Vec<&Measured> = cal.iter().map(|&i| &runs[i]).collect();
-        let fitted = fit_on(cand, &all, p);
-        let predicted: Vec<Features> = runs.par_iter().map(|r| predict(cand, &fitted.params, r, p)).collect();
-        let mut heldout = Vec::new();
-        for (inn, out) in &splits {
-            let refs: Vec<&Measured> = inn.iter().map(|&i| &runs[i]).collect();
-            let f = if inn == &cal { fitted.clone() } else { fit_on(cand, &refs, p) };
-            let pred: Vec<(usize, f64, Features)> = out
-                .par_iter()
-                .map(|&i| {
-                    let s = predict(cand, &f.params, &runs[i], p);
-                    (i, run_misfit(&runs[i].features, &s), s)
-                })
-                .collect();
-            heldout.extend(pred);
-        }
-        heldout.sort_by_key(|h| h.0);
-        let heldout_mean = heldout.iter().map(|h| h.1).sum::<f64>() / heldout.len().max(1) as f64;
-        CandidateResult { fitted, predicted, heldout, heldout_mean }
-    }).collect();
+    let candidates: Vec<CandidateResult> = CANDIDATES
+        .par_iter()
+        .map(|&cand| {
+            let all: Vec<&Measured> = cal.iter().map(|&i| &runs[i]).collect();
+            let fitted = fit_on(cand, &all, p);
+            let predicted: Vec<Features> = runs.par_iter().map(|r| predict(cand, &fitted.params, r, p)).collect();
+            let mut heldout = Vec::new();
+            for (inn, out) in &splits {
+                let refs: Vec<&Measured> = inn.iter().map(|&i| &runs[i]).collect();
+                let f = if inn == &cal { fitted.clone() } else { fit_on(cand, &refs, p) };
+                let pred: Vec<(usize, f64, Features)> = out
+                    .par_iter()
+                    .map(|&i| {
+                        let s = predict(cand, &f.params, &runs[i], p);
+                        (i, run_misfit(&runs[i].features, &s), s)
+                    })
+                    .collect();
+                heldout.extend(pred);
+            }
+            heldout.sort_by_key(|h| h.0);
+            let heldout_mean = heldout.iter().map(|h| h.1).sum::<f64>() / heldout.len().max(1) as f64;
+            CandidateResult { fitted, predicted, heldout, heldout_mean }
+        })
+        .collect();
     let base = candidates[0].heldout_mean;
     let chosen = (1..candidates.len())
         .filter(|&c| !candidates[c].heldout.is_empty())
@@ -254,5 +260,14 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
         })
         .collect();
     let folder_name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    Ok(Study { params: p.clone(), runs, leave_one_out, calibration_stiffnesses, candidates, chosen, folder_name, traces })
+    Ok(Study {
+        params: p.clone(),
+        runs,
+        leave_one_out,
+        calibration_stiffnesses,
+        candidates,
+        chosen,
+        folder_name,
+        traces,
+    })
 }

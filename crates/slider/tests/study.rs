@@ -27,7 +27,14 @@ fn shipped() -> Option<PathBuf> {
 }
 
 fn synthetic(k: f64, v_um_s: f64, duration_s: f64, f: rig_slider::Features) -> Measured {
-    Measured { name: format!("k{k}-v{v_um_s}"), stiffness_n_m: k, drive_speed_um_s: v_um_s, duration_s, sample_rate_hz: 2000.0, features: f }
+    Measured {
+        name: format!("k{k}-v{v_um_s}"),
+        stiffness_n_m: k,
+        drive_speed_um_s: v_um_s,
+        duration_s,
+        sample_rate_hz: 2000.0,
+        features: f,
+    }
 }
 
 #[test]
@@ -44,7 +51,9 @@ fn round_trip_recovers_a_coulomb_law() {
         assert_eq!(f.regime, Regime::StickSlip, "{k} {v}: {f:?}");
         runs.push(synthetic(k, v, 30.0, f));
     }
-    let cost = |x: &[f64]| runs.iter().map(|r| run_misfit(&r.features, &predict(Candidate::Coulomb, x, r, &p))).sum::<f64>() / 3.0;
+    let cost = |x: &[f64]| {
+        runs.iter().map(|r| run_misfit(&r.features, &predict(Candidate::Coulomb, x, r, &p))).sum::<f64>() / 3.0
+    };
     let (x, c) = fit(Candidate::Coulomb, &[0.35, 0.03], 3, 14, cost);
     assert!((x[0] - truth[0]).abs() < 0.01, "mu_static {} (truth {})", x[0], truth[0]);
     assert!((x[1] / truth[1] - 1.0).abs() < 0.1, "mu_drop {} (truth {})", x[1], truth[1]);
@@ -125,4 +134,3 @@ fn unseen_stiffness_is_predicted() {
         assert_eq!(b.inertial_period, Some(false), "{} at k2254-v4300: {b:?}", c.fitted.candidate.id());
     }
 }
-
