@@ -47,6 +47,22 @@ pub struct StudyParams {
     pub features: FeatureOptions,
 }
 
+impl StudyParams {
+    /// The `slider` stage's `[stage.params]` of a pipeline.toml text (for the
+    /// examples and tests, which run the study outside the pipeline with the
+    /// same settings); `Err` names what is missing or mistyped.
+    pub fn from_pipeline_toml(text: &str) -> Result<StudyParams, String> {
+        let doc: toml::Table = text.parse().map_err(|e| format!("pipeline.toml: {e}"))?;
+        let stage = doc
+            .get("stage")
+            .and_then(|s| s.as_array())
+            .and_then(|a| a.iter().find(|s| s.get("name").and_then(|n| n.as_str()) == Some("slider")))
+            .ok_or("pipeline.toml: no [[stage]] named slider")?;
+        let params = stage.get("params").cloned().ok_or("pipeline.toml: stage slider has no [stage.params]")?;
+        params.try_into().map_err(|e| format!("pipeline.toml: stage slider: {e}"))
+    }
+}
+
 /// One run's measurement.
 #[derive(Debug, Clone)]
 pub struct Measured {

@@ -11,9 +11,7 @@ use std::path::{Path, PathBuf};
 fn params() -> StudyParams {
     // The values of pipeline.toml's `slider` stanza.
     let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../pipeline.toml")).unwrap();
-    let doc: toml::Table = text.parse().unwrap();
-    let stage = doc["stage"].as_array().unwrap().iter().find(|s| s["name"].as_str() == Some("slider")).unwrap();
-    stage["params"].clone().try_into().unwrap()
+    StudyParams::from_pipeline_toml(&text).unwrap()
 }
 
 fn shipped() -> Option<PathBuf> {
