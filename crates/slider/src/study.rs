@@ -117,7 +117,7 @@ pub struct Study {
 }
 
 /// Points of a figure's trace at most.
-pub const TRACE_POINTS: usize = 1500;
+pub const TRACE_POINTS: usize = 400;
 
 impl Measured {
     fn constants(&self, p: &StudyParams) -> RunConstants {
