@@ -99,12 +99,22 @@ impl Candidate {
         }
     }
 
-    /// A starting point inside the bounds (from the measured mean force `mu`).
-    pub fn start(self, mu: f64) -> Vec<f64> {
+    /// Starting points inside the bounds (around the measured mean force
+    /// `mu`); the fit starts from the one with the lowest calibration misfit.
+    /// For the memory laws they span the literature's range for paper on
+    /// paper (a, b − a of 0.003–0.01, Dc of 0.3–3 µm, ageing over 0.01–1 s;
+    /// Heslot et al. 1994, Baumberger & Caroli 2006): where the search
+    /// starts, not a value it keeps.
+    pub fn starts(self, mu: f64) -> Vec<Vec<f64>> {
         match self {
-            Candidate::Coulomb => vec![mu + 0.02, 0.04],
-            Candidate::StaticAgeing => vec![mu, 0.01, 0.1, 0.03, 0.005],
-            Candidate::RateState => vec![mu, 0.01, 0.01, 1e-6], // paper on paper: a, b − a ≈ 0.01, Dc ≈ 1 µm (Heslot et al. 1994)
+            Candidate::Coulomb => vec![vec![mu + 0.02, 0.04], vec![mu + 0.01, 0.01], vec![mu + 0.05, 0.1]],
+            Candidate::StaticAgeing => [(0.002, 0.01), (0.002, 1.0), (0.01, 0.01), (0.01, 1.0)]
+                .iter()
+                .map(|&(beta, tau)| vec![mu, beta, tau, 0.03, 0.005])
+                .collect(),
+            Candidate::RateState => {
+                [0.003, 0.01].iter().flat_map(|&bma| [0.3e-6, 1e-6, 3e-6].map(|dc| vec![mu, 0.01, bma, dc])).collect()
+            }
         }
     }
 }

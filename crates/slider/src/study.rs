@@ -192,7 +192,14 @@ fn fit_on(cand: Candidate, runs: &[&Measured], p: &StudyParams) -> Fitted {
         let m: Vec<f64> = runs.par_iter().map(|r| run_misfit(&r.features, &predict(cand, x, r, p))).collect();
         m.iter().sum::<f64>() / m.len() as f64
     };
-    let (params, calibration_misfit) = fit(cand, &cand.start(mu), p.fit_sweeps, p.fit_evals, cost);
+    let start = cand
+        .starts(mu)
+        .into_iter()
+        .map(|x| (cost(&x), x))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, x)| x)
+        .expect("every candidate has a start");
+    let (params, calibration_misfit) = fit(cand, &start, p.fit_sweeps, p.fit_evals, cost);
     let at_bounds = cand
         .params()
         .iter()
