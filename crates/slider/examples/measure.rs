@@ -1,6 +1,7 @@
 //! Prints the measured features of every run of a slider folder (default:
 //! ../shared/data/ens-lyon-slider-2019) with pipeline.toml's settings:
-//! `cargo run --example measure -p rig-slider -- DIR`.
+//! `cargo build --workspace --examples && ./target/debug/examples/measure DIR`
+//! from the workspace root.
 
 use rig_slider::{StudyParams, study::measure};
 
