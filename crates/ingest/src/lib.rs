@@ -60,12 +60,14 @@
 //! CSV header is line 1.
 //!
 //! [`lavi::read_lavi`] reads the real UFRJ/LAVI stick-slip recording with the
-//! same CSV rules (without the start-at-zero rule).
+//! same CSV rules (without the start-at-zero rule); [`slider::read_slider_folder`]
+//! reads a spring–slider folder (`runs/k<k>-v<V>.csv`) with them too.
 
 mod columns;
 mod error;
 pub mod lavi;
 mod manifest;
+pub mod slider;
 pub mod thesis;
 
 pub use error::IngestError;

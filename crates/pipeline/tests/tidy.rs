@@ -7,7 +7,7 @@ use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-const ANALYSIS: [&str; 10] = [
+const ANALYSIS: [&str; 11] = [
     "rig-types",
     "rig-ingest",
     "rig-calibrate",
@@ -18,6 +18,7 @@ const ANALYSIS: [&str; 10] = [
     "rig-diagnose",
     "rig-figures",
     "rig-lavi",
+    "rig-slider",
 ];
 
 fn root() -> PathBuf {

@@ -9,6 +9,7 @@ mod harmonic;
 mod lavi;
 mod report;
 mod simulation;
+mod slider;
 mod spectra;
 mod sweeps;
 mod thesis;
@@ -55,6 +56,7 @@ const STAGES: &[Entry] = &[
     entry("diagnosis", diagnosis::run, "diagnosis.rs", Some(typed::<rig_diagnose::DiagnoseOptions>))
         .needs(DIAGNOSIS_NEEDS),
     entry("lavi", lavi::run, "lavi.rs", Some(typed::<rig_lavi::StudyParams>)),
+    entry("slider", slider::run, "slider.rs", Some(typed::<rig_slider::StudyParams>)),
     entry("confusion", confusion::run, "confusion.rs", Some(typed::<confusion::ConfusionParams>)),
     entry("report", report::run, "report.rs", Some(typed::<report::Params>)),
 ];

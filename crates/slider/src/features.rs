@@ -1,0 +1,362 @@
+//! The one feature function of the slider, for recordings and simulations
+//! alike ([`features`]): regime, stick-slip period, force drop per slip,
+//! force at slip onset, stick fraction and creep before slip, each with its
+//! spread over the slip events.
+//!
+//! The force carries impulsive noise (spikes, some below zero; Colas et al.
+//! 2019 treat denoising as part of the measurement problem). A running
+//! median over `median_window_s` removes spikes shorter than half the window
+//! and keeps a step (a slip) sharp, which a linear low-pass would smear; the
+//! window (2.5 ms by default) is a ninth of the stiffest spring's natural
+//! period (23 ms at 2254 N/m), so the inertial oscillation passes.
+//!
+//! Events: the turning points of the filtered force with a hysteresis (a
+//! maximum is confirmed when the force has fallen that much below it, and so
+//! on), the larger of `min_drop` and `noise_multiple` robust deviations of
+//! the record's noise ([`robust_noise_sd`]; 0 for a simulation), so noise
+//! makes no event.
+//! A slip is a maximum → next minimum; the force at slip onset is the
+//! maximum, the drop the difference, the period the time between successive
+//! maxima. The slider velocity follows from the force (the data's README):
+//! v = V − (m g/k) dF̂/dt, F̂ = F/(m g); in stick dF̂/dt = L = k V/(m g).
+//! Each loading phase (minimum → next maximum) is cut into `segments`
+//! pieces; a piece whose least-squares slope gives v < V/2 counts as stuck
+//! (stick fraction: stuck time over the cycle); creep before slip is
+//! 1 − s/L for the slope s of the last piece, the slider's mean speed over
+//! V just before it slips (0: stuck until the slip; 1: sliding at V).
+//!
+//! Regime: fewer than `min_events` slips → steady sliding; slips with a
+//! median stick fraction of at least `stick_regime_fraction` → stick-slip
+//! (a relaxation oscillation: the slider rests, then slips); slips with less,
+//! at a median period of at least `inertial_ratio` natural periods
+//! 2π√(m/k) → creep (still a relaxation, but the slider creeps through the
+//! loading phase instead of resting: Heslot et al. 1994's creep-dominated
+//! regime); shorter → inertial oscillation (the mass oscillates on its
+//! spring near its natural period and hardly rests).
+
+use serde::{Deserialize, Serialize};
+
+/// The feature function's settings (pipeline.toml's `[stage.params]`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FeatureOptions {
+    /// Running-median window, s.
+    pub median_window_s: f64,
+    /// Hysteresis of the turning points, in F/(m g).
+    pub min_drop: f64,
+    /// Pieces of each loading phase for the stick fraction and the creep.
+    pub segments: usize,
+    /// Fewer slips than this: steady sliding.
+    pub min_events: usize,
+    /// The hysteresis is at least this many robust noise deviations of the record.
+    pub noise_multiple: f64,
+    /// Slips with a median stick fraction at least this: stick-slip.
+    pub stick_regime_fraction: f64,
+    /// Otherwise: a median period of at least this many natural periods is creep, less is inertial oscillation.
+    pub inertial_ratio: f64,
+}
+
+/// The regime of a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Regime {
+    SteadySliding,
+    StickSlip,
+    Creep,
+    InertialOscillation,
+}
+
+impl Regime {
+    pub fn label(self) -> &'static str {
+        match self {
+            Regime::SteadySliding => "steady sliding",
+            Regime::StickSlip => "stick-slip",
+            Regime::Creep => "creep",
+            Regime::InertialOscillation => "inertial oscillation",
+        }
+    }
+}
+
+/// A feature over the events: median, standard deviation, count.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Spread {
+    pub median: f64,
+    pub sd: f64,
+    pub n: usize,
+}
+
+impl Spread {
+    /// Median, sample sd and count of `v` (NaN median and sd when empty).
+    pub fn of(v: &[f64]) -> Spread {
+        if v.is_empty() {
+            return Spread { median: f64::NAN, sd: f64::NAN, n: 0 };
+        }
+        let mut s = v.to_vec();
+        s.sort_by(f64::total_cmp);
+        let n = s.len();
+        let median = if n % 2 == 1 { s[n / 2] } else { 0.5 * (s[n / 2 - 1] + s[n / 2]) };
+        let mean = s.iter().sum::<f64>() / n as f64;
+        let sd = if n > 1 { (s.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt() } else { 0.0 };
+        Spread { median, sd, n }
+    }
+}
+
+/// The features of one run (measured or simulated).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Features {
+    pub regime: Regime,
+    /// Slip events found.
+    pub events: usize,
+    pub period_s: Spread,
+    /// Force drop per slip, F/(m g).
+    pub drop: Spread,
+    /// Force at slip onset, F/(m g).
+    pub onset: Spread,
+    pub stick_fraction: Spread,
+    /// Creep before slip: the slider's mean speed over V in the last piece of the loading phase.
+    pub creep: Spread,
+    /// Mean force over the record, F/(m g).
+    pub mean_force: f64,
+    /// 2π √(m/k), s.
+    pub natural_period_s: f64,
+    /// The record's robust noise deviation, F/(m g) ([`robust_noise_sd`]).
+    pub noise_sd: f64,
+    /// The hysteresis the events were found with, F/(m g).
+    pub hysteresis: f64,
+}
+
+impl Features {
+    /// No events: the features of a record not yet measured (steady, NaN spreads).
+    pub fn default_steady() -> Features {
+        let none = Spread::of(&[]);
+        Features {
+            regime: Regime::SteadySliding,
+            events: 0,
+            period_s: none,
+            drop: none,
+            onset: none,
+            stick_fraction: none,
+            creep: none,
+            mean_force: f64::NAN,
+            natural_period_s: f64::NAN,
+            noise_sd: f64::NAN,
+            hysteresis: f64::NAN,
+        }
+    }
+}
+
+/// What the feature function needs to know of the run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunConstants {
+    pub stiffness_n_m: f64,
+    pub drive_speed_m_s: f64,
+    pub mass_kg: f64,
+    pub gravity_m_s2: f64,
+}
+
+/// The features of a force-over-weight record sampled at `time_s`.
+pub fn features(time_s: &[f64], force: &[f64], c: &RunConstants, o: &FeatureOptions) -> Features {
+    assert_eq!(time_s.len(), force.len(), "one time per sample");
+    let n = time_s.len();
+    let fs = (n.max(2) - 1) as f64 / (time_s[n - 1] - time_s[0]);
+    let half = (o.median_window_s * fs / 2.0).round() as usize;
+    let f = running_median(force, half);
+    let natural_period_s = 2.0 * std::f64::consts::PI * (c.mass_kg / c.stiffness_n_m).sqrt();
+    let load_rate = c.stiffness_n_m * c.drive_speed_m_s / (c.mass_kg * c.gravity_m_s2);
+    let noise_sd = robust_noise_sd(force, &f);
+    let hysteresis = o.min_drop.max(o.noise_multiple * noise_sd);
+    let turns = turning_points(&f, hysteresis);
+    let (mut period, mut drop, mut onset, mut stick, mut creep) = (vec![], vec![], vec![], vec![], vec![]);
+    // turns alternate; a slip is a maximum followed by a minimum.
+    let maxima: Vec<usize> = (0..turns.len()).filter(|&j| turns[j].1 && j + 1 < turns.len()).collect();
+    for (e, &j) in maxima.iter().enumerate() {
+        let (imax, imin) = (turns[j].0, turns[j + 1].0);
+        drop.push(f[imax] - f[imin]);
+        onset.push(f[imax]);
+        // The complete cycle ending at this maximum: previous maximum → min → this maximum.
+        if e == 0 || j < 2 {
+            continue;
+        }
+        let (iprev, iload) = (turns[maxima[e - 1]].0, turns[j - 1].0);
+        let cycle_s = time_s[imax] - time_s[iprev];
+        period.push(cycle_s);
+        let segs = o.segments.max(1);
+        let len = imax - iload;
+        if len < 2 * segs {
+            continue;
+        }
+        let mut stuck_s = 0.0;
+        let mut last_speed = f64::NAN;
+        for s in 0..segs {
+            let (a, b) = (iload + s * len / segs, iload + (s + 1) * len / segs);
+            let slope = ls_slope(&time_s[a..=b], &f[a..=b]);
+            let speed_ratio = 1.0 - slope / load_rate;
+            if speed_ratio < 0.5 {
+                stuck_s += time_s[b] - time_s[a];
+            }
+            last_speed = speed_ratio;
+        }
+        stick.push(stuck_s / cycle_s);
+        creep.push(last_speed);
+    }
+    let events = drop.len();
+    let period_s = Spread::of(&period);
+    let stick_fraction = Spread::of(&stick);
+    let regime = if events < o.min_events || period_s.n == 0 {
+        Regime::SteadySliding
+    } else if stick_fraction.median >= o.stick_regime_fraction {
+        Regime::StickSlip
+    } else if period_s.median >= o.inertial_ratio * natural_period_s {
+        Regime::Creep
+    } else {
+        Regime::InertialOscillation
+    };
+    Features {
+        regime,
+        events,
+        period_s,
+        drop: Spread::of(&drop),
+        onset: Spread::of(&onset),
+        stick_fraction,
+        creep: Spread::of(&creep),
+        mean_force: f.iter().sum::<f64>() / n as f64,
+        natural_period_s,
+        noise_sd,
+        hysteresis,
+    }
+}
+
+/// 1.4826 × the median absolute deviation of the raw record from its running
+/// median: the noise's standard deviation, blind to the spikes and to the
+/// slips (both are rare), 0 for a noiseless simulation.
+pub fn robust_noise_sd(raw: &[f64], filtered: &[f64]) -> f64 {
+    let mut d: Vec<f64> = raw.iter().zip(filtered).map(|(a, b)| (a - b).abs()).collect();
+    let m = d.len() / 2;
+    1.4826 * *d.select_nth_unstable_by(m, f64::total_cmp).1
+}
+
+/// Running median over 2·`half` + 1 samples (shrinking at the ends).
+pub fn running_median(x: &[f64], half: usize) -> Vec<f64> {
+    if half == 0 {
+        return x.to_vec();
+    }
+    let mut w = Vec::with_capacity(2 * half + 1);
+    (0..x.len())
+        .map(|i| {
+            let (a, b) = (i.saturating_sub(half), (i + half + 1).min(x.len()));
+            w.clear();
+            w.extend_from_slice(&x[a..b]);
+            let m = w.len() / 2;
+            *w.select_nth_unstable_by(m, f64::total_cmp).1
+        })
+        .collect()
+}
+
+/// Turning points with hysteresis `h`: (index, is_maximum), alternating.
+pub fn turning_points(f: &[f64], h: f64) -> Vec<(usize, bool)> {
+    let mut out = Vec::new();
+    if f.is_empty() {
+        return out;
+    }
+    let (mut hi, mut lo) = (0usize, 0usize);
+    let mut dir = 0i8; // 1: looking for a maximum, -1: for a minimum
+    for i in 1..f.len() {
+        if f[i] > f[hi] {
+            hi = i;
+        }
+        if f[i] < f[lo] {
+            lo = i;
+        }
+        match dir {
+            0 if f[hi] - f[i] >= h && hi > lo => {
+                out.push((hi, true));
+                dir = -1;
+                lo = i;
+            }
+            0 if f[i] - f[lo] >= h && lo > hi => {
+                out.push((lo, false));
+                dir = 1;
+                hi = i;
+            }
+            1 if f[hi] - f[i] >= h => {
+                out.push((hi, true));
+                dir = -1;
+                lo = i;
+            }
+            -1 if f[i] - f[lo] >= h => {
+                out.push((lo, false));
+                dir = 1;
+                hi = i;
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// Least-squares slope of y against t.
+fn ls_slope(t: &[f64], y: &[f64]) -> f64 {
+    let n = t.len() as f64;
+    let (mt, my) = (t.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let (mut sxy, mut sxx) = (0.0, 0.0);
+    for (a, b) in t.iter().zip(y) {
+        sxy += (a - mt) * (b - my);
+        sxx += (a - mt) * (a - mt);
+    }
+    sxy / sxx
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn opts() -> FeatureOptions {
+        FeatureOptions {
+            median_window_s: 0.0025,
+            min_drop: 0.02,
+            segments: 5,
+            min_events: 3,
+            noise_multiple: 3.0,
+            stick_regime_fraction: 0.5,
+            inertial_ratio: 3.0,
+        }
+    }
+
+    #[test]
+    fn sawtooth_with_spikes_gives_its_period_drop_and_onset() {
+        // Stick at the loading rate L, then an instantaneous drop of 0.05: period 0.05/L.
+        let c = RunConstants { stiffness_n_m: 168.0, drive_speed_m_s: 42e-6, mass_kg: 0.0307, gravity_m_s2: 9.81 };
+        let load = c.stiffness_n_m * c.drive_speed_m_s / (c.mass_kg * c.gravity_m_s2);
+        let period = 0.05 / load;
+        let fs = 2000.0;
+        let n = (10.0 * period * fs) as usize;
+        let t: Vec<f64> = (0..n).map(|i| 3.0 + i as f64 / fs).collect();
+        let mut f: Vec<f64> = t.iter().map(|&t| 0.30 + 0.05 * ((t - 3.0) / period).fract()).collect();
+        for i in (17..n).step_by(997) {
+            f[i] = -0.1; // impulsive noise, one sample wide
+        }
+        let r = features(&t, &f, &c, &opts());
+        assert_eq!(r.regime, Regime::StickSlip);
+        assert_eq!(r.events, 9);
+        assert!((r.period_s.median / period - 1.0).abs() < 1e-3, "{:?}", r.period_s);
+        assert!((r.drop.median - 0.05).abs() < 1e-3, "{:?}", r.drop);
+        assert!((r.onset.median - 0.35).abs() < 1e-3, "{:?}", r.onset);
+        assert!(r.stick_fraction.median > 0.95, "{:?}", r.stick_fraction);
+        assert!(r.creep.median.abs() < 0.02, "{:?}", r.creep);
+    }
+
+    #[test]
+    fn sine_near_the_natural_period_is_inertial_and_noise_is_steady() {
+        let c = RunConstants { stiffness_n_m: 2254.0, drive_speed_m_s: 1.1e-3, mass_kg: 0.0307, gravity_m_s2: 9.81 };
+        let t0 = 2.0 * std::f64::consts::PI * (c.mass_kg / c.stiffness_n_m).sqrt();
+        let t: Vec<f64> = (0..4000).map(|i| i as f64 / 2000.0).collect();
+        let f: Vec<f64> =
+            t.iter().map(|&t| 0.33 + 0.04 * (2.0 * std::f64::consts::PI * t / (1.1 * t0)).sin()).collect();
+        let r = features(&t, &f, &c, &opts());
+        assert_eq!(r.regime, Regime::InertialOscillation);
+        assert!((r.period_s.median / (1.1 * t0) - 1.0).abs() < 0.03, "{:?}", r.period_s);
+        let quiet: Vec<f64> =
+            t.iter().enumerate().map(|(i, _)| 0.33 + 0.005 * ((i * 7919) % 13) as f64 / 13.0).collect();
+        assert_eq!(features(&t, &quiet, &c, &opts()).regime, Regime::SteadySliding);
+    }
+}

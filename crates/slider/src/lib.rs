@@ -1,0 +1,41 @@
+//! The ENS Lyon paper-on-paper spring–slider (Colas et al., Phys. Rev. E 2019):
+//! what a Coulomb law gets wrong, why, and what a friction law with memory
+//! gains at stiffnesses it was not calibrated on.
+//!
+//! [`run_study`] is the front door: read a folder in the layout
+//! `runs/k<k>-v<V>.csv` (`rig_ingest::slider`), measure every run with the
+//! one feature function ([`features`]), fit the Coulomb baseline and the
+//! candidate laws ([`fit`]) on the calibration stiffnesses by simulating
+//! them ([`sim`]) through the same feature function, predict the held-out
+//! runs, choose the extension by its held-out gain ([`study`]), and render
+//! `slider.md`, tables, figures and `slider-diagnosis.json` ([`render`]).
+//!
+//! # Effect ids of this rig (`slider-diagnosis.json`)
+//!
+//! | id | picture | law ([`sim::Law`]) | parameters |
+//! |---|---|---|---|
+//! | `coulomb` | the baseline: one static and one kinetic coefficient | stick below μs, slip at μk | `mu_static`, `mu_drop` (μs − μk) |
+//! | `static_ageing` | the static threshold grows with the time stuck (contacts age), the kinetic friction grows with speed | μs(t) = μs0 + β ln(1 + t/τ); μk(v) = μk0 + α ln(1 + v/v1), v1 = 100 µm/s | `mu_static0`, `ageing_beta`, `ageing_time_s`, `mu_drop`, `alpha` |
+//! | `rate_state_ageing` | friction with a memory of the contact's age θ (Dieterich–Ruina) | μ = μ0 + a ln(v/v*) + b ln(v*θ/Dc), dθ/dt = 1 − vθ/Dc, v* = 100 µm/s | `mu0`, `a`, `b_minus_a`, `dc_m` |
+//! | `none` / `unexplained` | as in ../shared/spec/diagnosis.md | — | — |
+
+pub mod features;
+pub mod fit;
+pub mod render;
+pub mod sim;
+pub mod study;
+
+pub use features::{FeatureOptions, Features, Regime, RunConstants, Spread, features};
+pub use render::{StudyOutput, render};
+pub use study::{Study, StudyParams, run_study};
+
+/// Everything that can go wrong; each names what a person must fix.
+#[derive(Debug, thiserror::Error)]
+pub enum SliderError {
+    /// The folder or one of its runs was refused (file, line, rule).
+    #[error(transparent)]
+    Ingest(#[from] rig_ingest::IngestError),
+    /// No run at any stiffness of `calibration_stiffnesses_n_m`.
+    #[error("{}: calibration_stiffnesses_n_m = {listed:?}: no run of the folder has one of these stiffnesses", folder.display())]
+    NoCalibration { listed: Vec<f64>, folder: std::path::PathBuf },
+}
