@@ -19,18 +19,20 @@ pub struct Params {
     pub gtol: f64,
     pub fd_step: f64,
     pub gear_ratio: f64,
-    pub window_samples: usize,
+    pub window_s: f64,
     pub residual: Residual,
     pub free_inductance: bool,
     /// Comma-separated voltage-step ids; empty: the estimator's own split.
     pub holdout: String,
     pub whiteness_max_lag: usize,
     pub pi_method: Pi,
-    pub pi_window_samples: usize,
+    pub pi_window_s: f64,
     pub saturation_margin_v: f64,
     pub slip_threshold_rad_s: f64,
-    pub speed_half_window: usize,
+    pub speed_half_window_s: f64,
     pub min_stick_s: f64,
+    /// pipeline.toml's `[shared.integrator]`.
+    pub integrator: rig_model::SimOptions,
 }
 
 /// `solver = "lm" | "gauss_newton_ls"`.
@@ -70,7 +72,7 @@ fn options(p: &Params, thesis: &ThesisData) -> EstimateOptions {
     o.solver.gtol = p.gtol;
     o.solver.fd_step = p.fd_step;
     o.gear_ratio = p.gear_ratio;
-    o.speed_window_samples = p.window_samples;
+    o.speed_window_s = p.window_s;
     o.step_residual = match p.residual {
         Residual::Angle => StepResidual::Angle,
         Residual::Speed => StepResidual::Speed,
@@ -82,11 +84,12 @@ fn options(p: &Params, thesis: &ThesisData) -> EstimateOptions {
         Pi::CorrectedLs => PiMethod::CorrectedLs,
         Pi::Iv => PiMethod::Iv,
     };
-    o.pi.window_samples = p.pi_window_samples;
+    o.pi.window_s = p.pi_window_s;
     o.pi.saturation_margin_v = p.saturation_margin_v;
     o.friction.slip_threshold_rad_s = p.slip_threshold_rad_s;
-    o.friction.speed_half_window = p.speed_half_window;
+    o.friction.speed_half_window_s = p.speed_half_window_s;
     o.friction.min_stick_s = p.min_stick_s;
+    o.integrator = p.integrator.clone();
     o
 }
 
