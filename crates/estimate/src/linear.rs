@@ -133,14 +133,7 @@ pub fn ols_eiv(x: &[Vec<f64>], y: &[f64], noise_var: &[f64], context: &str) -> R
     llt.solve_in_place(b.as_mut());
     let inv = llt.inverse();
     let beta: Vec<f64> = (0..p).map(|j| b[(j, 0)] / scale[j]).collect();
-    let ssr: f64 = x
-        .iter()
-        .zip(y)
-        .map(|(r, yi)| {
-            let f: f64 = r.iter().zip(&beta).map(|(a, c)| a * c).sum();
-            (yi - f).powi(2)
-        })
-        .sum();
+    let ssr = residual_sum_of_squares(x, y, &beta);
     let sigma2 = ssr / (n - p) as f64;
     let stderr = (0..p).map(|j| (sigma2 * inv[(j, j)]).sqrt() / scale[j]).collect();
     if beta.iter().any(|v| !v.is_finite()) {
@@ -170,14 +163,7 @@ pub fn iv(x: &[Vec<f64>], z: &[Vec<f64>], y: &[f64], context: &str) -> Result<Ol
     let zty = zs.transpose() * &ym;
     let b = &inv * &zty;
     let beta: Vec<f64> = (0..p).map(|j| b[(j, 0)] / scale[j]).collect();
-    let ssr: f64 = x
-        .iter()
-        .zip(y)
-        .map(|(r, yi)| {
-            let f: f64 = r.iter().zip(&beta).map(|(a, c)| a * c).sum();
-            (yi - f).powi(2)
-        })
-        .sum();
+    let ssr = residual_sum_of_squares(x, y, &beta);
     let sigma2 = ssr / (n - p) as f64;
     let ztz = zs.transpose() * &zs;
     let cov = &inv * &ztz * inv.transpose();
@@ -186,6 +172,17 @@ pub fn iv(x: &[Vec<f64>], z: &[Vec<f64>], y: &[f64], context: &str) -> Result<Ol
         return Err(singular());
     }
     Ok(OlsFit { beta, stderr, ssr })
+}
+
+/// Σ (y − X β)² over the rows of `x`.
+fn residual_sum_of_squares(x: &[Vec<f64>], y: &[f64], beta: &[f64]) -> f64 {
+    x.iter()
+        .zip(y)
+        .map(|(r, yi)| {
+            let f: f64 = r.iter().zip(beta).map(|(a, c)| a * c).sum();
+            (yi - f).powi(2)
+        })
+        .sum()
 }
 
 /// Rows n, regressors p (refused unless n > p and `rows_match`), and each
