@@ -122,7 +122,7 @@ impl RunProtocol {
                 samples = samples.max(r.data.time_s.len());
             }
         }
-        if ramps.is_empty() || !(rate > 0.0) {
+        if ramps.is_empty() || rate.is_nan() || rate <= 0.0 {
             return None;
         }
         ramps.sort_by(f64::total_cmp);
