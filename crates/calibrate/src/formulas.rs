@@ -64,10 +64,8 @@ pub fn hz_to_rad_s(f_hz: f64) -> f64 {
     2.0 * PI * f_hz
 }
 
-/// rpm → rad/s.
-pub fn rpm_to_rad_s(rpm: f64) -> f64 {
-    rpm * 2.0 * PI / 60.0
-}
+/// rpm → rad/s (`rig_types::units`, the one home of the factor).
+pub use rig_types::units::rpm_to_rad_s;
 
 /// Steady no-load speed of a DC motor under constant voltage, from Eq. 4-6 with
 /// di/dt = 0 and Ω̇ = 0 and no load: V = R i + k_e Ω and k_T i = C_m Ω + T_f,

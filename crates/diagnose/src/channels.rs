@@ -140,11 +140,11 @@ pub struct ChannelOptions {
     pub drive_balance_ratio: f64,
     /// Linearity of the force sensor over its calibration runs (ratio² is F-distributed, (n − 2, n) dof).
     pub force_linearity_ratio: f64,
-    /// Window of the step residual, samples (the estimate's 50 ms).
-    pub window_samples: usize,
-    /// Window of the torque balance, samples (long enough that the
+    /// Window of the step residual, s (the estimate's 50 ms).
+    pub window_s: f64,
+    /// Window of the torque balance, s (long enough that the
     /// quantisation of Ω̇1 does not swamp the balance).
-    pub balance_window_samples: usize,
+    pub balance_window_s: f64,
     /// Steady-state seconds of each free-run simulation (after ramp + settle).
     pub free_run_steady_s: f64,
 }
@@ -208,7 +208,7 @@ pub fn all_checks(
     o: &ChannelOptions,
 ) -> Vec<ChannelCheck> {
     let mut v = static_twist_checks(c, cal, o);
-    v.extend(voltage_step_checks(c, cal, baseline, o));
+    v.extend(voltage_step_checks(c, cal, baseline, o, &opts.integrator));
     v.extend(free_run_checks(c, model, &FreeRunSettings::of(opts, o), o));
     v.push(torque_balance_check(c, cal, baseline, opts, o));
     v.push(drive_balance_check(c, opts, o));
@@ -217,9 +217,9 @@ pub fn all_checks(
 }
 
 /// Least squares of `y` on the rows `x` (the workspace's one solver,
-/// `rig_estimate::linreg::ols`): (coefficients, residual sum of squares).
+/// `rig_estimate::linear::ols`): (coefficients, residual sum of squares).
 fn ols(x: &[Vec<f64>], y: &[f64]) -> Option<(Vec<f64>, f64)> {
-    rig_estimate::linreg::ols(x, y, "channel check").ok().map(|f| (f.beta, f.ssr))
+    rig_estimate::linear::ols(x, y, "channel check").ok().map(|f| (f.beta, f.ssr))
 }
 
 /// Root mean square (0 for an empty slice).

@@ -26,8 +26,8 @@
 //! residuals (effective sample size).
 
 use crate::friction::{self, FrictionModel, SlipData};
-use crate::linalg::Normal;
 use crate::vocab::EffectId;
+use rig_estimate::linear::Normal;
 use std::f64::consts::PI;
 
 /// Which friction effects a model has.
@@ -77,7 +77,7 @@ impl Composite {
     pub fn speed_mu(&self, omega: f64) -> f64 {
         let mut m = self.mu_k;
         if let Some((mu_s, vs)) = self.stribeck {
-            m += (mu_s - self.mu_k) * (-(omega / vs).powi(2)).exp();
+            m += (mu_s - self.mu_k) * rig_model::friction::stribeck_decay(omega, vs);
         }
         if let Some(c) = self.viscous {
             m += c * omega;
@@ -212,7 +212,7 @@ fn refine_speed_time(
         sc.clear();
         let mut rss = 0.0;
         for i in 0..d.len() {
-            let gi = if stribeck { (-(d.omega[i] / th[2]).powi(2)).exp() } else { 0.0 };
+            let gi = if stribeck { rig_model::friction::stribeck_decay(d.omega[i], th[2]) } else { 0.0 };
             let ((sx, cx), (st, ct)) = (base[i], trig[d.run[i]]);
             let v = (sx * ct + cx * st, cx * ct - sx * st);
             let e = d.mu[i] - speed(th, gi, d.omega[i]) * (1.0 + th[i_a] * v.0);
@@ -569,7 +569,8 @@ mod tests {
     fn two_effects_at_once_are_recovered() {
         // Stribeck speed law × normal-force modulation at 1.3 Hz, own phase per run.
         let d = synth(5, |r, t, _, w| {
-            (0.4 + 0.2 * (-(w / 2.0f64).powi(2)).exp()) * (1.0 + 0.12 * (2.0 * PI * 1.3 * t + 0.9 * r as f64).sin())
+            (0.4 + 0.2 * rig_model::friction::stribeck_decay(w, 2.0f64))
+                * (1.0 + 0.12 * (2.0 * PI * 1.3 * t + 0.9 * r as f64).sin())
         });
         let freqs: Vec<f64> = (0..300).map(|j| 0.05 + 0.01 * j as f64).collect();
         let set =
@@ -585,7 +586,8 @@ mod tests {
         assert!(one.unwrap().rss_w > 20.0 * f.rss_w);
         // A held-out run's phase is recovered from its own data with the shared parameters fixed.
         let held = synth(1, |_, t, _, w| {
-            (0.4 + 0.2 * (-(w / 2.0f64).powi(2)).exp()) * (1.0 + 0.12 * (2.0 * PI * 1.3 * t + 2.5).sin())
+            (0.4 + 0.2 * rig_model::friction::stribeck_decay(w, 2.0f64))
+                * (1.0 + 0.12 * (2.0 * PI * 1.3 * t + 2.5).sin())
         });
         let ph = heldout_phases(m, &held);
         let e = (ph.0 - 2.5).rem_euclid(2.0 * PI);
@@ -603,7 +605,8 @@ mod tests {
     #[test]
     fn coupled_speed_law_and_modulation_reach_a_stationary_point() {
         let d = synth(4, |r, t, _, w| {
-            (0.4 + 0.2 * (-(w / 2.0f64).powi(2)).exp()) * (1.0 + 0.1 * (2.0 * PI * 0.5 * t + 0.7 * r as f64).sin())
+            (0.4 + 0.2 * rig_model::friction::stribeck_decay(w, 2.0f64))
+                * (1.0 + 0.1 * (2.0 * PI * 0.5 * t + 0.7 * r as f64).sin())
         });
         let freqs: Vec<f64> = (0..300).map(|j| 0.05 + 0.01 * j as f64).collect();
         let set =

@@ -7,8 +7,8 @@
 //! (The integral is driven by the measured error, so the prediction is a
 //! one-step filter of the data, not a free-run simulation.)
 
-use crate::linalg::Normal;
 use crate::prepare::RunSignals;
+use rig_estimate::linear::Normal;
 use rig_types::minimize::brent_min;
 
 /// PI gains and limit of the teacher-forced drive.

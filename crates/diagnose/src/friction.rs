@@ -4,8 +4,8 @@
 //! MEASURED time, rotor angle and rotor speed. Shared parameters across runs,
 //! one phase per run where the vocabulary frees it (diagnosis.md table).
 
-use crate::linalg::Normal;
 use crate::prepare::RunSignals;
+use rig_estimate::linear::Normal;
 use rig_types::minimize::brent_min;
 use std::f64::consts::PI;
 use std::ops::RangeInclusive;
@@ -113,7 +113,7 @@ impl FrictionModel {
             FrictionModel::Coulomb { mu_k } => mu_k,
             FrictionModel::Viscous { mu_k, c } => mu_k + c * omega,
             FrictionModel::Stribeck { mu_k, mu_s, vs, c } => {
-                mu_k + (mu_s - mu_k) * (-(omega / vs).powi(2)).exp() + c * omega
+                rig_model::friction::stribeck_mu(mu_s, mu_k, vs, omega) + c * omega
             }
             FrictionModel::TimeSine { mu_k, a, f_hz } => mu_k * (1.0 + a * (2.0 * PI * f_hz * t + theta).sin()),
             FrictionModel::AngleSine { mu_k, a, order } => mu_k * (1.0 + a * (order as f64 * phi + theta).sin()),
@@ -255,7 +255,7 @@ impl<'a> StribeckRss<'a> {
         let d = self.d;
         let (mut a01, mut a11, mut a12, mut b1) = (0.0, 0.0, 0.0, 0.0);
         for i in 0..d.len() {
-            let g = (-(d.omega[i] / vs).powi(2)).exp();
+            let g = rig_model::friction::stribeck_decay(d.omega[i], vs);
             self.g[i] = g;
             let (v0, v1, v2) = (1.0 * self.sw[i], g * self.sw[i], d.omega[i] * self.sw[i]);
             a01 += v0 * v1;
@@ -265,9 +265,9 @@ impl<'a> StribeckRss<'a> {
         }
         let [a00, a02, a22, b0, b2] = self.fixed;
         let ne = if self.viscous {
-            Normal { n: 3, ata: vec![a00, a01, a02, a01, a11, a12, a02, a12, a22], atb: vec![b0, b1, b2] }
+            Normal::from_row_major(3, &[a00, a01, a02, a01, a11, a12, a02, a12, a22], vec![b0, b1, b2])
         } else {
-            Normal { n: 2, ata: vec![a00, a01, a01, a11], atb: vec![b0, b1] }
+            Normal::from_row_major(2, &[a00, a01, a01, a11], vec![b0, b1])
         };
         let Some(p) = ne.solve() else { return f64::INFINITY };
         let mut rss = 0.0;
@@ -292,7 +292,7 @@ pub fn fit_stribeck(d: &SlipData, with_viscous: bool) -> Option<FrictionFit> {
     let lin = |vs: f64| {
         linear_fit(d, ncol, |i, r| {
             r[0] = 1.0;
-            r[1] = (-(d.omega[i] / vs).powi(2)).exp();
+            r[1] = rig_model::friction::stribeck_decay(d.omega[i], vs);
             if with_viscous {
                 r[2] = d.omega[i];
             }
@@ -316,7 +316,7 @@ pub fn fit_stribeck(d: &SlipData, with_viscous: bool) -> Option<FrictionFit> {
     let np = ncol + 1;
     let mut ne = Normal::new(np);
     for i in 0..d.len() {
-        let g = (-(d.omega[i] / vs).powi(2)).exp();
+        let g = rig_model::friction::stribeck_decay(d.omega[i], vs);
         let dg_dvs = g * 2.0 * d.omega[i].powi(2) / vs.powi(3);
         let sw = d.w(i).sqrt();
         if with_viscous {
@@ -855,15 +855,15 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeIn
         let newton = (!time_kind)
             .then(|| {
                 let mut h = ne.clone();
-                h.ata[1] += h_mk_a;
-                h.ata[np] += h_mk_a;
+                h.ata[(0, 1)] += h_mk_a;
+                h.ata[(1, 0)] += h_mk_a;
                 for (r, x) in h_th.iter().enumerate() {
                     let j = 2 + r;
                     for (k, v) in [(0, x[0]), (1, x[1])] {
-                        h.ata[k * np + j] += v;
-                        h.ata[j * np + k] += v;
+                        h.ata[(k, j)] += v;
+                        h.ata[(j, k)] += v;
                     }
-                    h.ata[j * np + j] += x[2];
+                    h.ata[(j, j)] += x[2];
                 }
                 h.solve()
             })
@@ -1175,7 +1175,7 @@ pub(crate) mod tests {
 
     #[test]
     fn stribeck_law_is_recovered() {
-        let d = synth(4, |_, _, _, w| 0.4 + 0.2 * (-(w / 2.0f64).powi(2)).exp());
+        let d = synth(4, |_, _, _, w| 0.4 + 0.2 * rig_model::friction::stribeck_decay(w, 2.0f64));
         let f = fit_stribeck(&d, false).unwrap();
         let FrictionModel::Stribeck { mu_k, mu_s, vs, .. } = f.model else { panic!() };
         assert!((mu_k - 0.4).abs() < 1e-3 && (mu_s - 0.6).abs() < 5e-3 && (vs - 2.0).abs() < 0.05, "{:?}", f.model);

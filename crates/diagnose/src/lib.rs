@@ -82,7 +82,6 @@ pub mod channels;
 pub mod composite;
 pub mod drive;
 pub mod friction;
-mod linalg;
 pub mod lines;
 pub mod prepare;
 pub mod render;
@@ -107,10 +106,11 @@ pub struct DiagnoseOptions {
     /// set-point, then normal force: consecutive runs of one condition go to
     /// different folds).
     pub folds: usize,
-    /// Rotor speed: centred difference over ±this many samples.
-    pub rotor_speed_half_window: usize,
-    /// Motor speed (for the PI error): centred difference over ±this many samples.
-    pub motor_speed_half_window: usize,
+    /// Rotor speed: centred difference over ±this many seconds (counted in
+    /// samples from each run's time column).
+    pub rotor_speed_half_window_s: f64,
+    /// Motor speed (for the PI error): centred difference over ±this many seconds.
+    pub motor_speed_half_window_s: f64,
     /// |Ω1| above which (and away from stuck samples) rotor 1 counts as slipping, rad/s.
     pub slip_speed_rad_s: f64,
     /// Slip samples before this time are not used (start-up), s.
@@ -118,7 +118,7 @@ pub struct DiagnoseOptions {
     /// Steady state starts at ramp_s + settle_s.
     pub settle_s: f64,
     /// An effect must lower the cross-validated misfit by at least this fraction …
-    pub min_relative_gain: f64,
+    pub selection: rig_types::contract::SelectionRule,
     /// … with a paired run-level t of ln(M_before/M_after) of at least this.
     pub min_t: f64,
     /// The final model is adequate when its cross-validated misfit is at most
@@ -140,6 +140,10 @@ pub struct DiagnoseOptions {
     /// The regime classifier, the one definition of stick-slip
     /// (`[shared.classify]` of pipeline.toml, handed to the stage).
     pub classify: rig_sweep::ClassifyOptions,
+    /// Integrator tolerances of every simulation of the checks (free runs,
+    /// voltage steps): pipeline.toml's `[shared.integrator]`, as the
+    /// simulation, sweeps, spectra and estimation stages.
+    pub integrator: rig_model::SimOptions,
 }
 
 impl DiagnoseOptions {
@@ -232,7 +236,7 @@ pub fn diagnose(
     let mut checks: Vec<ChannelCheck> = Vec::new();
     if let Some(p) = baseline {
         checks.extend(channels::static_twist_checks(c, cal, o));
-        checks.extend(channels::voltage_step_checks(c, cal, p, o));
+        checks.extend(channels::voltage_step_checks(c, cal, p, o, &opts.integrator));
         checks.push(channels::torque_balance_check(c, cal, p, opts, o));
     }
     // The drive balance needs no baseline: it fits its coefficients to the records.

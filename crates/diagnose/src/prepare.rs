@@ -3,9 +3,8 @@
 //! reference, the usable slip samples and the sensor noise measured in the data.
 
 use crate::{DiagnoseError, DiagnoseOptions};
-use rig_types::sensor::{force_n, ticks_to_rad};
+use rig_types::sensor::{force_n, half_window_samples, ticks_to_rad};
 use rig_types::{Campaign, Run, RunKind};
-use std::f64::consts::PI;
 
 /// Force-sensor calibration used to turn mV into N (the sensor model's, one definition).
 pub use rig_types::sensor::ForceCal;
@@ -143,12 +142,12 @@ fn prepare_run(
     let volt = column(run, "motor_voltage_v", &d.motor_voltage_v)?.clone();
     let mv = column(run, "brake_force_mv", &d.brake_force_mv)?;
     let force = cal.force_n(mv);
-    let w1 = centred_speed(&t, &phi1, opts.rotor_speed_half_window);
-    let w2 = centred_speed(&t, &phi2, opts.motor_speed_half_window);
+    let h = half_window_samples(&t, opts.rotor_speed_half_window_s);
+    let w1 = centred_speed(&t, &phi1, h);
+    let w2 = centred_speed(&t, &phi2, half_window_samples(&t, opts.motor_speed_half_window_s));
 
     // Stuck detection on the raw encoder: no tick change across ±half samples.
     let n = t.len();
-    let h = opts.rotor_speed_half_window;
     let ticks = d.rotor_ticks.as_ref().expect("checked above");
     let moved: Vec<bool> = (0..n).map(|k| ticks[(k + h).min(n - 1)] != ticks[k.saturating_sub(h)]).collect();
     let mut slip_idx = Vec::new();
@@ -182,7 +181,7 @@ fn prepare_run(
     Ok(RunSignals {
         id: run.id.clone(),
         fold,
-        setpoint_rad_s: motor_rpm_setpoint * 2.0 * PI / 60.0,
+        setpoint_rad_s: rig_types::units::rpm_to_rad_s(motor_rpm_setpoint),
         normal_force_n,
         ramp_s,
         force_noise_n: diff_noise(&force),

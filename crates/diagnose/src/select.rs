@@ -451,7 +451,8 @@ pub fn diagnose_signals(
     let mut accepted: Vec<(EffectId, Comparison)> = Vec::new();
     let mut steps: Vec<StepRow> = Vec::new();
     let mut first_step: Vec<(EffectId, Comparison, Vec<f64>)> = Vec::new();
-    let significant = |c: &Comparison| c.gain >= opts.min_relative_gain && c.t >= opts.min_t && c.after.is_finite();
+    let significant =
+        |c: &Comparison| c.gain >= opts.selection.min_relative_gain && c.t >= opts.min_t && c.after.is_finite();
     for step in 1..=EffectId::ALL.len() {
         let remaining: Vec<EffectId> =
             EffectId::ALL.into_iter().filter(|e| !accepted.iter().any(|a| a.0 == *e)).collect();
@@ -749,7 +750,7 @@ pub fn diagnose_signals(
             id: s.id.clone(),
             fold: s.fold,
             normal_force_n: s.normal_force_n,
-            motor_rpm_setpoint: s.setpoint_rad_s * 60.0 / (2.0 * PI),
+            motor_rpm_setpoint: rig_types::units::rad_s_to_rpm(s.setpoint_rad_s),
             slip_samples: s.slip_idx.len(),
             misfit_baseline: base_ms[r],
             misfit_extended: cur_ms[r],

@@ -1,7 +1,7 @@
 //! What a leftover mismatch follows: a library of signals computed from the
 //! recordings, sparse regression of the final model's residual on them
 //! (sequentially thresholded least squares, on faer through
-//! `rig_estimate::linreg::ols`), fitted on training folds and scored on the
+//! `rig_estimate::linear::ols`), fitted on training folds and scored on the
 //! held-out fold, and in words the physical causes each signal points to.
 //!
 //! Residuals: in the friction channel the relative slip-coefficient residual
@@ -171,7 +171,7 @@ fn fit(x: &[Vec<f64>], y: &[f64], rows: &[usize], cols: &[usize]) -> Option<(Vec
         })
         .collect();
     let yy: Vec<f64> = rows.iter().map(|&i| y[i]).collect();
-    let f = rig_estimate::linreg::ols(&design, &yy, "residual signature").ok()?;
+    let f = rig_estimate::linear::ols(&design, &yy, "residual signature").ok()?;
     Some((f.beta, mean, sd))
 }
 

@@ -4,7 +4,6 @@
 
 use crate::lsq::{IterationRecord, LsqSolution};
 use faer::Mat;
-use faer::linalg::solvers::DenseSolveCore;
 use serde::{Deserialize, Serialize};
 
 /// Pairs with |ρ| above this are flagged "not separately identifiable".
@@ -78,9 +77,8 @@ pub fn covariance(sol: &LsqSolution) -> Covariance {
     let p = sol.theta.len();
     let sigma2 = sol.ssr / (m.saturating_sub(p).max(1)) as f64;
     let jtj: Mat<f64> = sol.jacobian.transpose() * &sol.jacobian;
-    match jtj.llt(faer::Side::Lower) {
-        Ok(llt) => {
-            let inv = llt.inverse();
+    match crate::linear::spd_inverse(&jtj) {
+        Some(inv) => {
             let stderr = (0..p)
                 .map(|j| (sigma2 * inv[(j, j)]).sqrt() * sol.transforms[j].dx_dtheta(sol.theta[j]).abs())
                 .collect();
@@ -88,7 +86,7 @@ pub fn covariance(sol: &LsqSolution) -> Covariance {
                 (0..p).map(|i| (0..p).map(|j| inv[(i, j)] / (inv[(i, i)] * inv[(j, j)]).sqrt()).collect()).collect();
             Covariance { sigma2, stderr, correlation, regular: true }
         }
-        Err(_) => Covariance {
+        None => Covariance {
             sigma2,
             stderr: vec![f64::INFINITY; p],
             correlation: (0..p).map(|i| (0..p).map(|j| if i == j { 1.0 } else { f64::NAN }).collect()).collect(),

@@ -10,15 +10,17 @@
 use crate::EstimateError;
 use crate::signals::{mean_sd, median};
 use rig_types::sensor::{
-    ForceCal, central_difference_rad_s as central_speed, force_n, speed_resolution_rad_s, ticks_to_rad,
+    ForceCal, central_difference_rad_s as central_speed, force_n, half_window_samples, nominal_window_samples,
+    speed_resolution_rad_s, ticks_to_rad,
 };
 use rig_types::{Campaign, RunKind};
 use serde::{Deserialize, Serialize};
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FrictionOptions {
-    /// Half-width (samples) of the centred difference for Ω1.
-    pub speed_half_window: usize,
+    /// Half-width of the centred difference for Ω1, s (counted in samples
+    /// from each run's time column).
+    pub speed_half_window_s: f64,
     /// Ω1 above this is slip. Must sit well above the speed resolution of the
     /// difference (one count over 2·half samples) so no stuck sample passes.
     pub slip_threshold_rad_s: f64,
@@ -30,7 +32,12 @@ pub struct FrictionOptions {
 
 impl Default for FrictionOptions {
     fn default() -> Self {
-        FrictionOptions { speed_half_window: 10, slip_threshold_rad_s: 0.5, min_stick_s: 0.05, min_normal_force_n: 0.5 }
+        FrictionOptions {
+            speed_half_window_s: 0.02,
+            slip_threshold_rad_s: 0.5,
+            min_stick_s: 0.05,
+            min_normal_force_n: 0.5,
+        }
     }
 }
 
@@ -65,7 +72,7 @@ pub fn analyse_trace(
     normal_force_n: f64,
     opts: &FrictionOptions,
 ) -> RunFriction {
-    let h = opts.speed_half_window.max(1);
+    let h = half_window_samples(time_s, opts.speed_half_window_s).max(1);
     let omega = central_speed(time_s, rotor_angle_rad, h);
     let mu: Vec<f64> = force_n.iter().map(|f| f / normal_force_n).collect();
     let slip: Vec<usize> = (0..omega.len()).filter(|&i| omega[i].abs() > opts.slip_threshold_rad_s).collect();
@@ -110,7 +117,8 @@ pub fn estimate_friction(
     opts: &FrictionOptions,
 ) -> Result<FrictionEstimate, EstimateError> {
     let dt = c.rig.sample_rate_hz.recip();
-    let resolution = speed_resolution_rad_s(c.rig.encoder_ticks_per_rev, 2 * opts.speed_half_window.max(1), dt);
+    let h = nominal_window_samples(opts.speed_half_window_s, c.rig.sample_rate_hz);
+    let resolution = speed_resolution_rad_s(c.rig.encoder_ticks_per_rev, 2 * h, dt);
     if opts.slip_threshold_rad_s < 2.0 * resolution {
         return Err(EstimateError::InvalidOption {
             name: "slip_threshold_rad_s".into(),

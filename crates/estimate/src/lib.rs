@@ -10,7 +10,7 @@ pub mod argmin_adapter;
 mod error;
 pub mod fit_stats;
 pub mod friction;
-pub mod linreg;
+pub mod linear;
 pub mod lsq;
 mod options;
 pub mod pi;

@@ -5,7 +5,6 @@
 
 use crate::EstimateError;
 use faer::Mat;
-use faer::linalg::solvers::Solve;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -151,7 +150,7 @@ pub fn normal_equations(jac: &Mat<f64>, r: &[f64]) -> (Mat<f64>, Vec<f64>) {
     (jtj, g)
 }
 
-/// Solves (A + λ·diag(A)) δ = −g by Cholesky; `None` if not positive definite.
+/// Solves (A + λ·diag(A)) δ = −g (`crate::linear::spd_solve`); `None` if not positive definite.
 fn damped_step(jtj: &Mat<f64>, g: &[f64], lambda: f64) -> Option<Vec<f64>> {
     let p = g.len();
     let mut a = jtj.clone();
@@ -161,11 +160,8 @@ fn damped_step(jtj: &Mat<f64>, g: &[f64], lambda: f64) -> Option<Vec<f64>> {
         let d = jtj[(j, j)].max(1e-12 * (1.0 + jtj[(j, j)]));
         a[(j, j)] += lambda * d;
     }
-    let llt = a.llt(faer::Side::Lower).ok()?;
-    let mut rhs = Mat::<f64>::from_fn(p, 1, |i, _| -g[i]);
-    llt.solve_in_place(rhs.as_mut());
-    let step: Vec<f64> = (0..p).map(|i| rhs[(i, 0)]).collect();
-    step.iter().all(|v| v.is_finite()).then_some(step)
+    let minus_g: Vec<f64> = g.iter().map(|v| -v).collect();
+    crate::linear::spd_solve(&a, &minus_g)
 }
 
 /// Levenberg–Marquardt (Marquardt scaling, Nielsen's damping update) from

@@ -8,6 +8,7 @@ use crate::friction::FrictionOptions;
 use crate::lsq::SolverOptions;
 use crate::pi::PiOptions;
 use crate::steps::StepResidual;
+use rig_model::SimOptions;
 use serde::{Deserialize, Serialize};
 
 /// Table 4.4: initial values of the least-squares identification.
@@ -92,18 +93,19 @@ pub struct EstimateOptions {
     /// lowest and the highest voltage, hold out the ones in between
     /// (validation by interpolation); with two or fewer steps none is held out.
     pub holdout: Option<Vec<String>>,
-    /// Samples per window of the voltage-step residuals (angles are compared
-    /// every this many samples; speeds are means over such windows).
-    pub speed_window_samples: usize,
+    /// Window of the voltage-step residuals, s (angles are compared every
+    /// window; speeds are means over windows), counted in samples from each
+    /// run's time column ([`rig_types::sensor::window_samples`]).
+    pub speed_window_s: f64,
     pub step_residual: StepResidual,
     /// Estimate the armature inductance too (default: held at Table 4.4,
     /// since L/R is about one sample interval; the report gives the
     /// correlation and standard error it would have if freed).
     pub free_inductance: bool,
-    /// Integrator tolerances for the fits.
-    pub sim_rtol: f64,
-    pub sim_atol: f64,
-    pub sim_max_step_s: f64,
+    /// Integrator tolerances of the fits: pipeline.toml's `[shared.integrator]`
+    /// (the estimation stage lists it), the same as every simulating stage;
+    /// the default is rig-model's, which that table states.
+    pub integrator: SimOptions,
     /// Lags of the residual whiteness test (in speed windows).
     pub whiteness_max_lag: usize,
     pub pi: PiOptions,
@@ -120,12 +122,10 @@ impl EstimateOptions {
             solver: SolverOptions::default(),
             solver_kind: SolverKind::LevenbergMarquardt,
             holdout: None,
-            speed_window_samples: 25,
+            speed_window_s: 0.05,
             step_residual: StepResidual::Speed,
             free_inductance: false,
-            sim_rtol: 1e-7,
-            sim_atol: 1e-9,
-            sim_max_step_s: 0.01,
+            integrator: SimOptions::default(),
             whiteness_max_lag: 25,
             pi: PiOptions::default(),
             friction: FrictionOptions::default(),

@@ -14,11 +14,10 @@
 //! kp by 20 % in the round-trip test if not absorbed. ki stays identified by
 //! the variation of ∫e within a segment.
 
-use crate::{EstimateError, linreg};
-use rig_types::sensor::ticks_to_rad;
+use crate::{EstimateError, linear};
+use rig_types::sensor::{nominal_window_samples, ticks_to_rad, window_samples};
 use rig_types::{Campaign, RunKind};
 use serde::{Deserialize, Serialize};
-use std::f64::consts::TAU;
 
 /// How the encoder quantisation in the regressors is handled.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -39,10 +38,11 @@ pub enum PiMethod {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PiOptions {
     pub method: PiMethod,
-    /// Samples per averaging window. Long windows keep the encoder
-    /// quantisation in ē small against ē's own variation: at 1000 counts/rev
-    /// the round-trip test gives kp −7 % at 25 samples, within 0.1 % at 100.
-    pub window_samples: usize,
+    /// Averaging window, s (counted in samples from each run's time column).
+    /// Long windows keep the encoder quantisation in ē small against ē's own
+    /// variation: at 1000 counts/rev and 500 Hz the round-trip test gives kp
+    /// −7 % at 25 samples (50 ms), within 0.1 % at 100 (200 ms).
+    pub window_s: f64,
     /// A sample is saturated when |V| ≥ limit − margin.
     pub saturation_margin_v: f64,
     /// Unsaturated segments (after a saturation) shorter than this many windows are dropped.
@@ -51,12 +51,7 @@ pub struct PiOptions {
 
 impl Default for PiOptions {
     fn default() -> Self {
-        PiOptions {
-            method: PiMethod::CorrectedLs,
-            window_samples: 250,
-            saturation_margin_v: 0.5,
-            min_segment_windows: 4,
-        }
+        PiOptions { method: PiMethod::CorrectedLs, window_s: 0.5, saturation_margin_v: 0.5, min_segment_windows: 4 }
     }
 }
 
@@ -119,7 +114,6 @@ pub fn voltage_plateau_v(c: &Campaign) -> Option<f64> {
 pub fn estimate_pi(c: &Campaign, limit_v: f64, opts: &PiOptions) -> Result<PiEstimate, EstimateError> {
     let plateau = voltage_plateau_v(c);
     let limit_v = plateau.map_or(limit_v, |p| p.min(limit_v));
-    let w = opts.window_samples.max(1);
     // Rows: (ē, Ī, offset index or None, V̄).
     let mut rows: Vec<(f64, f64, Option<usize>, f64, f64)> = Vec::new();
     let mut n_offsets = 0usize;
@@ -131,8 +125,9 @@ pub fn estimate_pi(c: &Campaign, limit_v: f64, opts: &PiOptions) -> Result<PiEst
         let v = d.motor_voltage_v.as_ref().ok_or_else(|| missing("motor_voltage_v"))?;
         let ticks = d.motor_ticks.as_ref().ok_or_else(|| missing("motor_ticks"))?;
         let t = &d.time_s;
+        let w = window_samples(t, opts.window_s).max(1);
         let phi2 = ticks_to_rad(ticks, c.rig.encoder_ticks_per_rev);
-        let sp = motor_rpm_setpoint * TAU / 60.0;
+        let sp = rig_types::units::rpm_to_rad_s(motor_rpm_setpoint);
         let integral: Vec<f64> = t.iter().zip(&phi2).map(|(&ti, &p)| reference_angle_rad(ti, sp, ramp_s) - p).collect();
         let sat: Vec<bool> = v.iter().map(|x| x.abs() >= limit_v - opts.saturation_margin_v).collect();
         total += v.len();
@@ -217,14 +212,16 @@ pub fn estimate_pi(c: &Campaign, limit_v: f64, opts: &PiOptions) -> Result<PiEst
         PiMethod::CorrectedLs => {
             // Var of ē: 2·(Δ²/12)/Δt²; of Ī (trapezoid mean of w + 1 samples): ≈ (Δ²/12)/(w + 1).
             let q = rig_types::sensor::tick_rad(c.rig.encoder_ticks_per_rev).powi(2) / 12.0;
+            // The window at the campaign's nominal rate (the per-run counts agree with it).
+            let w = nominal_window_samples(opts.window_s, c.rig.sample_rate_hz);
             let dt = w as f64 / c.rig.sample_rate_hz;
             let mut noise_var = vec![0.0; p];
             noise_var[0] = 2.0 * q / (dt * dt);
             noise_var[1] = q / (w + 1) as f64;
-            linreg::ols_eiv(&x, &y, &noise_var, "PI gains: V = kp·e + ki·∫e + offsets")?
+            linear::ols_eiv(&x, &y, &noise_var, "PI gains: V = kp·e + ki·∫e + offsets")?
         }
-        PiMethod::Iv => linreg::iv(&x, &z, &y, "PI gains: V = kp·e + ki·∫e + offsets")?,
-        PiMethod::Ols => linreg::ols(&x, &y, "PI gains: V = kp·e + ki·∫e + offsets")?,
+        PiMethod::Iv => linear::iv(&x, &z, &y, "PI gains: V = kp·e + ki·∫e + offsets")?,
+        PiMethod::Ols => linear::ols(&x, &y, "PI gains: V = kp·e + ki·∫e + offsets")?,
     };
     Ok(PiEstimate {
         kp_v_s_rad: fit.beta[0],

@@ -215,14 +215,14 @@ pub fn report_markdown(e: &RigEstimate, campaign: &str, o: &EstimateOptions) -> 
     );
     let _ = writeln!(
         s,
-        "- Residuals: {}, every {} samples, both encoders.",
+        "- Residuals: {}, every {} s, both encoders.",
         match o.step_residual {
             StepResidual::Angle =>
                 "encoder angles (motor side and rotor 1) minus simulated angles (maximum likelihood if \
                                     the residual is the encoder quantisation)",
             StepResidual::Speed => "window-mean speeds (angle differences over the window) of measurement and model",
         },
-        o.speed_window_samples
+        o.speed_window_s
     );
     let _ = writeln!(
         s,
@@ -323,11 +323,11 @@ pub fn report_markdown(e: &RigEstimate, campaign: &str, o: &EstimateOptions) -> 
     let _ = writeln!(
         s,
         "V = kp·e + ki·∫e + c_k, e = Ω_ref − Ω2, Ω_ref the ramp 0 → set-point over ramp_s; both sides averaged over \
-         windows of {} samples, ∫e = ∫Ω_ref − φ2 from the encoder (no derivative), ē from angle differences. {} \
+         windows of {} s, ∫e = ∫Ω_ref − φ2 from the encoder (no derivative), ē from angle differences. {} \
          One constant c_k per unsaturated segment and run (encoder rounding, anti-windup after saturation). Samples \
          with |V| ≥ supply − {} V are saturated: {:.2} % of all samples; {} windows, {} offsets.\n\nkp = {} ± {} V s/rad, \
          ki = {} ± {} V/rad; residual RMS {:.4} V. {}\n",
-        o.pi.window_samples,
+        o.pi.window_s,
         match o.pi.method {
             crate::pi::PiMethod::CorrectedLs => {
                 "The encoder quantisation in ē and Ī (variance Δ²/12 per sample) would attenuate kp; its known variance \
@@ -362,12 +362,12 @@ pub fn report_markdown(e: &RigEstimate, campaign: &str, o: &EstimateOptions) -> 
         s,
         "The force sensor measures the tangential pad force F = (mV − offset)/factor (campaign calibration), so \
          μ = T1/(N0 r) = F/N0. μk: mean μ over slip samples, |Ω1| > {} rad/s from a centred difference over ±{} \
-         samples (at least twice its one-count resolution, so no stuck sample counts as slip), averaged per run and \
+         s (at least twice its one-count resolution, so no stuck sample counts as slip), averaged per run and \
          pooled over {} runs ({} samples), standard error from the between-run scatter. μs: the peak μ of each stick \
          episode (≥ {} s) up to its break-away, median over {} episodes, standard error 1.2533·1.4826·MAD/√n. \
          Runs with N0 < {} N are skipped.\n\nμs = {} ± {}, μk = {} ± {}.{}\n",
         o.friction.slip_threshold_rad_s,
-        o.friction.speed_half_window,
+        o.friction.speed_half_window_s,
         fr.n_slip_runs,
         fr.n_slip_samples,
         o.friction.min_stick_s,

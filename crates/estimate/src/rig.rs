@@ -65,7 +65,7 @@ pub struct RigEstimate {
 }
 
 fn sim_options(o: &EstimateOptions) -> SimOptions {
-    SimOptions { rtol: o.sim_rtol, atol: o.sim_atol, max_step_s: o.sim_max_step_s }
+    o.integrator.clone()
 }
 
 /// The starting `RigParams`: Table 4.4 motor, J1/K from the calibration,
@@ -181,7 +181,7 @@ pub fn estimate_rig(
     cal: &CampaignCalibration,
     o: &EstimateOptions,
 ) -> Result<RigEstimate, EstimateError> {
-    let steps = step_data(c, o.speed_window_samples.max(1))?;
+    let steps = step_data(c, o.speed_window_s)?;
     if steps.is_empty() {
         return Err(EstimateError::MissingRuns {
             campaign: c.name.clone(),

@@ -27,7 +27,7 @@ use crate::lsq::LsqProblem;
 use crate::signals::window_speed;
 use rayon::prelude::*;
 use rig_model::SimOptions;
-use rig_types::sensor::ticks_to_rad;
+use rig_types::sensor::{ticks_to_rad, window_samples};
 use rig_types::{Campaign, RigParams, RunInput, RunKind};
 
 /// The parameters the steps estimate, in solver order.
@@ -121,8 +121,9 @@ pub enum StepResidual {
     Angle,
 }
 
-/// Voltage-step runs of `c`, in campaign order.
-pub fn step_data(c: &Campaign, w: usize) -> Result<Vec<StepData>, EstimateError> {
+/// Voltage-step runs of `c`, in campaign order, in windows of `window_s`
+/// seconds (counted in samples from each run's time column).
+pub fn step_data(c: &Campaign, window_s: f64) -> Result<Vec<StepData>, EstimateError> {
     let mut out = Vec::new();
     for run in c.runs_of("voltage_step") {
         let RunKind::VoltageStep { .. } = run.kind else { continue };
@@ -134,6 +135,7 @@ pub fn step_data(c: &Campaign, w: usize) -> Result<Vec<StepData>, EstimateError>
         let phi1 =
             ticks_to_rad(d.rotor_ticks.as_ref().ok_or_else(|| missing("rotor_ticks"))?, c.rig.encoder_ticks_per_rev);
         let t = &d.time_s;
+        let w = window_samples(t, window_s).max(1);
         let (wt, w2) = window_speed(t, &phi2, w);
         let (_, w1) = window_speed(t, &phi1, w);
         if wt.len() < 10 {

@@ -148,7 +148,8 @@ pub struct StudyParams {
     pub fit_evaluations: usize,
     /// Moving mean of the measured top speed that the compliant drive follows, s.
     pub drive_ref_window_s: f64,
-    pub min_relative_gain: f64,
+    /// pipeline.toml's `[shared.selection]` (the campaign diagnosis' rule too).
+    pub selection: rig_types::contract::SelectionRule,
     /// One-sided level of the paired t-test (0.05 or 0.01).
     pub significance: f64,
     pub adequacy_threshold: f64,

@@ -486,7 +486,7 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
          windows. An effect is added when it has the largest held-out gain of its step, lowers the mean held-out misfit by at least {:.0} %, passes \
          a one-sided paired t-test over the {} held-out windows (t > {:.3}, level {}) and is no worse on the calibration window \
          (tables/lavi-candidates.csv, tables/lavi-heldout-misfits.csv).\n",
-        100.0 * s.params.min_relative_gain,
+        100.0 * s.params.selection.min_relative_gain,
         nh,
         sel.t_critical,
         s.params.significance

@@ -74,8 +74,14 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
     let sim_features =
         |m: &Model| -> Vec<Features> { (0..wins.len()).map(|w| ev.features(m, w).unwrap_or(NAN_FEATURES)).collect() };
     let baseline_features = sim_features(&baseline);
-    let selection =
-        forward_select(&ev, &baseline, &Candidate::ALL, p.fit_evaluations, p.min_relative_gain, p.significance)?;
+    let selection = forward_select(
+        &ev,
+        &baseline,
+        &Candidate::ALL,
+        p.fit_evaluations,
+        p.selection.min_relative_gain,
+        p.significance,
+    )?;
     let final_features = sim_features(&selection.final_model);
     let wob = wob_hypothesis(&ev, &selection)?;
     let adequate = mean(&selection.final_heldout) <= p.adequacy_threshold;

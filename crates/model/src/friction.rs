@@ -1,10 +1,22 @@
 //! Brake friction laws μ(Ω1) (Eq. 4-10, Table 4.7 and the vocabulary laws of
 //! ../shared/spec/diagnosis.md) and the normal force with its effects.
 
+pub(crate) use rig_types::units::RAD_S_TO_RPM;
 use rig_types::{Effect, FrictionLaw, HarmonicFriction, ThesisFriction};
 use std::f64::consts::PI;
 
-pub(crate) const RAD_S_TO_RPM: f64 = 60.0 / (2.0 * PI);
+/// The Stribeck law, written once for the model and the diagnosis:
+/// μ(Ω) = μk + (μs − μk)·exp(−(Ω/vs)²) (Eq. 4-10's velocity weakening as the
+/// diagnosis vocabulary states it, ../shared/spec/diagnosis.md; exponent δ = 2).
+pub fn stribeck_mu(mu_static: f64, mu_kinetic: f64, stribeck_speed_rad_s: f64, omega_rad_s: f64) -> f64 {
+    mu_kinetic + (mu_static - mu_kinetic) * stribeck_decay(omega_rad_s, stribeck_speed_rad_s)
+}
+
+/// The Stribeck decay exp(−(Ω/vs)²) of [`stribeck_mu`] (its shape alone: the
+/// diagnosis' linear fits use it as a regressor).
+pub fn stribeck_decay(omega_rad_s: f64, stribeck_speed_rad_s: f64) -> f64 {
+    (-(omega_rad_s / stribeck_speed_rad_s).powi(2)).exp()
+}
 
 /// Eq. 4-10 with Table 4.7, read as a piecewise-linear lookup over rotor rpm
 /// (the reading is argued in the crate docs, "Friction as published"):
@@ -43,7 +55,7 @@ pub fn slip_mu(law: &FrictionLaw, speed_abs_rad_s: f64) -> f64 {
     match (law, slip_mu_affine(law, w)) {
         (_, Some((_, mu0, mu1))) => mu0 + mu1 * w,
         (FrictionLaw::Stribeck { mu_static, mu_kinetic, stribeck_speed_rad_s }, None) => {
-            mu_kinetic + (mu_static - mu_kinetic) * (-(w / stribeck_speed_rad_s).powi(2)).exp()
+            stribeck_mu(*mu_static, *mu_kinetic, *stribeck_speed_rad_s, w)
         }
         (_, None) => unreachable!("only the Stribeck law is not piecewise affine"),
     }

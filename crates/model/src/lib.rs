@@ -194,7 +194,7 @@ use system::{Drive, System};
 
 /// Integrator settings. Tolerances are explicit arguments, never globals.
 /// pipeline.toml declares them once, in its `[shared.integrator]` table.
-#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SimOptions {
     pub rtol: f64,
@@ -424,9 +424,7 @@ pub fn static_twist_rad(params: &RigParams, torque_nm: f64) -> f64 {
     torque_nm.signum() * (0.5 * (lo + hi) + half_gap)
 }
 
-fn rpm_to_rad_s(rpm: f64) -> f64 {
-    rpm * 2.0 * std::f64::consts::PI / 60.0
-}
+use rig_types::units::rpm_to_rad_s;
 
 fn finite(name: &'static str, value: f64) -> Result<(), ModelError> {
     if value.is_finite() { Ok(()) } else { Err(ModelError::InvalidParameter { name, value, rule: "must be finite" }) }

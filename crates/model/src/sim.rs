@@ -7,7 +7,6 @@ use crate::exact::{Compute, Exact, ROWS, apply, apply_along, same_step};
 use crate::system::{CUR, INT, Mode, PHI1, PHI2, Region, System, VoltageIn, W1, W2};
 use crate::{ModelError, SimOptions, State};
 use rig_types::{FrictionLaw, ModelKind, Trajectory};
-use std::f64::consts::PI;
 
 /// Step budget of one call: accepted plus rejected steps may not exceed
 /// `MAX_STEPS + MAX_STEPS_PER_S × (simulated seconds)`. A run that needs more
@@ -64,7 +63,7 @@ fn failed(t: f64, reason: impl Into<String>) -> ModelError {
 /// lookup, |Ω1| below the static set-point (it has no stick phase of its own).
 fn thesis_stuck(sys: &System, y: &Vector) -> bool {
     match &sys.p.friction {
-        FrictionLaw::Thesis(f) => (y[W1] * 60.0 / (2.0 * PI)).abs() < f.static_setpoint_rpm,
+        FrictionLaw::Thesis(f) => rig_types::units::rad_s_to_rpm(y[W1]).abs() < f.static_setpoint_rpm,
         _ => y[W1] == 0.0,
     }
 }

@@ -236,7 +236,7 @@ fn anti_windup_limits_overshoot_after_saturation() {
     p.motor.inertia_kgm2 *= 100.0;
     let t = grid(40.0, 200.0);
     let tr = simulate(&p, &op(100.0, 0.0, 0.0), &t, &opts(1e-8)).unwrap();
-    let target = 100.0 * 2.0 * PI / 60.0;
+    let target = rig_types::units::rpm_to_rad_s(100.0);
     let peak = tr.motor_speed_rad_s.iter().cloned().fold(f64::MIN, f64::max);
     let saturated_s = tr.voltage_v.iter().filter(|&&v| v == 6.0).count() as f64 / 200.0;
     assert!(saturated_s > 1.0, "saturated for {saturated_s} s");

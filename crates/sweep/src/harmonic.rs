@@ -36,10 +36,12 @@ pub struct HarmonicOptions {
     /// Line tolerance in bins: simulations are noise-free, σ_f is tiny, so
     /// the 0.1-bin floor rules (as in the spectra stage).
     pub tolerance_bins: f64,
-    /// Quasi-periodic needs a discrete spectrum whose lines carry at least
-    /// this fraction of the variance (`rig_spectra::SignalLines::quasi_periodic`,
-    /// as the sweeps classifier).
-    pub min_line_power_fraction: f64,
+    /// The regime classifier's thresholds (pipeline.toml's `[shared.classify]`):
+    /// quasi-periodic needs a discrete spectrum whose lines carry at least
+    /// `classify.min_line_power_fraction` of the variance
+    /// (`rig_spectra::SignalLines::quasi_periodic`), the sweeps' own threshold,
+    /// declared once.
+    pub classify: crate::ClassifyOptions,
 }
 
 impl HarmonicOptions {
@@ -98,7 +100,7 @@ fn analyse(
         stuck_fraction: tr.stuck[i0..].iter().filter(|s| **s).count() as f64 / n,
         negative_speed_fraction: rotor_rpm.iter().filter(|v| **v < 0.0).count() as f64 / n,
         rotor_rpm,
-        quasi_periodic: sl.quasi_periodic(p.min_line_power_fraction),
+        quasi_periodic: sl.quasi_periodic(p.classify.min_line_power_fraction),
         resolution_hz: sl.spectrum.resolution_hz,
         lines: sl.lines,
     })
@@ -350,7 +352,7 @@ pub fn markdown(cases: &[Case], p: &HarmonicOptions) -> String {
         p.min_freq_hz,
         p.max_freq_hz,
         p.tolerance_bins,
-        p.min_line_power_fraction
+        p.classify.min_line_power_fraction
     );
     let _ = writeln!(
         md,

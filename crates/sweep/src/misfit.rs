@@ -99,8 +99,10 @@ pub fn misfit_study(
     let mut figures: Vec<FigureSpec> = results.iter().map(overlay_figure).collect();
     let measured_mu = measured_friction_points(&runs, force, radius_m, ticks_per_rev);
     figures.push(friction_figure(thesis, rig, measured_mu));
+    // The limit cycles start from rest with the campaign's ramp.
+    let ramp_s = crate::operating::RunProtocol::of_campaign(campaign).map_or(0.0, |p| p.ramp_s);
     for (id, rpm, n) in [("fig-4-17a", 54.5, 4.5), ("fig-4-17b", 122.0, 25.0)] {
-        figures.push(limit_cycle_figure(id, rpm, n, thesis, rig, opts, limit_cycle_s)?);
+        figures.push(limit_cycle_figure(id, (rpm, n, ramp_s), thesis, rig, opts, limit_cycle_s)?);
     }
     Ok(MisfitOutput { table: misfit_table(&results), figures })
 }
@@ -352,8 +354,7 @@ fn friction_figure(thesis: &RigParams, rig: &RigParams, measured: Option<Series>
 /// `window_s` of a 3·window_s run from rest, sampled at MAX_POINTS / window_s Hz.
 fn limit_cycle_figure(
     id: &str,
-    setpoint_rpm: f64,
-    normal_force_n: f64,
+    (setpoint_rpm, normal_force_n, ramp_s): (f64, f64, f64),
     thesis: &RigParams,
     rig: &RigParams,
     opts: &SimOptions,
@@ -362,7 +363,7 @@ fn limit_cycle_figure(
     let t_end = 3.0 * window_s;
     let dt = window_s / (MAX_POINTS - 1) as f64;
     let t: Vec<f64> = (0..MAX_POINTS).map(|k| t_end - window_s + k as f64 * dt).collect();
-    let input = RunInput::OperatingPoint { motor_rpm_setpoint: setpoint_rpm, normal_force_n, ramp_s: 2.0 };
+    let input = RunInput::OperatingPoint { motor_rpm_setpoint: setpoint_rpm, normal_force_n, ramp_s };
     let mut series = Vec::new();
     let mut ranges = Vec::new();
     for (name, p, style) in [("thesis model", thesis, SeriesStyle::Dashed), ("rig model", rig, SeriesStyle::Line)] {
@@ -386,7 +387,7 @@ fn limit_cycle_figure(
         caption: format!(
             "Phase portrait of rotor-1 speed against shaft twist φ2 − φ1 for motor set-point {setpoint_rpm} rpm \
              and normal force {normal_force_n} N (the operating points of the thesis' Fig. 4.17), simulated from \
-             rest with a 2 s ramp for {t_end} s; the last {window_s} s are shown, sampled every {} ms from the \
+             rest with a {ramp_s} s ramp (the campaign's) for {t_end} s; the last {window_s} s are shown, sampled every {} ms from the \
              integrator's dense output (model speed, no encoder). Thesis model: Table 4.5, n = 1, Eq. 4-10 \
              lookup, PI gains of the rig. Rig model: data/rig-params.json. In the window: {}. A model \
              that settles to steady sliding shows a point or an inward spiral, not a limit cycle.",

@@ -7,12 +7,15 @@
 //! `encoder_ticks_per_rev`, then the documented ±20 ms differentiator), so
 //! measured and simulated windows see the same quantisation and filter before
 //! the same classifier. The window is the last `window_s` of the record minus
-//! the differentiator's 40 ms edge (18 s after a 2 s ramp in a 40 s record).
+//! the differentiator's 40 ms edge (18 s after a 2 s ramp in the shipped
+//! campaign's 40 s records). The chapter's labelled points are simulated with
+//! the campaign's own protocol ([`RunProtocol::of_campaign`]: its sample rate,
+//! its operating points' ramp and length), never an assumed one.
 
 use crate::{Classification, Point, SweepError, SweepSettings, classify};
 use rig_model::simulate;
 use rig_types::sensor::{SPEED_HALF_WINDOW_S, encoder_speed_rad_s, quantised_speed_rad_s};
-use rig_types::{RigParams, Run, RunInput, RunKind};
+use rig_types::{Campaign, RigParams, Run, RunInput, RunKind};
 
 /// A campaign run classified from its recording and from both models.
 #[derive(Debug, Clone)]
@@ -95,17 +98,59 @@ pub fn op_point(run: &Run, th: &RigParams, rg: &RigParams, s: &SweepSettings, tp
     })
 }
 
-/// A labelled point of the chapter simulated like a campaign run: 2 s ramp,
-/// 40 s at 500 Hz (the campaign's protocol), encoder and differentiator.
+/// How a campaign records its operating points, read from the campaign:
+/// what a simulation "like a campaign run" must imitate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunProtocol {
+    /// The campaign's nominal sample rate (campaign.toml), Hz.
+    pub sample_rate_hz: f64,
+    /// The longest operating-point record, s (samples / rate).
+    pub duration_s: f64,
+    /// The median ramp of the operating points, s.
+    pub ramp_s: f64,
+}
+
+impl RunProtocol {
+    /// The protocol of `c`'s operating points; `None` without any.
+    pub fn of_campaign(c: &Campaign) -> Option<Self> {
+        let rate = c.rig.sample_rate_hz;
+        let mut ramps = Vec::new();
+        let mut samples = 0usize;
+        for r in c.runs_of("operating_point") {
+            if let RunKind::OperatingPoint { ramp_s, .. } = r.kind {
+                ramps.push(ramp_s);
+                samples = samples.max(r.data.time_s.len());
+            }
+        }
+        if ramps.is_empty() || rate.is_nan() || rate <= 0.0 {
+            return None;
+        }
+        ramps.sort_by(f64::total_cmp);
+        Some(RunProtocol { sample_rate_hz: rate, duration_s: samples as f64 / rate, ramp_s: ramps[ramps.len() / 2] })
+    }
+
+    /// Sample times 0, 1/rate, … up to `duration_s` inclusive.
+    pub fn times_s(&self) -> Vec<f64> {
+        let n = (self.duration_s * self.sample_rate_hz).round() as usize;
+        (0..=n).map(|k| k as f64 / self.sample_rate_hz).collect()
+    }
+}
+
+/// A labelled point of the chapter simulated like a campaign run (the
+/// campaign's sample rate, record length and ramp), encoder and differentiator.
 pub fn from_rest(
     p: &RigParams,
     pt: Point,
+    protocol: &RunProtocol,
     s: &SweepSettings,
     tpr: u32,
 ) -> Result<Classification, rig_model::ModelError> {
-    let time_s: Vec<f64> = (0..=20_000).map(|k| k as f64 / 500.0).collect();
-    let input =
-        RunInput::OperatingPoint { motor_rpm_setpoint: pt.motor_rpm, normal_force_n: pt.normal_force_n, ramp_s: 2.0 };
+    let time_s = protocol.times_s();
+    let input = RunInput::OperatingPoint {
+        motor_rpm_setpoint: pt.motor_rpm,
+        normal_force_n: pt.normal_force_n,
+        ramp_s: protocol.ramp_s,
+    };
     simulated(p, &input, &time_s, s, tpr)
 }
 
@@ -114,13 +159,15 @@ pub fn labelled_points(
     labels: &[LabelledPoint],
     th: &RigParams,
     rg: &RigParams,
+    protocol: &RunProtocol,
     s: &SweepSettings,
     tpr: u32,
 ) -> Result<Vec<Labelled>, SweepError> {
     let mut out = Vec::new();
     for l in labels {
         let at = |p: &RigParams, which: &str| {
-            from_rest(p, l.point, s, tpr).map_err(|e| SweepError::Analysis(format!("{which} model at {}: {e}", l.id)))
+            from_rest(p, l.point, protocol, s, tpr)
+                .map_err(|e| SweepError::Analysis(format!("{which} model at {}: {e}", l.id)))
         };
         let thesis = at(th, "thesis")?;
         let rig = at(rg, "rig")?;

@@ -10,7 +10,7 @@
 
 pub mod render;
 
-use crate::operating::{LabelledPoint, OpPoint, labelled_points, op_point};
+use crate::operating::{LabelledPoint, OpPoint, RunProtocol, labelled_points, op_point};
 use crate::{
     ChainResult, ClassifyOptions, MapSlice, MapSpec, Point, Shard, SweepError, SweepSettings, WindowSpec,
     bifurcation_chains, linspace, run_chains, run_map_shard,
@@ -39,8 +39,6 @@ pub struct SweepsParams {
     pub diagram_points: usize,
     pub speed_sweep_force_n: f64,
     pub friction_sweep_rpm: f64,
-    pub speed_sweep_campaign_force_n: f64,
-    pub friction_sweep_campaign_rpm: f64,
     /// `"i/n"`: only chains of shard i of the maps.
     pub shard: String,
     /// The regime classifier's thresholds (pipeline.toml's `[shared.classify]`).
@@ -124,6 +122,34 @@ pub fn map_shards(
         .collect()
 }
 
+/// The campaign's own speed and force series: the normal force most of its
+/// operating points share (the speed series' force) and the set-point most
+/// share (the force series' set-point); ties go to the smaller value. Read
+/// from the campaign, so another lab's set-points get their own diagrams.
+pub fn campaign_series(campaign: &Campaign) -> (f64, f64) {
+    let mode = |values: Vec<f64>| {
+        let mut counts: Vec<(f64, usize)> = Vec::new();
+        for v in values {
+            match counts.iter_mut().find(|(x, _)| *x == v) {
+                Some(c) => c.1 += 1,
+                None => counts.push((v, 1)),
+            }
+        }
+        counts.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.total_cmp(&b.0)));
+        counts.first().map_or(f64::NAN, |c| c.0)
+    };
+    let points: Vec<(f64, f64)> = campaign
+        .runs_of("operating_point")
+        .filter_map(|r| match r.kind {
+            rig_types::RunKind::OperatingPoint { motor_rpm_setpoint, normal_force_n, .. } => {
+                Some((motor_rpm_setpoint, normal_force_n))
+            }
+            _ => None,
+        })
+        .collect();
+    (mode(points.iter().map(|p| p.1).collect()), mode(points.iter().map(|p| p.0).collect()))
+}
+
 /// The whole study: both models' maps and diagrams, every operating point
 /// of `campaign`, the chapter's labelled points.
 pub fn sweeps_study(
@@ -135,6 +161,10 @@ pub fn sweeps_study(
     progress: &(dyn Fn() + Sync),
     on_model: &dyn Fn(&str),
 ) -> Result<SweepsStudy, SweepError> {
+    if campaign.runs_of("operating_point").next().is_none() {
+        return Err(SweepError::Analysis(format!("campaign {} has no operating_point run", campaign.name)));
+    }
+    let (cfs, cfr) = campaign_series(campaign);
     let settings = p.settings();
     let map = p.map();
     let n_diag = p.diagram_points;
@@ -147,7 +177,6 @@ pub fn sweeps_study(
             run_chains(&m, &bifurcation_chains(values, f), &settings, progress)
         };
         let (fs, fr) = (p.speed_sweep_force_n, p.friction_sweep_rpm);
-        let (cfs, cfr) = (p.speed_sweep_campaign_force_n, p.friction_sweep_campaign_rpm);
         models.push(ModelSweeps {
             name,
             map: run_map_shard(&m, &map, Shard::WHOLE, &settings, progress),
@@ -166,7 +195,10 @@ pub fn sweeps_study(
     }
     let (th, rg) = (&models[0].params, &models[1].params);
     let ops: Vec<OpPoint> = runs.par_iter().map(|r| op_point(r, th, rg, &settings, tpr)).collect::<Result<_, _>>()?;
-    let labelled = labelled_points(labels, th, rg, &settings, tpr)?;
+    let protocol = RunProtocol::of_campaign(campaign).ok_or_else(|| {
+        SweepError::Analysis(format!("campaign {}: no operating-point protocol (sample rate, ramp)", campaign.name))
+    })?;
+    let labelled = labelled_points(labels, th, rg, &protocol, &settings, tpr)?;
     let chosen = crate::operating::time_response_runs(&runs)
         .into_iter()
         .map(|(fig, target, run)| (fig, target, run.id.clone()))
@@ -175,8 +207,8 @@ pub fn sweeps_study(
         settings,
         speed_sweep_force_n: p.speed_sweep_force_n,
         friction_sweep_rpm: p.friction_sweep_rpm,
-        campaign_force_n: p.speed_sweep_campaign_force_n,
-        campaign_rpm: p.friction_sweep_campaign_rpm,
+        campaign_force_n: cfs,
+        campaign_rpm: cfr,
         models,
         ops,
         labelled,

@@ -292,3 +292,13 @@ pub struct ThesisData {
     /// Operating points the captions label vibrating or quiet.
     pub labelled_points: Vec<LabelledPoint>,
 }
+
+/// The rule that lets an effect into a model by forward selection, shared by
+/// every study that selects (pipeline.toml's `[shared.selection]`, handed to
+/// the `diagnosis` and `lavi` stages): declared once so the two cannot drift.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SelectionRule {
+    /// An effect must lower the held-out misfit by at least this fraction.
+    pub min_relative_gain: f64,
+}

@@ -45,13 +45,28 @@ pub fn speed_resolution_rad_s(ticks_per_rev: u32, w: usize, dt_s: f64) -> f64 {
 /// Samples in a half window of `half_s` seconds, from the median sample step
 /// (the time column is authoritative; the nominal rate is not trusted).
 pub fn half_window_samples(time_s: &[f64], half_s: f64) -> usize {
+    window_samples(time_s, half_s)
+}
+
+/// Samples in a window of `window_s` seconds (at least 1), from the median
+/// sample step; 0 when the record has fewer than two samples or no positive
+/// step. Every window of the analysis is declared in seconds and counted in
+/// samples here, so a campaign at another sample rate keeps its windows' length.
+pub fn window_samples(time_s: &[f64], window_s: f64) -> usize {
     if time_s.len() < 2 {
         return 0;
     }
     let mut dt: Vec<f64> = time_s.windows(2).map(|w| w[1] - w[0]).collect();
     dt.sort_by(f64::total_cmp);
     let med = dt[dt.len() / 2];
-    if med <= 0.0 { 0 } else { ((half_s / med).round() as usize).max(1) }
+    if med <= 0.0 { 0 } else { ((window_s / med).round() as usize).max(1) }
+}
+
+/// Samples in a window of `window_s` seconds at a campaign's nominal
+/// `sample_rate_hz` (at least 1): for a statistic of the whole campaign (a
+/// noise floor, a resolution) where no one run's time column speaks for all.
+pub fn nominal_window_samples(window_s: f64, sample_rate_hz: f64) -> usize {
+    ((window_s * sample_rate_hz).round() as usize).max(1)
 }
 
 /// Centred moving average over ±`half` samples; the window shrinks

@@ -249,7 +249,7 @@ pub fn draw_hidden(class: &str, mu_kinetic: f64, max_setpoint_rpm: f64, seed: u6
         "drive_voltage_limit" => {
             // Armature back-EMF at the highest set-point with the default motor (n = 8, k_e ≈ 0.0588):
             // a limit between 45 % and 80 % of it saturates the fast runs.
-            let w_arm = 8.0 * max_setpoint_rpm * 2.0 * std::f64::consts::PI / 60.0;
+            let w_arm = rig_types::units::rpm_to_rad_s(8.0 * max_setpoint_rpm);
             Hidden::DriveVoltageLimit { limit_v: 0.0588 * w_arm * r.random_range(0.45..0.8) }
         }
         "motor_cogging" => {

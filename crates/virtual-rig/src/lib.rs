@@ -109,6 +109,12 @@ impl Protocol {
     }
 }
 
+/// The generator's own integrator tolerances for the truth it records: the
+/// generator's, not the analysis' (the analysis integrates with pipeline.toml's
+/// `[shared.integrator]`). Equal to those today; a campaign is data, so
+/// changing the analysis' tolerances must not change what the rig recorded.
+pub const TRUTH_SIM_OPTIONS: SimOptions = SimOptions { rtol: 1e-8, atol: 1e-10, max_step_s: 0.01 };
+
 /// Why a campaign could not be generated.
 #[derive(Debug, thiserror::Error)]
 pub enum VirtualRigError {
@@ -160,7 +166,7 @@ pub fn generate(name: &str, truth: &Truth, protocol: &Protocol, seed: u64) -> Re
         ));
         clock_s += 2.0;
     }
-    let sim_opts = SimOptions::default();
+    let sim_opts = TRUTH_SIM_OPTIONS;
     for &v in &protocol.step_voltages_v {
         let t = times(protocol.step_duration_s, rate);
         let id = format!("step-{}v", v);

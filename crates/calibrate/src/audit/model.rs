@@ -84,7 +84,7 @@ pub(super) fn motor_and_friction(a: &mut Audit, t: &ThesisTables) -> Result<(), 
 
     // Table 4.7 set-points against Eq. 4-10's single threshold Tol = 0.001 (unit not printed).
     let tol = t.statement("tol")?.value.value;
-    let tol_rad_s_in_rpm = tol * 60.0 / (2.0 * PI);
+    let tol_rad_s_in_rpm = rig_types::units::rad_s_to_rpm(tol);
     for sym in ["mu_st", "mu_dyn"] {
         let row = t.friction(sym)?;
         let sp = row.setpoint_rpm.value;

@@ -5,7 +5,7 @@ use super::{ChannelCheck, ChannelOptions, rms};
 use crate::DiagnoseOptions;
 use crate::prepare::diff_noise;
 use rig_calibrate::CampaignCalibration;
-use rig_types::sensor::{ForceCal, force_n, tick_rad, ticks_to_rad};
+use rig_types::sensor::{ForceCal, force_n, nominal_window_samples, tick_rad, ticks_to_rad};
 use rig_types::{Campaign, RigParams, RunKind};
 
 /// Regressors of one window boundary: [⟨Ω̇1⟩, ⟨φ2−φ1⟩, ⟨Ω2−Ω1⟩, ⟨Ω1⟩, 1] and r⟨F⟩.
@@ -52,7 +52,7 @@ fn rows(phi1: &[f64], phi2: &[f64], force_n: &[f64], dt: f64, w: usize, r_m: f64
 /// themselves (one least squares over all runs): a bearing drag or a slightly
 /// wrong calibration is then no finding, and what is left is what no linear
 /// rotor equation explains (a torque that follows angle, time or stick/slip).
-/// Terms are triangle-weighted window means (window `balance_window_samples`).
+/// Terms are triangle-weighted window means (window `balance_window_s`).
 /// Statistic: per run the RMS residual, over runs their RMS, N·m. Floor: the
 /// same expression under sensor noise alone: force noise (measured per run by
 /// first differences) and one-tick quantisation of both encoders propagated
@@ -65,7 +65,7 @@ pub fn torque_balance_check(
     o: &ChannelOptions,
 ) -> ChannelCheck {
     let name = "operating_point.torque_balance";
-    let w = o.balance_window_samples.max(2);
+    let w = nominal_window_samples(o.balance_window_s, c.rig.sample_rate_hz).max(2);
     let dt = 1.0 / c.rig.sample_rate_hz;
     let rad = tick_rad(c.rig.encoder_ticks_per_rev);
     let r_m = c.rig.brake_disc_radius_m;
@@ -100,7 +100,7 @@ pub fn torque_balance_check(
     // J1 is the calibration's (Eqs. 4-4/4-5): fitted here it would be
     // attenuated towards 0 by the quantisation noise of Ω̇1 (errors in variables).
     let j1 = cal.rotor_inertia_kgm2;
-    let mut ne = crate::linalg::Normal::new(5);
+    let mut ne = rig_estimate::linear::Normal::new(5);
     for r in &per_run {
         for (x, y) in &r.rows {
             let row: Vec<(usize, f64)> = x.iter().copied().enumerate().skip(1).collect();

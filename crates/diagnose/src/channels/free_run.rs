@@ -8,9 +8,8 @@ use crate::prepare::centred_speed;
 use crate::result::Features;
 use crate::select::steady_features;
 use rig_model::SimOptions;
-use rig_types::sensor::{tick_rad, ticks_to_rad};
+use rig_types::sensor::{half_window_samples, nominal_window_samples, tick_rad, ticks_to_rad};
 use rig_types::{Campaign, RigParams, RunInput, RunKind};
-use std::f64::consts::PI;
 
 /// What the free-run comparison needs from the diagnosis options.
 #[derive(Debug, Clone, PartialEq)]
@@ -18,10 +17,12 @@ pub struct FreeRunSettings {
     pub settle_s: f64,
     pub steady_s: f64,
     pub slip_speed_rad_s: f64,
-    pub rotor_speed_half_window: usize,
-    pub motor_speed_half_window: usize,
+    pub rotor_speed_half_window_s: f64,
+    pub motor_speed_half_window_s: f64,
     /// The regime classifier's thresholds (`[shared.classify]`).
     pub classify: rig_sweep::ClassifyOptions,
+    /// `[shared.integrator]`.
+    pub integrator: SimOptions,
 }
 
 impl FreeRunSettings {
@@ -30,9 +31,10 @@ impl FreeRunSettings {
             settle_s: opts.settle_s,
             steady_s: o.free_run_steady_s,
             slip_speed_rad_s: opts.slip_speed_rad_s,
-            rotor_speed_half_window: opts.rotor_speed_half_window,
-            motor_speed_half_window: opts.motor_speed_half_window,
+            rotor_speed_half_window_s: opts.rotor_speed_half_window_s,
+            motor_speed_half_window_s: opts.motor_speed_half_window_s,
             classify: opts.classify.clone(),
+            integrator: opts.integrator.clone(),
         }
     }
 }
@@ -89,23 +91,24 @@ fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) 
     let phi1 = ticks_to_rad(&run.data.rotor_ticks.as_ref()?[..to], c.rig.encoder_ticks_per_rev);
     let phi2 = ticks_to_rad(&run.data.motor_ticks.as_ref()?[..to], c.rig.encoder_ticks_per_rev);
     let tt = &t[..to];
-    let w_set = motor_rpm_setpoint * 2.0 * PI / 60.0;
+    let w_set = rig_types::units::rpm_to_rad_s(motor_rpm_setpoint);
     let dt = (tt[to - 1] - tt[0]) / (to - 1) as f64;
     let stride = ((1.0 / (TRACE_RATE_HZ * dt)).round() as usize).max(1);
+    let (h1, h2) =
+        (half_window_samples(tt, s.rotor_speed_half_window_s), half_window_samples(tt, s.motor_speed_half_window_s));
     let feat = |a1: &[f64], a2: &[f64]| {
-        let w1 = centred_speed(tt, a1, s.rotor_speed_half_window);
-        let w2 = centred_speed(tt, a2, s.motor_speed_half_window);
+        let w1 = centred_speed(tt, a1, h1);
+        let w2 = centred_speed(tt, a2, h2);
         let f = steady_features(&tt[from..], &w1[from..], &w2[from..], w_set, s.slip_speed_rad_s, &s.classify);
         (f, w1[from..].iter().step_by(stride).copied().collect::<Vec<f64>>())
     };
     let (measured, measured_rad_s) = feat(&phi1, &phi2);
     let input = RunInput::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s };
-    let sim = rig_model::simulate(p, &input, tt, &SimOptions::default())
-        .ok()
-        .map(|tr| feat(&tr.rotor_angle_rad, &tr.motor_angle_rad));
+    let sim =
+        rig_model::simulate(p, &input, tt, &s.integrator).ok().map(|tr| feat(&tr.rotor_angle_rad, &tr.motor_angle_rad));
     let (simulated, simulated_rad_s) = sim.map_or((None, None), |(f, w)| (Some(f), Some(w)));
     let trace = Trace { time_s: tt[from..].iter().step_by(stride).copied().collect(), measured_rad_s, simulated_rad_s };
-    let motor_tick_rad_s = rad / (2.0 * s.motor_speed_half_window as f64 * dt);
+    let motor_tick_rad_s = rad / (2.0 * h2 as f64 * dt);
     Some(Pair { id: run.id.clone(), measured, simulated, window_s: tt[to - 1] - tt[from], trace, motor_tick_rad_s })
 }
 
@@ -182,7 +185,8 @@ pub fn free_run_checks_of(c: &Campaign, pairs: &[Pair], s: &FreeRunSettings, o: 
     ));
 
     let floor = tick_rad(c.rig.encoder_ticks_per_rev)
-        / (2.0 * s.rotor_speed_half_window as f64 / c.rig.sample_rate_hz)
+        / (2.0 * nominal_window_samples(s.rotor_speed_half_window_s, c.rig.sample_rate_hz) as f64
+            / c.rig.sample_rate_hz)
         / 6f64.sqrt();
     for (name, th, get) in [
         (names[1], o.rotor_max_ratio, (|f: &Features| f.rotor_max_rad_s) as fn(&Features) -> f64),

@@ -5,7 +5,7 @@ use super::{ChannelCheck, ChannelOptions, rms};
 use rig_calibrate::CampaignCalibration;
 use rig_estimate::steps::{simulate_step, step_data};
 use rig_model::SimOptions;
-use rig_types::sensor::speed_resolution_rad_s;
+use rig_types::sensor::{nominal_window_samples, speed_resolution_rad_s};
 use rig_types::{Campaign, RigParams};
 
 /// Spread of per-step values around their mean, and the RMS of their
@@ -38,6 +38,7 @@ pub fn voltage_step_checks(
     cal: &CampaignCalibration,
     baseline: &RigParams,
     o: &ChannelOptions,
+    sim: &SimOptions,
 ) -> Vec<ChannelCheck> {
     let mut out = Vec::new();
     let tick_rad = rig_types::sensor::tick_rad(c.rig.encoder_ticks_per_rev);
@@ -89,8 +90,8 @@ pub fn voltage_step_checks(
         ));
     }
 
-    let w = o.window_samples.max(1);
-    let Ok(data) = step_data(c, w) else {
+    let w = nominal_window_samples(o.window_s, c.rig.sample_rate_hz);
+    let Ok(data) = step_data(c, o.window_s) else {
         out.push(ChannelCheck::not_testable("voltage_step.residual", ids, "no usable voltage_step run".into()));
         return out;
     };
@@ -98,7 +99,7 @@ pub fn voltage_step_checks(
     let per_run: Vec<Option<(f64, f64)>> = data
         .par_iter()
         .map(|s| {
-            let (m2, m1) = simulate_step(baseline, s, &SimOptions::default()).ok()?;
+            let (m2, m1) = simulate_step(baseline, s, sim).ok()?;
             let r: Vec<f64> = s
                 .motor_speed_rad_s
                 .iter()

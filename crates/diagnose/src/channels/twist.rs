@@ -7,13 +7,12 @@ use rig_calibrate::CampaignCalibration;
 use rig_types::Campaign;
 
 /// Least squares of y on the columns of `x` (rows of equal length), by the
-/// normal equations (at most 3 columns here). None when singular.
+/// workspace's normal equations (`rig_estimate::linear::Normal`; at most 3
+/// columns here). None when singular.
 fn lstsq(x: &[Vec<f64>], y: &[f64]) -> Option<Vec<f64>> {
-    let p = x.first()?.len();
-    let mut n = crate::linalg::Normal::new(p);
+    let mut n = rig_estimate::linear::Normal::new(x.first()?.len());
     for (row, &v) in x.iter().zip(y) {
-        let r: Vec<(usize, f64)> = row.iter().copied().enumerate().collect();
-        n.add_sparse(&r, v);
+        n.add_row(row, v);
     }
     n.solve()
 }

@@ -433,7 +433,7 @@ fn ladder_hidden(effect: &str, size: f64, base: &Truth, max_rpm: f64, seed: u64)
         Hidden::ViscousBrake { .. } => Hidden::ViscousBrake { mu_kinetic: mu_k, viscous_per_rad_s: mu_k * size / 10.0 },
         Hidden::DriveVoltageLimit { .. } => {
             let m = &base.truth_motor();
-            let back_emf_v = m.0 * m.1 * max_rpm * 2.0 * std::f64::consts::PI / 60.0;
+            let back_emf_v = rig_types::units::rpm_to_rad_s(m.0 * m.1 * max_rpm);
             Hidden::DriveVoltageLimit { limit_v: size * back_emf_v }
         }
         other => other,

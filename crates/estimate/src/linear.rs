@@ -1,0 +1,254 @@
+//! The workspace's one linear least-squares solver (ARCHITECTURE.md, "one home
+//! per idea"; a tidy test refuses a second): symmetric positive definite
+//! systems by faer's Cholesky ([`spd_solve`], [`spd_inverse`]), the normal
+//! equations they come from ([`Normal`], accumulated row by row), ordinary
+//! least squares with standard errors (σ²(XᵀX)⁻¹, σ² = SSR/(n − p)) on
+//! column-scaled normal equations ([`ols`]), its errors-in-variables
+//! correction ([`ols_eiv`]) and instrumental variables ([`iv`]). The
+//! Levenberg–Marquardt steps (`lsq.rs`), the fit covariances (`fit_stats.rs`)
+//! and the diagnosis' linear fits solve here.
+
+use crate::EstimateError;
+use faer::Mat;
+use faer::linalg::solvers::{DenseSolveCore, Solve};
+
+/// Solves A x = b for a symmetric positive definite A (only its lower
+/// triangle is read); `None` when A is not positive definite or the solution
+/// is not finite.
+pub fn spd_solve(a: &Mat<f64>, b: &[f64]) -> Option<Vec<f64>> {
+    let llt = a.llt(faer::Side::Lower).ok()?;
+    let mut rhs = Mat::<f64>::from_fn(b.len(), 1, |i, _| b[i]);
+    llt.solve_in_place(rhs.as_mut());
+    let x: Vec<f64> = (0..b.len()).map(|i| rhs[(i, 0)]).collect();
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+/// A⁻¹ of a symmetric positive definite A (covariances σ²(JᵀJ)⁻¹); `None`
+/// when A is not positive definite.
+pub fn spd_inverse(a: &Mat<f64>) -> Option<Mat<f64>> {
+    a.llt(faer::Side::Lower).ok().map(|llt| llt.inverse())
+}
+
+/// Normal equations AᵀA x = Aᵀy of a least-squares problem with `n`
+/// unknowns, accumulated one (sparse) row at a time. Solved by [`spd_solve`]
+/// after a conditioning check: a Cholesky pivot below 1e-13 of the largest
+/// diagonal entry counts as singular (an unidentifiable parameter, which
+/// callers report as data, not as an error).
+#[derive(Debug, Clone)]
+pub struct Normal {
+    pub n: usize,
+    /// AᵀA, n × n.
+    pub ata: Mat<f64>,
+    pub atb: Vec<f64>,
+}
+
+impl Normal {
+    pub fn new(n: usize) -> Self {
+        Normal { n, ata: Mat::zeros(n, n), atb: vec![0.0; n] }
+    }
+
+    /// Normal equations already summed: AᵀA row-major (n × n) and Aᵀy.
+    pub fn from_row_major(n: usize, ata: &[f64], atb: Vec<f64>) -> Self {
+        Normal { n, ata: Mat::from_fn(n, n, |i, j| ata[i * n + j]), atb }
+    }
+
+    /// Adds one residual row given by its non-zero entries `(column, value)` and target `y`.
+    pub fn add_sparse(&mut self, row: &[(usize, f64)], y: f64) {
+        for &(i, vi) in row {
+            self.atb[i] += vi * y;
+            for &(j, vj) in row {
+                self.ata[(i, j)] += vi * vj;
+            }
+        }
+    }
+
+    /// Adds one dense residual row `x` with target `y`.
+    pub fn add_row(&mut self, x: &[f64], y: f64) {
+        let row: Vec<(usize, f64)> = x.iter().copied().enumerate().collect();
+        self.add_sparse(&row, y);
+    }
+
+    /// The Cholesky factor's pivots all above 1e-13 of the diagonal scale.
+    fn regular(&self) -> bool {
+        let n = self.n;
+        let scale = (0..n).map(|i| self.ata[(i, i)].abs()).fold(0.0_f64, f64::max).max(f64::MIN_POSITIVE);
+        let Ok(llt) = self.ata.llt(faer::Side::Lower) else { return false };
+        let l = llt.L();
+        (0..n).all(|i| {
+            let d = l[(i, i)] * l[(i, i)];
+            d.is_finite() && d > 1e-13 * scale
+        })
+    }
+
+    /// Solves (AᵀA) x = Aᵀy; `None` when the matrix is singular (see the type's docs).
+    pub fn solve(&self) -> Option<Vec<f64>> {
+        if !self.regular() {
+            return None;
+        }
+        spd_solve(&self.ata, &self.atb)
+    }
+
+    /// (AᵀA)⁻¹ row-major, for covariances σ²(AᵀA)⁻¹; `None` when singular.
+    pub fn inverse(&self) -> Option<Vec<f64>> {
+        if !self.regular() {
+            return None;
+        }
+        let inv = spd_inverse(&self.ata)?;
+        Some((0..self.n * self.n).map(|k| inv[(k / self.n, k % self.n)]).collect())
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct OlsFit {
+    pub beta: Vec<f64>,
+    pub stderr: Vec<f64>,
+    pub ssr: f64,
+}
+
+/// Fits y ≈ X β; `x` is row-major (n rows of p). `context` names the regression in errors.
+pub fn ols(x: &[Vec<f64>], y: &[f64], context: &str) -> Result<OlsFit, EstimateError> {
+    ols_eiv(x, y, &vec![0.0; x.first().map_or(0, Vec::len)], context)
+}
+
+/// Least squares corrected for known errors in the regressors (errors in
+/// variables, "corrected least squares"): a regressor measured with
+/// independent zero-mean error of variance s² inflates E[XᵀX] by n·s² on its
+/// diagonal, which attenuates its coefficient; subtracting it removes the bias.
+/// `noise_var[j]` is that variance for column j (0 for exact regressors).
+pub fn ols_eiv(x: &[Vec<f64>], y: &[f64], noise_var: &[f64], context: &str) -> Result<OlsFit, EstimateError> {
+    let (n, p, scale) = shape_and_scale(x, true, context)?;
+    let xs = Mat::<f64>::from_fn(n, p, |i, j| x[i][j] / scale[j]);
+    let ym = Mat::<f64>::from_fn(n, 1, |i, _| y[i]);
+    let mut xtx = xs.transpose() * &xs;
+    for j in 0..p {
+        xtx[(j, j)] -= n as f64 * noise_var[j] / (scale[j] * scale[j]);
+    }
+    let xty = xs.transpose() * &ym;
+    let singular = || EstimateError::Singular {
+        context: context.into(),
+        rule: "a regressor is constant zero or a combination of the others (or no larger than its known noise)",
+    };
+    let llt = xtx.llt(faer::Side::Lower).map_err(|_| singular())?;
+    let mut b = xty.clone();
+    llt.solve_in_place(b.as_mut());
+    let inv = llt.inverse();
+    let beta: Vec<f64> = (0..p).map(|j| b[(j, 0)] / scale[j]).collect();
+    let ssr = residual_sum_of_squares(x, y, &beta);
+    let sigma2 = ssr / (n - p) as f64;
+    let stderr = (0..p).map(|j| (sigma2 * inv[(j, j)]).sqrt() / scale[j]).collect();
+    if beta.iter().any(|v| !v.is_finite()) {
+        return Err(singular());
+    }
+    Ok(OlsFit { beta, stderr, ssr })
+}
+
+/// Instrumental-variable estimate β = (ZᵀX)⁻¹ Zᵀy for regressors measured with
+/// noise: each instrument column correlates with the true regressor but not
+/// with its noise. Standard errors σ²·(ZᵀX)⁻¹ ZᵀZ (XᵀZ)⁻¹, σ² = SSR/(n − p).
+pub fn iv(x: &[Vec<f64>], z: &[Vec<f64>], y: &[f64], context: &str) -> Result<OlsFit, EstimateError> {
+    let (n, p, scale) = shape_and_scale(x, z.len() == x.len(), context)?;
+    let xs = Mat::<f64>::from_fn(n, p, |i, j| x[i][j] / scale[j]);
+    let zs = Mat::<f64>::from_fn(n, p, |i, j| z[i][j] / scale[j]);
+    let ym = Mat::<f64>::from_fn(n, 1, |i, _| y[i]);
+    let ztx = zs.transpose() * &xs;
+    let singular = || EstimateError::Singular {
+        context: context.into(),
+        rule: "an instrument is uncorrelated with its regressor, or regressors are collinear",
+    };
+    let lu = ztx.partial_piv_lu();
+    let inv = lu.inverse();
+    if (0..p).any(|i| (0..p).any(|j| !inv[(i, j)].is_finite())) {
+        return Err(singular());
+    }
+    let zty = zs.transpose() * &ym;
+    let b = &inv * &zty;
+    let beta: Vec<f64> = (0..p).map(|j| b[(j, 0)] / scale[j]).collect();
+    let ssr = residual_sum_of_squares(x, y, &beta);
+    let sigma2 = ssr / (n - p) as f64;
+    let ztz = zs.transpose() * &zs;
+    let cov = &inv * &ztz * inv.transpose();
+    let stderr = (0..p).map(|j| (sigma2 * cov[(j, j)]).sqrt() / scale[j]).collect();
+    if beta.iter().any(|v| !v.is_finite()) {
+        return Err(singular());
+    }
+    Ok(OlsFit { beta, stderr, ssr })
+}
+
+/// Σ (y − X β)² over the rows of `x`.
+fn residual_sum_of_squares(x: &[Vec<f64>], y: &[f64], beta: &[f64]) -> f64 {
+    x.iter()
+        .zip(y)
+        .map(|(r, yi)| {
+            let f: f64 = r.iter().zip(beta).map(|(a, c)| a * c).sum();
+            (yi - f).powi(2)
+        })
+        .sum()
+}
+
+/// Rows n, regressors p (refused unless n > p and `rows_match`), and each
+/// column's RMS: scaling columns to unit RMS keeps the normal equations well
+/// conditioned.
+fn shape_and_scale(x: &[Vec<f64>], rows_match: bool, context: &str) -> Result<(usize, usize, Vec<f64>), EstimateError> {
+    let n = x.len();
+    let p = x.first().map_or(0, Vec::len);
+    if n <= p || !rows_match {
+        return Err(EstimateError::TooFewSamples {
+            context: context.into(),
+            got: n,
+            need: p + 1,
+            rule: "need more rows than regressors",
+        });
+    }
+    let scale = (0..p)
+        .map(|j| {
+            let s = (x.iter().map(|r| r[j] * r[j]).sum::<f64>() / n as f64).sqrt();
+            if s > 0.0 { s } else { 1.0 }
+        })
+        .collect();
+    Ok((n, p, scale))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normal_equations_recover_a_line_and_its_covariance() {
+        // y = 2 + 3x exactly: the solution is exact and (AᵀA)⁻¹ matches the closed form.
+        let mut ne = Normal::new(2);
+        for x in [0.0, 1.0, 2.0, 3.0] {
+            ne.add_row(&[1.0, x], 2.0 + 3.0 * x);
+        }
+        let p = ne.solve().unwrap();
+        assert!((p[0] - 2.0).abs() < 1e-12 && (p[1] - 3.0).abs() < 1e-12);
+        let inv = ne.inverse().unwrap();
+        // Var(slope) / σ² = 1 / Σ(x − x̄)² = 1/5.
+        assert!((inv[3] - 0.2).abs() < 1e-12);
+        let fit =
+            ols(&[vec![1.0, 0.0], vec![1.0, 1.0], vec![1.0, 2.0], vec![1.0, 3.5]], &[2.0, 5.0, 8.0, 12.5], "line")
+                .unwrap();
+        assert!((fit.beta[0] - 2.0).abs() < 1e-12 && (fit.beta[1] - 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn singular_normal_equations_are_none() {
+        let mut ne = Normal::new(2);
+        ne.add_sparse(&[(0, 1.0), (1, 1.0)], 1.0);
+        ne.add_sparse(&[(0, 2.0), (1, 2.0)], 2.0);
+        assert!(ne.solve().is_none());
+        assert!(ne.inverse().is_none());
+        let mut near = Normal::new(2);
+        near.add_row(&[1.0, 1.0], 1.0);
+        near.add_row(&[1.0, 1.0 + 1e-9], 1.0);
+        assert!(near.solve().is_none(), "a pivot of 1e-18 of the scale is singular");
+    }
+
+    #[test]
+    fn spd_solve_refuses_an_indefinite_matrix() {
+        let a = Mat::<f64>::from_fn(2, 2, |i, j| if i == j { 1.0 } else { 2.0 });
+        assert!(spd_solve(&a, &[1.0, 1.0]).is_none());
+        let b = Mat::<f64>::from_fn(2, 2, |i, j| if i == j { 2.0 } else { 1.0 });
+        let x = spd_solve(&b, &[3.0, 3.0]).unwrap();
+        assert!((x[0] - 1.0).abs() < 1e-14 && (x[1] - 1.0).abs() < 1e-14);
+    }
+}
