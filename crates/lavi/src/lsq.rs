@@ -1,9 +1,11 @@
 //! The study's one linear least-squares path (moved from rig_model, which does
-//! no fitting): normal equations solved by Gauss–Jordan elimination with
-//! partial pivoting, with (XᵀX)⁻¹ for the covariance. The equation-of-motion
+//! no fitting): normal equations accumulated and solved by the workspace's
+//! one solver ([`rig_estimate::linear::Normal`], faer's Cholesky), with
+//! (XᵀX)⁻¹ for the covariance. The equation-of-motion
 //! fit ([`crate::eom`]) and the residual signature ([`crate::signature`]) call
-//! [`least_squares`]; nothing else here solves a linear system, so moving to
-//! the workspace's shared solver is a change of this file.
+//! [`least_squares`]; nothing else here solves a linear system.
+
+use rig_estimate::linear::Normal;
 
 /// A least-squares solution of y ≈ X β.
 #[derive(Debug, Clone, PartialEq)]
@@ -29,19 +31,16 @@ impl LeastSquares {
 }
 
 /// Least squares of `y` on the rows produced by `row(i)` for i in 0..y.len()
-/// (each of the same length p). `None` when XᵀX is singular.
+/// (each of the same length p). `None` when XᵀX is singular (the
+/// workspace's one rule: [`rig_estimate::linear::Normal`]).
 pub fn least_squares(y: &[f64], p: usize, row: impl Fn(usize) -> Vec<f64>) -> Option<LeastSquares> {
-    let (mut ata, mut atb) = (vec![vec![0.0; p]; p], vec![0.0; p]);
+    let mut normal = Normal::new(p);
     for (i, yi) in y.iter().enumerate() {
-        let x = row(i);
-        for r in 0..p {
-            atb[r] += x[r] * yi;
-            for c in 0..p {
-                ata[r][c] += x[r] * x[c];
-            }
-        }
+        normal.add_row(&row(i), *yi);
     }
-    let (coef, inverse) = solve_with_inverse(ata, atb)?;
+    let coef = normal.solve()?;
+    let flat = normal.inverse()?;
+    let inverse = flat.chunks(p).map(<[f64]>::to_vec).collect();
     let sse = y
         .iter()
         .enumerate()
@@ -51,39 +50,6 @@ pub fn least_squares(y: &[f64], p: usize, row: impl Fn(usize) -> Vec<f64>) -> Op
         })
         .sum();
     Some(LeastSquares { coef, inverse, sse, points: y.len() })
-}
-
-/// Solves `a x = b` (a small normal-equation matrix) by Gauss–Jordan elimination
-/// with partial pivoting; also returns a⁻¹ for the covariance.
-fn solve_with_inverse(mut a: Vec<Vec<f64>>, mut rhs: Vec<f64>) -> Option<(Vec<f64>, Vec<Vec<f64>>)> {
-    let m = rhs.len();
-    let mut inv: Vec<Vec<f64>> = (0..m).map(|i| (0..m).map(|j| if i == j { 1.0 } else { 0.0 }).collect()).collect();
-    let scale = (0..m).map(|i| a[i][i].abs()).fold(0.0, f64::max);
-    for col in 0..m {
-        let piv = (col..m).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        if a[piv][col].abs() <= 1e-13 * scale || a[piv][col].abs() < 1e-300 {
-            return None;
-        }
-        a.swap(col, piv);
-        inv.swap(col, piv);
-        rhs.swap(col, piv);
-        for r in 0..m {
-            if r != col {
-                let f = a[r][col] / a[col][col];
-                for c in 0..m {
-                    a[r][c] -= f * a[col][c];
-                    inv[r][c] -= f * inv[col][c];
-                }
-                rhs[r] -= f * rhs[col];
-            }
-        }
-    }
-    let x = (0..m).map(|i| rhs[i] / a[i][i]).collect();
-    for (i, row) in inv.iter_mut().enumerate() {
-        let d = a[i][i];
-        row.iter_mut().for_each(|v| *v /= d);
-    }
-    Some((x, inv))
 }
 
 #[cfg(test)]

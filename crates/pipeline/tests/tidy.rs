@@ -420,15 +420,12 @@ fn the_stribeck_law_has_one_home() {
 }
 
 /// Linear least-squares solvers outside the one home still to move, with
-/// their owners (they are told the path, `rig_estimate::linear`):
-/// - lavi's STLSQ and model's 1-DOF fit (`rig_lavi::signature`,
-///   `rig_model::one_dof`): owned by the LAVI work; rig-model may not reach
-///   rig-estimate (it fits nothing), so its fit moves to the LAVI side;
-/// - calibrate's three-point parabola of an extremum (`signal.rs`, Cramer's
-///   rule on 3 × 3 normal equations): rig-estimate depends on rig-calibrate,
-///   so the home is out of its reach.
-const SOLVERS_NOT_YET: [&str; 3] =
-    ["crates/lavi/src/signature.rs", "crates/model/src/one_dof.rs", "crates/calibrate/src/signal.rs"];
+/// the reason: calibrate's three-point parabola of an extremum (`signal.rs`,
+/// Cramer's rule on 3 × 3 normal equations): rig-estimate depends on
+/// rig-calibrate, so the home is out of its reach. (The LAVI study's fits
+/// and residual signature solve through `rig_lavi::lsq`, which calls the home;
+/// rig-model's 1-DOF core fits nothing.)
+const SOLVERS_NOT_YET: [&str; 1] = ["crates/calibrate/src/signal.rs"];
 
 /// One linear least-squares solver: `rig_estimate::linear` (faer's Cholesky
 /// behind `spd_solve`, `spd_inverse`, `Normal`, `ols`, `ols_eiv`, `iv`).
