@@ -63,7 +63,7 @@ fn dips_that_carry_angle_are_found_and_not_bridged() {
     // Each dip takes 343 rpm for 20 ms out of the top angle: 0.718 rad; bridging
     // would add 1.437 rad by the record's end, far above a noise-free channel's noise.
     let bridge = d.repairs.iter().find(|r| r.repair == "bridge_dips").unwrap();
-    let dip_rad = 343.0 * std::f64::consts::TAU / 60.0 * 0.020;
+    let dip_rad = 343.0 * rig_types::units::RPM_TO_RAD_S * 0.020;
     assert!((bridge.record_end_change_rad - 2.0 * dip_rad).abs() < 0.01, "{bridge:?}");
     assert!(!bridge.applied, "{bridge:?}");
     // The low-pass keeps the angle: within the noise, applied.
@@ -107,7 +107,7 @@ fn run_175_as_measured_keeps_its_twist() {
     let rows = read_plain(&path);
     let (mut phi, mut lo, mut hi) = (0.0f64, 0.0f64, 0.0f64);
     for w in rows.windows(2) {
-        phi += (w[1][0] - w[0][0]) * (w[0][1] - w[0][2]) * std::f64::consts::TAU / 60.0;
+        phi += (w[1][0] - w[0][0]) * (w[0][1] - w[0][2]) * rig_types::units::RPM_TO_RAD_S;
         lo = lo.min(phi);
         hi = hi.max(phi);
     }

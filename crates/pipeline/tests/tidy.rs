@@ -455,7 +455,7 @@ fn linear_least_squares_has_one_home() {
 
 /// pipeline.toml keys that two stages declare with the same value on purpose:
 /// each is that stage's own physics, not a setting the stages must agree on.
-const SAME_VALUE_ON_PURPOSE: [(&str, &str); 2] = [
+const SAME_VALUE_ON_PURPOSE: [(&str, &str); 3] = [
     (
         "tolerance_bins",
         "spectra (measured signals) and harmonic (noise-free simulations) set their line tolerance for \
@@ -465,6 +465,11 @@ const SAME_VALUE_ON_PURPOSE: [(&str, &str); 2] = [
         "sample_rate_hz",
         "the rate each study samples its own simulations at (sweeps: the classifier's spectral test up \
          to 10 Hz; harmonic: lines below 5 Hz); neither reads the other's",
+    ),
+    (
+        "adequacy_threshold",
+        "the LAVI and slider studies each measure their misfit in units of their own feature targets \
+         (1 = every feature at its bound); the same number, two scales",
     ),
 ];
 

@@ -548,7 +548,7 @@ fn markdown(s: &Study) -> String {
                 md,
                 "No candidate lowers the Coulomb law's mean held-out misfit ({:.3}) by {} % or more; the best is {} at {:.3}.\n",
                 s.candidates[0].heldout_mean,
-                100.0 * p.min_relative_gain,
+                100.0 * p.selection.min_relative_gain,
                 extension(s).fitted.candidate.id(),
                 extension(s).heldout_mean
             );

@@ -39,8 +39,10 @@ pub struct StudyParams {
     /// Coordinate-descent passes and Brent evaluations per parameter.
     pub fit_sweeps: usize,
     pub fit_evals: usize,
-    /// An extension must lower the mean held-out misfit by this fraction...
-    pub min_relative_gain: f64,
+    /// An extension must lower the mean held-out misfit by
+    /// `selection.min_relative_gain` (pipeline.toml's `[shared.selection]`,
+    /// the campaign diagnosis' and the LAVI study's rule too)...
+    pub selection: rig_types::contract::SelectionRule,
     /// ...and the model is adequate when its mean held-out misfit is at most
     /// this and it gets the regime of every held-out run right.
     pub adequacy_threshold: f64,
@@ -58,7 +60,13 @@ impl StudyParams {
             .and_then(|s| s.as_array())
             .and_then(|a| a.iter().find(|s| s.get("name").and_then(|n| n.as_str()) == Some("slider")))
             .ok_or("pipeline.toml: no [[stage]] named slider")?;
-        let params = stage.get("params").cloned().ok_or("pipeline.toml: stage slider has no [stage.params]")?;
+        let mut params = stage.get("params").cloned().ok_or("pipeline.toml: stage slider has no [stage.params]")?;
+        // The runner hands each listed [shared.<name>] table to the stage as [stage.params.<name>].
+        if let (Some(table), Some(sel)) =
+            (params.as_table_mut(), doc.get("shared").and_then(|s| s.get("selection")).cloned())
+        {
+            table.insert("selection".into(), sel);
+        }
         params.try_into().map_err(|e| format!("pipeline.toml: stage slider: {e}"))
     }
 }
@@ -269,7 +277,7 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
     let chosen = (1..candidates.len())
         .filter(|&c| !candidates[c].heldout.is_empty())
         .min_by(|&a, &b| candidates[a].heldout_mean.total_cmp(&candidates[b].heldout_mean))
-        .filter(|&c| candidates[c].heldout_mean <= (1.0 - p.min_relative_gain) * base);
+        .filter(|&c| candidates[c].heldout_mean <= (1.0 - p.selection.min_relative_gain) * base);
     let traces = raw
         .iter()
         .zip(&runs)
