@@ -11,13 +11,22 @@
 //!
 //! Groups of cases ([`Group`]):
 //! - `null`: the rig drawn (±8–10 % around Table 4.5, as [`crate::draw_rig`]) with nothing hidden: `none`;
+//! - `null_stick_slip`: an effect-free rig whose campaign stick-slips in at
+//!   least [`crate::MIN_STICK_SLIP_RUNS`] operating points
+//!   ([`crate::draw_stick_slip_rig`]): `none` (what free-run thresholds are
+//!   calibrated on);
 //! - `single`: each vocabulary effect alone, drawn as [`crate::draw_hidden`]: that effect;
 //! - `compound`: two vocabulary effects at once (every pair except
 //!   velocity weakening + viscous brake, which are two friction laws and
 //!   cannot both be the brake's law): both must be found, the verdict is either;
 //! - `vocabulary_plus_outside`: a vocabulary effect and one outside the
 //!   vocabulary: `unexplained`, with the vocabulary effect found as a partial explanation;
-//! - `outside`: one effect outside the vocabulary ([`Hidden::OUTSIDE`]): `unexplained`;
+//! - `outside`: one effect outside the vocabulary ([`Hidden::OUTSIDE`]): `unexplained`
+//!   (static friction aging, which only a stick shows, on a stick-slipping rig);
+//! - `structural`: one structural fault ([`Hidden::STRUCTURAL`]) on a
+//!   stick-slipping rig: its structural id or `unexplained` ([`Expected::Structural`]);
+//! - `structural_plus_vocabulary`: a structural fault and a vocabulary effect:
+//!   the vocabulary effect found, and the structure named or the verdict `unexplained`;
 //! - `ladder`: each vocabulary effect at six sizes down to where it should
 //!   be lost in the noise ([`LADDER_STEPS`]): the effect, or a miss.
 //!
@@ -32,7 +41,9 @@
 //! vocabulary effect does; the current limit only shows where the current
 //! would exceed I_max (start-up, break-away).
 
-use crate::{Hidden, Protocol, Truth, VirtualRigError, draw_hidden, draw_rig, generate, write_campaign};
+use crate::{
+    Hidden, Protocol, Truth, VirtualRigError, draw_hidden, draw_rig, draw_stick_slip_rig, generate, ids, write_campaign,
+};
 use rig_types::{Campaign, fmt_fixed};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -67,10 +78,13 @@ pub struct DiagnosisResult {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Group {
     Null,
+    NullStickSlip,
     Single,
     Compound,
     VocabularyPlusOutside,
     Outside,
+    Structural,
+    StructuralPlusVocabulary,
     Ladder,
 }
 
@@ -78,10 +92,13 @@ impl Group {
     pub fn name(self) -> &'static str {
         match self {
             Group::Null => "null",
+            Group::NullStickSlip => "null_stick_slip",
             Group::Single => "single",
             Group::Compound => "compound",
             Group::VocabularyPlusOutside => "vocabulary_plus_outside",
             Group::Outside => "outside",
+            Group::Structural => "structural",
+            Group::StructuralPlusVocabulary => "structural_plus_vocabulary",
             Group::Ladder => "ladder",
         }
     }
@@ -131,6 +148,10 @@ pub enum Expected {
     Effects(Vec<&'static str>),
     /// `unexplained`, with the listed vocabulary effects found as a partial explanation.
     Unexplained { partial: Vec<&'static str> },
+    /// A structural fault (diagnosis.md: "Structure is a candidate like an
+    /// effect"): the structure `id` among the findings, or the verdict
+    /// `unexplained`; the listed vocabulary effects found either way.
+    Structural { id: &'static str, partial: Vec<&'static str> },
 }
 
 /// One campaign of the battery.
@@ -152,8 +173,10 @@ impl Case {
         let vocab: Vec<&'static str> = hidden.iter().filter(|h| !h.is_outside()).map(|h| h.id()).collect();
         if hidden.is_empty() {
             Expected::None
-        } else if hidden.iter().any(|h| h.is_outside()) {
+        } else if hidden.iter().any(|h| h.is_outside() && !h.is_structural()) {
             Expected::Unexplained { partial: vocab }
+        } else if let Some(id) = hidden.iter().find_map(|h| h.structural_id()) {
+            Expected::Structural { id, partial: vocab }
         } else {
             Expected::Effects(vocab)
         }
@@ -163,23 +186,33 @@ impl Case {
     /// compound joined by `+` (any of them is a right verdict), or `unexplained`.
     pub fn expected_verdict(&self) -> String {
         match self.expected() {
-            Expected::None => "none".into(),
+            Expected::None => ids::NONE.into(),
             Expected::Effects(e) => e.join("+"),
-            Expected::Unexplained { .. } => "unexplained".into(),
+            Expected::Unexplained { .. } => ids::UNEXPLAINED.into(),
+            Expected::Structural { id, .. } => format!("{id}|{}", ids::UNEXPLAINED),
         }
     }
 
-    /// Row of the confusion matrix: `none`, the effect, `a+b`, `a+outside:x`,
-    /// `outside:x` or `ladder:a`.
+    /// Row of the confusion matrix: `none`, `none:stick_slip`, the effect,
+    /// `a+b`, `a+outside:x`, `outside:x`, `structural:s`, `a+structural:s` or `ladder:a`.
     pub fn truth_class(&self) -> String {
         let names: Vec<String> = self
             .truth
             .hidden_all()
             .iter()
-            .map(|h| if h.is_outside() { format!("outside:{}", h.class()) } else { h.class().to_string() })
+            .map(|h| {
+                if h.is_structural() {
+                    format!("structural:{}", h.class())
+                } else if h.is_outside() {
+                    format!("outside:{}", h.class())
+                } else {
+                    h.class().to_string()
+                }
+            })
             .collect();
         match (self.group, &self.rung) {
             (_, Some(r)) => format!("ladder:{}", r.effect),
+            (Group::NullStickSlip, _) => "none:stick_slip".into(),
             _ if names.is_empty() => "none".into(),
             _ => names.join("+"),
         }
@@ -209,20 +242,28 @@ pub const BATTERY_SEED: u64 = 90_000;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sizes {
     pub nulls: usize,
+    /// Effect-free rigs that stick-slip ([`crate::draw_stick_slip_rig`]).
+    pub stick_slip_nulls: usize,
     pub singles_per_effect: usize,
     /// Seeds per compound pair (0: no compounds).
     pub compound_seeds: usize,
-    /// Outside effects paired with a vocabulary effect (at most 10).
+    /// Outside effects paired with a vocabulary effect (at most 11).
     pub vocabulary_plus_outside: usize,
     pub outside_seeds: usize,
+    /// Seeds per structural fault.
+    pub structural_seeds: usize,
+    /// Vocabulary effects paired with each structural fault (at most 5).
+    pub structural_plus_vocabulary: usize,
     pub ladder_seeds: usize,
 }
 
 impl Battery {
-    /// The full battery under [`Protocol::full`]: 20 nulls, 3 draws of each
-    /// vocabulary effect, every compound pair twice, each outside effect once
-    /// with a vocabulary effect and 3 times alone, each ladder rung 3 times
-    /// (183 campaigns).
+    /// The full battery under [`Protocol::full`]: 20 nulls, 20 stick-slipping
+    /// nulls, 3 draws of each vocabulary effect, every compound pair twice,
+    /// each outside effect once with a vocabulary effect and 3 times alone,
+    /// each structural fault 3 times alone and with 2 vocabulary effects,
+    /// each ladder rung 20 times (737 campaigns;
+    /// 20 draws per rung put the 95 % band of P(right) = 1 at 0.83–1).
     pub fn full() -> Battery {
         Battery::full_seeded(BATTERY_SEED)
     }
@@ -231,18 +272,24 @@ impl Battery {
     pub fn full_seeded(seed: u64) -> Battery {
         let sizes = Sizes {
             nulls: 20,
+            stick_slip_nulls: 20,
             singles_per_effect: 3,
             compound_seeds: 2,
-            vocabulary_plus_outside: 10,
+            vocabulary_plus_outside: 11,
             outside_seeds: 3,
-            ladder_seeds: 3,
+            structural_seeds: 3,
+            structural_plus_vocabulary: 2,
+            ladder_seeds: 20,
         };
-        Battery::build("full", Protocol::full(), sizes, seed, &Hidden::OUTSIDE)
+        Battery::build("full", Protocol::full(), sizes, seed, &Hidden::OUTSIDE, &Hidden::STRUCTURAL)
     }
 
-    /// The seeded CI subset under [`Protocol::small`] (13 campaigns): 3 nulls,
-    /// each vocabulary effect once, one compound, one vocabulary + outside,
-    /// three outside effects (a tribological, a mechanical and a sensor fault).
+    /// The seeded CI subset under [`Protocol::small`] (18 campaigns): 3 nulls
+    /// and a stick-slipping one, each vocabulary effect once, one compound,
+    /// one vocabulary + outside, four outside effects (a tribological, a
+    /// mechanical, a sensor fault and static friction aging, which only free
+    /// run sees), two structural faults (damping on the rotor speed, a
+    /// channel delay) and one structural fault with a vocabulary effect.
     pub fn ci() -> Battery {
         Battery::ci_seeded(BATTERY_SEED)
     }
@@ -251,10 +298,13 @@ impl Battery {
     pub fn ci_seeded(seed: u64) -> Battery {
         let sizes = Sizes {
             nulls: 3,
+            stick_slip_nulls: 1,
             singles_per_effect: 1,
             compound_seeds: 0,
             vocabulary_plus_outside: 0,
             outside_seeds: 1,
+            structural_seeds: 1,
+            structural_plus_vocabulary: 0,
             ladder_seeds: 0,
         };
         let mut b = Battery::build(
@@ -262,30 +312,50 @@ impl Battery {
             Protocol::small(),
             sizes,
             seed,
-            &["brake_fade", "coupling_backlash", "encoder_missing_ticks"],
+            &[ids::BRAKE_FADE, ids::COUPLING_BACKLASH, ids::ENCODER_MISSING_TICKS, ids::STATIC_FRICTION_AGING],
+            &[ids::DAMPING_ROTOR_ABSOLUTE, ids::CHANNEL_DELAY],
         );
         let max_rpm = max_rpm(&b.protocol);
         let seed = seed + 20_000;
+        let proto = b.protocol.clone();
         b.cases.push(compound(
             "compound-normal_force_modulation+viscous_brake_friction-0",
             Group::Compound,
             seed,
-            ["normal_force_modulation", "viscous_brake_friction"],
+            [ids::NORMAL_FORCE_MODULATION, ids::VISCOUS_BRAKE_FRICTION],
             max_rpm,
+            &proto,
         ));
         b.cases.push(compound(
             "mixed-angle_periodic_friction+brake_fade-0",
             Group::VocabularyPlusOutside,
             seed + 1,
-            ["angle_periodic_friction", "brake_fade"],
+            [ids::ANGLE_PERIODIC_FRICTION, ids::BRAKE_FADE],
             max_rpm,
+            &proto,
+        ));
+        b.cases.push(compound(
+            "structural-viscous_brake_friction+damping_rotor_absolute-0",
+            Group::StructuralPlusVocabulary,
+            seed + 2,
+            [ids::VISCOUS_BRAKE_FRICTION, ids::DAMPING_ROTOR_ABSOLUTE],
+            max_rpm,
+            &proto,
         ));
         b.cases.sort_by(|a, b| a.group.cmp(&b.group).then(a.id.cmp(&b.id)));
         b
     }
 
-    /// A battery of the given sizes; case seeds are `seed + 10 000·group + index`.
-    pub fn build(name: &'static str, protocol: Protocol, sizes: Sizes, seed: u64, outside: &[&'static str]) -> Battery {
+    /// A battery of the given sizes with the listed outside effects and
+    /// structural faults; case seeds are `seed + 10 000·group + index`.
+    pub fn build(
+        name: &'static str,
+        protocol: Protocol,
+        sizes: Sizes,
+        seed: u64,
+        outside: &[&'static str],
+        structural: &[&'static str],
+    ) -> Battery {
         let max_rpm = max_rpm(&protocol);
         let mut cases = Vec::new();
         for j in 0..sizes.nulls {
@@ -295,6 +365,16 @@ impl Battery {
                 group: Group::Null,
                 seed: s,
                 truth: draw_rig(s),
+                rung: None,
+            });
+        }
+        for j in 0..sizes.stick_slip_nulls {
+            let s = seed + 60_000 + j as u64;
+            cases.push(Case {
+                id: format!("null_stick_slip-{j:02}"),
+                group: Group::NullStickSlip,
+                seed: s,
+                truth: base_rig(ids::NONE, s, &protocol),
                 rung: None,
             });
         }
@@ -323,21 +403,35 @@ impl Battery {
                 for j in 0..sizes.compound_seeds {
                     let s = seed + 20_000 + k;
                     k += 1;
-                    cases.push(compound(&format!("compound-{ea}+{eb}-{j}"), Group::Compound, s, [ea, eb], max_rpm));
+                    cases.push(compound(
+                        &format!("compound-{ea}+{eb}-{j}"),
+                        Group::Compound,
+                        s,
+                        [ea, eb],
+                        max_rpm,
+                        &protocol,
+                    ));
                 }
             }
         }
         for (i, out) in outside.iter().take(sizes.vocabulary_plus_outside).enumerate() {
             let ea = Hidden::VOCABULARY[i % Hidden::VOCABULARY.len()];
             let s = seed + 30_000 + i as u64;
-            cases.push(compound(&format!("mixed-{ea}+{out}-0"), Group::VocabularyPlusOutside, s, [ea, out], max_rpm));
+            cases.push(compound(
+                &format!("mixed-{ea}+{out}-0"),
+                Group::VocabularyPlusOutside,
+                s,
+                [ea, out],
+                max_rpm,
+                &protocol,
+            ));
         }
         k = 0;
         for out in outside {
             for j in 0..sizes.outside_seeds {
                 let s = seed + 40_000 + k;
                 k += 1;
-                let base = draw_rig(s);
+                let base = base_rig(out, s, &protocol);
                 let h = draw_hidden(out, base.mu_kinetic(), max_rpm, s);
                 cases.push(Case {
                     id: format!("outside-{out}-{j}"),
@@ -346,6 +440,39 @@ impl Battery {
                     truth: base.with_hidden(vec![h]),
                     rung: None,
                 });
+            }
+        }
+        k = 0;
+        for st in structural {
+            for j in 0..sizes.structural_seeds {
+                let s = seed + 70_000 + k;
+                k += 1;
+                let base = base_rig(st, s, &protocol);
+                let h = draw_hidden(st, base.mu_kinetic(), max_rpm, s);
+                cases.push(Case {
+                    id: format!("structural-{st}-{j}"),
+                    group: Group::Structural,
+                    seed: s,
+                    truth: base.with_hidden(vec![h]),
+                    rung: None,
+                });
+            }
+        }
+        k = 0;
+        for (i, st) in structural.iter().enumerate() {
+            for j in 0..sizes.structural_plus_vocabulary.min(Hidden::VOCABULARY.len()) {
+                // Each fault with a different pair of effects (i + 2j mod 5).
+                let ea = Hidden::VOCABULARY[(i + 2 * j) % Hidden::VOCABULARY.len()];
+                let s = seed + 80_000 + k;
+                k += 1;
+                cases.push(compound(
+                    &format!("structural-{ea}+{st}-0"),
+                    Group::StructuralPlusVocabulary,
+                    s,
+                    [ea, st],
+                    max_rpm,
+                    &protocol,
+                ));
             }
         }
         k = 0;
@@ -409,9 +536,25 @@ fn max_rpm(p: &Protocol) -> f64 {
     p.op_points.iter().map(|x| x.0).fold(0.0, f64::max)
 }
 
-/// A case with two hidden effects, the second drawn with its own seed.
-fn compound(id: &str, group: Group, seed: u64, effects: [&str; 2], max_rpm: f64) -> Case {
-    let base = draw_rig(seed);
+/// The effect-free rig a case with `class` hidden is built on: a rig that
+/// stick-slips ([`draw_stick_slip_rig`]) for the stick-slipping nulls, for
+/// static friction aging (only a stick shows it) and for the structural
+/// faults (their free-run signature is in the stick-slip cycle), else
+/// [`draw_rig`]'s.
+fn base_rig(class: &str, seed: u64, protocol: &Protocol) -> Truth {
+    if class == ids::NONE || class == ids::STATIC_FRICTION_AGING || ids::STRUCTURAL.contains(&class) {
+        draw_stick_slip_rig(seed, protocol).unwrap_or_else(|| {
+            panic!("no rig drawn from seed {seed} stick-slips under this protocol: it needs slow, loaded points")
+        })
+    } else {
+        draw_rig(seed)
+    }
+}
+
+/// A case with two hidden effects, the second drawn with its own seed, on
+/// the rig the second needs ([`base_rig`]).
+fn compound(id: &str, group: Group, seed: u64, effects: [&str; 2], max_rpm: f64, protocol: &Protocol) -> Case {
+    let base = base_rig(effects[1], seed, protocol);
     let mu_k = base.mu_kinetic();
     let a = draw_hidden(effects[0], mu_k, max_rpm, seed);
     let b = draw_hidden(effects[1], mu_k, max_rpm, seed.wrapping_add(0x5151_5151));
@@ -466,22 +609,34 @@ pub struct Judgement {
 }
 
 /// Scores a diagnosis of `case`: the verdict must be the expected one (any
-/// effect of a compound), every vocabulary effect of the truth must be among
-/// the findings with every parameter within [`battery_tolerance`], and no
-/// vocabulary effect that is not in the truth may be found.
+/// effect of a compound; for a structural fault `unexplained`, or the
+/// structure named among the findings with the verdict the structure or a
+/// vocabulary effect of the truth), every vocabulary effect of the truth must
+/// be among the findings with every parameter within [`battery_tolerance`],
+/// and nothing that is not in the truth may be found (a structural finding
+/// other than the truth's structure included).
 pub fn judge(case: &Case, result: &Result<DiagnosisResult, String>) -> Judgement {
     let d = match result {
         Ok(d) => d,
         Err(e) => return Judgement { right: false, reason: format!("error: {e}") },
     };
     let mut why = Vec::new();
+    // The truth's structural id, which a finding may name.
+    let mut structure = None;
     let (required, verdict_ok) = match case.expected() {
         Expected::None => (vec![], d.verdict == "none"),
         Expected::Effects(e) => {
             let ok = e.iter().any(|x| *x == d.verdict);
             (e, ok)
         }
-        Expected::Unexplained { partial } => (partial, d.verdict == "unexplained"),
+        Expected::Unexplained { partial } => (partial, d.verdict == ids::UNEXPLAINED),
+        Expected::Structural { id, partial } => {
+            let named = d.findings.iter().any(|f| f.effect == id);
+            let ok =
+                d.verdict == ids::UNEXPLAINED || (named && (d.verdict == id || partial.contains(&d.verdict.as_str())));
+            structure = Some(id);
+            (partial, ok)
+        }
     };
     if !verdict_ok {
         why.push(format!("verdict `{}`, expected `{}`", d.verdict, case.expected_verdict()));
@@ -512,7 +667,10 @@ pub fn judge(case: &Case, result: &Result<DiagnosisResult, String>) -> Judgement
         }
     }
     for f in &d.findings {
-        if f.effect != "unexplained" && !required.contains(&f.effect.as_str()) {
+        if f.effect != ids::UNEXPLAINED
+            && !required.contains(&f.effect.as_str())
+            && Some(f.effect.as_str()) != structure
+        {
             why.push(format!("spurious finding {}", f.effect));
         }
     }
