@@ -50,13 +50,13 @@ use std::path::Path;
 
 mod render;
 pub use render::{
-    clopper_pearson, confusion_table, detection_sheet, detection_table, false_alarm_table, markdown_table,
-    report_markdown, wrong_table,
+    battery_outputs, clopper_pearson, confusion_table, detection_sheet, detection_table, false_alarm_table,
+    markdown_table, report_markdown, wrong_table,
 };
 
 /// One finding of a diagnosis, as diagnosis.md's `findings[]` (effect id and
 /// its parameters under their JSON keys).
-#[derive(Debug, Clone, PartialEq, Default, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, serde::Deserialize, serde::Serialize)]
 pub struct Finding {
     pub effect: String,
     /// Absent in the JSON of an `unexplained` finding (it has no parameters).
@@ -68,7 +68,7 @@ pub struct Finding {
 /// finding in order, read from diagnosis.json's schema
 /// (../shared/spec/diagnosis.md; other fields ignored), so any diagnosis that
 /// writes the spec's JSON converts with `serde_json::from_value`.
-#[derive(Debug, Clone, PartialEq, Default, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, serde::Deserialize, serde::Serialize)]
 pub struct DiagnosisResult {
     pub verdict: String,
     pub findings: Vec<Finding>,
@@ -231,6 +231,8 @@ impl Case {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Battery {
     pub name: &'static str,
+    /// The first case seed it was built from.
+    pub seed: u64,
     pub protocol: Protocol,
     pub cases: Vec<Case>,
 }
@@ -343,6 +345,22 @@ impl Battery {
             &proto,
         ));
         b.cases.sort_by(|a, b| a.group.cmp(&b.group).then(a.id.cmp(&b.id)));
+        b
+    }
+
+    /// Four cases of [`Battery::ci_seeded`] (a null, a vocabulary effect, an
+    /// outside effect and a structural fault) under [`Protocol::small`]: the
+    /// battery the shard tests run through the real diagnosis in seconds.
+    pub fn smoke_seeded(seed: u64) -> Battery {
+        let mut b = Battery::ci_seeded(seed);
+        let keep = [
+            "null-00",
+            "single-normal_force_modulation-0",
+            "outside-coupling_backlash-0",
+            "structural-channel_delay-0",
+        ];
+        b.cases.retain(|c| keep.contains(&c.id.as_str()));
+        b.name = "smoke";
         b
     }
 
@@ -494,31 +512,79 @@ impl Battery {
                 }
             }
         }
-        Battery { name, protocol, cases }
+        Battery { name, seed, protocol, cases }
     }
 
-    /// Generates each campaign in memory, in order, and diagnoses it with
-    /// `diagnose`; a generation error is a wrong answer with its text.
-    pub fn run(&self, diagnose: impl Fn(&Case, &Campaign) -> Result<DiagnosisResult, String>) -> Vec<Outcome> {
-        self.cases
-            .iter()
-            .map(|case| {
+    /// The battery `name` (`smoke`, `ci` or `full`) with its case seeds starting at `seed`.
+    pub fn named(name: &str, seed: u64) -> Option<Battery> {
+        match name {
+            "smoke" => Some(Battery::smoke_seeded(seed)),
+            "ci" => Some(Battery::ci_seeded(seed)),
+            "full" => Some(Battery::full_seeded(seed)),
+            _ => None,
+        }
+    }
+
+    /// Generates each campaign in memory and diagnoses it with `diagnose`,
+    /// the cases in parallel (rayon) and the outcomes in the battery's order;
+    /// a generation error is a wrong answer with its text.
+    pub fn run(&self, diagnose: impl Fn(&Case, &Campaign) -> Result<DiagnosisResult, String> + Sync) -> Vec<Outcome> {
+        self.run_range(0..self.cases.len(), diagnose).into_iter().map(|(_, o)| o).collect()
+    }
+
+    /// As [`Battery::run`] for the cases at `range` only (a shard), each with its index.
+    pub fn run_range(
+        &self,
+        range: std::ops::Range<usize>,
+        diagnose: impl Fn(&Case, &Campaign) -> Result<DiagnosisResult, String> + Sync,
+    ) -> Vec<(usize, Outcome)> {
+        use rayon::prelude::*;
+        let range = range.start.min(self.cases.len())..range.end.min(self.cases.len());
+        range
+            .into_par_iter()
+            .map(|k| {
+                let case = &self.cases[k];
                 let result = case.generate(&self.protocol).map_err(|e| e.to_string()).and_then(|c| diagnose(case, &c));
-                Outcome::new(case.clone(), result)
+                (k, Outcome::new(case.clone(), result))
             })
             .collect()
     }
 
-    /// As [`Battery::run`], but each campaign is written to `root/<case id>`
+    /// The diagnoses of the cases at `range` as a mergeable slice (shard
+    /// `index` of `count`); [`merge_slices`] joins a job array's slices.
+    pub fn run_slice(
+        &self,
+        index: usize,
+        count: usize,
+        range: std::ops::Range<usize>,
+        diagnose: impl Fn(&Case, &Campaign) -> Result<DiagnosisResult, String> + Sync,
+    ) -> BatterySlice {
+        let results = self
+            .run_range(range, diagnose)
+            .into_iter()
+            .map(|(k, o)| CaseResult { index: k, id: o.case.id.clone(), result: o.result.map(ExactResult::from) })
+            .collect();
+        BatterySlice {
+            battery: self.name.to_string(),
+            seed: self.seed,
+            total_cases: self.cases.len(),
+            shard_index: index,
+            shard_count: count,
+            results,
+        }
+    }
+
+    /// As [`Battery::run`] (in parallel, in order), but each campaign is written to `root/<case id>`
     /// (rig-campaign/1, read back like a user's data) and `diagnose` gets that
     /// folder. The folders are left in place.
     pub fn run_dirs(
         &self,
         root: &Path,
-        diagnose: impl Fn(&Case, &Path) -> Result<DiagnosisResult, String>,
+        diagnose: impl Fn(&Case, &Path) -> Result<DiagnosisResult, String> + Sync,
     ) -> Vec<Outcome> {
+        use rayon::prelude::*;
         self.cases
-            .iter()
+            .par_iter()
             .map(|case| {
                 let dir = root.join(&case.id);
                 let result = case
@@ -530,6 +596,86 @@ impl Battery {
             })
             .collect()
     }
+}
+
+/// One shard's diagnoses of a battery: enough to rebuild the battery
+/// ([`Battery::named`]) and judge every case again after a merge.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BatterySlice {
+    pub battery: String,
+    pub seed: u64,
+    pub total_cases: usize,
+    pub shard_index: usize,
+    pub shard_count: usize,
+    pub results: Vec<CaseResult>,
+}
+
+/// The diagnosis of the case at `index` (its id, to check the rebuilt battery).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct CaseResult {
+    pub index: usize,
+    pub id: String,
+    pub result: Result<ExactResult, String>,
+}
+
+/// A [`DiagnosisResult`] whose parameters are stored as their f64 bit
+/// patterns, so a slice read back gives the very same numbers (JSON's
+/// decimal text need not round-trip every f64 in serde_json's default parser).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ExactResult {
+    pub verdict: String,
+    pub findings: Vec<(String, BTreeMap<String, u64>)>,
+}
+
+impl From<DiagnosisResult> for ExactResult {
+    fn from(d: DiagnosisResult) -> Self {
+        let findings = d
+            .findings
+            .into_iter()
+            .map(|f| (f.effect, f.params.into_iter().map(|(k, v)| (k, v.to_bits())).collect()))
+            .collect();
+        ExactResult { verdict: d.verdict, findings }
+    }
+}
+
+impl From<ExactResult> for DiagnosisResult {
+    fn from(e: ExactResult) -> Self {
+        let findings = e
+            .findings
+            .into_iter()
+            .map(|(effect, p)| Finding { effect, params: p.into_iter().map(|(k, v)| (k, f64::from_bits(v))).collect() })
+            .collect();
+        DiagnosisResult { verdict: e.verdict, findings }
+    }
+}
+
+/// Joins the slices of one battery's job array: the battery rebuilt from
+/// its name and seed, and every case's outcome judged again, in the
+/// battery's order. Refuses slices of different batteries, a case id that is
+/// not the rebuilt battery's, and a set that misses or repeats a case.
+pub fn merge_slices(slices: Vec<BatterySlice>) -> Result<(Battery, Vec<Outcome>), String> {
+    let first = slices.first().ok_or("no battery slice to merge")?;
+    let (name, seed, total) = (first.battery.clone(), first.seed, first.total_cases);
+    if slices.iter().any(|s| s.battery != name || s.seed != seed || s.total_cases != total) {
+        return Err("slices come from different batteries (name, seed or size differ)".into());
+    }
+    let battery = Battery::named(&name, seed).ok_or_else(|| format!("unknown battery {name:?}"))?;
+    if battery.cases.len() != total {
+        return Err(format!("battery {name} has {} cases, the slices {total}", battery.cases.len()));
+    }
+    let mut results: Vec<CaseResult> = slices.into_iter().flat_map(|s| s.results).collect();
+    results.sort_by_key(|r| r.index);
+    if results.len() != total || results.iter().enumerate().any(|(k, r)| r.index != k) {
+        return Err("slices must cover every case exactly once (missing or duplicate shard)".into());
+    }
+    let mut outcomes = Vec::with_capacity(total);
+    for (r, case) in results.into_iter().zip(&battery.cases) {
+        if r.id != case.id {
+            return Err(format!("case {} of the slices is {}, the battery's is {}", r.index, r.id, case.id));
+        }
+        outcomes.push(Outcome::new(case.clone(), r.result.map(DiagnosisResult::from)));
+    }
+    Ok((battery, outcomes))
 }
 
 fn max_rpm(p: &Protocol) -> f64 {

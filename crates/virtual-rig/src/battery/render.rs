@@ -5,6 +5,24 @@ use super::{Battery, Group, Outcome};
 use crate::confusion::VERDICTS;
 use rig_types::{AxisScale, MarkerShape, Panel, SeriesStyle, Sheet, Table, band, figure, fmt_fixed, series};
 
+/// Every table and text the `confusion` stage writes for `outcomes` of
+/// `battery`, as (path under the out dir, table or text), in a fixed order,
+/// and the detection sheet (`None` without ladder cases): one home for the
+/// stage and for `cargo xtask merge-shards`, so a merged job array writes
+/// the same bytes as an unsharded run.
+pub fn battery_outputs(battery: &Battery, outcomes: &[Outcome]) -> (Vec<(&'static str, String)>, Option<Sheet>) {
+    let detection = detection_table(outcomes);
+    let sheet = detection_sheet(&detection, battery.name);
+    let files = vec![
+        ("tables/confusion-matrix.csv", confusion_table(outcomes).to_csv()),
+        ("tables/confusion-false-alarms.csv", false_alarm_table(outcomes).to_csv()),
+        ("tables/confusion-detection.csv", detection.to_csv()),
+        ("tables/confusion-wrong.csv", wrong_table(outcomes).to_csv()),
+        ("confusion.md", report_markdown(battery, outcomes)),
+    ];
+    (files, sheet)
+}
+
 /// Two-sided 95 % Clopper–Pearson interval of a binomial proportion k/n
 /// (exact: the p at which P(X ≥ k) resp. P(X ≤ k) is 2.5 %).
 pub fn clopper_pearson(k: usize, n: usize) -> (f64, f64) {
