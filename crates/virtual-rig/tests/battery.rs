@@ -119,7 +119,7 @@ fn expected_verdicts_follow_the_groups() {
             Group::Structural => {
                 let id = c.truth.hidden.structural_id().expect("a structural fault");
                 assert_eq!(c.expected(), Expected::Structural { id, partial: vec![] });
-                assert_eq!(v, format!("{id}|unexplained"));
+                assert_eq!(v, format!("{id}/unexplained"));
                 assert!(c.truth_class().starts_with("structural:"));
             }
             Group::StructuralPlusVocabulary => {

@@ -183,13 +183,14 @@ impl Case {
     }
 
     /// The expected verdict as one string: `none`, the effect id, the ids of a
-    /// compound joined by `+` (any of them is a right verdict), or `unexplained`.
+    /// compound joined by `+` (any of them is a right verdict), `unexplained`,
+    /// or `<structural id>/unexplained` for a structural fault (either is right).
     pub fn expected_verdict(&self) -> String {
         match self.expected() {
             Expected::None => ids::NONE.into(),
             Expected::Effects(e) => e.join("+"),
             Expected::Unexplained { .. } => ids::UNEXPLAINED.into(),
-            Expected::Structural { id, .. } => format!("{id}|{}", ids::UNEXPLAINED),
+            Expected::Structural { id, .. } => format!("{id}/{}", ids::UNEXPLAINED),
         }
     }
 
