@@ -218,6 +218,31 @@ pub fn parse_params<T: DeserializeOwned>(params: &toml::Table) -> std::result::R
     })
 }
 
+/// The four files of a multi-panel sheet (as [`StageCtx::write_sheet`]
+/// stages them), for writers outside a stage (`cargo xtask merge-shards`).
+pub(crate) fn sheet_files(sheet: &Sheet) -> Result<Vec<(String, Vec<u8>)>> {
+    let svg = rig_figures::render_sheet_svg(sheet).with_context(|| format!("figure {}", sheet.id))?;
+    let png = rig_figures::render_sheet_png(sheet).with_context(|| format!("figure {}", sheet.id))?;
+    let csv = rig_figures::sheet_csv(sheet);
+    Ok(figure_files(&sheet.id, svg, png, (&sheet.title, &sheet.caption), csv))
+}
+
+/// `figures/<id>.svg`, `.png`, `.txt` (title and caption) and `.csv`.
+fn figure_files(
+    id: &str,
+    svg: String,
+    png: Vec<u8>,
+    (title, caption): (&str, &str),
+    csv: String,
+) -> Vec<(String, Vec<u8>)> {
+    vec![
+        (format!("figures/{id}.svg"), svg.into_bytes()),
+        (format!("figures/{id}.png"), png),
+        (format!("figures/{id}.txt"), format!("{title}\n\n{caption}\n").into_bytes()),
+        (format!("figures/{id}.csv"), csv.into_bytes()),
+    ]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -248,29 +273,4 @@ mod tests {
         let e = err("rtol = 1.0\nname = \"a\"");
         assert_eq!(e, "[stage.params]: missing field `points`");
     }
-}
-
-/// The four files of a multi-panel sheet (as [`StageCtx::write_sheet`]
-/// stages them), for writers outside a stage (`cargo xtask merge-shards`).
-pub(crate) fn sheet_files(sheet: &Sheet) -> Result<Vec<(String, Vec<u8>)>> {
-    let svg = rig_figures::render_sheet_svg(sheet).with_context(|| format!("figure {}", sheet.id))?;
-    let png = rig_figures::render_sheet_png(sheet).with_context(|| format!("figure {}", sheet.id))?;
-    let csv = rig_figures::sheet_csv(sheet);
-    Ok(figure_files(&sheet.id, svg, png, (&sheet.title, &sheet.caption), csv))
-}
-
-/// `figures/<id>.svg`, `.png`, `.txt` (title and caption) and `.csv`.
-fn figure_files(
-    id: &str,
-    svg: String,
-    png: Vec<u8>,
-    (title, caption): (&str, &str),
-    csv: String,
-) -> Vec<(String, Vec<u8>)> {
-    vec![
-        (format!("figures/{id}.svg"), svg.into_bytes()),
-        (format!("figures/{id}.png"), png),
-        (format!("figures/{id}.txt"), format!("{title}\n\n{caption}\n").into_bytes()),
-        (format!("figures/{id}.csv"), csv.into_bytes()),
-    ]
 }

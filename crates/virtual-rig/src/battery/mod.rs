@@ -445,38 +445,15 @@ impl Battery {
                 &protocol,
             ));
         }
-        k = 0;
-        for out in outside {
-            for j in 0..sizes.outside_seeds {
-                let s = seed + 40_000 + k;
-                k += 1;
-                let base = base_rig(out, s, &protocol);
-                let h = draw_hidden(out, base.mu_kinetic(), max_rpm, s);
-                cases.push(Case {
-                    id: format!("outside-{out}-{j}"),
-                    group: Group::Outside,
-                    seed: s,
-                    truth: base.with_hidden(vec![h]),
-                    rung: None,
-                });
-            }
-        }
-        k = 0;
-        for st in structural {
-            for j in 0..sizes.structural_seeds {
-                let s = seed + 70_000 + k;
-                k += 1;
-                let base = base_rig(st, s, &protocol);
-                let h = draw_hidden(st, base.mu_kinetic(), max_rpm, s);
-                cases.push(Case {
-                    id: format!("structural-{st}-{j}"),
-                    group: Group::Structural,
-                    seed: s,
-                    truth: base.with_hidden(vec![h]),
-                    rung: None,
-                });
-            }
-        }
+        cases.extend(alone(outside, Group::Outside, "outside", sizes.outside_seeds, seed + 40_000, &protocol));
+        cases.extend(alone(
+            structural,
+            Group::Structural,
+            "structural",
+            sizes.structural_seeds,
+            seed + 70_000,
+            &protocol,
+        ));
         k = 0;
         for (i, st) in structural.iter().enumerate() {
             for j in 0..sizes.structural_plus_vocabulary.min(Hidden::VOCABULARY.len()) {
@@ -696,6 +673,28 @@ fn base_rig(class: &str, seed: u64, protocol: &Protocol) -> Truth {
     } else {
         draw_rig(seed)
     }
+}
+
+/// `per` cases of each class of `classes` hidden alone, on the rig it needs
+/// ([`base_rig`]), ids `<prefix>-<class>-<j>`, seeds `seed0 + k` in order.
+fn alone(classes: &[&str], group: Group, prefix: &str, per: usize, seed0: u64, protocol: &Protocol) -> Vec<Case> {
+    let max_rpm = max_rpm(protocol);
+    let mut cases = Vec::new();
+    for class in classes {
+        for j in 0..per {
+            let s = seed0 + cases.len() as u64;
+            let base = base_rig(class, s, protocol);
+            let h = draw_hidden(class, base.mu_kinetic(), max_rpm, s);
+            cases.push(Case {
+                id: format!("{prefix}-{class}-{j}"),
+                group,
+                seed: s,
+                truth: base.with_hidden(vec![h]),
+                rung: None,
+            });
+        }
+    }
+    cases
 }
 
 /// A case with two hidden effects, the second drawn with its own seed, on
