@@ -98,7 +98,11 @@
 //! C dϑ/dt = T1 Ω1 − C ϑ/τ, and divides N (so μs and μ alike) by
 //! 1 + ϑ/ϑ_fade; the error norm covers ϑ only when the effect is present, so
 //! every run without it takes exactly the steps it took before; it is not
-//! part of [`State`] (a continuation starts cold). `DriveCurrentLimit` clamps
+//! part of [`State`] (a continuation starts cold). `StaticFrictionAging`
+//! uses the same seventh state as the stuck contact's age (dt/dt = 1 in
+//! stick, held in slip, reset to 0 each time rotor 1 comes to rest) and
+//! raises the stick threshold to (μs + B ln(1 + age/τ))·N·r: a break-away
+//! event whose threshold grows while stuck, found by the same root finder. `DriveCurrentLimit` clamps
 //! the terminal voltage to n k_e Ω2 ± R I_max after the PI loop, whose
 //! integral does not see it (windup), and in voltage steps too.
 //!
@@ -556,7 +560,20 @@ fn validate(p: &RigParams, o: &SimOptions) -> Result<(), ModelError> {
                 positive("effects.fade_temperature_k", *fade_temperature_k)?;
             }
             Effect::DriveCurrentLimit { current_limit_a } => positive("effects.current_limit_a", *current_limit_a)?,
+            Effect::StaticFrictionAging { aging_mu_per_efold, aging_time_s } => {
+                non_negative("effects.aging_mu_per_efold", *aging_mu_per_efold)?;
+                positive("effects.aging_time_s", *aging_time_s)?;
+            }
         }
+    }
+    let fade = p.effects.iter().any(|e| matches!(e, Effect::BrakeFade { .. }));
+    if fade && p.effects.iter().any(|e| matches!(e, Effect::StaticFrictionAging { .. })) {
+        // Both live in the one pad state (the temperature rise or the contact age).
+        return Err(ModelError::InvalidParameter {
+            name: "effects",
+            value: 2.0,
+            rule: "brake_fade and static_friction_aging cannot be combined (one pad state)",
+        });
     }
     match &p.harmonic {
         Some(HarmonicFriction::MultiplyTorque { omega_p_rad_s }) => finite("harmonic.omega_p_rad_s", *omega_p_rad_s)?,

@@ -4,7 +4,7 @@
 
 use crate::dopri::{DIM, Dopri, StepFailure, Vector, locate_root};
 use crate::exact::{Compute, Exact, ROWS, apply, apply_along, same_step};
-use crate::system::{CUR, INT, Mode, PHI1, PHI2, Region, System, VoltageIn, W1, W2};
+use crate::system::{CUR, INT, Mode, PHI1, PHI2, Region, System, TEMP, VoltageIn, W1, W2};
 use crate::{ModelError, SimOptions, State};
 use rig_types::{FrictionLaw, ModelKind, Trajectory};
 
@@ -435,6 +435,10 @@ pub(crate) fn run(
                 // Ω1 reached zero: stick if static friction can hold the shaft, else reverse.
                 _ => {
                     y[W1] = 0.0;
+                    if sys.has_contact_age() {
+                        // A new contact: its age starts at 0 (Effect::StaticFrictionAging).
+                        y[TEMP] = 0.0;
+                    }
                     sys.mode_at_rest(t, &y)
                 }
             };

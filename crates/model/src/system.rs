@@ -17,7 +17,9 @@ pub(crate) const W1: usize = 2;
 pub(crate) const W2: usize = 3;
 pub(crate) const CUR: usize = 4;
 pub(crate) const INT: usize = 5;
-/// Pad temperature rise ϑ of [`Effect::BrakeFade`], K (0 without it).
+/// The pad's state: the temperature rise ϑ of [`Effect::BrakeFade`], K, or
+/// the stuck contact's age of [`Effect::StaticFrictionAging`], s (the two
+/// cannot be combined; 0 without either).
 pub(crate) const TEMP: usize = 6;
 
 /// Armature speed scale of the rig model's motor friction, rad/s: T_f acts as
@@ -122,6 +124,8 @@ pub(crate) struct System<'a> {
     fade: Option<(f64, f64, f64)>,
     /// Current limit I_max of the amplifier, A, if any.
     current_limit_a: Option<f64>,
+    /// Static friction aging (B per e-fold, τ in s), if any; the contact age is `y[TEMP]`.
+    aging: Option<(f64, f64)>,
     /// 1 / (ki T_t) of the anti-windup, inverted once instead of divided by
     /// on every right-hand side.
     inv_ki_tracking: f64,
@@ -130,8 +134,8 @@ pub(crate) struct System<'a> {
 impl<'a> System<'a> {
     pub fn new(p: &'a RigParams, drive: Drive, n0: f64) -> Self {
         let gear = p.motor.gear_ratio;
-        let (mut half_gap_rad, mut cubic_per_rad2, mut imbalance, mut fade, mut current_limit_a) =
-            (0.0, 0.0, false, None, None);
+        let (mut half_gap_rad, mut cubic_per_rad2, mut imbalance, mut fade, mut current_limit_a, mut aging) =
+            (0.0, 0.0, false, None, None, None);
         for e in &p.effects {
             match *e {
                 Effect::CouplingBacklash { gap_rad } => half_gap_rad += 0.5 * gap_rad,
@@ -141,6 +145,9 @@ impl<'a> System<'a> {
                     fade = Some((heat_capacity_j_k, cooling_time_s, fade_temperature_k))
                 }
                 Effect::DriveCurrentLimit { current_limit_a: i } => current_limit_a = Some(i),
+                Effect::StaticFrictionAging { aging_mu_per_efold, aging_time_s } => {
+                    aging = Some((aging_mu_per_efold, aging_time_s))
+                }
                 _ => {}
             }
         }
@@ -162,14 +169,21 @@ impl<'a> System<'a> {
             imbalance,
             fade,
             current_limit_a,
+            aging,
             inv_ki_tracking: 1.0 / (p.drive.ki_v_rad * ANTI_WINDUP_TRACKING_S),
         }
     }
 
-    /// Whether the state has the thermal component (brake fade): the error
-    /// norm then covers it.
+    /// Whether the state has the pad component (brake fade's temperature or
+    /// static friction aging's contact age): the error norm then covers it.
     pub fn has_thermal_state(&self) -> bool {
-        self.fade.is_some()
+        self.fade.is_some() || self.aging.is_some()
+    }
+
+    /// Whether the pad state is the stuck contact's age ([`Effect::StaticFrictionAging`]):
+    /// it restarts at 0 whenever rotor 1 comes to rest.
+    pub fn has_contact_age(&self) -> bool {
+        self.aging.is_some()
     }
 
     /// Whether friction can act at all (brake closed).
@@ -357,7 +371,12 @@ impl<'a> System<'a> {
     #[inline]
     pub fn stick_limit_nm(&self, t: f64, y: &Vector) -> f64 {
         let factor = self.torque_factor(t).abs();
-        static_mu(&self.p.friction) * self.normal_force_n(t, y) * self.p.brake_disc_radius_m * factor
+        let mu_s = match self.aging {
+            // μs(t_stick) = μs + B ln(1 + t_stick/τ) (Effect::StaticFrictionAging).
+            Some((b, tau_s)) => static_mu(&self.p.friction) + b * (y[TEMP].max(0.0) / tau_s).ln_1p(),
+            None => static_mu(&self.p.friction),
+        };
+        mu_s * self.normal_force_n(t, y) * self.p.brake_disc_radius_m * factor
     }
 
     /// Friction torque T1 on rotor 1 (positive opposes positive Ω1) in `mode`.
@@ -417,6 +436,10 @@ impl<'a> System<'a> {
             if let Some((_, tau, _)) = self.fade {
                 // Stuck: no friction power, the pad cools.
                 dy[TEMP] = -y[TEMP] / tau;
+            }
+            if self.aging.is_some() {
+                // Stuck: the contact ages at the rate of time.
+                dy[TEMP] = 1.0;
             }
             return dy;
         }

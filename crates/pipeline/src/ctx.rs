@@ -165,10 +165,10 @@ impl StageCtx {
     /// A multi-panel sheet: the same four files as [`Self::write_figure`];
     /// its `.csv` holds every panel's series with a `panel` column.
     pub fn write_sheet(&mut self, sheet: &Sheet) -> Result<()> {
-        let svg = rig_figures::render_sheet_svg(sheet).with_context(|| format!("figure {}", sheet.id))?;
-        let png = rig_figures::render_sheet_png(sheet).with_context(|| format!("figure {}", sheet.id))?;
-        let csv = rig_figures::sheet_csv(sheet);
-        self.write_figure_files(&sheet.id, svg, png, (&sheet.title, &sheet.caption), csv)
+        for (rel, bytes) in sheet_files(sheet)? {
+            self.write_bytes(&rel, bytes)?;
+        }
+        Ok(())
     }
 
     fn write_figure_files(
@@ -179,10 +179,10 @@ impl StageCtx {
         (title, caption): (&str, &str),
         csv: String,
     ) -> Result<()> {
-        self.write_text(&format!("figures/{id}.svg"), &svg)?;
-        self.write_bytes(&format!("figures/{id}.png"), png)?;
-        self.write_text(&format!("figures/{id}.txt"), &format!("{title}\n\n{caption}\n"))?;
-        self.write_text(&format!("figures/{id}.csv"), &csv)
+        for (rel, bytes) in figure_files(id, svg, png, (title, caption), csv) {
+            self.write_bytes(&rel, bytes)?;
+        }
+        Ok(())
     }
 
     /// Everything staged so far (the runner commits these).
@@ -216,6 +216,31 @@ pub fn parse_params<T: DeserializeOwned>(params: &toml::Table) -> std::result::R
             _ => format!("[stage.params]: {msg}"),
         }
     })
+}
+
+/// The four files of a multi-panel sheet (as [`StageCtx::write_sheet`]
+/// stages them), for writers outside a stage (`cargo xtask merge-shards`).
+pub(crate) fn sheet_files(sheet: &Sheet) -> Result<Vec<(String, Vec<u8>)>> {
+    let svg = rig_figures::render_sheet_svg(sheet).with_context(|| format!("figure {}", sheet.id))?;
+    let png = rig_figures::render_sheet_png(sheet).with_context(|| format!("figure {}", sheet.id))?;
+    let csv = rig_figures::sheet_csv(sheet);
+    Ok(figure_files(&sheet.id, svg, png, (&sheet.title, &sheet.caption), csv))
+}
+
+/// `figures/<id>.svg`, `.png`, `.txt` (title and caption) and `.csv`.
+fn figure_files(
+    id: &str,
+    svg: String,
+    png: Vec<u8>,
+    (title, caption): (&str, &str),
+    csv: String,
+) -> Vec<(String, Vec<u8>)> {
+    vec![
+        (format!("figures/{id}.svg"), svg.into_bytes()),
+        (format!("figures/{id}.png"), png),
+        (format!("figures/{id}.txt"), format!("{title}\n\n{caption}\n").into_bytes()),
+        (format!("figures/{id}.csv"), csv.into_bytes()),
+    ]
 }
 
 #[cfg(test)]

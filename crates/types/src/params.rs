@@ -100,6 +100,15 @@ pub enum Effect {
     /// with di/dt = 0); the PI loop does not know and winds up. Applies to
     /// voltage steps too (the amplifier is always in the path).
     DriveCurrentLimit { current_limit_a: f64 },
+    /// Not in the vocabulary (tribology), seen only where the rotor sticks:
+    /// the static coefficient grows with the age of the stuck contact,
+    /// μs(t_stick) = μs + B·ln(1 + t_stick/τ) (B = `aging_mu_per_efold`,
+    /// τ = `aging_time_s`; Dieterich, J. Geophys. Res. 77 (1972) 3690, and
+    /// Rabinowicz, Proc. Phys. Soc. 71 (1958) 668: the real contact area
+    /// creeps under load, so break-away after a longer stick needs a larger
+    /// torque). The slip law is unchanged. The contact age restarts at 0 each
+    /// time rotor 1 comes to rest (and at the start of a run).
+    StaticFrictionAging { aging_mu_per_efold: f64, aging_time_s: f64 },
 }
 
 /// Eq. 4-11 and its physically consistent alternative (issue 4).

@@ -17,13 +17,16 @@ fn main() {
         .expect("thesis data");
     let sizes = Sizes {
         nulls: 20,
+        stick_slip_nulls: 0,
         singles_per_effect: 1,
         compound_seeds: 1,
         vocabulary_plus_outside: 0,
         outside_seeds: 1,
+        structural_seeds: 0,
+        structural_plus_vocabulary: 0,
         ladder_seeds: 0,
     };
-    let battery = Battery::build("mid", Protocol::small(), sizes, seed, &Hidden::OUTSIDE);
+    let battery = Battery::build("mid", Protocol::small(), sizes, seed, &Hidden::OUTSIDE, &[]);
     let out = battery.run(|case, c| {
         let t0 = std::time::Instant::now();
         let d = rig_diagnose::diagnose_campaign(c, Some(&thesis), &opts).map_err(|e| e.to_string())?;

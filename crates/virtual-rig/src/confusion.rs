@@ -2,15 +2,22 @@
 //! hidden-effect tests (crates/virtual-rig/tests/hidden_effects.rs). The
 //! many-campaign experiment is [`crate::battery`].
 
+use crate::ids;
+
 /// All verdict ids a diagnosis can return, in the matrix's column order.
-pub const VERDICTS: [&str; 8] = [
-    "none",
-    "normal_force_modulation",
-    "angle_periodic_friction",
-    "velocity_weakening_friction",
-    "viscous_brake_friction",
-    "drive_voltage_limit",
-    "unexplained",
+/// The structural ids come between the vocabulary and `unexplained`.
+pub const VERDICTS: [&str; 12] = [
+    ids::NONE,
+    ids::NORMAL_FORCE_MODULATION,
+    ids::ANGLE_PERIODIC_FRICTION,
+    ids::VELOCITY_WEAKENING_FRICTION,
+    ids::VISCOUS_BRAKE_FRICTION,
+    ids::DRIVE_VOLTAGE_LIMIT,
+    ids::DAMPING_ROTOR_ABSOLUTE,
+    ids::CHANNEL_DELAY,
+    ids::FORCE_SENSOR_DYNAMICS,
+    ids::ENCODER_COUPLING_COMPLIANCE,
+    ids::UNEXPLAINED,
     "error",
 ];
 

@@ -1,9 +1,29 @@
 //! Seeded draws of the truth: rig parameters in plausible ranges around the
 //! thesis' Table 4.5 (with the 8:1 gearbox), the sensor chain, and the hidden effect.
 
+use crate::ids;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rig_types::{DriveParams, Effect, FrictionLaw, ModelKind, MotorParams, RigParams};
+
+/// A recorded channel of an operating point that a sensor fault can act on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SensorChannel {
+    /// `rotor_ticks`, the rotor encoder.
+    RotorEncoder,
+    /// `brake_force_mv`, the force sensor.
+    Force,
+}
+
+impl SensorChannel {
+    /// The recording's column name.
+    pub fn column(self) -> &'static str {
+        match self {
+            SensorChannel::RotorEncoder => "rotor_ticks",
+            SensorChannel::Force => "brake_force_mv",
+        }
+    }
+}
 
 /// The effect hidden in a campaign, with the parameters the diagnosis must recover.
 #[derive(Debug, Clone, PartialEq)]
@@ -83,43 +103,102 @@ pub enum Hidden {
     EncoderMissingTicks {
         miss_probability: f64,
     },
+    /// Outside (tribology), seen only in free run: static friction that ages
+    /// with the time the contact has been stuck,
+    /// μs(t_stick) = μs0 + B ln(1 + t_stick/τ), slip friction unchanged
+    /// ([`Effect::StaticFrictionAging`]; Dieterich 1972, Rabinowicz 1958).
+    /// A longer stick needs a larger torque to break away, so stick-slip
+    /// cycles lengthen and grow; teacher-forcing in slip never sees it.
+    StaticFrictionAging {
+        aging_mu_per_efold: f64,
+        aging_time_s: f64,
+    },
+    /// Structural: the rig's damping acts on the absolute rotor speed (a drag
+    /// −C_r Ω1: bearings, seals, air; Eq. 4-7's diag(C, Cm) placement), with
+    /// only a small material damping C left on the twist rate, where the rig
+    /// model puts all of it.
+    RotorAbsoluteDamping {
+        rotor_damping_nm_s_rad: f64,
+        shaft_damping_nm_s_rad: f64,
+    },
+    /// Structural (sensor chain): one recorded channel of the operating
+    /// points lags the others by a transport delay of whole samples (a FIFO
+    /// or filter latency of the acquisition chain): x_rec[k] = x[k − d].
+    ChannelDelay {
+        channel: SensorChannel,
+        delay_samples: u32,
+    },
+    /// Structural (sensor chain): the force sensor is a second-order system
+    /// (load cell and caliper arm as mass–spring–damper, base-excited by the
+    /// pad force): F̈m + 2ζω F̊m + ω² Fm = ω² F, ω = 2π f_n.
+    ForceSensorDynamics {
+        natural_frequency_hz: f64,
+        damping_ratio: f64,
+    },
+    /// Structural (sensor chain): the rotor encoder's disc sits on a compliant
+    /// coupling (its inertia between the sensor and rotor 1):
+    /// φ̈e + 2ζω φ̇e + ω² φe = ω² φ1 + 2ζω Ω1 (coupling stiffness k_c and
+    /// damping c_c over the disc's inertia J_e: ω² = k_c/J_e, 2ζω = c_c/J_e).
+    EncoderCouplingCompliance {
+        natural_frequency_hz: f64,
+        damping_ratio: f64,
+    },
 }
 
 impl Hidden {
-    /// The verdict a correct diagnosis returns.
+    /// The verdict a correct diagnosis returns (a structural fault: see
+    /// [`Hidden::structural_id`], `unexplained` is right too).
     pub fn id(&self) -> &'static str {
         match self {
-            Hidden::None => "none",
-            Hidden::NormalForceModulation { .. } => "normal_force_modulation",
-            Hidden::AnglePeriodicFriction { .. } => "angle_periodic_friction",
-            Hidden::VelocityWeakening { .. } => "velocity_weakening_friction",
-            Hidden::ViscousBrake { .. } => "viscous_brake_friction",
-            Hidden::DriveVoltageLimit { .. } => "drive_voltage_limit",
-            _ => "unexplained",
+            Hidden::None => ids::NONE,
+            Hidden::NormalForceModulation { .. } => ids::NORMAL_FORCE_MODULATION,
+            Hidden::AnglePeriodicFriction { .. } => ids::ANGLE_PERIODIC_FRICTION,
+            Hidden::VelocityWeakening { .. } => ids::VELOCITY_WEAKENING_FRICTION,
+            Hidden::ViscousBrake { .. } => ids::VISCOUS_BRAKE_FRICTION,
+            Hidden::DriveVoltageLimit { .. } => ids::DRIVE_VOLTAGE_LIMIT,
+            _ => ids::UNEXPLAINED,
         }
+    }
+
+    /// The structural id of a structural fault ([`ids::STRUCTURAL`]).
+    pub fn structural_id(&self) -> Option<&'static str> {
+        match self {
+            Hidden::RotorAbsoluteDamping { .. } => Some(ids::DAMPING_ROTOR_ABSOLUTE),
+            Hidden::ChannelDelay { .. } => Some(ids::CHANNEL_DELAY),
+            Hidden::ForceSensorDynamics { .. } => Some(ids::FORCE_SENSOR_DYNAMICS),
+            Hidden::EncoderCouplingCompliance { .. } => Some(ids::ENCODER_COUPLING_COMPLIANCE),
+            _ => None,
+        }
+    }
+
+    /// Whether this is a structural fault rather than an effect.
+    pub fn is_structural(&self) -> bool {
+        self.structural_id().is_some()
     }
 
     /// Name of the hidden class: the verdict id for a vocabulary effect and
     /// `none`, the effect's own name for one outside the vocabulary.
     pub fn class(&self) -> &'static str {
         match self {
-            Hidden::MotorCogging { .. } => "motor_cogging",
-            Hidden::BrakeFade { .. } => "brake_fade",
-            Hidden::CouplingBacklash { .. } => "coupling_backlash",
-            Hidden::ShaftCubicStiffness { .. } => "shaft_cubic_stiffness",
-            Hidden::RotorImbalance { .. } => "rotor_imbalance",
-            Hidden::DriveCurrentLimit { .. } => "drive_current_limit",
-            Hidden::MotorWarmUp { .. } => "motor_warm_up",
-            Hidden::ForceSensorNonlinearity { .. } => "force_sensor_nonlinearity",
-            Hidden::ForceOffsetDrift { .. } => "force_offset_drift",
-            Hidden::EncoderMissingTicks { .. } => "encoder_missing_ticks",
-            other => other.id(),
+            Hidden::MotorCogging { .. } => ids::MOTOR_COGGING,
+            Hidden::BrakeFade { .. } => ids::BRAKE_FADE,
+            Hidden::CouplingBacklash { .. } => ids::COUPLING_BACKLASH,
+            Hidden::ShaftCubicStiffness { .. } => ids::SHAFT_CUBIC_STIFFNESS,
+            Hidden::RotorImbalance { .. } => ids::ROTOR_IMBALANCE,
+            Hidden::DriveCurrentLimit { .. } => ids::DRIVE_CURRENT_LIMIT,
+            Hidden::MotorWarmUp { .. } => ids::MOTOR_WARM_UP,
+            Hidden::ForceSensorNonlinearity { .. } => ids::FORCE_SENSOR_NONLINEARITY,
+            Hidden::ForceOffsetDrift { .. } => ids::FORCE_OFFSET_DRIFT,
+            Hidden::EncoderMissingTicks { .. } => ids::ENCODER_MISSING_TICKS,
+            Hidden::StaticFrictionAging { .. } => ids::STATIC_FRICTION_AGING,
+            other => other.structural_id().unwrap_or_else(|| other.id()),
         }
     }
 
-    /// Whether this effect is outside the diagnosis vocabulary.
+    /// Whether this effect is outside the diagnosis vocabulary (structural
+    /// faults included: no vocabulary effect explains them).
     pub fn is_outside(&self) -> bool {
-        self.id() == "unexplained"
+        self.id() == ids::UNEXPLAINED
     }
 
     /// All parameters of the truth, outside effects included (for reports).
@@ -145,6 +224,21 @@ impl Hidden {
             }
             Hidden::ForceOffsetDrift { drift_mv_per_s } => vec![("drift_mv_per_s", drift_mv_per_s)],
             Hidden::EncoderMissingTicks { miss_probability } => vec![("miss_probability", miss_probability)],
+            Hidden::StaticFrictionAging { aging_mu_per_efold, aging_time_s } => {
+                vec![("aging_mu_per_efold", aging_mu_per_efold), ("aging_time_s", aging_time_s)]
+            }
+            Hidden::RotorAbsoluteDamping { rotor_damping_nm_s_rad, shaft_damping_nm_s_rad } => vec![
+                ("rotor_damping_nm_s_rad", rotor_damping_nm_s_rad),
+                ("shaft_damping_nm_s_rad", shaft_damping_nm_s_rad),
+            ],
+            Hidden::ChannelDelay { channel, delay_samples } => vec![
+                ("delay_samples", f64::from(delay_samples)),
+                ("force_channel", if channel == SensorChannel::Force { 1.0 } else { 0.0 }),
+            ],
+            Hidden::ForceSensorDynamics { natural_frequency_hz, damping_ratio }
+            | Hidden::EncoderCouplingCompliance { natural_frequency_hz, damping_ratio } => {
+                vec![("natural_frequency_hz", natural_frequency_hz), ("damping_ratio", damping_ratio)]
+            }
             _ => self.params(),
         }
     }
@@ -175,37 +269,23 @@ impl Hidden {
 
     /// The classes in the order of the confusion matrix.
     pub const CLASSES: [&'static str; 7] = [
-        "none",
-        "normal_force_modulation",
-        "angle_periodic_friction",
-        "velocity_weakening_friction",
-        "viscous_brake_friction",
-        "drive_voltage_limit",
-        "motor_cogging",
+        ids::NONE,
+        ids::NORMAL_FORCE_MODULATION,
+        ids::ANGLE_PERIODIC_FRICTION,
+        ids::VELOCITY_WEAKENING_FRICTION,
+        ids::VISCOUS_BRAKE_FRICTION,
+        ids::DRIVE_VOLTAGE_LIMIT,
+        ids::MOTOR_COGGING,
     ];
 
     /// The vocabulary effects (diagnosis.md), in the matrix's order.
-    pub const VOCABULARY: [&'static str; 5] = [
-        "normal_force_modulation",
-        "angle_periodic_friction",
-        "velocity_weakening_friction",
-        "viscous_brake_friction",
-        "drive_voltage_limit",
-    ];
+    pub const VOCABULARY: [&'static str; 5] = ids::VOCABULARY;
 
     /// The effects outside the vocabulary ([`Hidden::class`] names).
-    pub const OUTSIDE: [&'static str; 10] = [
-        "motor_cogging",
-        "brake_fade",
-        "coupling_backlash",
-        "shaft_cubic_stiffness",
-        "rotor_imbalance",
-        "drive_current_limit",
-        "motor_warm_up",
-        "force_sensor_nonlinearity",
-        "force_offset_drift",
-        "encoder_missing_ticks",
-    ];
+    pub const OUTSIDE: [&'static str; 11] = ids::OUTSIDE;
+
+    /// The structural faults ([`Hidden::class`] names).
+    pub const STRUCTURAL: [&'static str; 4] = ids::STRUCTURAL;
 }
 
 /// Everything the virtual rig knows and the diagnosis must not.
@@ -280,6 +360,43 @@ pub fn draw_hidden(class: &str, mu_kinetic: f64, max_setpoint_rpm: f64, seed: u6
             drift_mv_per_s: if r.random_bool(0.5) { 1.0 } else { -1.0 } * r.random_range(0.5..1.5),
         },
         "encoder_missing_ticks" => Hidden::EncoderMissingTicks { miss_probability: r.random_range(0.002..0.01) },
+        // B of 4–10 % of μk per e-fold of stick time, τ 20–200 ms: a 0.3 s stick
+        // raises μs by 5–25 % of μk. Rocks give B ≈ 0.01 on μ ≈ 0.6 (Dieterich
+        // 1972), polymer glasses 1–3 % of μ (Baumberger & Caroli, Adv. Phys. 55
+        // (2006) 279); the range is the upper end, where it matters on this rig.
+        "static_friction_aging" => Hidden::StaticFrictionAging {
+            aging_mu_per_efold: mu_kinetic * r.random_range(0.04..0.10),
+            aging_time_s: r.random_range(0.02..0.2),
+        },
+        // Bearing, seal and air drag on rotor 1 of 3–12 mN·m·s/rad (the torque
+        // balance of emulated rigs finds 6.5–6.9 mN·m·s/rad, issue 25), and a
+        // shaft's material damping of 0.5–2 % of critical on the nominal
+        // √(J1 K) = √(0.0298 · 0.271) (steel: ≈ 0.1–1 %, couplings add).
+        "damping_rotor_absolute" => Hidden::RotorAbsoluteDamping {
+            rotor_damping_nm_s_rad: r.random_range(0.003..0.012),
+            shaft_damping_nm_s_rad: 2.0 * r.random_range(0.005..0.02) * (0.0298f64 * 0.271).sqrt(),
+        },
+        // 2–5 samples (4–10 ms at 500 Hz), the rotor encoder or the force channel.
+        "channel_delay" => Hidden::ChannelDelay {
+            channel: if r.random_bool(0.5) { SensorChannel::RotorEncoder } else { SensorChannel::Force },
+            delay_samples: r.random_range(2..=5),
+        },
+        // A force measured through a compliant lever arm: 6–15 Hz, ζ 0.05–0.3,
+        // a few times the stick-slip fundamental, so the break-away rings.
+        "force_sensor_dynamics" => Hidden::ForceSensorDynamics {
+            natural_frequency_hz: r.random_range(6.0..15.0),
+            damping_ratio: r.random_range(0.05..0.3),
+        },
+        // An encoder disc on a soft elastomer coupling or a long extension
+        // shaft: 2–5 Hz, ζ 0.05–0.2. The disc lags by ≈ α/ω² under an
+        // acceleration α; stick-slip swings Ω1 by a few rad/s in ≈ 0.1 s
+        // (α ≈ 20–50 rad/s²), so at 3 Hz the lag is ≈ 0.05–0.14 rad (8–22
+        // ticks), at 10 Hz below a tick (6.3 mrad): stiffer couplings are
+        // invisible on this rig.
+        "encoder_coupling_compliance" => Hidden::EncoderCouplingCompliance {
+            natural_frequency_hz: r.random_range(2.0..5.0),
+            damping_ratio: r.random_range(0.05..0.2),
+        },
         _ => Hidden::None,
     }
 }
@@ -398,11 +515,21 @@ impl Truth {
                 Hidden::DriveCurrentLimit { current_limit_a } => {
                     params.effects.push(Effect::DriveCurrentLimit { current_limit_a })
                 }
+                Hidden::StaticFrictionAging { aging_mu_per_efold, aging_time_s } => {
+                    params.effects.push(Effect::StaticFrictionAging { aging_mu_per_efold, aging_time_s })
+                }
+                Hidden::RotorAbsoluteDamping { rotor_damping_nm_s_rad, shaft_damping_nm_s_rad } => {
+                    params.rotor_damping_nm_s_rad = rotor_damping_nm_s_rad;
+                    params.shaft_damping_nm_s_rad = shaft_damping_nm_s_rad;
+                }
                 // Applied by the campaign generator (per run, or in the sensor chain).
                 Hidden::MotorWarmUp { .. }
                 | Hidden::ForceSensorNonlinearity { .. }
                 | Hidden::ForceOffsetDrift { .. }
-                | Hidden::EncoderMissingTicks { .. } => {}
+                | Hidden::EncoderMissingTicks { .. }
+                | Hidden::ChannelDelay { .. }
+                | Hidden::ForceSensorDynamics { .. }
+                | Hidden::EncoderCouplingCompliance { .. } => {}
             }
         }
         let mut it = hidden.into_iter().filter(|h| *h != Hidden::None);

@@ -33,9 +33,14 @@
 pub mod battery;
 pub mod confusion;
 mod draw;
+pub mod ids;
+mod sensor;
+mod stick;
 mod write;
 
-pub use draw::{Hidden, Truth, draw_hidden, draw_rig, draw_truth};
+pub use draw::{Hidden, SensorChannel, Truth, draw_hidden, draw_rig, draw_truth};
+pub use sensor::second_order_response;
+pub use stick::{MIN_STICK_SLIP_RUNS, StickSlip, draw_stick_slip_rig, stick_slip_runs};
 pub use write::write_campaign;
 
 use rand::{Rng, SeedableRng};
@@ -158,6 +163,7 @@ pub fn generate(name: &str, truth: &Truth, protocol: &Protocol, seed: u64) -> Re
         // The held angle wanders by a fraction of a tick (hand-held torque).
         let a: Vec<f64> = t.iter().map(|_| angle + rng.random_range(-0.004..0.004)).collect();
         let id = format!("twist-{}", j + 1);
+        let a = faults.delayed(SensorChannel::RotorEncoder, a);
         let rotor = faults.rotor_ticks(encoder_ticks(&a, per_rev), &id);
         runs.push(run(
             id,
@@ -179,7 +185,8 @@ pub fn generate(name: &str, truth: &Truth, protocol: &Protocol, seed: u64) -> Re
         let tr = rig_model::simulate(&p, &RunInput::VoltageStep { voltage_v: v }, &t, &sim_opts)
             .map_err(|source| VirtualRigError::Model { run: id.clone(), source })?;
         let volt = tr.voltage_v.iter().map(|x| x + v_noise.sample(&mut rng)).collect();
-        let rotor = faults.rotor_ticks(encoder_ticks(&tr.rotor_angle_rad, per_rev), &id);
+        let angle = faults.rotor_angle_seen(&tr.rotor_angle_rad, &tr.rotor_speed_rad_s, rate);
+        let rotor = faults.rotor_ticks(encoder_ticks(&angle, per_rev), &id);
         runs.push(run(
             id,
             RunKind::VoltageStep { voltage_v: v },
@@ -222,20 +229,21 @@ pub fn generate(name: &str, truth: &Truth, protocol: &Protocol, seed: u64) -> Re
                 let tr = rig_model::simulate(p, &input, &t, &sim_opts)
                     .map_err(|source| VirtualRigError::Model { run: id.clone(), source })?;
                 let r = p.brake_disc_radius_m;
-                let mv = tr
-                    .friction_torque_nm
+                let force_n = faults.force_seen(tr.friction_torque_nm.iter().map(|tq| tq / r).collect(), rate);
+                let mv = force_n
                     .iter()
                     .zip(&t)
-                    .map(|(tq, &tk)| faults.force_mv(truth, tq / r, tk) + mv_noise.sample(&mut rng))
+                    .map(|(&f, &tk)| faults.force_mv(truth, f, tk) + mv_noise.sample(&mut rng))
                     .collect();
                 let volt = tr.voltage_v.iter().map(|x| x + v_noise.sample(&mut rng)).collect();
+                let angle = faults.rotor_angle_seen(&tr.rotor_angle_rad, &tr.rotor_speed_rad_s, rate);
                 Ok(run(
                     id.clone(),
                     RunKind::OperatingPoint { motor_rpm_setpoint: *rpm, normal_force_n: *n0, ramp_s: protocol.ramp_s },
                     RunData {
                         motor_voltage_v: Some(volt),
                         motor_ticks: Some(encoder_ticks(&tr.motor_angle_rad, per_rev)),
-                        rotor_ticks: Some(faults.rotor_ticks(encoder_ticks(&tr.rotor_angle_rad, per_rev), id)),
+                        rotor_ticks: Some(faults.rotor_ticks(encoder_ticks(&angle, per_rev), id)),
                         brake_force_mv: Some(mv),
                         time_s: t,
                     },
@@ -279,6 +287,12 @@ struct SensorFaults {
     miss_probability: f64,
     /// (ΔT in K, τ in s) of the motor warm-up.
     warm_up: Option<(f64, f64)>,
+    /// A channel's transport delay, samples.
+    delay: Option<(SensorChannel, usize)>,
+    /// (f_n in Hz, ζ) of the force sensor's second-order response.
+    force_dynamics: Option<(f64, f64)>,
+    /// (f_n in Hz, ζ) of the rotor encoder's compliant coupling.
+    encoder_coupling: Option<(f64, f64)>,
     seed: u64,
 }
 
@@ -298,6 +312,13 @@ impl SensorFaults {
                 Hidden::MotorWarmUp { temperature_rise_k, time_constant_s } => {
                     f.warm_up = Some((temperature_rise_k, time_constant_s))
                 }
+                Hidden::ChannelDelay { channel, delay_samples } => f.delay = Some((channel, delay_samples as usize)),
+                Hidden::ForceSensorDynamics { natural_frequency_hz, damping_ratio } => {
+                    f.force_dynamics = Some((natural_frequency_hz, damping_ratio))
+                }
+                Hidden::EncoderCouplingCompliance { natural_frequency_hz, damping_ratio } => {
+                    f.encoder_coupling = Some((natural_frequency_hz, damping_ratio))
+                }
                 _ => {}
             }
         }
@@ -312,6 +333,43 @@ impl SensorFaults {
             return linear;
         }
         linear + self.quadratic_mv_per_n2 * force_n * force_n + self.drift_mv_per_s * t_s
+    }
+
+    /// `x` as recorded on `channel`: delayed by whole samples under
+    /// [`Hidden::ChannelDelay`] (x_rec[k] = x[k − d], the first sample held
+    /// before the record starts: the rig was at rest), else unchanged.
+    fn delayed(&self, channel: SensorChannel, x: Vec<f64>) -> Vec<f64> {
+        match self.delay {
+            Some((c, d)) if c == channel && d > 0 && !x.is_empty() => {
+                let mut out = Vec::with_capacity(x.len());
+                out.extend(std::iter::repeat_n(x[0], d.min(x.len())));
+                out.extend_from_slice(&x[..x.len() - d.min(x.len())]);
+                out
+            }
+            _ => x,
+        }
+    }
+
+    /// The brake force the force sensor sees (N, before its voltage line):
+    /// the second-order response of [`Hidden::ForceSensorDynamics`], then the
+    /// channel's delay.
+    fn force_seen(&self, force_n: Vec<f64>, rate_hz: f64) -> Vec<f64> {
+        let seen = match self.force_dynamics {
+            Some((f_n, zeta)) => second_order_response(&force_n, None, rate_hz, f_n, zeta),
+            None => force_n,
+        };
+        self.delayed(SensorChannel::Force, seen)
+    }
+
+    /// The angle the rotor encoder's disc turns through: rotor 1's angle
+    /// through the compliant coupling of [`Hidden::EncoderCouplingCompliance`]
+    /// (its speed drives the coupling's damper), then the channel's delay.
+    fn rotor_angle_seen(&self, angle_rad: &[f64], speed_rad_s: &[f64], rate_hz: f64) -> Vec<f64> {
+        let seen = match self.encoder_coupling {
+            Some((f_n, zeta)) => second_order_response(angle_rad, Some(speed_rad_s), rate_hz, f_n, zeta),
+            None => angle_rad.to_vec(),
+        };
+        self.delayed(SensorChannel::RotorEncoder, seen)
     }
 
     /// The rotor encoder's count with each tick missed with probability p
@@ -350,4 +408,20 @@ impl SensorFaults {
 
 fn run(id: String, kind: RunKind, data: RunData) -> Run {
     Run { file: PathBuf::from(format!("runs/{id}.csv")), id, kind, data }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{SensorChannel, SensorFaults};
+
+    /// A channel delay of d samples shifts that channel only, holding its first sample.
+    #[test]
+    fn delay_shifts_one_channel_by_whole_samples() {
+        let f = SensorFaults { delay: Some((SensorChannel::Force, 2)), ..Default::default() };
+        let x = vec![1.0, 2.0, 3.0, 4.0, 5.0];
+        assert_eq!(f.delayed(SensorChannel::Force, x.clone()), vec![1.0, 1.0, 1.0, 2.0, 3.0]);
+        assert_eq!(f.delayed(SensorChannel::RotorEncoder, x.clone()), x);
+        let long = SensorFaults { delay: Some((SensorChannel::RotorEncoder, 9)), ..Default::default() };
+        assert_eq!(long.delayed(SensorChannel::RotorEncoder, x), vec![1.0; 5]);
+    }
 }

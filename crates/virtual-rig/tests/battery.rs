@@ -7,7 +7,7 @@ use rig_virtual_rig::battery::{
     Battery, Case, DiagnosisResult, Expected, Finding, Group, LADDER_STEPS, Outcome, clopper_pearson, confusion_table,
     detection_table, false_alarm_table, judge, wrong_table,
 };
-use rig_virtual_rig::{Hidden, Protocol, draw_hidden, draw_rig, generate};
+use rig_virtual_rig::{Hidden, Protocol, draw_hidden, draw_rig, draw_stick_slip_rig, generate, ids, stick_slip_runs};
 
 fn tiny() -> Protocol {
     Protocol {
@@ -27,6 +27,14 @@ fn batteries_are_deterministic_and_cover_every_group() {
     assert_eq!(ids.len(), full.cases.len(), "case ids are unique");
     let count = |g: Group| full.cases.iter().filter(|c| c.group == g).count();
     assert!(count(Group::Null) >= 20);
+    assert!(count(Group::NullStickSlip) >= 20, "free-run thresholds need >= 20 stick-slipping nulls");
+    for st in Hidden::STRUCTURAL {
+        let n = full.cases.iter().filter(|c| c.group == Group::Structural && c.truth.hidden.class() == st).count();
+        assert!(n >= 2, "{st}: {n} seeds");
+        assert!(full.cases.iter().any(
+            |c| c.group == Group::StructuralPlusVocabulary && c.truth.hidden_all().iter().any(|h| h.class() == st)
+        ));
+    }
     for e in Hidden::VOCABULARY {
         assert!(full.cases.iter().any(|c| c.group == Group::Single && c.expected_verdict() == e), "{e}");
         let ladder: Vec<f64> = full
@@ -35,6 +43,11 @@ fn batteries_are_deterministic_and_cover_every_group() {
             .filter_map(|c| c.rung.as_ref().filter(|r| r.effect == e && c.id.ends_with("-0")).map(|r| r.size))
             .collect();
         assert_eq!(ladder.len(), LADDER_STEPS, "{e}");
+        for step in 0..LADDER_STEPS {
+            let draws =
+                full.cases.iter().filter(|c| c.rung.as_ref().is_some_and(|r| r.effect == e && r.step == step)).count();
+            assert!(draws >= 20, "{e} rung {step}: {draws} draws");
+        }
         // Every rung's truth carries its size.
         for c in full.cases.iter().filter(|c| c.rung.as_ref().is_some_and(|r| r.effect == e)) {
             assert_eq!(c.truth.hidden.id(), e);
@@ -57,8 +70,17 @@ fn batteries_are_deterministic_and_cover_every_group() {
     assert_eq!(ci, Battery::ci());
     assert_ne!(Battery::ci_seeded(1).cases[0].truth, ci.cases[0].truth, "another seed, other rigs");
     assert_eq!(Battery::full_seeded(rig_virtual_rig::battery::BATTERY_SEED), full);
-    assert!((10..=15).contains(&ci.cases.len()), "{}", ci.cases.len());
-    for g in [Group::Null, Group::Single, Group::Compound, Group::VocabularyPlusOutside, Group::Outside] {
+    assert!((15..=20).contains(&ci.cases.len()), "{}", ci.cases.len());
+    for g in [
+        Group::Null,
+        Group::NullStickSlip,
+        Group::Single,
+        Group::Compound,
+        Group::VocabularyPlusOutside,
+        Group::Outside,
+        Group::Structural,
+        Group::StructuralPlusVocabulary,
+    ] {
         assert!(ci.cases.iter().any(|c| c.group == g), "{g:?}");
     }
     // The ci subset's generated campaign is the same twice (tiny protocol to stay fast).
@@ -72,7 +94,7 @@ fn expected_verdicts_follow_the_groups() {
     for c in &Battery::full().cases {
         let v = c.expected_verdict();
         match c.group {
-            Group::Null => assert_eq!((v.as_str(), c.expected()), ("none", Expected::None)),
+            Group::Null | Group::NullStickSlip => assert_eq!((v.as_str(), c.expected()), ("none", Expected::None)),
             Group::Single | Group::Ladder => {
                 assert!(Hidden::VOCABULARY.contains(&v.as_str()), "{}: {v}", c.id);
                 assert_eq!(c.truth.hidden_all().len(), 1);
@@ -93,6 +115,17 @@ fn expected_verdicts_follow_the_groups() {
                 assert_eq!(v, "unexplained");
                 assert_eq!(c.expected(), Expected::Unexplained { partial: vec![] });
                 assert!(c.truth_class().starts_with("outside:"));
+            }
+            Group::Structural => {
+                let id = c.truth.hidden.structural_id().expect("a structural fault");
+                assert_eq!(c.expected(), Expected::Structural { id, partial: vec![] });
+                assert_eq!(v, format!("{id}/unexplained"));
+                assert!(c.truth_class().starts_with("structural:"));
+            }
+            Group::StructuralPlusVocabulary => {
+                let Expected::Structural { partial, .. } = c.expected() else { panic!("{}", c.id) };
+                assert_eq!(partial.len(), 1);
+                assert!(c.truth_class().contains("+structural:"), "{}", c.truth_class());
             }
         }
     }
@@ -147,8 +180,26 @@ fn judge_checks_verdict_every_effect_and_its_parameters() {
     assert!(judge(mixed, &answer("unexplained", vec![partial.clone(), unexplained.clone()])).right);
     assert!(!judge(mixed, &answer(vocab.id(), vec![partial])).right, "naming only the vocabulary effect is wrong");
     let outside = full.cases.iter().find(|c| c.group == Group::Outside).unwrap();
-    assert!(judge(outside, &answer("unexplained", vec![unexplained])).right);
+    assert!(judge(outside, &answer("unexplained", vec![unexplained.clone()])).right);
     assert!(!judge(outside, &answer("none", vec![])).right);
+
+    // A structural fault: `unexplained`, or its structure named; not `none`, not another structure.
+    let st = find("structural-damping_rotor_absolute-0");
+    assert!(judge(&st, &answer("unexplained", vec![unexplained.clone()])).right);
+    assert!(judge(&st, &answer(ids::DAMPING_ROTOR_ABSOLUTE, vec![finding(ids::DAMPING_ROTOR_ABSOLUTE, &[])])).right);
+    assert!(!judge(&st, &answer("none", vec![])).right);
+    assert!(!judge(&st, &answer(ids::CHANNEL_DELAY, vec![finding(ids::CHANNEL_DELAY, &[])])).right);
+    let j = judge(&st, &answer("viscous_brake_friction", vec![finding("viscous_brake_friction", &[])]));
+    assert!(!j.right && j.reason.contains("spurious"), "a vocabulary effect compensating a structure: {}", j.reason);
+    // With a vocabulary effect: that effect found, and the structure named or `unexplained`.
+    let sv = full.cases.iter().find(|c| c.group == Group::StructuralPlusVocabulary).unwrap();
+    let vocab = sv.truth.hidden_all().into_iter().find(|h| !h.is_outside()).unwrap();
+    let Expected::Structural { id, .. } = sv.expected() else { panic!() };
+    let found =
+        Finding { effect: vocab.id().into(), params: vocab.params().into_iter().map(|(k, v)| (k.into(), v)).collect() };
+    assert!(judge(sv, &answer("unexplained", vec![found.clone(), unexplained])).right);
+    assert!(judge(sv, &answer(vocab.id(), vec![found.clone(), finding(id, &[])])).right);
+    assert!(!judge(sv, &answer(vocab.id(), vec![found])).right, "the structure unnamed and not `unexplained`");
 }
 
 #[test]
@@ -170,17 +221,25 @@ fn tables_count_what_they_should() {
     // A fake diagnosis: always `none`.
     let outcomes: Vec<Outcome> = b.cases.iter().map(|c| Outcome::new(c.clone(), answer("none", vec![]))).collect();
     let fa = false_alarm_table(&outcomes);
-    assert_eq!(fa.rows[0][..3], ["20".to_string(), "0".to_string(), "0.000".to_string()]);
+    let row = |g: &str, n: &str| vec![g.to_string(), n.to_string(), "0".to_string(), "0.000".to_string()];
+    assert_eq!(fa.rows.len(), 3);
+    assert_eq!(fa.rows[0][..4], row("null", "20"));
+    assert_eq!(fa.rows[1][..4], row("null_stick_slip", "20"));
+    assert_eq!(fa.rows[2][..4], row("all", "40"));
     let cm = confusion_table(&outcomes);
     let none_row = cm.rows.iter().find(|r| r[0] == "none").unwrap();
     assert_eq!(none_row[cm.columns.iter().position(|c| c == "right").unwrap()], "20");
     assert!(cm.rows.iter().all(|r| !r[0].starts_with("ladder")));
     let det = detection_table(&outcomes);
     assert_eq!(det.rows.len(), 5 * LADDER_STEPS);
-    assert!(det.rows.iter().all(|r| r[6] == "0" && r[4] == "3"));
-    assert_eq!(wrong_table(&outcomes).rows.len(), b.cases.iter().filter(|c| c.group != Group::Null).count());
+    assert!(det.rows.iter().all(|r| r[6] == "0" && r[4] == "20"));
+    assert_eq!(
+        wrong_table(&outcomes).rows.len(),
+        b.cases.iter().filter(|c| !matches!(c.group, Group::Null | Group::NullStickSlip)).count()
+    );
     let md = rig_virtual_rig::battery::report_markdown(&b, &outcomes);
-    assert!(md.contains("| 20 | 0 | 0.000 | 0.000 | 0.168 |"), "{md}");
+    assert!(md.contains("| null | 20 | 0 | 0.000 | 0.000 | 0.168 |"), "{md}");
+    assert!(md.contains("| all | 40 | 0 | 0.000 | 0.000 | 0.088 |"), "{md}");
 }
 
 /// Largest change between two recordings of the same protocol, per channel
@@ -238,6 +297,81 @@ fn every_outside_effect_changes_the_recording_beyond_noise() {
     println!("{}", report.join("\n"));
 }
 
+/// Static friction aging and every structural fault change the recording of
+/// a stick-slipping rig beyond the noise (small protocol: the stick-slip
+/// draw needs its slow, loaded points).
+#[test]
+fn every_new_fault_changes_a_stick_slipping_recording_beyond_noise() {
+    let proto = Protocol::small();
+    let seed = 424_243;
+    let base = draw_stick_slip_rig(seed, &proto).expect("a stick-slipping rig");
+    let plain = generate("plain", &base, &proto, seed).unwrap();
+    let mut report = Vec::new();
+    for class in Hidden::STRUCTURAL.into_iter().chain([ids::STATIC_FRICTION_AGING]) {
+        let h = draw_hidden(class, base.mu_kinetic(), 130.0, seed);
+        assert_eq!(h.class(), class);
+        let truth = base.clone().with_hidden(vec![h]);
+        let c = generate(class, &truth, &proto, seed).unwrap();
+        let (ticks, mv, volts) = change(&plain, &c);
+        // Sensor dynamics ring at a few Hz and average out of 1 s means: the
+        // encoders carry no noise, so their largest sample difference counts too.
+        let sample_ticks = plain
+            .runs
+            .iter()
+            .zip(&c.runs)
+            .filter_map(|(a, b)| Some(a.data.rotor_ticks.as_ref()?.iter().zip(b.data.rotor_ticks.as_ref()?)))
+            .flatten()
+            .map(|(a, b)| (a - b).abs())
+            .max()
+            .unwrap_or(0);
+        report.push(format!("{class}: {ticks:.1} ticks ({sample_ticks} per sample), {mv:.2} mV, {volts:.3} V"));
+        assert!(
+            ticks >= 10.0 || sample_ticks >= 10 || mv >= 3.0 || volts >= 0.05,
+            "{class} changes nothing measurable: {report:?}"
+        );
+    }
+    println!("{}", report.join("\n"));
+}
+
+/// The stick-slipping nulls do stick-slip: every one of the full battery's
+/// has at least 3 operating points whose truth sticks repeatedly, and
+/// fewer than all (steady sliding stays in the campaign).
+#[test]
+fn stick_slipping_nulls_stick_slip() {
+    let full = Battery::full();
+    let mut counts = Vec::new();
+    for c in full.cases.iter().filter(|c| c.group == Group::NullStickSlip) {
+        assert!(c.truth.hidden_all().is_empty());
+        let runs = stick_slip_runs(&c.truth, &full.protocol).unwrap();
+        let n = runs.iter().filter(|s| s.is_stick_slip()).count();
+        assert!(n >= 3 && n < runs.len(), "{}: {n} of {} runs stick-slip", c.id, runs.len());
+        counts.push(n);
+    }
+    assert_eq!(counts.len(), 20);
+    // The plain nulls do not (issue 25: "today's nulls never stick-slip").
+    let plain = full.cases.iter().find(|c| c.group == Group::Null).unwrap();
+    let n = stick_slip_runs(&plain.truth, &full.protocol).unwrap().iter().filter(|s| s.is_stick_slip()).count();
+    println!("stick-slipping runs per null: {counts:?}; a plain null: {n}");
+}
+
+/// Every id the virtual rig names for the vocabulary is the diagnosis's
+/// (its `EffectId` list, the vocabulary's one home), and the other way round.
+#[test]
+fn vocabulary_ids_are_the_diagnosis_ids() {
+    let theirs: Vec<&str> = rig_diagnose::vocab::EffectId::ALL.iter().map(|e| e.id()).collect();
+    assert_eq!(theirs, ids::VOCABULARY.to_vec());
+    assert_eq!(rig_diagnose::vocab::NONE, ids::NONE);
+    assert_eq!(rig_diagnose::vocab::UNEXPLAINED, ids::UNEXPLAINED);
+    // No id of the virtual rig is used twice.
+    let mut all: Vec<&str> = [ids::NONE, ids::UNEXPLAINED].into_iter().chain(ids::VOCABULARY).collect();
+    all.extend(ids::OUTSIDE);
+    all.extend(ids::STRUCTURAL);
+    let n = all.len();
+    all.sort_unstable();
+    all.dedup();
+    assert_eq!(all.len(), n);
+}
+
 /// Every campaign of the full battery with an effect outside the vocabulary
 /// or a compound simulates under the full protocol (no integrator failure).
 /// Minutes in a debug build: `cargo test -p rig-virtual-rig --test battery -- --ignored`.
@@ -257,9 +391,9 @@ fn every_full_battery_campaign_with_new_physics_generates() {
 fn runners_hand_each_campaign_to_the_diagnosis_and_judge_it() {
     let mut b = Battery::ci();
     b.protocol = tiny();
-    assert_eq!(Battery::full().cases.len(), 183);
+    assert_eq!(Battery::full().cases.len(), 737);
     let oracle = |case: &Case| {
-        let findings: Vec<Finding> = case
+        let mut findings: Vec<Finding> = case
             .truth
             .hidden_all()
             .iter()
@@ -273,6 +407,10 @@ fn runners_hand_each_campaign_to_the_diagnosis_and_judge_it() {
             Expected::None => "none".to_string(),
             Expected::Effects(e) => e[0].to_string(),
             Expected::Unexplained { .. } => "unexplained".to_string(),
+            Expected::Structural { id, .. } => {
+                findings.insert(0, Finding { effect: id.into(), params: Default::default() });
+                id.to_string()
+            }
         };
         Ok(DiagnosisResult { verdict, findings })
     };

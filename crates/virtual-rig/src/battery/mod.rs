@@ -11,13 +11,22 @@
 //!
 //! Groups of cases ([`Group`]):
 //! - `null`: the rig drawn (±8–10 % around Table 4.5, as [`crate::draw_rig`]) with nothing hidden: `none`;
+//! - `null_stick_slip`: an effect-free rig whose campaign stick-slips in at
+//!   least [`crate::MIN_STICK_SLIP_RUNS`] operating points
+//!   ([`crate::draw_stick_slip_rig`]): `none` (what free-run thresholds are
+//!   calibrated on);
 //! - `single`: each vocabulary effect alone, drawn as [`crate::draw_hidden`]: that effect;
 //! - `compound`: two vocabulary effects at once (every pair except
 //!   velocity weakening + viscous brake, which are two friction laws and
 //!   cannot both be the brake's law): both must be found, the verdict is either;
 //! - `vocabulary_plus_outside`: a vocabulary effect and one outside the
 //!   vocabulary: `unexplained`, with the vocabulary effect found as a partial explanation;
-//! - `outside`: one effect outside the vocabulary ([`Hidden::OUTSIDE`]): `unexplained`;
+//! - `outside`: one effect outside the vocabulary ([`Hidden::OUTSIDE`]): `unexplained`
+//!   (static friction aging, which only a stick shows, on a stick-slipping rig);
+//! - `structural`: one structural fault ([`Hidden::STRUCTURAL`]) on a
+//!   stick-slipping rig: its structural id or `unexplained` ([`Expected::Structural`]);
+//! - `structural_plus_vocabulary`: a structural fault and a vocabulary effect:
+//!   the vocabulary effect found, and the structure named or the verdict `unexplained`;
 //! - `ladder`: each vocabulary effect at six sizes down to where it should
 //!   be lost in the noise ([`LADDER_STEPS`]): the effect, or a miss.
 //!
@@ -32,20 +41,22 @@
 //! vocabulary effect does; the current limit only shows where the current
 //! would exceed I_max (start-up, break-away).
 
-use crate::{Hidden, Protocol, Truth, VirtualRigError, draw_hidden, draw_rig, generate, write_campaign};
+use crate::{
+    Hidden, Protocol, Truth, VirtualRigError, draw_hidden, draw_rig, draw_stick_slip_rig, generate, ids, write_campaign,
+};
 use rig_types::{Campaign, fmt_fixed};
 use std::collections::BTreeMap;
 use std::path::Path;
 
 mod render;
 pub use render::{
-    clopper_pearson, confusion_table, detection_sheet, detection_table, false_alarm_table, markdown_table,
-    report_markdown, wrong_table,
+    battery_outputs, clopper_pearson, confusion_table, detection_sheet, detection_table, false_alarm_table,
+    markdown_table, report_markdown, wrong_table,
 };
 
 /// One finding of a diagnosis, as diagnosis.md's `findings[]` (effect id and
 /// its parameters under their JSON keys).
-#[derive(Debug, Clone, PartialEq, Default, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, serde::Deserialize, serde::Serialize)]
 pub struct Finding {
     pub effect: String,
     /// Absent in the JSON of an `unexplained` finding (it has no parameters).
@@ -57,7 +68,7 @@ pub struct Finding {
 /// finding in order, read from diagnosis.json's schema
 /// (../shared/spec/diagnosis.md; other fields ignored), so any diagnosis that
 /// writes the spec's JSON converts with `serde_json::from_value`.
-#[derive(Debug, Clone, PartialEq, Default, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, serde::Deserialize, serde::Serialize)]
 pub struct DiagnosisResult {
     pub verdict: String,
     pub findings: Vec<Finding>,
@@ -67,10 +78,13 @@ pub struct DiagnosisResult {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Group {
     Null,
+    NullStickSlip,
     Single,
     Compound,
     VocabularyPlusOutside,
     Outside,
+    Structural,
+    StructuralPlusVocabulary,
     Ladder,
 }
 
@@ -78,10 +92,13 @@ impl Group {
     pub fn name(self) -> &'static str {
         match self {
             Group::Null => "null",
+            Group::NullStickSlip => "null_stick_slip",
             Group::Single => "single",
             Group::Compound => "compound",
             Group::VocabularyPlusOutside => "vocabulary_plus_outside",
             Group::Outside => "outside",
+            Group::Structural => "structural",
+            Group::StructuralPlusVocabulary => "structural_plus_vocabulary",
             Group::Ladder => "ladder",
         }
     }
@@ -131,6 +148,10 @@ pub enum Expected {
     Effects(Vec<&'static str>),
     /// `unexplained`, with the listed vocabulary effects found as a partial explanation.
     Unexplained { partial: Vec<&'static str> },
+    /// A structural fault (diagnosis.md: "Structure is a candidate like an
+    /// effect"): the structure `id` among the findings, or the verdict
+    /// `unexplained`; the listed vocabulary effects found either way.
+    Structural { id: &'static str, partial: Vec<&'static str> },
 }
 
 /// One campaign of the battery.
@@ -152,34 +173,47 @@ impl Case {
         let vocab: Vec<&'static str> = hidden.iter().filter(|h| !h.is_outside()).map(|h| h.id()).collect();
         if hidden.is_empty() {
             Expected::None
-        } else if hidden.iter().any(|h| h.is_outside()) {
+        } else if hidden.iter().any(|h| h.is_outside() && !h.is_structural()) {
             Expected::Unexplained { partial: vocab }
+        } else if let Some(id) = hidden.iter().find_map(|h| h.structural_id()) {
+            Expected::Structural { id, partial: vocab }
         } else {
             Expected::Effects(vocab)
         }
     }
 
     /// The expected verdict as one string: `none`, the effect id, the ids of a
-    /// compound joined by `+` (any of them is a right verdict), or `unexplained`.
+    /// compound joined by `+` (any of them is a right verdict), `unexplained`,
+    /// or `<structural id>/unexplained` for a structural fault (either is right).
     pub fn expected_verdict(&self) -> String {
         match self.expected() {
-            Expected::None => "none".into(),
+            Expected::None => ids::NONE.into(),
             Expected::Effects(e) => e.join("+"),
-            Expected::Unexplained { .. } => "unexplained".into(),
+            Expected::Unexplained { .. } => ids::UNEXPLAINED.into(),
+            Expected::Structural { id, .. } => format!("{id}/{}", ids::UNEXPLAINED),
         }
     }
 
-    /// Row of the confusion matrix: `none`, the effect, `a+b`, `a+outside:x`,
-    /// `outside:x` or `ladder:a`.
+    /// Row of the confusion matrix: `none`, `none:stick_slip`, the effect,
+    /// `a+b`, `a+outside:x`, `outside:x`, `structural:s`, `a+structural:s` or `ladder:a`.
     pub fn truth_class(&self) -> String {
         let names: Vec<String> = self
             .truth
             .hidden_all()
             .iter()
-            .map(|h| if h.is_outside() { format!("outside:{}", h.class()) } else { h.class().to_string() })
+            .map(|h| {
+                if h.is_structural() {
+                    format!("structural:{}", h.class())
+                } else if h.is_outside() {
+                    format!("outside:{}", h.class())
+                } else {
+                    h.class().to_string()
+                }
+            })
             .collect();
         match (self.group, &self.rung) {
             (_, Some(r)) => format!("ladder:{}", r.effect),
+            (Group::NullStickSlip, _) => "none:stick_slip".into(),
             _ if names.is_empty() => "none".into(),
             _ => names.join("+"),
         }
@@ -198,6 +232,8 @@ impl Case {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Battery {
     pub name: &'static str,
+    /// The first case seed it was built from.
+    pub seed: u64,
     pub protocol: Protocol,
     pub cases: Vec<Case>,
 }
@@ -209,20 +245,28 @@ pub const BATTERY_SEED: u64 = 90_000;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sizes {
     pub nulls: usize,
+    /// Effect-free rigs that stick-slip ([`crate::draw_stick_slip_rig`]).
+    pub stick_slip_nulls: usize,
     pub singles_per_effect: usize,
     /// Seeds per compound pair (0: no compounds).
     pub compound_seeds: usize,
-    /// Outside effects paired with a vocabulary effect (at most 10).
+    /// Outside effects paired with a vocabulary effect (at most 11).
     pub vocabulary_plus_outside: usize,
     pub outside_seeds: usize,
+    /// Seeds per structural fault.
+    pub structural_seeds: usize,
+    /// Vocabulary effects paired with each structural fault (at most 5).
+    pub structural_plus_vocabulary: usize,
     pub ladder_seeds: usize,
 }
 
 impl Battery {
-    /// The full battery under [`Protocol::full`]: 20 nulls, 3 draws of each
-    /// vocabulary effect, every compound pair twice, each outside effect once
-    /// with a vocabulary effect and 3 times alone, each ladder rung 3 times
-    /// (183 campaigns).
+    /// The full battery under [`Protocol::full`]: 20 nulls, 20 stick-slipping
+    /// nulls, 3 draws of each vocabulary effect, every compound pair twice,
+    /// each outside effect once with a vocabulary effect and 3 times alone,
+    /// each structural fault 3 times alone and with 2 vocabulary effects,
+    /// each ladder rung 20 times (737 campaigns;
+    /// 20 draws per rung put the 95 % band of P(right) = 1 at 0.83–1).
     pub fn full() -> Battery {
         Battery::full_seeded(BATTERY_SEED)
     }
@@ -231,18 +275,24 @@ impl Battery {
     pub fn full_seeded(seed: u64) -> Battery {
         let sizes = Sizes {
             nulls: 20,
+            stick_slip_nulls: 20,
             singles_per_effect: 3,
             compound_seeds: 2,
-            vocabulary_plus_outside: 10,
+            vocabulary_plus_outside: 11,
             outside_seeds: 3,
-            ladder_seeds: 3,
+            structural_seeds: 3,
+            structural_plus_vocabulary: 2,
+            ladder_seeds: 20,
         };
-        Battery::build("full", Protocol::full(), sizes, seed, &Hidden::OUTSIDE)
+        Battery::build("full", Protocol::full(), sizes, seed, &Hidden::OUTSIDE, &Hidden::STRUCTURAL)
     }
 
-    /// The seeded CI subset under [`Protocol::small`] (13 campaigns): 3 nulls,
-    /// each vocabulary effect once, one compound, one vocabulary + outside,
-    /// three outside effects (a tribological, a mechanical and a sensor fault).
+    /// The seeded CI subset under [`Protocol::small`] (18 campaigns): 3 nulls
+    /// and a stick-slipping one, each vocabulary effect once, one compound,
+    /// one vocabulary + outside, four outside effects (a tribological, a
+    /// mechanical, a sensor fault and static friction aging, which only free
+    /// run sees), two structural faults (damping on the rotor speed, a
+    /// channel delay) and one structural fault with a vocabulary effect.
     pub fn ci() -> Battery {
         Battery::ci_seeded(BATTERY_SEED)
     }
@@ -251,10 +301,13 @@ impl Battery {
     pub fn ci_seeded(seed: u64) -> Battery {
         let sizes = Sizes {
             nulls: 3,
+            stick_slip_nulls: 1,
             singles_per_effect: 1,
             compound_seeds: 0,
             vocabulary_plus_outside: 0,
             outside_seeds: 1,
+            structural_seeds: 1,
+            structural_plus_vocabulary: 0,
             ladder_seeds: 0,
         };
         let mut b = Battery::build(
@@ -262,30 +315,66 @@ impl Battery {
             Protocol::small(),
             sizes,
             seed,
-            &["brake_fade", "coupling_backlash", "encoder_missing_ticks"],
+            &[ids::BRAKE_FADE, ids::COUPLING_BACKLASH, ids::ENCODER_MISSING_TICKS, ids::STATIC_FRICTION_AGING],
+            &[ids::DAMPING_ROTOR_ABSOLUTE, ids::CHANNEL_DELAY],
         );
         let max_rpm = max_rpm(&b.protocol);
         let seed = seed + 20_000;
+        let proto = b.protocol.clone();
         b.cases.push(compound(
             "compound-normal_force_modulation+viscous_brake_friction-0",
             Group::Compound,
             seed,
-            ["normal_force_modulation", "viscous_brake_friction"],
+            [ids::NORMAL_FORCE_MODULATION, ids::VISCOUS_BRAKE_FRICTION],
             max_rpm,
+            &proto,
         ));
         b.cases.push(compound(
             "mixed-angle_periodic_friction+brake_fade-0",
             Group::VocabularyPlusOutside,
             seed + 1,
-            ["angle_periodic_friction", "brake_fade"],
+            [ids::ANGLE_PERIODIC_FRICTION, ids::BRAKE_FADE],
             max_rpm,
+            &proto,
+        ));
+        b.cases.push(compound(
+            "structural-viscous_brake_friction+damping_rotor_absolute-0",
+            Group::StructuralPlusVocabulary,
+            seed + 2,
+            [ids::VISCOUS_BRAKE_FRICTION, ids::DAMPING_ROTOR_ABSOLUTE],
+            max_rpm,
+            &proto,
         ));
         b.cases.sort_by(|a, b| a.group.cmp(&b.group).then(a.id.cmp(&b.id)));
         b
     }
 
-    /// A battery of the given sizes; case seeds are `seed + 10 000·group + index`.
-    pub fn build(name: &'static str, protocol: Protocol, sizes: Sizes, seed: u64, outside: &[&'static str]) -> Battery {
+    /// Four cases of [`Battery::ci_seeded`] (a null, a vocabulary effect, an
+    /// outside effect and a structural fault) under [`Protocol::small`]: the
+    /// battery the shard tests run through the real diagnosis in seconds.
+    pub fn smoke_seeded(seed: u64) -> Battery {
+        let mut b = Battery::ci_seeded(seed);
+        let keep = [
+            "null-00",
+            "single-normal_force_modulation-0",
+            "outside-coupling_backlash-0",
+            "structural-channel_delay-0",
+        ];
+        b.cases.retain(|c| keep.contains(&c.id.as_str()));
+        b.name = "smoke";
+        b
+    }
+
+    /// A battery of the given sizes with the listed outside effects and
+    /// structural faults; case seeds are `seed + 10 000·group + index`.
+    pub fn build(
+        name: &'static str,
+        protocol: Protocol,
+        sizes: Sizes,
+        seed: u64,
+        outside: &[&'static str],
+        structural: &[&'static str],
+    ) -> Battery {
         let max_rpm = max_rpm(&protocol);
         let mut cases = Vec::new();
         for j in 0..sizes.nulls {
@@ -295,6 +384,16 @@ impl Battery {
                 group: Group::Null,
                 seed: s,
                 truth: draw_rig(s),
+                rung: None,
+            });
+        }
+        for j in 0..sizes.stick_slip_nulls {
+            let s = seed + 60_000 + j as u64;
+            cases.push(Case {
+                id: format!("null_stick_slip-{j:02}"),
+                group: Group::NullStickSlip,
+                seed: s,
+                truth: base_rig(ids::NONE, s, &protocol),
                 rung: None,
             });
         }
@@ -323,29 +422,53 @@ impl Battery {
                 for j in 0..sizes.compound_seeds {
                     let s = seed + 20_000 + k;
                     k += 1;
-                    cases.push(compound(&format!("compound-{ea}+{eb}-{j}"), Group::Compound, s, [ea, eb], max_rpm));
+                    cases.push(compound(
+                        &format!("compound-{ea}+{eb}-{j}"),
+                        Group::Compound,
+                        s,
+                        [ea, eb],
+                        max_rpm,
+                        &protocol,
+                    ));
                 }
             }
         }
         for (i, out) in outside.iter().take(sizes.vocabulary_plus_outside).enumerate() {
             let ea = Hidden::VOCABULARY[i % Hidden::VOCABULARY.len()];
             let s = seed + 30_000 + i as u64;
-            cases.push(compound(&format!("mixed-{ea}+{out}-0"), Group::VocabularyPlusOutside, s, [ea, out], max_rpm));
+            cases.push(compound(
+                &format!("mixed-{ea}+{out}-0"),
+                Group::VocabularyPlusOutside,
+                s,
+                [ea, out],
+                max_rpm,
+                &protocol,
+            ));
         }
+        cases.extend(alone(outside, Group::Outside, "outside", sizes.outside_seeds, seed + 40_000, &protocol));
+        cases.extend(alone(
+            structural,
+            Group::Structural,
+            "structural",
+            sizes.structural_seeds,
+            seed + 70_000,
+            &protocol,
+        ));
         k = 0;
-        for out in outside {
-            for j in 0..sizes.outside_seeds {
-                let s = seed + 40_000 + k;
+        for (i, st) in structural.iter().enumerate() {
+            for j in 0..sizes.structural_plus_vocabulary.min(Hidden::VOCABULARY.len()) {
+                // Each fault with a different pair of effects (i + 2j mod 5).
+                let ea = Hidden::VOCABULARY[(i + 2 * j) % Hidden::VOCABULARY.len()];
+                let s = seed + 80_000 + k;
                 k += 1;
-                let base = draw_rig(s);
-                let h = draw_hidden(out, base.mu_kinetic(), max_rpm, s);
-                cases.push(Case {
-                    id: format!("outside-{out}-{j}"),
-                    group: Group::Outside,
-                    seed: s,
-                    truth: base.with_hidden(vec![h]),
-                    rung: None,
-                });
+                cases.push(compound(
+                    &format!("structural-{ea}+{st}-0"),
+                    Group::StructuralPlusVocabulary,
+                    s,
+                    [ea, st],
+                    max_rpm,
+                    &protocol,
+                ));
             }
         }
         k = 0;
@@ -367,31 +490,79 @@ impl Battery {
                 }
             }
         }
-        Battery { name, protocol, cases }
+        Battery { name, seed, protocol, cases }
     }
 
-    /// Generates each campaign in memory, in order, and diagnoses it with
-    /// `diagnose`; a generation error is a wrong answer with its text.
-    pub fn run(&self, diagnose: impl Fn(&Case, &Campaign) -> Result<DiagnosisResult, String>) -> Vec<Outcome> {
-        self.cases
-            .iter()
-            .map(|case| {
+    /// The battery `name` (`smoke`, `ci` or `full`) with its case seeds starting at `seed`.
+    pub fn named(name: &str, seed: u64) -> Option<Battery> {
+        match name {
+            "smoke" => Some(Battery::smoke_seeded(seed)),
+            "ci" => Some(Battery::ci_seeded(seed)),
+            "full" => Some(Battery::full_seeded(seed)),
+            _ => None,
+        }
+    }
+
+    /// Generates each campaign in memory and diagnoses it with `diagnose`,
+    /// the cases in parallel (rayon) and the outcomes in the battery's order;
+    /// a generation error is a wrong answer with its text.
+    pub fn run(&self, diagnose: impl Fn(&Case, &Campaign) -> Result<DiagnosisResult, String> + Sync) -> Vec<Outcome> {
+        self.run_range(0..self.cases.len(), diagnose).into_iter().map(|(_, o)| o).collect()
+    }
+
+    /// As [`Battery::run`] for the cases at `range` only (a shard), each with its index.
+    pub fn run_range(
+        &self,
+        range: std::ops::Range<usize>,
+        diagnose: impl Fn(&Case, &Campaign) -> Result<DiagnosisResult, String> + Sync,
+    ) -> Vec<(usize, Outcome)> {
+        use rayon::prelude::*;
+        let range = range.start.min(self.cases.len())..range.end.min(self.cases.len());
+        range
+            .into_par_iter()
+            .map(|k| {
+                let case = &self.cases[k];
                 let result = case.generate(&self.protocol).map_err(|e| e.to_string()).and_then(|c| diagnose(case, &c));
-                Outcome::new(case.clone(), result)
+                (k, Outcome::new(case.clone(), result))
             })
             .collect()
     }
 
-    /// As [`Battery::run`], but each campaign is written to `root/<case id>`
+    /// The diagnoses of the cases at `range` as a mergeable slice (shard
+    /// `index` of `count`); [`merge_slices`] joins a job array's slices.
+    pub fn run_slice(
+        &self,
+        index: usize,
+        count: usize,
+        range: std::ops::Range<usize>,
+        diagnose: impl Fn(&Case, &Campaign) -> Result<DiagnosisResult, String> + Sync,
+    ) -> BatterySlice {
+        let results = self
+            .run_range(range, diagnose)
+            .into_iter()
+            .map(|(k, o)| CaseResult { index: k, id: o.case.id.clone(), result: o.result.map(ExactResult::from) })
+            .collect();
+        BatterySlice {
+            battery: self.name.to_string(),
+            seed: self.seed,
+            total_cases: self.cases.len(),
+            shard_index: index,
+            shard_count: count,
+            results,
+        }
+    }
+
+    /// As [`Battery::run`] (in parallel, in order), but each campaign is written to `root/<case id>`
     /// (rig-campaign/1, read back like a user's data) and `diagnose` gets that
     /// folder. The folders are left in place.
     pub fn run_dirs(
         &self,
         root: &Path,
-        diagnose: impl Fn(&Case, &Path) -> Result<DiagnosisResult, String>,
+        diagnose: impl Fn(&Case, &Path) -> Result<DiagnosisResult, String> + Sync,
     ) -> Vec<Outcome> {
+        use rayon::prelude::*;
         self.cases
-            .iter()
+            .par_iter()
             .map(|case| {
                 let dir = root.join(&case.id);
                 let result = case
@@ -405,13 +576,131 @@ impl Battery {
     }
 }
 
+/// One shard's diagnoses of a battery: enough to rebuild the battery
+/// ([`Battery::named`]) and judge every case again after a merge.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BatterySlice {
+    pub battery: String,
+    pub seed: u64,
+    pub total_cases: usize,
+    pub shard_index: usize,
+    pub shard_count: usize,
+    pub results: Vec<CaseResult>,
+}
+
+/// The diagnosis of the case at `index` (its id, to check the rebuilt battery).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct CaseResult {
+    pub index: usize,
+    pub id: String,
+    pub result: Result<ExactResult, String>,
+}
+
+/// A [`DiagnosisResult`] whose parameters are stored as their f64 bit
+/// patterns, so a slice read back gives the very same numbers (JSON's
+/// decimal text need not round-trip every f64 in serde_json's default parser).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ExactResult {
+    pub verdict: String,
+    pub findings: Vec<(String, BTreeMap<String, u64>)>,
+}
+
+impl From<DiagnosisResult> for ExactResult {
+    fn from(d: DiagnosisResult) -> Self {
+        let findings = d
+            .findings
+            .into_iter()
+            .map(|f| (f.effect, f.params.into_iter().map(|(k, v)| (k, v.to_bits())).collect()))
+            .collect();
+        ExactResult { verdict: d.verdict, findings }
+    }
+}
+
+impl From<ExactResult> for DiagnosisResult {
+    fn from(e: ExactResult) -> Self {
+        let findings = e
+            .findings
+            .into_iter()
+            .map(|(effect, p)| Finding { effect, params: p.into_iter().map(|(k, v)| (k, f64::from_bits(v))).collect() })
+            .collect();
+        DiagnosisResult { verdict: e.verdict, findings }
+    }
+}
+
+/// Joins the slices of one battery's job array: the battery rebuilt from
+/// its name and seed, and every case's outcome judged again, in the
+/// battery's order. Refuses slices of different batteries, a case id that is
+/// not the rebuilt battery's, and a set that misses or repeats a case.
+pub fn merge_slices(slices: Vec<BatterySlice>) -> Result<(Battery, Vec<Outcome>), String> {
+    let first = slices.first().ok_or("no battery slice to merge")?;
+    let (name, seed, total) = (first.battery.clone(), first.seed, first.total_cases);
+    if slices.iter().any(|s| s.battery != name || s.seed != seed || s.total_cases != total) {
+        return Err("slices come from different batteries (name, seed or size differ)".into());
+    }
+    let battery = Battery::named(&name, seed).ok_or_else(|| format!("unknown battery {name:?}"))?;
+    if battery.cases.len() != total {
+        return Err(format!("battery {name} has {} cases, the slices {total}", battery.cases.len()));
+    }
+    let mut results: Vec<CaseResult> = slices.into_iter().flat_map(|s| s.results).collect();
+    results.sort_by_key(|r| r.index);
+    if results.len() != total || results.iter().enumerate().any(|(k, r)| r.index != k) {
+        return Err("slices must cover every case exactly once (missing or duplicate shard)".into());
+    }
+    let mut outcomes = Vec::with_capacity(total);
+    for (r, case) in results.into_iter().zip(&battery.cases) {
+        if r.id != case.id {
+            return Err(format!("case {} of the slices is {}, the battery's is {}", r.index, r.id, case.id));
+        }
+        outcomes.push(Outcome::new(case.clone(), r.result.map(DiagnosisResult::from)));
+    }
+    Ok((battery, outcomes))
+}
+
 fn max_rpm(p: &Protocol) -> f64 {
     p.op_points.iter().map(|x| x.0).fold(0.0, f64::max)
 }
 
-/// A case with two hidden effects, the second drawn with its own seed.
-fn compound(id: &str, group: Group, seed: u64, effects: [&str; 2], max_rpm: f64) -> Case {
-    let base = draw_rig(seed);
+/// The effect-free rig a case with `class` hidden is built on: a rig that
+/// stick-slips ([`draw_stick_slip_rig`]) for the stick-slipping nulls, for
+/// static friction aging (only a stick shows it) and for the structural
+/// faults (their free-run signature is in the stick-slip cycle), else
+/// [`draw_rig`]'s.
+fn base_rig(class: &str, seed: u64, protocol: &Protocol) -> Truth {
+    if class == ids::NONE || class == ids::STATIC_FRICTION_AGING || ids::STRUCTURAL.contains(&class) {
+        draw_stick_slip_rig(seed, protocol).unwrap_or_else(|| {
+            panic!("no rig drawn from seed {seed} stick-slips under this protocol: it needs slow, loaded points")
+        })
+    } else {
+        draw_rig(seed)
+    }
+}
+
+/// `per` cases of each class of `classes` hidden alone, on the rig it needs
+/// ([`base_rig`]), ids `<prefix>-<class>-<j>`, seeds `seed0 + k` in order.
+fn alone(classes: &[&str], group: Group, prefix: &str, per: usize, seed0: u64, protocol: &Protocol) -> Vec<Case> {
+    let max_rpm = max_rpm(protocol);
+    let mut cases = Vec::new();
+    for class in classes {
+        for j in 0..per {
+            let s = seed0 + cases.len() as u64;
+            let base = base_rig(class, s, protocol);
+            let h = draw_hidden(class, base.mu_kinetic(), max_rpm, s);
+            cases.push(Case {
+                id: format!("{prefix}-{class}-{j}"),
+                group,
+                seed: s,
+                truth: base.with_hidden(vec![h]),
+                rung: None,
+            });
+        }
+    }
+    cases
+}
+
+/// A case with two hidden effects, the second drawn with its own seed, on
+/// the rig the second needs ([`base_rig`]).
+fn compound(id: &str, group: Group, seed: u64, effects: [&str; 2], max_rpm: f64, protocol: &Protocol) -> Case {
+    let base = base_rig(effects[1], seed, protocol);
     let mu_k = base.mu_kinetic();
     let a = draw_hidden(effects[0], mu_k, max_rpm, seed);
     let b = draw_hidden(effects[1], mu_k, max_rpm, seed.wrapping_add(0x5151_5151));
@@ -466,22 +755,34 @@ pub struct Judgement {
 }
 
 /// Scores a diagnosis of `case`: the verdict must be the expected one (any
-/// effect of a compound), every vocabulary effect of the truth must be among
-/// the findings with every parameter within [`battery_tolerance`], and no
-/// vocabulary effect that is not in the truth may be found.
+/// effect of a compound; for a structural fault `unexplained`, or the
+/// structure named among the findings with the verdict the structure or a
+/// vocabulary effect of the truth), every vocabulary effect of the truth must
+/// be among the findings with every parameter within [`battery_tolerance`],
+/// and nothing that is not in the truth may be found (a structural finding
+/// other than the truth's structure included).
 pub fn judge(case: &Case, result: &Result<DiagnosisResult, String>) -> Judgement {
     let d = match result {
         Ok(d) => d,
         Err(e) => return Judgement { right: false, reason: format!("error: {e}") },
     };
     let mut why = Vec::new();
+    // The truth's structural id, which a finding may name.
+    let mut structure = None;
     let (required, verdict_ok) = match case.expected() {
         Expected::None => (vec![], d.verdict == "none"),
         Expected::Effects(e) => {
             let ok = e.iter().any(|x| *x == d.verdict);
             (e, ok)
         }
-        Expected::Unexplained { partial } => (partial, d.verdict == "unexplained"),
+        Expected::Unexplained { partial } => (partial, d.verdict == ids::UNEXPLAINED),
+        Expected::Structural { id, partial } => {
+            let named = d.findings.iter().any(|f| f.effect == id);
+            let ok =
+                d.verdict == ids::UNEXPLAINED || (named && (d.verdict == id || partial.contains(&d.verdict.as_str())));
+            structure = Some(id);
+            (partial, ok)
+        }
     };
     if !verdict_ok {
         why.push(format!("verdict `{}`, expected `{}`", d.verdict, case.expected_verdict()));
@@ -512,7 +813,10 @@ pub fn judge(case: &Case, result: &Result<DiagnosisResult, String>) -> Judgement
         }
     }
     for f in &d.findings {
-        if f.effect != "unexplained" && !required.contains(&f.effect.as_str()) {
+        if f.effect != ids::UNEXPLAINED
+            && !required.contains(&f.effect.as_str())
+            && Some(f.effect.as_str()) != structure
+        {
             why.push(format!("spurious finding {}", f.effect));
         }
     }

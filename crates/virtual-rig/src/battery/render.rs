@@ -5,6 +5,24 @@ use super::{Battery, Group, Outcome};
 use crate::confusion::VERDICTS;
 use rig_types::{AxisScale, MarkerShape, Panel, SeriesStyle, Sheet, Table, band, figure, fmt_fixed, series};
 
+/// Every table and text the `confusion` stage writes for `outcomes` of
+/// `battery`, as (path under the out dir, table or text), in a fixed order,
+/// and the detection sheet (`None` without ladder cases): one home for the
+/// stage and for `cargo xtask merge-shards`, so a merged job array writes
+/// the same bytes as an unsharded run.
+pub fn battery_outputs(battery: &Battery, outcomes: &[Outcome]) -> (Vec<(&'static str, String)>, Option<Sheet>) {
+    let detection = detection_table(outcomes);
+    let sheet = detection_sheet(&detection, battery.name);
+    let files = vec![
+        ("tables/confusion-matrix.csv", confusion_table(outcomes).to_csv()),
+        ("tables/confusion-false-alarms.csv", false_alarm_table(outcomes).to_csv()),
+        ("tables/confusion-detection.csv", detection.to_csv()),
+        ("tables/confusion-wrong.csv", wrong_table(outcomes).to_csv()),
+        ("confusion.md", report_markdown(battery, outcomes)),
+    ];
+    (files, sheet)
+}
+
 /// Two-sided 95 % Clopper–Pearson interval of a binomial proportion k/n
 /// (exact: the p at which P(X ≥ k) resp. P(X ≤ k) is 2.5 %).
 pub fn clopper_pearson(k: usize, n: usize) -> (f64, f64) {
@@ -77,16 +95,37 @@ pub fn confusion_table(outcomes: &[Outcome]) -> Table {
     t
 }
 
-/// One row: the false-alarm rate on the effect-free (null) campaigns, any
-/// verdict other than `none` counting as an alarm, with its 95 % Clopper–Pearson interval.
+/// The false-alarm rate on the effect-free campaigns, any verdict other than
+/// `none` counting as an alarm, with its 95 % Clopper–Pearson interval: one
+/// row per null group (`null`, `null_stick_slip`) present, then `all` when both are.
 pub fn false_alarm_table(outcomes: &[Outcome]) -> Table {
-    let nulls: Vec<&Outcome> = outcomes.iter().filter(|o| o.case.group == Group::Null).collect();
-    let alarms = nulls.iter().filter(|o| o.verdict() != "none").count();
-    let n = nulls.len();
-    let (lo, hi) = clopper_pearson(alarms, n);
-    let mut t = Table::new(["n_null", "alarms", "false_alarm_rate", "ci95_low", "ci95_high"]);
-    let rate = if n == 0 { f64::NAN } else { alarms as f64 / n as f64 };
-    t.push([n.to_string(), alarms.to_string(), fmt_fixed(rate, 3), fmt_fixed(lo, 3), fmt_fixed(hi, 3)]);
+    let mut t = Table::new(["group", "n_null", "alarms", "false_alarm_rate", "ci95_low", "ci95_high"]);
+    let is_null = |g: Group| matches!(g, Group::Null | Group::NullStickSlip);
+    let mut row = |name: &str, keep: &dyn Fn(Group) -> bool| {
+        let nulls: Vec<&Outcome> = outcomes.iter().filter(|o| keep(o.case.group)).collect();
+        let alarms = nulls.iter().filter(|o| o.verdict() != "none").count();
+        let n = nulls.len();
+        let (lo, hi) = clopper_pearson(alarms, n);
+        let rate = if n == 0 { f64::NAN } else { alarms as f64 / n as f64 };
+        t.push([
+            name.to_string(),
+            n.to_string(),
+            alarms.to_string(),
+            fmt_fixed(rate, 3),
+            fmt_fixed(lo, 3),
+            fmt_fixed(hi, 3),
+        ]);
+    };
+    let groups: Vec<Group> = [Group::Null, Group::NullStickSlip]
+        .into_iter()
+        .filter(|g| outcomes.iter().any(|o| o.case.group == *g))
+        .collect();
+    for g in &groups {
+        row(g.name(), &|x| x == *g);
+    }
+    if groups.len() != 1 {
+        row("all", &is_null);
+    }
     t
 }
 
@@ -234,7 +273,7 @@ pub fn report_markdown(battery: &Battery, outcomes: &[Outcome]) -> String {
     let mut s = format!(
         "# Virtual-rig battery `{}`\n\n{} campaigns (protocol: {} operating points of {} s at {} Hz), each diagnosed \
          blind. Right = the expected verdict (any effect of a compound; `unexplained` when an effect outside the \
-         vocabulary is hidden), every hidden vocabulary effect among the findings with its parameters within 25 % \
+         vocabulary is hidden; for a structural fault `unexplained` or the structure named), every hidden vocabulary effect among the findings with its parameters within 25 % \
          (frequencies 5 %, order exact), and no other vocabulary effect. {} of {} answers are right.\n\n",
         battery.name,
         outcomes.len(),

@@ -1,0 +1,68 @@
+//! Every id the virtual rig names, in one table: the verdicts of the
+//! diagnosis vocabulary (../shared/spec/diagnosis.md; a test checks them
+//! against `rig_diagnose::vocab::EffectId`), the effects outside it and the
+//! structural faults. Code names an id through these constants, so a
+//! misspelt id does not compile.
+
+/// The verdict when the baseline explains the data within its noise.
+pub const NONE: &str = "none";
+/// The verdict (and the finding) when a significant mismatch is left.
+pub const UNEXPLAINED: &str = "unexplained";
+
+pub const NORMAL_FORCE_MODULATION: &str = "normal_force_modulation";
+pub const ANGLE_PERIODIC_FRICTION: &str = "angle_periodic_friction";
+pub const VELOCITY_WEAKENING_FRICTION: &str = "velocity_weakening_friction";
+pub const VISCOUS_BRAKE_FRICTION: &str = "viscous_brake_friction";
+pub const DRIVE_VOLTAGE_LIMIT: &str = "drive_voltage_limit";
+
+/// The vocabulary effects (diagnosis.md), in the confusion matrix's order.
+pub const VOCABULARY: [&str; 5] = [
+    NORMAL_FORCE_MODULATION,
+    ANGLE_PERIODIC_FRICTION,
+    VELOCITY_WEAKENING_FRICTION,
+    VISCOUS_BRAKE_FRICTION,
+    DRIVE_VOLTAGE_LIMIT,
+];
+
+pub const MOTOR_COGGING: &str = "motor_cogging";
+pub const BRAKE_FADE: &str = "brake_fade";
+pub const COUPLING_BACKLASH: &str = "coupling_backlash";
+pub const SHAFT_CUBIC_STIFFNESS: &str = "shaft_cubic_stiffness";
+pub const ROTOR_IMBALANCE: &str = "rotor_imbalance";
+pub const DRIVE_CURRENT_LIMIT: &str = "drive_current_limit";
+pub const MOTOR_WARM_UP: &str = "motor_warm_up";
+pub const FORCE_SENSOR_NONLINEARITY: &str = "force_sensor_nonlinearity";
+pub const FORCE_OFFSET_DRIFT: &str = "force_offset_drift";
+pub const ENCODER_MISSING_TICKS: &str = "encoder_missing_ticks";
+pub const STATIC_FRICTION_AGING: &str = "static_friction_aging";
+
+/// Effects outside the vocabulary (the right verdict is `unexplained`).
+pub const OUTSIDE: [&str; 11] = [
+    MOTOR_COGGING,
+    BRAKE_FADE,
+    COUPLING_BACKLASH,
+    SHAFT_CUBIC_STIFFNESS,
+    ROTOR_IMBALANCE,
+    DRIVE_CURRENT_LIMIT,
+    MOTOR_WARM_UP,
+    FORCE_SENSOR_NONLINEARITY,
+    FORCE_OFFSET_DRIFT,
+    ENCODER_MISSING_TICKS,
+    STATIC_FRICTION_AGING,
+];
+
+/// Damping on the absolute rotor speed Ω1 instead of the twist rate (Eq. 4-7's placement).
+pub const DAMPING_ROTOR_ABSOLUTE: &str = "damping_rotor_absolute";
+/// A recorded channel lagging the others by a transport delay.
+pub const CHANNEL_DELAY: &str = "channel_delay";
+/// The force sensor as a second-order system (a load cell with its own resonance).
+pub const FORCE_SENSOR_DYNAMICS: &str = "force_sensor_dynamics";
+/// The rotor encoder on a compliant coupling (an inertia between a sensor and what it measures).
+pub const ENCODER_COUPLING_COMPLIANCE: &str = "encoder_coupling_compliance";
+
+/// Structural faults: the model's structure, not an effect, is wrong. A right
+/// answer names the structure (these ids, the diagnosis' own structural ids
+/// once it has them) or says `unexplained` (diagnosis.md: "Structure is a
+/// candidate like an effect … their ids are the project's to define").
+pub const STRUCTURAL: [&str; 4] =
+    [DAMPING_ROTOR_ABSOLUTE, CHANNEL_DELAY, FORCE_SENSOR_DYNAMICS, ENCODER_COUPLING_COMPLIANCE];
