@@ -35,11 +35,12 @@ mod free_run;
 mod step;
 mod twist;
 
-pub use balance::torque_balance_check;
+pub use balance::{BalanceData, BalanceFit, balance_data, torque_balance_check, torque_balance_check_of};
 pub use drive_balance::drive_balance_check;
 pub use force_linearity::{force_linearity_check, force_parabola};
 pub use free_run::{
-    FreeRunSettings, Pair as FreeRunPair, free_run_checks, free_run_checks_of, free_run_pairs, speed_traces,
+    FreeRunSettings, Pair as FreeRunPair, free_run_checks, free_run_checks_of, free_run_misfit, free_run_pairs,
+    free_run_pairs_by, speed_floor_rad_s, speed_traces,
 };
 pub use step::voltage_step_checks;
 pub use twist::static_twist_checks;

@@ -1,0 +1,131 @@
+//! Calibration of the free-run checks that enter the diagnosis' adequacy test
+//! (issue 25): effect-free virtual-rig campaigns whose protocol includes
+//! low-speed, high-force operating points where the rig sticks and slips,
+//! diagnosed blind end to end (`diagnose_campaign`: calibrate, estimate,
+//! select, structure, free run). Every null must stick-slip in some runs (or
+//! it calibrates nothing), and the campaign-level rate of flagged free-run
+//! checks is printed with its Clopper–Pearson interval.
+//!
+//! Slow (a blind estimate and diagnosis per campaign): `cargo nextest run
+//! --workspace -E 'test(free_run_nulls)' --run-ignored all --nocapture`,
+//! `NULLS` campaigns (default 24).
+
+use rig_virtual_rig::{Protocol, draw_truth, generate};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+fn opts() -> rig_diagnose::DiagnoseOptions {
+    rig_diagnose::DiagnoseOptions::from_pipeline_toml(include_str!("../../../pipeline.toml")).expect("pipeline.toml")
+}
+
+fn thesis() -> rig_calibrate::ThesisData {
+    let t = rig_ingest::thesis::read_thesis_tables(Path::new("../../data/thesis")).expect("data/thesis");
+    rig_calibrate::thesis_data(&t).expect("thesis data")
+}
+
+/// The small protocol with its slow, heavily braked points replaced by
+/// points deep in the stick-slip region of the severity map (low set-point,
+/// high normal force), so that every null has runs that stick and slip and
+/// runs that slide steadily.
+fn stick_slip_protocol() -> Protocol {
+    let op = vec![
+        (10.0, 10.0),
+        (15.0, 10.0),
+        (20.0, 25.0),
+        (20.0, 13.0),
+        (25.0, 18.0),
+        (32.0, 25.0),
+        (45.0, 10.0),
+        (45.0, 25.0),
+        (65.0, 7.5),
+        (85.0, 10.0),
+        (130.0, 10.0),
+        (130.0, 25.0),
+    ];
+    Protocol { op_points: op, ..Protocol::small() }
+}
+
+/// Two-sided 95 % Clopper–Pearson interval of a binomial rate k/n (bisection
+/// on the binomial tail sums).
+fn clopper_pearson(k: usize, n: usize) -> (f64, f64) {
+    let tail_le = |p: f64, k: usize| -> f64 {
+        let mut s = 0.0;
+        let mut term = (1.0 - p).powi(n as i32);
+        for i in 0..=k {
+            s += term;
+            term *= (n - i) as f64 / (i + 1) as f64 * p / (1.0 - p);
+        }
+        s
+    };
+    let solve = |f: &dyn Fn(f64) -> bool| {
+        let (mut lo, mut hi) = (0.0, 1.0);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if f(mid) { lo = mid } else { hi = mid }
+        }
+        0.5 * (lo + hi)
+    };
+    let lower = if k == 0 { 0.0 } else { solve(&|p| 1.0 - tail_le(p, k - 1) < 0.025) };
+    let upper = if k == n { 1.0 } else { solve(&|p| tail_le(p, k) > 0.025) };
+    (lower, upper)
+}
+
+#[test]
+fn clopper_pearson_matches_known_values() {
+    // 0 of 24: upper 1 − 0.025^(1/24) = 0.1425; 1 of 24: (0.00105, 0.2112).
+    let (l, u) = clopper_pearson(0, 24);
+    assert!(l == 0.0 && (u - 0.1425).abs() < 5e-4, "{l} {u}");
+    let (l, u) = clopper_pearson(1, 24);
+    assert!((l - 0.00105).abs() < 5e-5 && (u - 0.2112).abs() < 5e-4, "{l} {u}");
+}
+
+#[test]
+#[ignore]
+fn free_run_nulls() {
+    let n: u64 = std::env::var("NULLS").ok().and_then(|s| s.parse().ok()).unwrap_or(24);
+    let th = thesis();
+    let o = opts();
+    let mut by_check: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    let (mut flagged, mut not_none, mut structure_moved) = (Vec::new(), Vec::new(), Vec::new());
+    for seed in 0..n {
+        let seed = 9100 + seed;
+        let truth = draw_truth("none", 130.0, seed);
+        let c = generate("null-ss", &truth, &stick_slip_protocol(), seed).expect("generate");
+        let d = rig_diagnose::diagnose_campaign(&c, Some(&th), &o).expect("diagnosis");
+        let ss = d.detail.runs.iter().filter(|r| r.measured.stick_slip).count();
+        let line: Vec<String> = d.detail.free_run_extended.iter().map(|k| format!("{} {:.2}", k.channel, k.ratio)).collect();
+        println!(
+            "seed {seed}: {ss}/{} runs stick-slip; verdict {}; structure {}; {}",
+            d.detail.runs.len(),
+            d.verdict,
+            d.structure.damping,
+            line.join(", ")
+        );
+        assert!(ss >= 1, "null seed {seed} never sticks and slips: it calibrates nothing");
+        for k in &d.detail.free_run_extended {
+            by_check.entry(k.channel.clone()).or_default().push(k.ratio);
+        }
+        if d.detail.free_run_extended.iter().any(|k| k.flagged) {
+            flagged.push(seed);
+        }
+        if d.verdict != "none" {
+            not_none.push((seed, d.verdict.clone()));
+        }
+        if d.structure.damping != "twist_rate" {
+            structure_moved.push((seed, d.structure.damping.clone()));
+        }
+    }
+    println!("free-run ratios of the final model over {n} stick-slipping nulls (min / median / 90 % / max):");
+    for (k, mut r) in by_check {
+        r.sort_by(f64::total_cmp);
+        let q = |p: f64| r[((r.len() - 1) as f64 * p).round() as usize];
+        println!("  {k:<30} {:.2} / {:.2} / {:.2} / {:.2}", q(0.0), q(0.5), q(0.9), q(1.0));
+    }
+    let (lo, hi) = clopper_pearson(flagged.len(), n as usize);
+    println!(
+        "campaigns with a flagged free-run check: {}/{n} (95 % Clopper–Pearson {lo:.3}–{hi:.3}): {flagged:?}",
+        flagged.len()
+    );
+    println!("verdict not `none`: {not_none:?}; structure not twist_rate: {structure_moved:?}");
+    assert!(flagged.len() as f64 <= 0.05 * n as f64 + 1e-9, "free-run false alarms {}/{n}", flagged.len());
+}
