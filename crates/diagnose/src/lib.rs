@@ -30,10 +30,20 @@
 //!    the adequacy test judges the mismatch. Repeat until no effect earns its
 //!    place; the retained effects are then refitted jointly on every run for
 //!    the reported parameters.
-//! 4. **Adequacy**: the final model's cross-validated misfit against the noise
+//! 4. **Structure** ([`structure`]): where the damping acts (the rig model's
+//!    twist rate, the absolute rotor speed, both), each placement fitted
+//!    teacher-forced through the rotor torque balance and selected on the
+//!    cross-validated free-run misfit on top of the extended model; reported
+//!    in `structure`, never as a finding (the verdict stays the first
+//!    vocabulary finding). Parameters a fit wants below their physical
+//!    bound go to `parameters_at_bounds`.
+//! 5. **Adequacy**: the final model's cross-validated misfit against the noise
 //!    floor (ratio ≤ `adequacy_ratio`), no angle-locked order line left in most
-//!    runs ([`lines`]), and no flagged check of the other run kinds
-//!    (`channel_checks`). A model that fails is `unexplained`; the effects
+//!    runs ([`lines`]), no flagged check of the other run kinds
+//!    (`channel_checks`), and — since issue 25 — no flagged free-run check
+//!    of the final model (baseline + findings + structure simulated from rest
+//!    at every operating point: regime, rotor-speed extrema, stick-slip
+//!    fundamental; `where` names `free_run`). A model that fails is `unexplained`; the effects
 //!    found are kept as a partial explanation and the `unexplained` finding
 //!    carries the residual [`signature`]: the signals of a library computed
 //!    from the recordings that the leftover residual follows, found by
@@ -52,6 +62,15 @@
 //! `M_r = e_V`. Over a set of runs, `M = sqrt(mean_r M_r²)`. It is
 //! dimensionless; its noise floor is the same expression with the RMS errors
 //! replaced by the measured sensor noise (σ_F/N0 and σ_V).
+//!
+//! # The free-run misfit (structure selection)
+//!
+//! For a model simulated free from rest at run r and the record, over the
+//! same steady window: `M_fr,r = sqrt(1 + mean(e²))`, with e_max, e_min the
+//! measured − simulated extreme of Ω1 over the speed resolution of the
+//! centred difference, and e_f the stick-slip fundamental's relative error
+//! over the relative Rayleigh resolution 1/(T·f) when record and simulation
+//! both stick and slip ([`channels::free_run_misfit`]). Over runs, RMS, as M.
 //!
 //! # The criterion (one that can say no)
 //!
@@ -95,8 +114,8 @@ pub mod vocab;
 pub use channels::{ChannelCheck, ChannelOptions, extended_params};
 pub use prepare::{ForceCal, RunSignals};
 pub use result::{
-    Adequacy, CandidateScore, Diagnosis, Finding, ParamAtBound, RunRow, SignatureEntry, StepRow, Structure, StructureScore,
-    round_sig,
+    Adequacy, CandidateScore, Diagnosis, Finding, ParamAtBound, RunRow, SignatureEntry, StepRow, Structure,
+    StructureScore, round_sig,
 };
 pub use select::diagnose_signals;
 pub use vocab::EffectId;
@@ -197,17 +216,15 @@ pub enum DiagnoseError {
 /// final model's adequacy. The drive's steady-state balance across the
 /// operating points needs no model and always enters the adequacy test. When
 /// a baseline `RigParams` is given, the other run kinds are checked too
-/// ([`channels`]): static twist, voltage steps and the rotor torque balance
-/// enter the adequacy test; every operating point is
-/// simulated free-run with the baseline and with the extended model (the
-/// baseline plus the findings, [`extended_params`]) for the per-run feature
-/// table and the free-run checks.
-///
-/// The free-run checks are reported but do not enter the adequacy test: their
-/// thresholds were calibrated on null campaigns whose operating points never
-/// stick and slip (crates/virtual-rig/tests/channel_calibration.rs), so a
-/// free-run ratio in the stick-slip regime, where extrema depend sharply on
-/// every parameter, has no measured null distribution yet.
+/// ([`channels`]): static twist, voltage steps (with the estimate, in the
+/// structure it was fitted in) and the rotor torque balance enter the
+/// adequacy test; every operating point is simulated free-run with the
+/// baseline and with the extended model (the baseline plus the findings,
+/// [`extended_params`]); the damping structure is selected on those free
+/// runs ([`structure`]), and the free-run checks of the final model
+/// (extended model in the selected structure) enter the adequacy test.
+/// Their thresholds are calibrated on stick-slipping effect-free campaigns
+/// (crates/virtual-rig/tests/free_run_calibration.rs, [`ChannelOptions`]).
 pub fn diagnose(
     c: &rig_types::Campaign,
     cal: &rig_calibrate::CampaignCalibration,
@@ -286,9 +303,7 @@ pub fn diagnose(
         // signature and the adequacy record come from the one place that makes them.
         let mut flagged = flagged0.clone();
         flagged.extend(flagged_of(&steps));
-        flagged.extend(
-            free_run_final.iter().filter(|k| k.flagged).map(|k| ("free_run".to_string(), k.as_pair().1)),
-        );
+        flagged.extend(free_run_final.iter().filter(|k| k.flagged).map(|k| ("free_run".to_string(), k.as_pair().1)));
         if flagged != flagged0 {
             d = select(&flagged)?;
         }

@@ -383,13 +383,22 @@ pub fn markdown(d: &Diagnosis) -> String {
             let _ = writeln!(
                 s,
                 "| {} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {} | {} |",
-                r.id, r.description, r.free_run_misfit, r.relative_gain, r.relative_gain_fold_sd, r.t, r.admissible,
+                r.id,
+                r.description,
+                r.free_run_misfit,
+                r.relative_gain,
+                r.relative_gain_fold_sd,
+                r.t,
+                r.admissible,
                 r.accepted
             );
         }
     }
     if !d.parameters_at_bounds.is_empty() {
-        let _ = writeln!(s, "\n## Parameters at bounds\n\n| parameter | bound | unconstrained | meaning |\n|---|---|---|---|");
+        let _ = writeln!(
+            s,
+            "\n## Parameters at bounds\n\n| parameter | bound | unconstrained | meaning |\n|---|---|---|---|"
+        );
         for p in &d.parameters_at_bounds {
             let _ = writeln!(s, "| {} | {} | {} | {} |", p.parameter, p.bound, p.unconstrained, p.meaning);
         }

@@ -23,26 +23,37 @@ fn thesis() -> rig_calibrate::ThesisData {
     rig_calibrate::thesis_data(&t).expect("thesis data")
 }
 
-/// The small protocol with its slow, heavily braked points replaced by
-/// points deep in the stick-slip region of the severity map (low set-point,
-/// high normal force), so that every null has runs that stick and slip and
-/// runs that slide steadily.
+/// The small protocol with most points moved into the stick-slip region of
+/// the severity map (low set-point, high normal force), so that every null
+/// has runs that stick and slip and runs that slide steadily.
 fn stick_slip_protocol() -> Protocol {
     let op = vec![
         (10.0, 10.0),
+        (10.0, 25.0),
         (15.0, 10.0),
+        (15.0, 25.0),
         (20.0, 25.0),
         (20.0, 13.0),
         (25.0, 18.0),
         (32.0, 25.0),
         (45.0, 10.0),
         (45.0, 25.0),
-        (65.0, 7.5),
         (85.0, 10.0),
-        (130.0, 10.0),
         (130.0, 25.0),
     ];
     Protocol { op_points: op, ..Protocol::small() }
+}
+
+/// An effect-free rig that sticks and slips: the virtual rig's draw with its
+/// shaft damping scaled by 0.3. `draw_rig` damps the shaft at ξ = 0.06–0.12,
+/// where no point of these protocols sticks and slips (seed 9100: 0 of 12
+/// runs); × 0.3 gives ξ = 0.018–0.036, the shipped rig's range (its
+/// estimate: C = 5.25e-3 N·m·s/rad, ξ ≈ 0.03). Still the rig model's own
+/// structure (damping on the twist rate) and no effect: a null.
+fn stick_slip_null(seed: u64) -> rig_virtual_rig::Truth {
+    let mut truth = draw_truth("none", 130.0, seed);
+    truth.params.shaft_damping_nm_s_rad *= 0.3;
+    truth
 }
 
 /// Two-sided 95 % Clopper–Pearson interval of a binomial rate k/n (bisection
@@ -89,11 +100,12 @@ fn free_run_nulls() {
     let (mut flagged, mut not_none, mut structure_moved) = (Vec::new(), Vec::new(), Vec::new());
     for seed in 0..n {
         let seed = 9100 + seed;
-        let truth = draw_truth("none", 130.0, seed);
+        let truth = stick_slip_null(seed);
         let c = generate("null-ss", &truth, &stick_slip_protocol(), seed).expect("generate");
         let d = rig_diagnose::diagnose_campaign(&c, Some(&th), &o).expect("diagnosis");
         let ss = d.detail.runs.iter().filter(|r| r.measured.stick_slip).count();
-        let line: Vec<String> = d.detail.free_run_extended.iter().map(|k| format!("{} {:.2}", k.channel, k.ratio)).collect();
+        let line: Vec<String> =
+            d.detail.free_run_extended.iter().map(|k| format!("{} {:.2}", k.channel, k.ratio)).collect();
         println!(
             "seed {seed}: {ss}/{} runs stick-slip; verdict {}; structure {}; {}",
             d.detail.runs.len(),

@@ -46,8 +46,7 @@ fn damping_on_the_rotor_speed_is_named_with_its_free_run_gain() {
     // The final model's free run is within its thresholds; what is left (if
     // anything) is the estimate's voltage-step fit, made in the twist-rate
     // placement, not the motion.
-    let left: Vec<&str> =
-        d.detail.free_run_extended.iter().filter(|k| k.flagged).map(|k| k.channel.as_str()).collect();
+    let left: Vec<&str> = d.detail.free_run_extended.iter().filter(|k| k.flagged).map(|k| k.channel.as_str()).collect();
     assert!(left.is_empty(), "final model's free run flagged: {left:?}");
     assert!(d.findings.iter().all(|f| !f.where_.iter().any(|w| w == "free_run")), "{:?}", d.findings);
     let base_flags = d.detail.free_run_baseline.iter().filter(|k| k.flagged).count();

@@ -168,7 +168,12 @@ pub fn torque_balance_check(
 }
 
 /// [`torque_balance_check`] of balance data already built.
-pub fn torque_balance_check_of(c: &Campaign, data: &BalanceData, baseline: &RigParams, o: &ChannelOptions) -> ChannelCheck {
+pub fn torque_balance_check_of(
+    c: &Campaign,
+    data: &BalanceData,
+    baseline: &RigParams,
+    o: &ChannelOptions,
+) -> ChannelCheck {
     let name = "operating_point.torque_balance";
     let w = o.balance_window_samples.max(2);
     let dt = 1.0 / c.rig.sample_rate_hz;

@@ -93,7 +93,9 @@ pub fn free_run_pairs_by(
 /// The speed resolution of the centred difference, tick/(2h·dt)/√6, rad/s:
 /// the noise floor of a rotor-speed extremum.
 pub fn speed_floor_rad_s(c: &Campaign, s: &FreeRunSettings) -> f64 {
-    tick_rad(c.rig.encoder_ticks_per_rev) / (2.0 * s.rotor_speed_half_window as f64 / c.rig.sample_rate_hz) / 6f64.sqrt()
+    tick_rad(c.rig.encoder_ticks_per_rev)
+        / (2.0 * s.rotor_speed_half_window as f64 / c.rig.sample_rate_hz)
+        / 6f64.sqrt()
 }
 
 /// Free-run misfit of one run (crate docs, "The free-run misfit"):
