@@ -690,7 +690,18 @@ pub fn diagnose_signals(
                 findings.iter().map(|f| f.effect.as_str()).collect::<Vec<_>>().join(", ")
             )
         };
+        // A mismatch seen only in the free run, with the teacher-forced
+        // channels within their noise: the residual signature describes
+        // noise-level structure of those channels, not the motion's gap.
+        let motion_only = ratio <= opts.adequacy_ratio
+            && consistent.is_empty()
+            && channel_checks.iter().all(|(k, _)| k == "free_run");
         let follows = match terms.first() {
+            _ if motion_only => format!(
+                " The teacher-forced channels are within their noise ({ratio:.1}× the floor): the mismatch shows only \
+                 in the motion, where the residual signature of those channels (listed, best {}) cannot see it.",
+                terms.first().map_or("none", |t| t.signal)
+            ),
             Some(t) => format!(
                 " The leftover follows {} (held-out gain {:.0} %), pointing to {}.",
                 t.signal,
