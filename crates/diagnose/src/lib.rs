@@ -286,7 +286,7 @@ pub fn diagnose(
             rayon::join(|| channels::free_run_pairs(c, p, &s), || channels::free_run_pairs(c, &ext, &s));
         let fold_of: std::collections::BTreeMap<String, usize> =
             d.detail.runs.iter().map(|r| (r.id.clone(), r.fold)).collect();
-        let sel = structure::select_structure(c, data, &ext, &ext_pairs, &fold_of, d.detail.folds, &s, opts);
+        let sel = structure::select_structure(c, data, &ext, &ext_pairs, &fold_of, &s, opts);
         let moved = sel.damping != structure::REGISTRY[0].id();
         let final_pairs = if moved { channels::free_run_pairs(c, &sel.model, &s) } else { ext_pairs };
         // The voltage steps judge the estimate on the runs it was fitted to,

@@ -106,17 +106,17 @@ pub struct StructureSelection {
 
 /// Selects the damping structure on top of `ext` (module docs). `ext_pairs`
 /// are the extended model's free runs (campaign order), `fold_of` each
-/// run's cross-validation fold.
+/// run's cross-validation fold (folds numbered from 0).
 pub fn select_structure(
     c: &Campaign,
     data: &BalanceData,
     ext: &RigParams,
     ext_pairs: &[FreeRunPair],
     fold_of: &BTreeMap<String, usize>,
-    folds: usize,
     s: &FreeRunSettings,
     opts: &DiagnoseOptions,
 ) -> StructureSelection {
+    let folds = fold_of.values().max().map_or(0, |m| m + 1);
     let floor = crate::channels::speed_floor_rad_s(c, s);
     let base_ms: BTreeMap<&str, f64> =
         ext_pairs.iter().filter_map(|q| free_run_misfit(q, floor).map(|m| (q.id.as_str(), m))).collect();
@@ -161,7 +161,9 @@ pub fn select_structure(
             .iter()
             .zip(&full.values)
             .zip(&se)
-            .filter(|((p, v), se)| !(**v - p.lower >= opts.min_t * **se))
+            .filter(|((p, v), se)| {
+                matches!((**v - p.lower).partial_cmp(&(opts.min_t * **se)), Some(std::cmp::Ordering::Less) | None)
+            })
             .map(|((p, v), se)| format!("{} = {v:.2e} ± {se:.1e} {}", p.name, p.unit))
             .collect();
         let pinned = cand.pinned(&full);
