@@ -30,10 +30,20 @@
 //!    the adequacy test judges the mismatch. Repeat until no effect earns its
 //!    place; the retained effects are then refitted jointly on every run for
 //!    the reported parameters.
-//! 4. **Adequacy**: the final model's cross-validated misfit against the noise
+//! 4. **Structure** ([`structure`]): where the damping acts (the rig model's
+//!    twist rate, the absolute rotor speed, both), each placement fitted
+//!    teacher-forced through the rotor torque balance and selected on the
+//!    cross-validated free-run misfit on top of the extended model; reported
+//!    in `structure`, never as a finding (the verdict stays the first
+//!    vocabulary finding). Parameters a fit wants below their physical
+//!    bound go to `parameters_at_bounds`.
+//! 5. **Adequacy**: the final model's cross-validated misfit against the noise
 //!    floor (ratio ≤ `adequacy_ratio`), no angle-locked order line left in most
-//!    runs ([`lines`]), and no flagged check of the other run kinds
-//!    (`channel_checks`). A model that fails is `unexplained`; the effects
+//!    runs ([`lines`]), no flagged check of the other run kinds
+//!    (`channel_checks`), and — since issue 25 — no flagged free-run check
+//!    of the final model (baseline + findings + structure simulated from rest
+//!    at every operating point: regime, rotor-speed extrema, stick-slip
+//!    fundamental; `where` names `free_run`). A model that fails is `unexplained`; the effects
 //!    found are kept as a partial explanation and the `unexplained` finding
 //!    carries the residual [`signature`]: the signals of a library computed
 //!    from the recordings that the leftover residual follows, found by
@@ -52,6 +62,15 @@
 //! `M_r = e_V`. Over a set of runs, `M = sqrt(mean_r M_r²)`. It is
 //! dimensionless; its noise floor is the same expression with the RMS errors
 //! replaced by the measured sensor noise (σ_F/N0 and σ_V).
+//!
+//! # The free-run misfit (structure selection)
+//!
+//! For a model simulated free from rest at run r and the record, over the
+//! same steady window: `M_fr,r = sqrt(1 + mean(e²))`, with e_max, e_min the
+//! measured − simulated extreme of Ω1 over the speed resolution of the
+//! centred difference, and e_f the stick-slip fundamental's relative error
+//! over the relative Rayleigh resolution 1/(T·f) when record and simulation
+//! both stick and slip ([`channels::free_run_misfit`]). Over runs, RMS, as M.
 //!
 //! # The criterion (one that can say no)
 //!
@@ -88,11 +107,15 @@ pub mod render;
 mod result;
 mod select;
 pub mod signature;
+pub mod structure;
 pub mod vocab;
 
 pub use channels::{ChannelCheck, ChannelOptions, extended_params};
 pub use prepare::{ForceCal, RunSignals};
-pub use result::{Adequacy, CandidateScore, Diagnosis, Finding, RunRow, SignatureEntry, StepRow, round_sig};
+pub use result::{
+    Adequacy, CandidateScore, Diagnosis, Finding, ParamAtBound, RunRow, SignatureEntry, StepRow, Structure,
+    StructureScore, round_sig,
+};
 pub use select::diagnose_signals;
 pub use vocab::EffectId;
 
@@ -197,17 +220,15 @@ pub enum DiagnoseError {
 /// final model's adequacy. The drive's steady-state balance across the
 /// operating points needs no model and always enters the adequacy test. When
 /// a baseline `RigParams` is given, the other run kinds are checked too
-/// ([`channels`]): static twist, voltage steps and the rotor torque balance
-/// enter the adequacy test; every operating point is
-/// simulated free-run with the baseline and with the extended model (the
-/// baseline plus the findings, [`extended_params`]) for the per-run feature
-/// table and the free-run checks.
-///
-/// The free-run checks are reported but do not enter the adequacy test: their
-/// thresholds were calibrated on null campaigns whose operating points never
-/// stick and slip (crates/virtual-rig/tests/channel_calibration.rs), so a
-/// free-run ratio in the stick-slip regime, where extrema depend sharply on
-/// every parameter, has no measured null distribution yet.
+/// ([`channels`]): static twist, voltage steps (with the estimate, in the
+/// structure it was fitted in) and the rotor torque balance enter the
+/// adequacy test; every operating point is simulated free-run with the
+/// baseline and with the extended model (the baseline plus the findings,
+/// [`extended_params`]); the damping structure is selected on those free
+/// runs ([`structure`]), and the free-run checks of the final model
+/// (extended model in the selected structure) enter the adequacy test.
+/// Their thresholds are calibrated on stick-slipping effect-free campaigns
+/// (crates/virtual-rig/tests/free_run_calibration.rs, [`ChannelOptions`]).
 pub fn diagnose(
     c: &rig_types::Campaign,
     cal: &rig_calibrate::CampaignCalibration,
@@ -234,43 +255,78 @@ pub fn diagnose(
     };
     let runs = prepare::prepare_runs(c, law, opts)?;
     let mut checks: Vec<ChannelCheck> = Vec::new();
-    if let Some(p) = baseline {
+    let balance = baseline.map(|_| channels::balance_data(c, cal, opts, o));
+    if let (Some(p), Some(data)) = (baseline, &balance) {
         checks.extend(channels::static_twist_checks(c, cal, o));
-        checks.extend(channels::voltage_step_checks(c, cal, p, o, &opts.integrator));
-        checks.push(channels::torque_balance_check(c, cal, p, opts, o));
+        checks.push(channels::torque_balance_check_of(c, data, p, o));
     }
     // The drive balance needs no baseline: it fits its coefficients to the records.
     checks.push(channels::drive_balance_check(c, opts, o));
     // So does the force sensor's linearity: the calibration runs against their own line.
     checks.push(force_check);
-    let flagged: Vec<(String, String)> = checks.iter().filter(|k| k.flagged).map(ChannelCheck::as_pair).collect();
-    let mut d = diagnose_signals(
-        &c.name,
-        &runs,
-        c.rig.supply_voltage_v,
-        c.rig.brake_disc_radius_m,
-        thesis_mu_dynamic,
-        &flagged,
-        opts,
-    )?;
-    if let Some(p) = baseline {
+    let flagged_of = |v: &[ChannelCheck]| v.iter().filter(|k| k.flagged).map(ChannelCheck::as_pair).collect::<Vec<_>>();
+    let select = |flagged: &[(String, String)]| {
+        diagnose_signals(
+            &c.name,
+            &runs,
+            c.rig.supply_voltage_v,
+            c.rig.brake_disc_radius_m,
+            thesis_mu_dynamic,
+            flagged,
+            opts,
+        )
+    };
+    // The findings do not depend on the flagged checks (only the adequacy
+    // test does), so the selection runs once on the model-free checks, and
+    // again only when the checks that need the final model flag something.
+    let flagged0 = flagged_of(&checks);
+    let mut d = select(&flagged0)?;
+    if let (Some(p), Some(data)) = (baseline, &balance) {
         let vocab: Vec<(EffectId, std::collections::BTreeMap<String, f64>)> =
             d.findings.iter().filter_map(|f| EffectId::from_id(&f.effect).map(|e| (e, f.params.clone()))).collect();
         let ext = extended_params(p, &vocab);
         let s = channels::FreeRunSettings::of(opts, o);
         let (base_pairs, ext_pairs) =
             rayon::join(|| channels::free_run_pairs(c, p, &s), || channels::free_run_pairs(c, &ext, &s));
+        let fold_of: std::collections::BTreeMap<String, usize> =
+            d.detail.runs.iter().map(|r| (r.id.clone(), r.fold)).collect();
+        let sel = structure::select_structure(c, data, &ext, &ext_pairs, &fold_of, &s, opts);
+        let moved = sel.damping != structure::REGISTRY[0].id();
+        let final_pairs = if moved { channels::free_run_pairs(c, &sel.model, &s) } else { ext_pairs };
+        // The voltage steps judge the estimate on the runs it was fitted to,
+        // in the structure it was fitted in (rig-estimate fits the twist-rate
+        // placement; with another structure its motor-side coefficients
+        // absorb the rotor's drag, so the selected structure on top of the
+        // estimate would count that drag twice on the steps).
+        let steps = channels::voltage_step_checks(c, cal, p, o, &opts.integrator);
+        let free_run_baseline = channels::free_run_checks_of(c, &base_pairs, &s, o);
+        let free_run_final = channels::free_run_checks_of(c, &final_pairs, &s, o);
+        // Free run is part of adequacy (issue 25): a flagged free-run check of
+        // the final model makes the answer `unexplained` (`where`: free_run);
+        // the selection is rerun with it so the unexplained finding, its
+        // signature and the adequacy record come from the one place that makes them.
+        let mut flagged = flagged0.clone();
+        flagged.extend(flagged_of(&steps));
+        flagged.extend(free_run_final.iter().filter(|k| k.flagged).map(|k| ("free_run".to_string(), k.as_pair().1)));
+        if flagged != flagged0 {
+            d = select(&flagged)?;
+        }
+        let at = checks.iter().take_while(|k| k.run_kind == "static_twist").count();
+        checks.splice(at..at, steps);
         for row in d.detail.runs.iter_mut() {
             if let Some(q) = base_pairs.iter().find(|q| q.id == row.id) {
                 row.measured = q.measured;
                 row.simulated = q.simulated;
             }
-            row.extended = ext_pairs.iter().find(|q| q.id == row.id).and_then(|q| q.simulated);
+            row.extended = final_pairs.iter().find(|q| q.id == row.id).and_then(|q| q.simulated);
         }
-        d.detail.free_run_baseline = channels::free_run_checks_of(c, &base_pairs, &s, o);
-        d.detail.free_run_extended = channels::free_run_checks_of(c, &ext_pairs, &s, o);
-        d.detail.speed_traces = channels::speed_traces(&base_pairs, &ext_pairs);
+        d.detail.free_run_baseline = free_run_baseline;
+        d.detail.free_run_extended = free_run_final;
+        d.detail.speed_traces = channels::speed_traces(&base_pairs, &final_pairs);
         d.detail.motor_speed_tick_rad_s = base_pairs.first().map_or(0.0, |q| q.motor_tick_rad_s);
+        d.detail.structure_scores = sel.scores;
+        d.structure = Structure { damping: sel.damping.into(), notes: sel.notes };
+        d.parameters_at_bounds = sel.at_bounds;
     }
     d.detail.channel_checks = checks;
     Ok(d)

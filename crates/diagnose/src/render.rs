@@ -269,11 +269,12 @@ pub fn markdown(d: &Diagnosis) -> String {
         s,
         "**Adequacy of the final model:** cross-validated misfit {:.2}× the noise floor (threshold {:.1}, calibrated \
          on effect-free virtual-rig campaigns; crate docs), {} consistent order line(s), {} significant check(s) of \
-         other run kinds → {}.\n",
+         other run kinds, {} flagged free-run check(s) of the final model → {}.\n",
         a.residual_over_noise,
         a.threshold,
         a.order_lines,
         a.channel_checks,
+        a.free_run_checks,
         if a.adequate {
             "adequate: nothing significant is left"
         } else {
@@ -369,14 +370,47 @@ pub fn markdown(d: &Diagnosis) -> String {
                 writeln!(s, "| {} | {:.2} | {:.1} | {} | {} |", k.channel, k.ratio, k.threshold, k.flagged, k.detail);
         }
     }
+    if !d.structure.damping.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n## Structure: where the damping acts\n\n**`{}`.** {}\n\nEach placement is fitted teacher-forced \
+             through the rotor torque balance on the training folds and scored by the cross-validated free-run misfit \
+             of the extended model (rig-diagnose `structure` docs).\n\n| structure | fitted (every run) | free-run \
+             misfit | gain | gain sd (folds) | paired t | admissible | chosen |\n|---|---|---|---|---|---|---|---|",
+            d.structure.damping, d.structure.notes
+        );
+        for r in &det.structure_scores {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {} | {} |",
+                r.id,
+                r.description,
+                r.free_run_misfit,
+                r.relative_gain,
+                r.relative_gain_fold_sd,
+                r.t,
+                r.admissible,
+                r.accepted
+            );
+        }
+    }
+    if !d.parameters_at_bounds.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n## Parameters at bounds\n\n| parameter | bound | unconstrained | meaning |\n|---|---|---|---|"
+        );
+        for p in &d.parameters_at_bounds {
+            let _ = writeln!(s, "| {} | {} | {} | {} |", p.parameter, p.bound, p.unconstrained, p.meaning);
+        }
+    }
     if !det.free_run_baseline.is_empty() {
         let _ = writeln!(
             s,
-            "\n## Free run: baseline and extended model\n\nEvery operating point simulated from rest with the baseline \
-             and with the extended model (baseline + findings, phases 0), compared with the record on phase-insensitive \
-             features. Reported, not part of the adequacy test: no null campaign of the calibration sticks and slips, \
-             so these ratios have no measured null distribution in the stick-slip regime (rig-diagnose `diagnose`).\n\n\
-             | check | baseline ratio | extended ratio | threshold | extended detail |\n|---|---|---|---|---|"
+            "\n## Free run: baseline and final model\n\nEvery operating point simulated from rest with the baseline \
+             and with the final model (baseline + findings, phases 0, with the selected structure), compared with the \
+             record on phase-insensitive features. The final model's checks are part of the adequacy test \
+             (thresholds calibrated on stick-slipping effect-free campaigns, rig-diagnose `ChannelOptions`).\n\n\
+             | check | baseline ratio | final ratio | threshold | final detail |\n|---|---|---|---|---|"
         );
         for (b, e) in det.free_run_baseline.iter().zip(&det.free_run_extended) {
             let _ =

@@ -29,6 +29,12 @@ pub struct Diagnosis {
     pub candidates: Vec<CandidateScore>,
     /// The test of the final model against noise (crate docs).
     pub adequacy: Adequacy,
+    /// Where the model's damping acts, as selected on the free run
+    /// ([`crate::structure`]).
+    pub structure: Structure,
+    /// Parameters a fit pinned at a physical bound, with their unconstrained
+    /// values (a symptom, never a silent fix).
+    pub parameters_at_bounds: Vec<ParamAtBound>,
     /// Detail for the report; not part of the JSON contract.
     #[serde(skip)]
     pub detail: Detail,
@@ -83,6 +89,38 @@ pub struct CandidateScore {
     pub criterion: f64,
 }
 
+/// diagnosis.json's `structure` (spec): the winning damping placement's id
+/// ([`crate::structure::REGISTRY`]) and a sentence with its free-run gain.
+#[derive(Debug, Clone, Serialize, PartialEq, Default)]
+pub struct Structure {
+    pub damping: String,
+    pub notes: String,
+}
+
+/// One entry of `parameters_at_bounds` (spec).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct ParamAtBound {
+    pub parameter: String,
+    pub bound: f64,
+    pub unconstrained: f64,
+    pub meaning: String,
+}
+
+/// One structural candidate's score (report table; not in the JSON).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StructureScore {
+    pub id: String,
+    pub description: String,
+    /// Cross-validated free-run misfit of the extended model with this structure.
+    pub free_run_misfit: f64,
+    /// Relative gain over the baseline structure, its spread across folds, paired t.
+    pub relative_gain: f64,
+    pub relative_gain_fold_sd: f64,
+    pub t: f64,
+    pub admissible: bool,
+    pub accepted: bool,
+}
+
 /// The adequacy test of the final model.
 #[derive(Debug, Clone, Serialize, PartialEq, Default)]
 pub struct Adequacy {
@@ -94,6 +132,9 @@ pub struct Adequacy {
     pub order_lines: usize,
     /// Significant checks of the other run kinds and channels.
     pub channel_checks: usize,
+    /// Flagged free-run checks of the final model (extended model with its
+    /// structure; crate docs): part of the test since issue 25.
+    pub free_run_checks: usize,
     pub adequate: bool,
 }
 
@@ -180,9 +221,12 @@ pub struct Detail {
     /// balance) that enter the adequacy test.
     pub channel_checks: Vec<crate::ChannelCheck>,
     /// Free-run checks of the operating points with the baseline and with the
-    /// extended model (reported; not part of the adequacy test, see `diagnose`).
+    /// final model (extended model with its selected structure); the final
+    /// model's enter the adequacy test (`diagnose`).
     pub free_run_baseline: Vec<crate::ChannelCheck>,
     pub free_run_extended: Vec<crate::ChannelCheck>,
+    /// Every structural candidate tried ([`crate::structure`]).
+    pub structure_scores: Vec<StructureScore>,
     /// Rotor speed of every operating point over its steady window, measured
     /// and free-run simulated by both models (small-multiples figure and the
     /// diagnosis-speed-traces table).

@@ -42,6 +42,106 @@ fn rows(phi1: &[f64], phi2: &[f64], force_n: &[f64], dt: f64, w: usize, r_m: f64
     out
 }
 
+/// One operating point's balance rows and what its noise floor needs.
+#[derive(Debug, Clone)]
+struct RunRows {
+    id: String,
+    rows: Vec<Row>,
+    force_noise_n: f64,
+    kernel_gain: f64,
+}
+
+/// The rotor torque balance's data: every operating point's window rows over
+/// its steady state, with J1 from the calibration. Built once; fitted on any
+/// subset of runs with any of the damping terms ([`BalanceData::fit`]), which
+/// is how the structural candidates ([`crate::structure`]) are fitted
+/// teacher-forced on training folds.
+#[derive(Debug, Clone)]
+pub struct BalanceData {
+    runs: Vec<RunRows>,
+    /// Rotor inertia held at the calibration's (Eqs. 4-4/4-5), kg·m².
+    pub j1_kgm2: f64,
+}
+
+/// A fitted rotor balance r·F = −J1 Ω̇1 + K tw + C tẇ − C_r Ω1 + c0.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BalanceFit {
+    pub stiffness_nm_rad: f64,
+    /// C on the twist rate Ω2 − Ω1 (0 when not fitted).
+    pub twist_damping_nm_s_rad: f64,
+    /// C_r, a drag on the absolute rotor speed Ω1 (0 when not fitted).
+    pub rotor_drag_nm_s_rad: f64,
+    pub offset_nm: f64,
+}
+
+impl BalanceFit {
+    fn beta(&self, j1: f64) -> [f64; 5] {
+        [-j1, self.stiffness_nm_rad, self.twist_damping_nm_s_rad, -self.rotor_drag_nm_s_rad, self.offset_nm]
+    }
+}
+
+/// The rows of every operating point of `c` ([`rows`], steady state only).
+pub fn balance_data(
+    c: &Campaign,
+    cal: &CampaignCalibration,
+    opts: &DiagnoseOptions,
+    o: &ChannelOptions,
+) -> BalanceData {
+    let w = nominal_window_samples(o.balance_window_s, c.rig.sample_rate_hz).max(2);
+    let dt = 1.0 / c.rig.sample_rate_hz;
+    let r_m = c.rig.brake_disc_radius_m;
+    // Σk²/(Σk)² of the triangle kernel: the variance gain of white noise.
+    let kernel_gain = {
+        let ks: Vec<f64> = (0..=2 * w).map(|k| (w - k.abs_diff(w)) as f64).collect();
+        ks.iter().map(|k| k * k).sum::<f64>() / ks.iter().sum::<f64>().powi(2)
+    };
+    let mut runs = Vec::new();
+    for run in c.runs_of("operating_point") {
+        let RunKind::OperatingPoint { ramp_s, .. } = run.kind else { continue };
+        let d = &run.data;
+        let (Some(t1), Some(t2), Some(mv)) = (&d.rotor_ticks, &d.motor_ticks, &d.brake_force_mv) else { continue };
+        let phi1 = ticks_to_rad(t1, c.rig.encoder_ticks_per_rev);
+        let phi2 = ticks_to_rad(t2, c.rig.encoder_ticks_per_rev);
+        let f = force_n(mv, ForceCal { factor_mv_per_n: cal.force_factor_mv_per_n, offset_mv: cal.force_offset_mv });
+        let from = d.time_s.partition_point(|&x| x < ramp_s + opts.settle_s);
+        runs.push(RunRows {
+            id: run.id.clone(),
+            rows: rows(&phi1, &phi2, &f, dt, w, r_m, from),
+            force_noise_n: diff_noise(&f),
+            kernel_gain,
+        });
+    }
+    BalanceData { runs, j1_kgm2: cal.rotor_inertia_kgm2 }
+}
+
+impl BalanceData {
+    /// Least squares of the balance over the runs `include` accepts, J1
+    /// held; C (twist rate) and C_r (absolute rotor speed) are fitted only
+    /// when asked, else held at 0. `None` when the regression is singular.
+    pub fn fit(&self, include: impl Fn(&str) -> bool, twist_damping: bool, rotor_drag: bool) -> Option<BalanceFit> {
+        let j1 = self.j1_kgm2;
+        let free = [false, true, twist_damping, rotor_drag, true];
+        let mut ne = rig_estimate::linear::Normal::new(5);
+        for r in self.runs.iter().filter(|r| include(&r.id)) {
+            for (x, y) in &r.rows {
+                let row: Vec<(usize, f64)> = x.iter().copied().enumerate().filter(|(i, _)| free[*i]).collect();
+                ne.add_sparse(&row, y + j1 * x[0]);
+            }
+        }
+        // A held coefficient: one unit row pins it at 0 (its column carries no data).
+        for (i, _) in free.iter().enumerate().filter(|(_, f)| !**f) {
+            ne.add_sparse(&[(i, 1.0)], 0.0);
+        }
+        let b = ne.solve()?;
+        Some(BalanceFit {
+            stiffness_nm_rad: b[1],
+            twist_damping_nm_s_rad: b[2],
+            rotor_drag_nm_s_rad: -b[3],
+            offset_nm: b[4],
+        })
+    }
+}
+
 /// Rotor-1 torque balance over the steady state of every operating point.
 ///
 /// Eq. 4-7, first row, in the rig model's reading (rig-model docs: the
@@ -64,54 +164,30 @@ pub fn torque_balance_check(
     opts: &DiagnoseOptions,
     o: &ChannelOptions,
 ) -> ChannelCheck {
+    torque_balance_check_of(c, &balance_data(c, cal, opts, o), baseline, o)
+}
+
+/// [`torque_balance_check`] of balance data already built.
+pub fn torque_balance_check_of(
+    c: &Campaign,
+    data: &BalanceData,
+    baseline: &RigParams,
+    o: &ChannelOptions,
+) -> ChannelCheck {
     let name = "operating_point.torque_balance";
     let w = nominal_window_samples(o.balance_window_s, c.rig.sample_rate_hz).max(2);
     let dt = 1.0 / c.rig.sample_rate_hz;
     let rad = tick_rad(c.rig.encoder_ticks_per_rev);
     let r_m = c.rig.brake_disc_radius_m;
-    struct RunRows {
-        id: String,
-        rows: Vec<Row>,
-        force_noise_n: f64,
-        kernel_gain: f64,
-    }
-    let mut per_run = Vec::new();
-    for run in c.runs_of("operating_point") {
-        let RunKind::OperatingPoint { ramp_s, .. } = run.kind else { continue };
-        let d = &run.data;
-        let (Some(t1), Some(t2), Some(mv)) = (&d.rotor_ticks, &d.motor_ticks, &d.brake_force_mv) else { continue };
-        let phi1 = ticks_to_rad(t1, c.rig.encoder_ticks_per_rev);
-        let phi2 = ticks_to_rad(t2, c.rig.encoder_ticks_per_rev);
-        let f = force_n(mv, ForceCal { factor_mv_per_n: cal.force_factor_mv_per_n, offset_mv: cal.force_offset_mv });
-        let from = d.time_s.partition_point(|&x| x < ramp_s + opts.settle_s);
-        // Σk²/(Σk)² of the triangle kernel: the variance gain of white noise.
-        let kernel_gain = {
-            let ks: Vec<f64> = (0..=2 * w).map(|k| (w - k.abs_diff(w)) as f64).collect();
-            ks.iter().map(|k| k * k).sum::<f64>() / ks.iter().sum::<f64>().powi(2)
-        };
-        per_run.push(RunRows {
-            id: run.id.clone(),
-            rows: rows(&phi1, &phi2, &f, dt, w, r_m, from),
-            force_noise_n: diff_noise(&f),
-            kernel_gain,
-        });
-    }
+    let per_run = &data.runs;
     let ids: Vec<String> = per_run.iter().map(|r| r.id.clone()).collect();
     // J1 is the calibration's (Eqs. 4-4/4-5): fitted here it would be
     // attenuated towards 0 by the quantisation noise of Ω̇1 (errors in variables).
-    let j1 = cal.rotor_inertia_kgm2;
-    let mut ne = rig_estimate::linear::Normal::new(5);
-    for r in &per_run {
-        for (x, y) in &r.rows {
-            let row: Vec<(usize, f64)> = x.iter().copied().enumerate().skip(1).collect();
-            ne.add_sparse(&row, y + j1 * x[0]);
-        }
-    }
-    ne.add_sparse(&[(0, 1.0)], 0.0);
-    let Some(mut beta) = ne.solve() else {
+    let j1 = data.j1_kgm2;
+    let Some(fit) = data.fit(|_| true, true, true) else {
         return ChannelCheck::not_testable(name, ids, "the rotor balance regression is singular".into());
     };
-    beta[0] = -j1;
+    let beta = fit.beta(j1);
     // r·F = −J1 Ω̇1 + K tw + C tẇ − d Ω1 + c0.
     let (k, cc, drag) = (beta[1], beta[2], -beta[3]);
     let run_rms: Vec<f64> = per_run

@@ -71,9 +71,55 @@ pub const TRACE_RATE_HZ: f64 = 20.0;
 /// run over ramp + settle + `steady_s` only, in parallel, campaign order kept;
 /// `simulated` is `None` where the integrator failed — data, not an error).
 pub fn free_run_pairs(c: &Campaign, p: &RigParams, s: &FreeRunSettings) -> Vec<Pair> {
+    free_run_pairs_by(c, s, |_| Some(p.clone()))
+}
+
+/// [`free_run_pairs`] with each run's own model: `params_of(run id)`, runs
+/// for which it gives `None` are skipped (a cross-validation fold's held-out
+/// runs, each with the model fitted without them).
+pub fn free_run_pairs_by(
+    c: &Campaign,
+    s: &FreeRunSettings,
+    params_of: impl Fn(&str) -> Option<RigParams> + Sync,
+) -> Vec<Pair> {
     use rayon::prelude::*;
     let runs: Vec<&rig_types::Run> = c.runs_of("operating_point").collect();
-    runs.par_iter().map(|r| pair(c, r, p, s)).collect::<Vec<_>>().into_iter().flatten().collect()
+    runs.par_iter()
+        .map(|r| params_of(&r.id).and_then(|p| pair(c, r, &p, s)))
+        .collect::<Vec<_>>()
+        .into_iter()
+        .flatten()
+        .collect()
+}
+
+/// The speed resolution of the centred difference, tick/(2h·dt)/√6, rad/s:
+/// the noise floor of a rotor-speed extremum.
+pub fn speed_floor_rad_s(c: &Campaign, s: &FreeRunSettings) -> f64 {
+    tick_rad(c.rig.encoder_ticks_per_rev)
+        / (2.0 * nominal_window_samples(s.rotor_speed_half_window_s, c.rig.sample_rate_hz) as f64
+            / c.rig.sample_rate_hz)
+        / 6f64.sqrt()
+}
+
+/// Free-run misfit of one run (crate docs, "The free-run misfit"):
+/// M_fr = sqrt(1 + mean(e²)) over the feature errors in units of their
+/// floors — e_max, e_min: measured − simulated extreme of Ω1 over the speed
+/// resolution `floor_rad_s`; e_f: the relative error of the stick-slip
+/// fundamental over the window's relative Rayleigh resolution 1/(T·f), when
+/// both record and simulation stick and slip. The 1 is the floor itself (a
+/// model at the noise scores ≈ 1.4, never 0, so ln ratios stay finite).
+/// `None` when the simulation failed.
+pub fn free_run_misfit(q: &Pair, floor_rad_s: f64) -> Option<f64> {
+    let f = q.simulated?;
+    let m = &q.measured;
+    let mut e2 = vec![
+        ((m.rotor_max_rad_s - f.rotor_max_rad_s) / floor_rad_s).powi(2),
+        ((m.rotor_min_rad_s - f.rotor_min_rad_s) / floor_rad_s).powi(2),
+    ];
+    if m.stick_slip() && f.stick_slip() && m.fundamental_hz > 0.0 {
+        e2.push(((m.fundamental_hz - f.fundamental_hz) * q.window_s).powi(2));
+    }
+    Some((1.0 + e2.iter().sum::<f64>() / e2.len() as f64).sqrt())
 }
 
 /// Features of one run: measured from the encoders and simulated with `p`,
@@ -184,10 +230,7 @@ pub fn free_run_checks_of(c: &Campaign, pairs: &[Pair], s: &FreeRunSettings, o: 
         ),
     ));
 
-    let floor = tick_rad(c.rig.encoder_ticks_per_rev)
-        / (2.0 * nominal_window_samples(s.rotor_speed_half_window_s, c.rig.sample_rate_hz) as f64
-            / c.rig.sample_rate_hz)
-        / 6f64.sqrt();
+    let floor = speed_floor_rad_s(c, s);
     for (name, th, get) in [
         (names[1], o.rotor_max_ratio, (|f: &Features| f.rotor_max_rad_s) as fn(&Features) -> f64),
         (names[2], o.rotor_min_ratio, |f: &Features| f.rotor_min_rad_s),
