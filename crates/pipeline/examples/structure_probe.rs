@@ -10,7 +10,8 @@
 //! extended model's effects are the findings of `reports/diagnosis.json`.
 //! Prints, per variant, the motor constants and the four free-run checks of
 //! `rig_diagnose::channels` (regime, rotor max/min, fundamental; ratios to
-//! their floors), then the runs whose regime differs.
+//! their floors), then the runs whose regime differs; the same for the
+//! models without effects, and for four phases of the normal-force modulation.
 
 use anyhow::{Context, Result};
 use rig_diagnose::channels::{FreeRunSettings, free_run_checks_of, free_run_pairs, torque_balance_check};
@@ -78,6 +79,15 @@ fn main() -> Result<()> {
                 .map(|r| format!("{} {:.1}%", r.run, r.channels[1].fit_percent))
                 .collect::<Vec<_>>()
         );
+        let m = &e.modes;
+        println!(
+            "    coupled mode {:.3} rad/s xi {:.4} | fixed base xi {:.4} | log decrement {:.3} rad/s xi {:.4}",
+            m.coupled_natural_rad_s.unwrap_or(f64::NAN),
+            m.coupled_damping_ratio.unwrap_or(f64::NAN),
+            m.fixed_base_damping_ratio,
+            m.log_decrement_natural_rad_s,
+            m.log_decrement_damping_ratio
+        );
         Ok(e)
     };
     let a = est(DampingStructure::TwistRate)?.params;
@@ -102,9 +112,14 @@ fn main() -> Result<()> {
     ));
     variants.push(("c3 both, C_r held, re-estimated", est(DampingStructure::Both { rotor_damping: held })?.params));
 
+    // Controls: the same models without the diagnosed effects (what the structure alone does).
+    let bare: Vec<(String, RigParams)> =
+        [0, 4].iter().map(|&i| (format!("{} (no effects)", variants[i].0), variants[i].1.clone())).collect();
+
     let s = FreeRunSettings::of(&opts, &opts.channels);
-    for (label, p) in &variants {
-        let ext = extended_params(p, &found);
+    let runs = variants.iter().map(|(l, p)| (l.to_string(), extended_params(p, &found))).chain(bare);
+    for (label, ext) in runs {
+        let p = &ext;
         let pairs = free_run_pairs(&c, &ext, &s);
         let checks = free_run_checks_of(&c, &pairs, &s, &opts.channels);
         println!("\n== {label}\n   {}", motor_line(p));
@@ -134,6 +149,25 @@ fn main() -> Result<()> {
                 );
             }
         }
+    }
+
+    // Is the regime of a run decided by the modulation's phase (per-run
+    // nuisance the diagnosis does not report; extended_params sets 0)?
+    println!("\n== phase of the normal-force modulation, c2 (C_r fitted, re-estimated)");
+    for k in 0..4 {
+        let phase_rad = f64::from(k) * std::f64::consts::FRAC_PI_2;
+        let mut ext = extended_params(&variants[4].1, &found);
+        for e in &mut ext.effects {
+            if let rig_types::Effect::NormalForceModulation { phase_rad: ph, .. } = e {
+                *ph = phase_rad;
+            }
+        }
+        let pairs = free_run_pairs(&c, &ext, &s);
+        let checks = free_run_checks_of(&c, &pairs, &s, &opts.channels);
+        println!(
+            "   phase {phase_rad:.3} rad: regime {} | rotor_max ratio {:.2} | rotor_min ratio {:.2}",
+            checks[0].detail, checks[1].ratio, checks[2].ratio
+        );
     }
     Ok(())
 }
