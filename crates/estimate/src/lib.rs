@@ -23,7 +23,7 @@ pub use error::EstimateError;
 pub use fit_stats::{FitReport, Identifiability, ParamEstimate};
 pub use friction::{FrictionEstimate, FrictionOptions, estimate_friction};
 pub use lsq::{IterationRecord, LsqProblem, LsqSolution, SolverOptions, Transform, levenberg_marquardt};
-pub use options::{EstimateOptions, InitialValues, SolverKind};
+pub use options::{DampingStructure, EstimateOptions, InitialValues, RotorDamping, SolverKind};
 pub use pi::{PiEstimate, PiMethod, PiOptions, estimate_pi};
 pub use rig::{ModeComparison, RigEstimate, StepFit, estimate_rig};
 pub use steps::StepResidual;

@@ -68,6 +68,42 @@ impl InitialValues {
     }
 }
 
+/// Where the rig model's viscous damping acts while the voltage steps are
+/// fitted (issue 25). The log decrement (Eqs. 4-2/4-3) measures one number C
+/// whichever placement — in the free decay the motor side is held, so the
+/// twist rate and the absolute rotor speed are the same — but in steady
+/// rotation the placements differ: a drag C_r on Ω1 loads the motor by C_r·Ω1
+/// (C_r·Ω1/n at the armature), which a fit under [`DampingStructure::TwistRate`]
+/// absorbs into k_T, k_e and T_f. A structural candidate is only compared
+/// fairly when the motor constants are estimated under it.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "placement")]
+pub enum DampingStructure {
+    /// C on the twist rate Ω2 − Ω1, C_r = 0: the rig model's structure (default;
+    /// the shipped estimate).
+    #[default]
+    TwistRate,
+    /// C on the absolute rotor speed Ω1 only (Eq. 4-7's diag(C, C_m) as
+    /// published): the twist-rate damping is 0 and the rotor drag C_r
+    /// (`RigParams::rotor_damping_nm_s_rad`) takes its place.
+    RotorAbsolute { rotor_damping: RotorDamping },
+    /// Both: C on the twist rate (fitted, as in `TwistRate`) and a drag C_r on Ω1.
+    Both { rotor_damping: RotorDamping },
+}
+
+/// How a structure's rotor drag C_r enters the voltage-step fit.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "how")]
+pub enum RotorDamping {
+    /// Estimated with the other free parameters, started at the log
+    /// decrement's C = 2ξ√(J1 K) (the natural prior: in the free decay C and
+    /// C_r are the same number).
+    Fitted,
+    /// Held at a value found elsewhere (e.g. the diagnosis' rotor
+    /// torque-balance fit), N·m·s/rad; the motor constants are fitted under it.
+    Held { nm_s_rad: f64 },
+}
+
 /// Which solver minimises the voltage-step misfit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -110,6 +146,14 @@ pub struct EstimateOptions {
     pub whiteness_max_lag: usize,
     pub pi: PiOptions,
     pub friction: FrictionOptions,
+    /// Where the damping acts during the voltage-step fit (default: the
+    /// twist rate, the shipped estimate; absent from JSON when default).
+    #[serde(default, skip_serializing_if = "is_twist_rate")]
+    pub damping: DampingStructure,
+}
+
+fn is_twist_rate(d: &DampingStructure) -> bool {
+    *d == DampingStructure::TwistRate
 }
 
 impl EstimateOptions {
@@ -129,6 +173,7 @@ impl EstimateOptions {
             whiteness_max_lag: 25,
             pi: PiOptions::default(),
             friction: FrictionOptions::default(),
+            damping: DampingStructure::TwistRate,
         }
     }
 

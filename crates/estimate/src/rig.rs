@@ -11,7 +11,7 @@ use crate::fit_stats::{
 };
 use crate::friction::{FrictionEstimate, estimate_friction};
 use crate::lsq::{LsqSolution, Transform, fd_jacobian, levenberg_marquardt};
-use crate::options::{EstimateOptions, SolverKind};
+use crate::options::{DampingStructure, EstimateOptions, RotorDamping, SolverKind};
 use crate::pi::{PiEstimate, estimate_pi};
 use crate::steps::{
     FREE, HELD, StepData, StepProblem, coupled_mode, get_param, scales_with_torque, simulate_step, split, step_data,
@@ -42,7 +42,8 @@ pub struct ModeComparison {
     /// Coupled mode of the fitted 2-DOF model (motor side free, damped by the drive).
     pub coupled_natural_rad_s: Option<f64>,
     pub coupled_damping_ratio: Option<f64>,
-    /// Motor side held fixed: ω = √(K/J1), ξ = C/(2√(J1 K)) (the chapter's 1-DOF reading, Eq. 4-4).
+    /// Motor side held fixed: ω = √(K/J1), ξ = (C + C_r)/(2√(J1 K)) (the chapter's 1-DOF reading, Eq. 4-4;
+    /// with the motor side held both dampings act on Ω1).
     pub fixed_base_natural_rad_s: f64,
     pub fixed_base_damping_ratio: f64,
     /// Log decrement of the same steps (campaign calibration, Eqs. 4-2/4-3).
@@ -83,12 +84,14 @@ fn initial_params(c: &Campaign, cal: &CampaignCalibration, o: &EstimateOptions) 
         }
     }
     let xi = if cal.damping_ratio.is_finite() && cal.damping_ratio > 0.0 { cal.damping_ratio } else { 0.05 };
+    let c_decay = 2.0 * xi * (j1 * k).sqrt();
+    let (c_twist, c_rotor) = initial_damping(c_decay, &o.damping)?;
     Ok(RigParams {
         kind: ModelKind::Rig,
         rotor_inertia_kgm2: j1,
         shaft_stiffness_nm_rad: k,
-        shaft_damping_nm_s_rad: 2.0 * xi * (j1 * k).sqrt(),
-        rotor_damping_nm_s_rad: 0.0,
+        shaft_damping_nm_s_rad: c_twist,
+        rotor_damping_nm_s_rad: c_rotor,
         motor: MotorParams {
             inertia_kgm2: i.motor_inertia_kgm2,
             inductance_h: i.inductance_h,
@@ -106,6 +109,56 @@ fn initial_params(c: &Campaign, cal: &CampaignCalibration, o: &EstimateOptions) 
         effects: Vec::new(),
         harmonic: None,
     })
+}
+
+/// Starting (C on the twist rate, C_r on Ω1) of a damping structure from the
+/// log decrement's C (Eq. 4-7's C = 2ξ√(J1 K)): the free decay (motor side
+/// held) measures C + C_r whichever placement, so a fitted C_r starts there
+/// and, with both fitted, each starts at half of it.
+fn initial_damping(c_decay: f64, d: &DampingStructure) -> Result<(f64, f64), EstimateError> {
+    let held = |v: f64| {
+        if v.is_finite() && v >= 0.0 {
+            Ok(v)
+        } else {
+            Err(EstimateError::InvalidOption {
+                name: "damping.rotor_damping.nm_s_rad".into(),
+                value: v,
+                rule: "a held rotor drag C_r must be finite and >= 0",
+            })
+        }
+    };
+    Ok(match d {
+        DampingStructure::TwistRate => (c_decay, 0.0),
+        DampingStructure::RotorAbsolute { rotor_damping: RotorDamping::Fitted } => (0.0, c_decay),
+        DampingStructure::RotorAbsolute { rotor_damping: RotorDamping::Held { nm_s_rad } } => (0.0, held(*nm_s_rad)?),
+        DampingStructure::Both { rotor_damping: RotorDamping::Fitted } => (0.5 * c_decay, 0.5 * c_decay),
+        DampingStructure::Both { rotor_damping: RotorDamping::Held { nm_s_rad } } => (c_decay, held(*nm_s_rad)?),
+    })
+}
+
+/// The voltage-step free set under a damping structure: [`FREE`] (C on the
+/// twist rate) with C replaced by C_r, dropped, or joined by C_r.
+fn free_set(d: &DampingStructure) -> Vec<&'static str> {
+    let mut free: Vec<&'static str> = FREE.to_vec();
+    match d {
+        DampingStructure::TwistRate | DampingStructure::Both { rotor_damping: RotorDamping::Held { .. } } => {}
+        DampingStructure::RotorAbsolute { rotor_damping: RotorDamping::Fitted } => {
+            free.iter_mut().filter(|n| **n == "C").for_each(|n| *n = "C_r")
+        }
+        DampingStructure::RotorAbsolute { rotor_damping: RotorDamping::Held { .. } } => free.retain(|n| *n != "C"),
+        DampingStructure::Both { rotor_damping: RotorDamping::Fitted } => free.push("C_r"),
+    }
+    free
+}
+
+/// Why a parameter is fixed by the damping structure (not estimated, not a held motor constant).
+fn structural_reason(name: &str, d: &DampingStructure) -> String {
+    match (name, d) {
+        ("C", _) => "0: the damping structure puts C on the absolute rotor speed (C_r)".into(),
+        ("C_r", DampingStructure::TwistRate) => "0: the damping structure puts C on the twist rate".into(),
+        ("C_r", _) => "held by the damping structure (value given, e.g. the rotor torque balance)".into(),
+        _ => "held".into(),
+    }
 }
 
 /// Why a held parameter is held, with the correlation it would have if freed.
@@ -201,7 +254,7 @@ pub fn estimate_rig(
     let sim = sim_options(o);
     let est_steps: Vec<&StepData> = steps.iter().zip(&used).filter(|(_, u)| **u).map(|(s, _)| s).collect();
     // The free set: FREE, plus L when asked (see EstimateOptions::free_inductance).
-    let mut free: Vec<&'static str> = FREE.to_vec();
+    let mut free: Vec<&'static str> = free_set(&o.damping);
     let mut held: Vec<&'static str> = HELD.to_vec();
     if o.free_inductance {
         free.push("L_DC");
@@ -234,7 +287,9 @@ pub fn estimate_rig(
     let pairs = flagged_pairs(&cov.correlation);
     let mut params = Vec::new();
     let order = ["J_m", "L_DC", "R_DC", "k_T", "k_e", "T_f", "C_m", "J_1", "K_s", "C"];
-    for name in order {
+    // C_r gets a row only under a structure that has one (the default table is unchanged).
+    let with_rotor = if o.damping == DampingStructure::TwistRate { &[][..] } else { &["C_r"][..] };
+    for &name in order.iter().chain(with_rotor) {
         let initial = get_param(&base, name);
         let estimate = get_param(&fitted, name);
         let (stderr, identifiable) = if let Some(j) = free.iter().position(|f| *f == name) {
@@ -267,9 +322,10 @@ pub fn estimate_rig(
                     },
                 },
             )
-        } else {
-            let h = held.iter().position(|f| *f == name).expect("held parameter");
+        } else if let Some(h) = held.iter().position(|f| *f == name) {
             (None, Identifiability::Fixed { reason: held_reason(name, held_info[h].0, held_info[h].1) })
+        } else {
+            (None, Identifiability::Fixed { reason: structural_reason(name, &o.damping) })
         };
         params.push(ParamEstimate {
             name: name.into(),
@@ -350,7 +406,12 @@ pub fn estimate_rig(
     final_params.friction = FrictionLaw::Coulomb { mu_static: friction.mu_static, mu_kinetic: friction.mu_kinetic };
 
     let (cwn, cxi) = coupled_mode(&fitted).map_or((None, None), |(w, x)| (Some(w), Some(x)));
-    let (j1, k, cc) = (fitted.rotor_inertia_kgm2, fitted.shaft_stiffness_nm_rad, fitted.shaft_damping_nm_s_rad);
+    // Motor side held (the log decrement's reading): C and C_r both act on Ω1.
+    let (j1, k, cc) = (
+        fitted.rotor_inertia_kgm2,
+        fitted.shaft_stiffness_nm_rad,
+        fitted.shaft_damping_nm_s_rad + fitted.rotor_damping_nm_s_rad,
+    );
     let modes = ModeComparison {
         coupled_natural_rad_s: cwn,
         coupled_damping_ratio: cxi,

@@ -44,6 +44,7 @@ pub fn set_param(p: &mut RigParams, name: &str, x: f64) {
         "T_f" => p.motor.friction_torque_nm = x,
         "J_1" => p.rotor_inertia_kgm2 = x,
         "C" => p.shaft_damping_nm_s_rad = x,
+        "C_r" => p.rotor_damping_nm_s_rad = x,
         "K_s" => p.shaft_stiffness_nm_rad = x,
         "R_DC" => p.motor.resistance_ohm = x,
         "L_DC" => p.motor.inductance_h = x,
@@ -60,6 +61,7 @@ pub fn get_param(p: &RigParams, name: &str) -> f64 {
         "T_f" => p.motor.friction_torque_nm,
         "J_1" => p.rotor_inertia_kgm2,
         "C" => p.shaft_damping_nm_s_rad,
+        "C_r" => p.rotor_damping_nm_s_rad,
         "K_s" => p.shaft_stiffness_nm_rad,
         "R_DC" => p.motor.resistance_ohm,
         "L_DC" => p.motor.inductance_h,
@@ -75,7 +77,7 @@ pub fn unit_of(name: &str) -> &'static str {
         "k_T" => "N m/A",
         "k_e" => "V s/rad",
         "T_f" => "N m",
-        "C" | "C_m" => "N m s/rad",
+        "C" | "C_m" | "C_r" => "N m s/rad",
         "K_s" => "N m/rad",
         "R_DC" => "Ohm",
         "L_DC" => "H",
@@ -85,7 +87,7 @@ pub fn unit_of(name: &str) -> &'static str {
 
 /// Parameters that scale with the overall torque scale (see module docs).
 pub fn scales_with_torque(name: &str) -> bool {
-    matches!(name, "J_m" | "k_T" | "T_f" | "J_1" | "C")
+    matches!(name, "J_m" | "k_T" | "T_f" | "J_1" | "C" | "C_r")
 }
 
 /// One voltage step prepared for fitting.
@@ -262,8 +264,10 @@ pub fn split(steps: &[StepData], holdout: Option<&[String]>) -> Vec<bool> {
 
 /// Natural frequency and damping ratio of the coupled torsional mode of the
 /// fitted model, linearised about steady rotation (L → 0, motor friction
-/// saturated): masses J1, n²J_m; string K, C between them; motor-side viscous
-/// b = n²(k_T k_e/R + C_m) to ground. Returns (ω_n rad/s, ξ) of the complex pair.
+/// saturated): masses J1, n²J_m; string K, C between them; rotor drag C_r
+/// (`rotor_damping_nm_s_rad`) and motor-side viscous b = n²(k_T k_e/R + C_m)
+/// to ground (Eq. 4-7's damping matrix with C on the twist rate plus
+/// diag(C_r, b)). Returns (ω_n rad/s, ξ) of the complex pair.
 pub fn coupled_mode(p: &RigParams) -> Option<(f64, f64)> {
     let m = &p.motor;
     let n = m.gear_ratio;
@@ -271,6 +275,7 @@ pub fn coupled_mode(p: &RigParams) -> Option<(f64, f64)> {
     let j2 = n * n * m.inertia_kgm2;
     let k = p.shaft_stiffness_nm_rad;
     let c = p.shaft_damping_nm_s_rad;
+    let c_r = p.rotor_damping_nm_s_rad;
     let b =
         n * n * (m.torque_constant_nm_a * m.voltage_constant_v_s_rad / m.resistance_ohm + m.speed_regulation_nm_s_rad);
     // State [φ1, φ2, Ω1, Ω2].
@@ -278,7 +283,7 @@ pub fn coupled_mode(p: &RigParams) -> Option<(f64, f64)> {
         (0, 2) | (1, 3) => 1.0,
         (2, 0) => -k / j1,
         (2, 1) => k / j1,
-        (2, 2) => -c / j1,
+        (2, 2) => -(c + c_r) / j1,
         (2, 3) => c / j1,
         (3, 0) => k / j2,
         (3, 1) => -k / j2,
