@@ -18,7 +18,15 @@ work=${WORK:-/tmp/riglab-slurm-ci}
 rm -rf "$work" && mkdir -p "$work"
 cargo build --workspace --quiet
 export XTASK=$PWD/target/debug/xtask
-eval "$(bash scripts/slurm/local-cluster.sh start "$work/cluster")"
+# A machine whose kernel or container refuses the daemons is like one
+# without Slurm: the check skips with a message (the comparison below is what
+# can fail).
+if ! cluster_env=$(bash scripts/slurm/local-cluster.sh start "$work/cluster"); then
+    echo "ci: the Slurm daemons did not start here (logs in $work/cluster); the Slurm check skips"
+    bash scripts/slurm/local-cluster.sh stop "$work/cluster" || true
+    exit 0
+fi
+eval "$cluster_env"
 trap 'bash scripts/slurm/local-cluster.sh stop "$work/cluster"' EXIT
 export BATTERY=smoke
 map_sets="sweeps.map_rpm_points=4 sweeps.map_force_points=3 sweeps.diagram_points=4"

@@ -169,6 +169,24 @@ pub struct ChannelOptions {
 /// `velocity_weakening_friction` replaces the friction law by the Stribeck
 /// law (its μs is both the law's peak and the break-away coefficient, as in
 /// rig-model); `viscous_brake_friction` keeps the baseline's μs.
+/// `p` with one run's nuisance phases (θ_t, θ_φ) in its time- and
+/// angle-modulation effects: N(t) = N0 (1 + a sin(2π f t + θ_t)) and
+/// N(φ1) = N0 (1 + a sin(n φ1 + θ_φ)) with t and φ1 the run's own (both
+/// start at 0 with the record). The spec leaves θ free per run; a free run
+/// with θ = 0 forces a different run than the one recorded, and near a
+/// regime boundary that alone changes the regime.
+pub fn with_run_phases(p: &RigParams, phases_rad: (f64, f64)) -> RigParams {
+    let mut q = p.clone();
+    for e in &mut q.effects {
+        match e {
+            Effect::NormalForceModulation { phase_rad, .. } => *phase_rad = phases_rad.0,
+            Effect::AnglePeriodicFriction { phase_rad, .. } => *phase_rad = phases_rad.1,
+            _ => {}
+        }
+    }
+    q
+}
+
 pub fn extended_params(baseline: &RigParams, findings: &[(EffectId, BTreeMap<String, f64>)]) -> RigParams {
     let mut p = baseline.clone();
     let mu_s0 = rig_model::friction::static_mu(&baseline.friction);

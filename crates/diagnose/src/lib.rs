@@ -286,13 +286,21 @@ pub fn diagnose(
             d.findings.iter().filter_map(|f| EffectId::from_id(&f.effect).map(|e| (e, f.params.clone()))).collect();
         let ext = extended_params(p, &vocab);
         let s = channels::FreeRunSettings::of(opts, o);
-        let (base_pairs, ext_pairs) =
-            rayon::join(|| channels::free_run_pairs(c, p, &s), || channels::free_run_pairs(c, &ext, &s));
+        // Each run's free run with its own nuisance phases (θ free per run, as
+        // the spec's laws and the teacher-forced fit have them).
+        let phases: std::collections::BTreeMap<String, (f64, f64)> =
+            d.detail.runs.iter().map(|r| (r.id.clone(), r.phases_rad)).collect();
+        let phased = |m: &rig_types::RigParams, id: &str| channels::with_run_phases(m, phases.get(id).copied().unwrap_or_default());
+        let (base_pairs, ext_pairs) = rayon::join(
+            || channels::free_run_pairs(c, p, &s),
+            || channels::free_run_pairs_by(c, &s, |id| Some(phased(&ext, id))),
+        );
         let fold_of: std::collections::BTreeMap<String, usize> =
             d.detail.runs.iter().map(|r| (r.id.clone(), r.fold)).collect();
-        let sel = structure::select_structure(c, data, &ext, &ext_pairs, &fold_of, &s, opts);
+        let sel = structure::select_structure(c, data, &ext, &ext_pairs, &fold_of, &phases, &s, opts);
         let moved = sel.damping != structure::REGISTRY[0].id();
-        let final_pairs = if moved { channels::free_run_pairs(c, &sel.model, &s) } else { ext_pairs };
+        let final_pairs =
+            if moved { channels::free_run_pairs_by(c, &s, |id| Some(phased(&sel.model, id))) } else { ext_pairs };
         // The voltage steps judge the estimate on the runs it was fitted to,
         // in the structure it was fitted in (rig-estimate fits the twist-rate
         // placement; with another structure its motor-side coefficients

@@ -159,6 +159,11 @@ pub struct RunRow {
     pub simulated: Option<Features>,
     /// Features of the free-run extended model (baseline + findings).
     pub extended: Option<Features>,
+    /// This run's nuisance phases under the final joint fit, rad: (θ of the
+    /// time modulation, θ of the angle modulation); 0 without those effects.
+    /// The spec's laws take θ free per run, so the free run of this run is
+    /// simulated with them ([`crate::channels::with_run_phases`]).
+    pub phases_rad: (f64, f64),
 }
 
 /// Features of one run's steady state (measured or simulated).

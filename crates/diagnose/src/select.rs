@@ -782,6 +782,7 @@ pub fn diagnose_signals(
             measured: measured_features(s, opts.slip_speed_rad_s, &opts.classify),
             simulated: None,
             extended: None,
+            phases_rad: full.phases.get(r).copied().unwrap_or((0.0, 0.0)),
         });
     }
     detail.mu_vs_speed = mu_vs_speed(&d_all, &coulomb.model, &full.model, &full.phases);

@@ -53,6 +53,18 @@ pub const OUTSIDE: [&str; 11] = [
 
 /// Damping on the absolute rotor speed Ω1 instead of the twist rate (Eq. 4-7's placement).
 pub const DAMPING_ROTOR_ABSOLUTE: &str = "damping_rotor_absolute";
+
+/// diagnosis.json's `structure.damping` of the rig model's own placement
+/// (damping on the twist rate): no structural finding.
+pub const DAMPING_TWIST_RATE: &str = "twist_rate";
+/// diagnosis.json's `structure.damping` that names [`DAMPING_ROTOR_ABSOLUTE`].
+pub const DAMPING_ROTOR_ABSOLUTE_PLACEMENT: &str = "rotor_absolute";
+
+/// The `structure.damping` a structural fault is named by, if it is a
+/// damping placement (a test checks these against the diagnosis' registry).
+pub fn damping_placement(fault: &str) -> Option<&'static str> {
+    (fault == DAMPING_ROTOR_ABSOLUTE).then_some(DAMPING_ROTOR_ABSOLUTE_PLACEMENT)
+}
 /// A recorded channel lagging the others by a transport delay.
 pub const CHANNEL_DELAY: &str = "channel_delay";
 /// The force sensor as a second-order system (a load cell with its own resonance).

@@ -136,7 +136,7 @@ fn finding(effect: &str, params: &[(&str, f64)]) -> Finding {
 }
 
 fn answer(verdict: &str, findings: Vec<Finding>) -> Result<DiagnosisResult, String> {
-    Ok(DiagnosisResult { verdict: verdict.into(), findings })
+    Ok(DiagnosisResult { verdict: verdict.into(), findings, structure: None })
 }
 
 #[test]
@@ -412,7 +412,7 @@ fn runners_hand_each_campaign_to_the_diagnosis_and_judge_it() {
                 id.to_string()
             }
         };
-        Ok(DiagnosisResult { verdict, findings })
+        Ok(DiagnosisResult { verdict, findings, structure: None })
     };
     let out = b.run(|case, campaign| {
         assert_eq!(campaign.name, case.id);
@@ -455,4 +455,28 @@ fn ladders_shrink_the_effect_towards_the_noise() {
         let (first, last) = (mark(0), mark(LADDER_STEPS - 1));
         assert!(first > 2.0 * last && first > 1.0, "{effect}: first rung {first}, last {last}");
     }
+}
+
+/// The damping placements the judge reads from diagnosis.json's `structure`
+/// are ids of the diagnosis' structure registry.
+#[test]
+fn damping_placements_are_the_diagnosis_structure_ids() {
+    let theirs: Vec<&str> = rig_diagnose::structure::REGISTRY.iter().map(|c| c.id()).collect();
+    assert_eq!(theirs.first(), Some(&ids::DAMPING_TWIST_RATE), "{theirs:?}");
+    for fault in ids::STRUCTURAL {
+        if let Some(p) = ids::damping_placement(fault) {
+            assert!(theirs.contains(&p), "{fault} -> {p} not in {theirs:?}");
+        }
+    }
+    // The judge accepts the placement named in `structure`, and flags one the truth lacks.
+    let null = Battery::ci().cases.into_iter().find(|c| c.expected() == Expected::None).expect("a null case");
+    let with = |damping: &str| {
+        Ok(DiagnosisResult {
+            verdict: ids::NONE.into(),
+            findings: vec![],
+            structure: Some(rig_virtual_rig::battery::StructureAnswer { damping: damping.into() }),
+        })
+    };
+    assert!(judge(&null, &with(ids::DAMPING_TWIST_RATE)).right);
+    assert!(!judge(&null, &with(ids::DAMPING_ROTOR_ABSOLUTE_PLACEMENT)).right);
 }

@@ -27,7 +27,7 @@ fn oracle(case: &Case) -> Result<DiagnosisResult, String> {
     if case.id.starts_with("outside") {
         return Err("a diagnosis error travels too".into());
     }
-    Ok(DiagnosisResult { verdict, findings })
+    Ok(DiagnosisResult { verdict, findings, structure: None })
 }
 
 fn files(b: &Battery, out: &[rig_virtual_rig::battery::Outcome]) -> Vec<(&'static str, String)> {

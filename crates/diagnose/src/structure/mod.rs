@@ -41,7 +41,7 @@ mod rotor_absolute;
 mod twist_rate;
 
 use crate::DiagnoseOptions;
-use crate::channels::{BalanceData, FreeRunPair, FreeRunSettings, free_run_misfit, free_run_pairs_by};
+use crate::channels::{BalanceData, FreeRunPair, FreeRunSettings, free_run_misfit, free_run_pairs_by, with_run_phases};
 use crate::result::{ParamAtBound, StructureScore, round_sig};
 use crate::select::{compare_folds, overall};
 use rig_types::{Campaign, RigParams};
@@ -113,6 +113,7 @@ pub fn select_structure(
     ext: &RigParams,
     ext_pairs: &[FreeRunPair],
     fold_of: &BTreeMap<String, usize>,
+    phases: &BTreeMap<String, (f64, f64)>,
     s: &FreeRunSettings,
     opts: &DiagnoseOptions,
 ) -> StructureSelection {
@@ -140,7 +141,7 @@ pub fn select_structure(
             (0..folds).map(|f| cand.fit(ext, data, &|id| fold_of.get(id).is_some_and(|&g| g != f))).collect();
         let pairs: Vec<FreeRunPair> = free_run_pairs_by(c, s, |id| {
             let f = fits.get(*fold_of.get(id)?)?.as_ref()?;
-            Some(cand.apply(ext, f))
+            Some(with_run_phases(&cand.apply(ext, f), phases.get(id).copied().unwrap_or_default()))
         });
         let (mut before, mut after, mut fold_v) = (Vec::new(), Vec::new(), Vec::new());
         for q in &pairs {

@@ -72,6 +72,17 @@ pub struct Finding {
 pub struct DiagnosisResult {
     pub verdict: String,
     pub findings: Vec<Finding>,
+    /// The spec's top-level `structure` (where the diagnosis puts the
+    /// damping), absent in older files.
+    #[serde(default)]
+    pub structure: Option<StructureAnswer>,
+}
+
+/// diagnosis.json's `structure` object: the damping placement the diagnosis
+/// selected (its other fields ignored).
+#[derive(Debug, Clone, PartialEq, Default, serde::Deserialize, serde::Serialize)]
+pub struct StructureAnswer {
+    pub damping: String,
 }
 
 /// The kind of a case.
@@ -603,6 +614,8 @@ pub struct CaseResult {
 pub struct ExactResult {
     pub verdict: String,
     pub findings: Vec<(String, BTreeMap<String, u64>)>,
+    #[serde(default)]
+    pub structure: Option<String>,
 }
 
 impl From<DiagnosisResult> for ExactResult {
@@ -612,7 +625,7 @@ impl From<DiagnosisResult> for ExactResult {
             .into_iter()
             .map(|f| (f.effect, f.params.into_iter().map(|(k, v)| (k, v.to_bits())).collect()))
             .collect();
-        ExactResult { verdict: d.verdict, findings }
+        ExactResult { verdict: d.verdict, findings, structure: d.structure.map(|s| s.damping) }
     }
 }
 
@@ -623,7 +636,7 @@ impl From<ExactResult> for DiagnosisResult {
             .into_iter()
             .map(|(effect, p)| Finding { effect, params: p.into_iter().map(|(k, v)| (k, f64::from_bits(v))).collect() })
             .collect();
-        DiagnosisResult { verdict: e.verdict, findings }
+        DiagnosisResult { verdict: e.verdict, findings, structure: e.structure.map(|damping| StructureAnswer { damping }) }
     }
 }
 
@@ -777,7 +790,8 @@ pub fn judge(case: &Case, result: &Result<DiagnosisResult, String>) -> Judgement
         }
         Expected::Unexplained { partial } => (partial, d.verdict == ids::UNEXPLAINED),
         Expected::Structural { id, partial } => {
-            let named = d.findings.iter().any(|f| f.effect == id);
+            let named = d.findings.iter().any(|f| f.effect == id)
+                || ids::damping_placement(id).is_some_and(|p| d.structure.as_ref().is_some_and(|s| s.damping == p));
             let ok =
                 d.verdict == ids::UNEXPLAINED || (named && (d.verdict == id || partial.contains(&d.verdict.as_str())));
             structure = Some(id);
@@ -810,6 +824,13 @@ pub fn judge(case: &Case, result: &Result<DiagnosisResult, String>) -> Judgement
                     }
                 }
             }
+        }
+    }
+    // A damping placement other than the rig model's, where the truth has none, is spurious.
+    if let Some(s) = &d.structure {
+        let truth_placement = structure.and_then(ids::damping_placement);
+        if s.damping != ids::DAMPING_TWIST_RATE && Some(s.damping.as_str()) != truth_placement {
+            why.push(format!("spurious structure: damping on {}", s.damping));
         }
     }
     for f in &d.findings {
