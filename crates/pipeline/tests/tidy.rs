@@ -455,7 +455,7 @@ fn linear_least_squares_has_one_home() {
 
 /// pipeline.toml keys that two stages declare with the same value on purpose:
 /// each is that stage's own physics, not a setting the stages must agree on.
-const SAME_VALUE_ON_PURPOSE: [(&str, &str); 3] = [
+const SAME_VALUE_ON_PURPOSE: [(&str, &str); 4] = [
     (
         "tolerance_bins",
         "spectra (measured signals) and harmonic (noise-free simulations) set their line tolerance for \
@@ -465,6 +465,11 @@ const SAME_VALUE_ON_PURPOSE: [(&str, &str); 3] = [
         "sample_rate_hz",
         "the rate each study samples its own simulations at (sweeps: the classifier's spectral test up \
          to 10 Hz; harmonic: lines below 5 Hz); neither reads the other's",
+    ),
+    (
+        "shard",
+        "each sharded stage's own slice of its own job array (sweeps: the maps' chains; confusion: \
+         the battery's campaigns); \"1/1\" is each one's unsharded default",
     ),
     (
         "adequacy_threshold",
