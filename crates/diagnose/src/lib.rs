@@ -290,7 +290,9 @@ pub fn diagnose(
         // the spec's laws and the teacher-forced fit have them).
         let phases: std::collections::BTreeMap<String, (f64, f64)> =
             d.detail.runs.iter().map(|r| (r.id.clone(), r.phases_rad)).collect();
-        let phased = |m: &rig_types::RigParams, id: &str| channels::with_run_phases(m, phases.get(id).copied().unwrap_or_default());
+        let phased = |m: &rig_types::RigParams, id: &str| {
+            channels::with_run_phases(m, phases.get(id).copied().unwrap_or_default())
+        };
         let (base_pairs, ext_pairs) = rayon::join(
             || channels::free_run_pairs(c, p, &s),
             || channels::free_run_pairs_by(c, &s, |id| Some(phased(&ext, id))),

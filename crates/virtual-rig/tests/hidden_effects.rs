@@ -120,7 +120,8 @@ fn a_fading_brake_is_not_named_viscous_friction() {
 #[ignore = "known regression since the free-run adequacy test (issue 25): verdict unexplained, rotor_max 6.1x"]
 fn angle_periodic_friction_explains_its_line_in_the_motor_speed() {
     let (d, effects) = battery_case("compound-angle_periodic_friction+viscous_brake_friction-0");
-    let left: Vec<&str> = d.findings.iter().filter(|f| f.effect == "unexplained").map(|f| f.evidence.as_str()).collect();
+    let left: Vec<&str> =
+        d.findings.iter().filter(|f| f.effect == "unexplained").map(|f| f.evidence.as_str()).collect();
     assert_eq!(d.verdict, "angle_periodic_friction", "findings {effects:?}; left: {left:?}");
     assert!(effects.iter().any(|e| e == "viscous_brake_friction"), "findings {effects:?}");
 }

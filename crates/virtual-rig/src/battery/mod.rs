@@ -636,7 +636,11 @@ impl From<ExactResult> for DiagnosisResult {
             .into_iter()
             .map(|(effect, p)| Finding { effect, params: p.into_iter().map(|(k, v)| (k, f64::from_bits(v))).collect() })
             .collect();
-        DiagnosisResult { verdict: e.verdict, findings, structure: e.structure.map(|damping| StructureAnswer { damping }) }
+        DiagnosisResult {
+            verdict: e.verdict,
+            findings,
+            structure: e.structure.map(|damping| StructureAnswer { damping }),
+        }
     }
 }
 
