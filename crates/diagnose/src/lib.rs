@@ -297,9 +297,7 @@ pub fn diagnose(
             || channels::free_run_pairs(c, p, &s),
             || channels::free_run_pairs_by(c, &s, |id| Some(phased(&ext, id))),
         );
-        let fold_of: std::collections::BTreeMap<String, usize> =
-            d.detail.runs.iter().map(|r| (r.id.clone(), r.fold)).collect();
-        let sel = structure::select_structure(c, data, &ext, &ext_pairs, &fold_of, &phases, &s, opts);
+        let sel = structure::select_structure(c, data, &ext, &ext_pairs, &d.detail.runs, &s, opts);
         let moved = sel.damping != structure::REGISTRY[0].id();
         let final_pairs =
             if moved { channels::free_run_pairs_by(c, &s, |id| Some(phased(&sel.model, id))) } else { ext_pairs };

@@ -105,18 +105,20 @@ pub struct StructureSelection {
 }
 
 /// Selects the damping structure on top of `ext` (module docs). `ext_pairs`
-/// are the extended model's free runs (campaign order), `fold_of` each
-/// run's cross-validation fold (folds numbered from 0).
+/// are the extended model's free runs (campaign order), `runs` the
+/// diagnosis' rows: each run's cross-validation fold (numbered from 0) and
+/// its nuisance phases, with which its free runs are simulated.
 pub fn select_structure(
     c: &Campaign,
     data: &BalanceData,
     ext: &RigParams,
     ext_pairs: &[FreeRunPair],
-    fold_of: &BTreeMap<String, usize>,
-    phases: &BTreeMap<String, (f64, f64)>,
+    runs: &[crate::RunRow],
     s: &FreeRunSettings,
     opts: &DiagnoseOptions,
 ) -> StructureSelection {
+    let fold_of: BTreeMap<&str, usize> = runs.iter().map(|r| (r.id.as_str(), r.fold)).collect();
+    let phases: BTreeMap<&str, (f64, f64)> = runs.iter().map(|r| (r.id.as_str(), r.phases_rad)).collect();
     let folds = fold_of.values().max().map_or(0, |m| m + 1);
     let floor = crate::channels::speed_floor_rad_s(c, s);
     let base_ms: BTreeMap<&str, f64> =
@@ -148,7 +150,7 @@ pub fn select_structure(
             if let (Some(b), Some(a)) = (base_ms.get(q.id.as_str()), free_run_misfit(q, floor)) {
                 before.push(*b);
                 after.push(a);
-                fold_v.push(fold_of[&q.id]);
+                fold_v.push(fold_of[q.id.as_str()]);
             }
         }
         let cmp = compare_folds(&before, &after, &fold_v, folds);

@@ -1,5 +1,4 @@
-//! The stage registry: pipeline.toml names -> stage bodies. One module per
-//! stage family; each body is a thin call into an analysis crate.
+//! The stage registry: pipeline.toml names -> stage bodies, each a thin call into an analysis crate.
 
 mod campaign_cal;
 mod confusion;
@@ -80,7 +79,6 @@ const ESTIMATION_NEEDS: &[RunNeed] = &[
 const DIAGNOSIS_NEEDS: &[RunNeed] = &[RunNeed::runs("operating_point", 3, "cross-validation over runs")];
 
 const fn entry(name: &'static str, run: StageFn, file: &'static str, params: Option<TypedCheck>) -> Entry {
-    // `file` is relative to this folder; `source` below adds the folder.
     Entry { name, run, source: file, params, needs: &[] }
 }
 
@@ -90,7 +88,7 @@ impl Entry {
     }
 }
 
-/// This folder, relative to the workspace root.
+/// This folder, relative to the workspace root (`source` adds it to each entry's file).
 const STAGES_DIR: &str = "crates/pipeline/src/stages";
 
 fn find(name: &str) -> Option<&'static Entry> {
