@@ -12,22 +12,13 @@ use crate::study::Study;
 use crate::{Candidate, LaviError};
 use rig_ingest::lavi::LaviRecording;
 use rig_spectra::lowpass_fft;
-use rig_types::{FigureSpec, SeriesStyle, Table, figure, fmt_fixed, series};
+use rig_types::{SeriesStyle, Table, figure, fmt_fixed, series};
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-/// Everything the stage writes, in a fixed order.
-#[derive(Debug, Default)]
-pub struct StudyOutput {
-    /// (path under reports/, table).
-    pub tables: Vec<(String, Table)>,
-    pub figures: Vec<FigureSpec>,
-    /// `lavi.md`.
-    pub markdown: String,
-    /// `lavi-diagnosis.json`.
-    pub diagnosis: Value,
-}
+/// Everything the stage writes, in a fixed order (`lavi.md`, `lavi-diagnosis.json`).
+pub type StudyOutput = rig_types::StudyOutput<Value>;
 
 /// Issue 10's target for each feature, in words.
 const TARGETS: [&str; N_FEATURES] = [

@@ -5,21 +5,12 @@
 use crate::features::{Features, Regime, Spread};
 use crate::fit::Candidate;
 use crate::study::{CandidateResult, Study, predict_trace};
-use rig_types::{FigureSpec, SeriesStyle, Table, figure, fmt_fixed, series};
+use rig_types::{SeriesStyle, Table, figure, fmt_fixed, series};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 
-/// Everything the stage writes, in a fixed order.
-#[derive(Debug, Default)]
-pub struct StudyOutput {
-    /// (path under the out dir, table).
-    pub tables: Vec<(String, Table)>,
-    pub figures: Vec<FigureSpec>,
-    /// `slider.md`.
-    pub markdown: String,
-    /// `slider-diagnosis.json`.
-    pub diagnosis: Value,
-}
+/// Everything the stage writes, in a fixed order (`slider.md`, `slider-diagnosis.json`).
+pub type StudyOutput = rig_types::StudyOutput<Value>;
 
 /// What the literature says a Coulomb law misses on paper on paper, and what
 /// this study could and could not show of it (the text of slider.md).

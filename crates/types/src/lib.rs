@@ -11,6 +11,7 @@ mod figure;
 pub mod minimize;
 mod params;
 pub mod sensor;
+mod study;
 mod table;
 pub mod thesis;
 mod trajectory;
@@ -23,5 +24,6 @@ pub use figure::{
 pub use params::{
     DriveParams, Effect, FrictionLaw, HarmonicFriction, ModelKind, MotorParams, RigParams, RunInput, ThesisFriction,
 };
+pub use study::StudyOutput;
 pub use table::{Table, fmt_fixed};
 pub use trajectory::Trajectory;
