@@ -97,6 +97,7 @@
 //! `confusion` stage publishes the battery's false alarms and confusion
 //! matrix with every run.
 
+pub mod breakaway;
 pub mod channels;
 pub mod composite;
 pub mod drive;
@@ -167,6 +168,10 @@ pub struct DiagnoseOptions {
     /// voltage steps): pipeline.toml's `[shared.integrator]`, as the
     /// simulation, sweeps, spectra and estimation stages.
     pub integrator: rig_model::SimOptions,
+    /// How stick episodes and slip are read from the records (the
+    /// estimation's μs rules, pipeline.toml's `[shared.stick_episodes]`):
+    /// the extended model's break-away level ([`breakaway`]).
+    pub stick_episodes: rig_estimate::FrictionOptions,
 }
 
 impl DiagnoseOptions {
@@ -284,12 +289,17 @@ pub fn diagnose(
     if let (Some(p), Some(data)) = (baseline, &balance) {
         let vocab: Vec<(EffectId, std::collections::BTreeMap<String, f64>)> =
             d.findings.iter().filter_map(|f| EffectId::from_id(&f.effect).map(|e| (e, f.params.clone()))).collect();
-        let ext = extended_params(p, &vocab);
-        let s = channels::FreeRunSettings::of(opts, o);
         // Each run's free run with its own nuisance phases (θ free per run, as
         // the spec's laws and the teacher-forced fit have them).
         let phases: std::collections::BTreeMap<String, (f64, f64)> =
             d.detail.runs.iter().map(|r| (r.id.clone(), r.phases_rad)).collect();
+        // The static level the extended model breaks away at, read under its
+        // own normal force (breakaway module docs).
+        let ext = extended_params(p, &vocab);
+        let level = breakaway::breakaway_level(c, &law, &ext, &phases, &opts.stick_episodes);
+        let ext = level.as_ref().map_or(ext.clone(), |l| breakaway::with_static_level(&ext, l));
+        d.detail.breakaway = level;
+        let s = channels::FreeRunSettings::of(opts, o);
         let phased = |m: &rig_types::RigParams, id: &str| {
             channels::with_run_phases(m, phases.get(id).copied().unwrap_or_default())
         };

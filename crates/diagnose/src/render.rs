@@ -407,14 +407,22 @@ pub fn markdown(d: &Diagnosis) -> String {
         let _ = writeln!(
             s,
             "\n## Free run: baseline and final model\n\nEvery operating point simulated from rest with the baseline \
-             and with the final model (baseline + findings, phases 0, with the selected structure), compared with the \
-             record on phase-insensitive features. The final model's checks are part of the adequacy test \
+             and with the final model (baseline + findings with each run's fitted phases, the break-away level read \
+             under its normal force, and the selected structure), compared with the record on phase-insensitive features. The final model's checks are part of the adequacy test \
              (thresholds calibrated on stick-slipping effect-free campaigns, rig-diagnose `ChannelOptions`).\n\n\
              | check | baseline ratio | final ratio | threshold | final detail |\n|---|---|---|---|---|"
         );
         for (b, e) in det.free_run_baseline.iter().zip(&det.free_run_extended) {
             let _ =
                 writeln!(s, "| {} | {:.2} | {:.2} | {:.1} | {} |", b.channel, b.ratio, e.ratio, e.threshold, e.detail);
+        }
+        if let Some(l) = &det.breakaway {
+            let _ = writeln!(
+                s,
+                "\nThe final model's {} (rig-diagnose `breakaway`: a finding that modulates the normal force moves \
+                 the break-aways to where N is low, so F/N0 under-reads the static level; the slip channels never see it).",
+                l.describe()
+            );
         }
     }
     let _ = writeln!(

@@ -239,6 +239,9 @@ pub struct Detail {
     /// One encoder tick over the motor-speed differentiator window, rad/s:
     /// the resolution of the motor-dip feature (0 when not computed).
     pub motor_speed_tick_rad_s: f64,
+    /// The extended model's static level when a finding modulates the
+    /// normal force ([`crate::breakaway`]); `None`: the baseline's stands.
+    pub breakaway: Option<crate::breakaway::BreakAwayLevel>,
 }
 
 /// One operating point's rotor speed over the steady window (about 20 Hz).

@@ -16,7 +16,11 @@ use rig_types::sensor::{
 use rig_types::{Campaign, RunKind};
 use serde::{Deserialize, Serialize};
 
+/// pipeline.toml's `[shared.stick_episodes]`: the estimation's μs/μk and the
+/// diagnosis' break-away level under its extended model read stick and slip
+/// with the same rules.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct FrictionOptions {
     /// Half-width of the centred difference for Ω1, s (counted in samples
     /// from each run's time column).
@@ -72,9 +76,24 @@ pub fn analyse_trace(
     normal_force_n: f64,
     opts: &FrictionOptions,
 ) -> RunFriction {
+    analyse_trace_normal(time_s, rotor_angle_rad, force_n, &|_| normal_force_n, opts)
+}
+
+/// [`analyse_trace`] with a normal force that varies along the run,
+/// `normal_force_n(sample index)`: μ = F/N(t). The baseline has N = N0; a
+/// model whose normal force is modulated (rig_model::friction::normal_force_n)
+/// reads its own break-away level from the same episodes (the diagnosis'
+/// `breakaway` module).
+pub fn analyse_trace_normal(
+    time_s: &[f64],
+    rotor_angle_rad: &[f64],
+    force_n: &[f64],
+    normal_force_n: &dyn Fn(usize) -> f64,
+    opts: &FrictionOptions,
+) -> RunFriction {
     let h = half_window_samples(time_s, opts.speed_half_window_s).max(1);
     let omega = central_speed(time_s, rotor_angle_rad, h);
-    let mu: Vec<f64> = force_n.iter().map(|f| f / normal_force_n).collect();
+    let mu: Vec<f64> = force_n.iter().enumerate().map(|(i, f)| f / normal_force_n(i)).collect();
     let slip: Vec<usize> = (0..omega.len()).filter(|&i| omega[i].abs() > opts.slip_threshold_rad_s).collect();
     let mu_slip =
         (!slip.is_empty()).then(|| (slip.iter().map(|&i| mu[i].abs()).sum::<f64>() / slip.len() as f64, slip.len()));
@@ -107,6 +126,18 @@ pub fn analyse_trace(
         }
     }
     RunFriction { mu_slip, breakaway_peaks: peaks }
+}
+
+/// μs from break-away peaks: their median, with the standard error
+/// 1.2533·σ/√n, σ = 1.4826·MAD (normal efficiency of the median); None
+/// without peaks, no standard error from one.
+pub fn static_level(peaks: &[f64]) -> Option<(f64, Option<f64>)> {
+    if peaks.is_empty() {
+        return None;
+    }
+    let med = median(peaks);
+    let mad = median(&peaks.iter().map(|p| (p - med).abs()).collect::<Vec<_>>());
+    Some((med, (peaks.len() >= 2).then(|| 1.2533 * 1.4826 * mad / (peaks.len() as f64).sqrt())))
 }
 
 /// μs and μk from every operating point; force calibration force_n = (mv − offset)/factor.
@@ -163,13 +194,7 @@ pub fn estimate_friction(
     // μs: median of peaks; se = 1.2533·σ/√n with σ = 1.4826·MAD (normal efficiency of the median).
     // Without any break-away there is no evidence that μs exceeds μk: the
     // Coulomb law then degenerates to μs = μk (stated in the report).
-    let (mu_s, mu_s_se) = if peaks.is_empty() {
-        (mu_k, None)
-    } else {
-        let med = median(&peaks);
-        let mad = median(&peaks.iter().map(|p| (p - med).abs()).collect::<Vec<_>>());
-        (med, (peaks.len() >= 2).then(|| 1.2533 * 1.4826 * mad / (peaks.len() as f64).sqrt()))
-    };
+    let (mu_s, mu_s_se) = static_level(&peaks).unwrap_or((mu_k, None));
     Ok(FrictionEstimate {
         mu_static: mu_s,
         mu_static_stderr: mu_s_se,

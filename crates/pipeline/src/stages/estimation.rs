@@ -28,9 +28,8 @@ pub struct Params {
     pub pi_method: Pi,
     pub pi_window_s: f64,
     pub saturation_margin_v: f64,
-    pub slip_threshold_rad_s: f64,
-    pub speed_half_window_s: f64,
-    pub min_stick_s: f64,
+    /// pipeline.toml's `[shared.stick_episodes]`.
+    pub stick_episodes: rig_estimate::FrictionOptions,
     /// pipeline.toml's `[shared.integrator]`.
     pub integrator: rig_model::SimOptions,
 }
@@ -86,9 +85,7 @@ fn options(p: &Params, initial: InitialValues) -> EstimateOptions {
     };
     o.pi.window_s = p.pi_window_s;
     o.pi.saturation_margin_v = p.saturation_margin_v;
-    o.friction.slip_threshold_rad_s = p.slip_threshold_rad_s;
-    o.friction.speed_half_window_s = p.speed_half_window_s;
-    o.friction.min_stick_s = p.min_stick_s;
+    o.friction = p.stick_episodes.clone();
     o.integrator = p.integrator.clone();
     o
 }
