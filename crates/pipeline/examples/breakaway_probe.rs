@@ -15,6 +15,20 @@ fn main() -> Result<()> {
     let cal = rig_calibrate::calibrate_campaign(&c)?;
     let shipped: RigParams =
         serde_json::from_str(&std::fs::read_to_string(root.join("reports/data/rig-params.json"))?)?;
+    let shipped = if std::env::var("REEST").is_ok() {
+        let th = rig_calibrate::thesis_data(&rig_ingest::thesis::read_thesis_tables(&root.join("data/thesis"))?)?;
+        let o = rig_estimate::EstimateOptions {
+            damping: rig_estimate::DampingStructure::RotorAbsolute {
+                rotor_damping: rig_estimate::RotorDamping::Fitted,
+            },
+            ..rig_estimate::EstimateOptions::new(rig_estimate::InitialValues::from_thesis_data(&th))
+        };
+        let e = rig_estimate::estimate_rig(&c, &cal, &o)?.params;
+        println!("re-estimated: C {:.3e} C_r {:.3e} motor {:?} drive {:?}", e.shaft_damping_nm_s_rad, e.rotor_damping_nm_s_rad, e.motor, e.drive);
+        e
+    } else {
+        shipped
+    };
     for a in std::env::args().skip(1) {
         let (a, k) = a.split_once(',').unwrap_or((&a, ""));
         let mu_s: f64 = a.parse().context("mu_static")?;
@@ -31,6 +45,10 @@ fn main() -> Result<()> {
             println!("  {:<28} ratio {:6.2} thr {:.1} {} {}", k.channel, k.ratio, k.threshold, k.flagged, k.detail);
         }
         println!("  structure {} | {}", d.structure.damping, d.structure.notes);
+        let cr: f64 = std::env::var("CR").map_or(6.92e-3, |v| v.parse().unwrap());
+        for id in ["op-19", "op-27", "op-03", "op-20"] {
+            blocks(&c, &d, &p, id, cr, &opts.integrator);
+        }
         for r in &d.detail.runs {
             if let (m, Some(e)) = (r.measured, r.extended) {
                 println!("  {} ss {}/{} max {:.2}/{:.2} min {:.2}/{:.2}", r.id, m.stick_slip(), e.stick_slip(), m.rotor_max_rad_s, e.rotor_max_rad_s, m.rotor_min_rad_s, e.rotor_min_rad_s);
@@ -38,4 +56,47 @@ fn main() -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Block extrema (2 s) of run `id`'s rotor speed, measured and simulated with
+/// the final model rebuilt by hand (findings, phases, μs, rotor damping).
+#[allow(dead_code)]
+pub fn blocks(c: &rig_types::Campaign, d: &rig_diagnose::Diagnosis, base: &RigParams, id: &str, c_r: f64, so: &rig_model::SimOptions) {
+    use rig_types::RunKind;
+    let vocab: Vec<_> = d
+        .findings
+        .iter()
+        .filter_map(|f| rig_diagnose::EffectId::from_id(&f.effect).map(|e| (e, f.params.clone())))
+        .collect();
+    let row = d.detail.runs.iter().find(|r| r.id == id).unwrap();
+    let mut p = rig_diagnose::channels::with_run_phases(&rig_diagnose::extended_params(base, &vocab), row.phases_rad);
+    if let Some(l) = &d.detail.breakaway {
+        p = rig_diagnose::breakaway::with_static_level(&p, l);
+    }
+    if std::env::var("TW").is_err() {
+        p.shaft_damping_nm_s_rad = 0.0;
+    }
+    if c_r >= 0.0 {
+        p.rotor_damping_nm_s_rad = c_r;
+    }
+    let run = c.runs.iter().find(|r| r.id == id).unwrap();
+    let RunKind::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s } = run.kind else { return };
+    let t = &run.data.time_s;
+    let input = rig_types::RunInput::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s };
+    let tr = rig_model::simulate(&p, &input, t, so).unwrap();
+    let h = 10;
+    let speed = |a: &[f64]| rig_types::sensor::central_difference_rad_s(t, a, h);
+    let meas = speed(&rig_types::sensor::ticks_to_rad(run.data.rotor_ticks.as_ref().unwrap(), c.rig.encoder_ticks_per_rev));
+    let sim = speed(&tr.rotor_angle_rad);
+    for (name, w) in [("meas", &meas), ("sim ", &sim)] {
+        let mut line = format!("  {id} {name}");
+        for b in 0..20 {
+            let (lo, hi) = (b as f64 * 2.0, b as f64 * 2.0 + 2.0);
+            let v: Vec<f64> = t.iter().zip(w.iter()).filter(|(x, _)| **x >= lo && **x < hi).map(|(_, y)| *y).collect();
+            let mx = v.iter().copied().fold(f64::MIN, f64::max);
+            let mn = v.iter().copied().fold(f64::MAX, f64::min);
+            line.push_str(&format!(" {mx:.1}/{mn:.1}"));
+        }
+        println!("{line}");
+    }
 }
