@@ -84,7 +84,8 @@ pub fn breakaway_level(
         let phi1 = ticks_to_rad(ticks, c.rig.encoder_ticks_per_rev);
         let force = law.force_n(mv);
         let p = with_run_phases(model, phases_rad.get(&run.id).copied().unwrap_or_default());
-        let n_of = |i: usize| rig_model::friction::normal_force_n(normal_force_n, &p.effects, None, d.time_s[i], phi1[i]);
+        let n_of =
+            |i: usize| rig_model::friction::normal_force_n(normal_force_n, &p.effects, None, d.time_s[i], phi1[i]);
         peaks.extend(analyse_trace_normal(&d.time_s, &phi1, &force, &n_of, o).breakaway_peaks);
     }
     let (mu_static, mu_static_stderr) = static_level(&peaks)?;

@@ -298,7 +298,6 @@ pub fn diagnose(
         let ext = extended_params(p, &vocab);
         let level = breakaway::breakaway_level(c, &law, &ext, &phases, &opts.stick_episodes);
         let ext = level.as_ref().map_or(ext.clone(), |l| breakaway::with_static_level(&ext, l));
-        d.detail.breakaway = level;
         let s = channels::FreeRunSettings::of(opts, o);
         let phased = |m: &rig_types::RigParams, id: &str| {
             channels::with_run_phases(m, phases.get(id).copied().unwrap_or_default())
@@ -338,6 +337,7 @@ pub fn diagnose(
             }
             row.extended = final_pairs.iter().find(|q| q.id == row.id).and_then(|q| q.simulated);
         }
+        d.detail.breakaway = level;
         d.detail.free_run_baseline = free_run_baseline;
         d.detail.free_run_extended = free_run_final;
         d.detail.speed_traces = channels::speed_traces(&base_pairs, &final_pairs);

@@ -24,7 +24,10 @@ fn main() -> Result<()> {
             ..rig_estimate::EstimateOptions::new(rig_estimate::InitialValues::from_thesis_data(&th))
         };
         let e = rig_estimate::estimate_rig(&c, &cal, &o)?.params;
-        println!("re-estimated: C {:.3e} C_r {:.3e} motor {:?} drive {:?}", e.shaft_damping_nm_s_rad, e.rotor_damping_nm_s_rad, e.motor, e.drive);
+        println!(
+            "re-estimated: C {:.3e} C_r {:.3e} motor {:?} drive {:?}",
+            e.shaft_damping_nm_s_rad, e.rotor_damping_nm_s_rad, e.motor, e.drive
+        );
         e
     } else {
         shipped
@@ -51,7 +54,16 @@ fn main() -> Result<()> {
         }
         for r in &d.detail.runs {
             if let (m, Some(e)) = (r.measured, r.extended) {
-                println!("  {} ss {}/{} max {:.2}/{:.2} min {:.2}/{:.2}", r.id, m.stick_slip(), e.stick_slip(), m.rotor_max_rad_s, e.rotor_max_rad_s, m.rotor_min_rad_s, e.rotor_min_rad_s);
+                println!(
+                    "  {} ss {}/{} max {:.2}/{:.2} min {:.2}/{:.2}",
+                    r.id,
+                    m.stick_slip(),
+                    e.stick_slip(),
+                    m.rotor_max_rad_s,
+                    e.rotor_max_rad_s,
+                    m.rotor_min_rad_s,
+                    e.rotor_min_rad_s
+                );
             }
         }
     }
@@ -61,7 +73,14 @@ fn main() -> Result<()> {
 /// Block extrema (2 s) of run `id`'s rotor speed, measured and simulated with
 /// the final model rebuilt by hand (findings, phases, μs, rotor damping).
 #[allow(dead_code)]
-pub fn blocks(c: &rig_types::Campaign, d: &rig_diagnose::Diagnosis, base: &RigParams, id: &str, c_r: f64, so: &rig_model::SimOptions) {
+pub fn blocks(
+    c: &rig_types::Campaign,
+    d: &rig_diagnose::Diagnosis,
+    base: &RigParams,
+    id: &str,
+    c_r: f64,
+    so: &rig_model::SimOptions,
+) {
     use rig_types::RunKind;
     let vocab: Vec<_> = d
         .findings
@@ -86,7 +105,8 @@ pub fn blocks(c: &rig_types::Campaign, d: &rig_diagnose::Diagnosis, base: &RigPa
     let tr = rig_model::simulate(&p, &input, t, so).unwrap();
     let h = 10;
     let speed = |a: &[f64]| rig_types::sensor::central_difference_rad_s(t, a, h);
-    let meas = speed(&rig_types::sensor::ticks_to_rad(run.data.rotor_ticks.as_ref().unwrap(), c.rig.encoder_ticks_per_rev));
+    let meas =
+        speed(&rig_types::sensor::ticks_to_rad(run.data.rotor_ticks.as_ref().unwrap(), c.rig.encoder_ticks_per_rev));
     let sim = speed(&tr.rotor_angle_rad);
     for (name, w) in [("meas", &meas), ("sim ", &sim)] {
         let mut line = format!("  {id} {name}");

@@ -108,16 +108,13 @@ fn a_fading_brake_is_not_named_viscous_friction() {
 /// the order-2 line the friction puts into the motor speed (through the
 /// shaft) is explained by it. Before: `unexplained` by that line alone.
 ///
-/// Known regression (issue 25, open): since the free run is part of
-/// adequacy, both effects are still found with their parameters, but the
-/// extended model's free run misses the rotor-speed maxima by 6.1× their
-/// floor (op-30: measured 4.52, simulated 6.70 rad/s), so the verdict is
-/// `unexplained`. The free-run thresholds were calibrated on effect-free
-/// campaigns only; whether a right in-vocabulary model should pass them (a
-/// break-away level the teacher-forced slip channel cannot see) is the open
-/// question. Run with `--run-ignored only`.
+/// Since the free run is part of adequacy (issue 25) the extended model must
+/// also pass it: the angle-periodic friction modulates the normal force, so
+/// the break-aways fall where N is low and F/N0 under-reads the static level;
+/// read under the extended model's N(t, φ1) (rig_diagnose::breakaway) the
+/// free run passes (before that re-read: rotor maxima 6.1× their floor,
+/// op-30 measured 4.52, simulated 6.70 rad/s, verdict `unexplained`).
 #[test]
-#[ignore = "known regression since the free-run adequacy test (issue 25): verdict unexplained, rotor_max 6.1x"]
 fn angle_periodic_friction_explains_its_line_in_the_motor_speed() {
     let (d, effects) = battery_case("compound-angle_periodic_friction+viscous_brake_friction-0");
     let left: Vec<&str> =
