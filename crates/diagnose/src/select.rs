@@ -393,7 +393,8 @@ fn signature_curve(s: &Samples, col: usize) -> Vec<(f64, f64, bool)> {
 /// The whole selection on prepared signals. `thesis_mu_dynamic` (Table 4.7)
 /// adds the thesis rung to the ladder; `channel_checks` are the significant
 /// mismatches found in the other run kinds (static twist, voltage steps,
-/// free-run operating points), each "run_kind: sentence".
+/// free-run operating points), each "run_kind: sentence". The candidates are
+/// the vocabulary's [`REGISTRY`].
 pub fn diagnose_signals(
     campaign: &str,
     runs: &[RunSignals],
@@ -403,6 +404,21 @@ pub fn diagnose_signals(
     channel_checks: &[(String, String)],
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
+    select_over(REGISTRY, campaign, runs, (supply_v, disc_radius_m), thesis_mu_dynamic, channel_checks, opts)
+}
+
+/// [`diagnose_signals`] with the candidates of `registry` (in its order);
+/// `rig` is (supply voltage V, brake disc radius m).
+pub(crate) fn select_over(
+    registry: &[&'static dyn VocabularyEffect],
+    campaign: &str,
+    runs: &[RunSignals],
+    rig: (f64, f64),
+    thesis_mu_dynamic: Option<f64>,
+    channel_checks: &[(String, String)],
+    opts: &DiagnoseOptions,
+) -> Result<Diagnosis, DiagnoseError> {
+    let (supply_v, disc_radius_m) = rig;
     let folds = opts.folds.min(runs.len());
     if runs.len() < 3 || folds < 2 {
         return Err(DiagnoseError::TooFewRuns { campaign: campaign.into(), needed: 3, found: runs.len() });
@@ -448,8 +464,9 @@ pub fn diagnose_signals(
     let mut first_step: Vec<(EffectId, Comparison, Vec<f64>)> = Vec::new();
     let significant =
         |c: &Comparison| c.gain >= opts.selection.min_relative_gain && c.t >= opts.min_t && c.after.is_finite();
-    for step in 1..=REGISTRY.len() {
-        let remaining: Vec<EffectId> = EffectId::all().filter(|e| !accepted.iter().any(|a| a.0 == *e)).collect();
+    for step in 1..=registry.len() {
+        let remaining: Vec<EffectId> =
+            registry.iter().map(|e| EffectId(*e)).filter(|e| !accepted.iter().any(|a| a.0 == *e)).collect();
         // Fit every candidate's friction sets (and the drive limit) at once, in parallel.
         let needed: Vec<FrictionSet> = {
             let mut v: Vec<FrictionSet> = remaining.iter().map(|&e| current.with(e).friction).collect();
@@ -540,7 +557,7 @@ pub fn diagnose_signals(
         .collect();
     // Lines a fitted effect drives (an angle-locked friction of order n: order
     // n and its harmonics, in either speed) are explained, not left over.
-    let explained_order = REGISTRY.iter().find_map(|e| e.explained_order(&full.model));
+    let explained_order = registry.iter().find_map(|e| e.explained_order(&full.model));
     let consistent: Vec<lines::ConsistentLine> = lines::consistent_lines(&all_lines, opts.line_ratio)
         .into_iter()
         .filter(|l| explained_order.is_none_or(|n| l.order % n != 0))

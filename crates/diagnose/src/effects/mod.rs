@@ -257,16 +257,17 @@ mod tests {
     }
 
     /// Adding an effect is one new file and one registry line: a test-only
-    /// effect (a constant friction offset, declared here as its own file would
-    /// declare it) is selected, applied and described by the same code paths
-    /// as the vocabulary's, through a registry of its own. Nothing else names it.
+    /// effect, declared here as its own file would declare it (an id, its
+    /// parameters, its term, how it applies, its sentence), goes through the
+    /// same code as the vocabulary's: forward selection over a registry of
+    /// its own finds it, reports its parameters and its sentence, and the
+    /// extended model and the per-run phases apply it. Nothing else names it.
     mod an_effect_is_one_file_and_one_registry_line {
         use super::super::*;
-        use crate::composite::Term as FrictionTerm;
+        use crate::drive::{Pi, predict_voltage};
+        use crate::prepare::RunSignals;
 
-        /// The test effect: the drive's voltage limit under another id (the
-        /// vocabulary's effects are the only terms the fits have; a new id on
-        /// an existing term needs nothing but this file and the registry line).
+        /// The test effect: a limit of the drive under an id of its own.
         struct TestLimit;
         const ID: &str = "test_drive_limit";
         const PARAMS: &[ParamSpec] =
@@ -285,17 +286,87 @@ mod tests {
                 model.drive.limit_v = p("limit_v") - 1.0;
             }
             fn evidence(&self, p: Params) -> String {
-                format!("test limit {:.1} V", p("limit_v"))
+                format!("test limit at {:.1} V", p("limit_v"))
             }
         }
+        /// The test's registry: the test effect's one line, and a vocabulary effect.
         static TEST_REGISTRY: &[&dyn VocabularyEffect] =
-            &[&TestLimit, &super::super::normal_force_modulation::NormalForceModulation];
+            &[&super::super::normal_force_modulation::NormalForceModulation, &TestLimit];
+
+        /// Six runs whose drive saturates at 5 V (PI kp = 2 V·s/rad, ki = 10 V/rad
+        /// on a motor speed that lags the ramp and wobbles), Coulomb friction
+        /// μ = 0.4 in slip, small deterministic noise on both channels.
+        fn runs() -> Vec<RunSignals> {
+            let truth = Pi { kp_v_s_rad: 2.0, ki_v_rad: 10.0, limit_v: 5.0 };
+            (0..6)
+                .map(|r| {
+                    let sp = [1.0, 2.0, 3.0][r % 3];
+                    let n = 4000;
+                    let time_s: Vec<f64> = (0..n).map(|k| k as f64 * 0.002).collect();
+                    let wobble = |t: f64, f: f64| (2.0 * std::f64::consts::PI * f * t + r as f64).sin();
+                    let motor_speed_rad_s: Vec<f64> =
+                        time_s.iter().map(|&t| sp * (1.0 - (-t / 0.8).exp()) * (1.0 + 0.1 * wobble(t, 0.7))).collect();
+                    let rotor_speed_rad_s: Vec<f64> = time_s.iter().map(|&t| 5.0 + 0.3 * wobble(t, 0.37)).collect();
+                    let integral = |w: &[f64]| {
+                        w.iter()
+                            .scan(0.0, |a, x| {
+                                *a += x * 0.002;
+                                Some(*a)
+                            })
+                            .collect::<Vec<f64>>()
+                    };
+                    let noise = |k: usize, m: usize| (k * m % 101) as f64 / 50.0 - 1.0;
+                    let mu_obs: Vec<f64> = (0..n).map(|k| 0.4 + 0.002 * noise(k, 7919)).collect();
+                    let mut s = RunSignals {
+                        id: format!("r{r}"),
+                        fold: r % 3,
+                        setpoint_rad_s: sp,
+                        normal_force_n: 10.0,
+                        ramp_s: 2.0,
+                        rotor_angle_rad: integral(&rotor_speed_rad_s),
+                        motor_angle_rad: integral(&motor_speed_rad_s),
+                        time_s,
+                        rotor_speed_rad_s,
+                        motor_speed_rad_s,
+                        voltage_v: vec![],
+                        friction_force_n: mu_obs.iter().map(|m| m * 10.0).collect(),
+                        slip_idx: (0..n).collect(),
+                        mu_obs,
+                        force_noise_n: 0.002 * 10.0 * 0.58,
+                        voltage_noise_v: 0.01 * 0.58,
+                        steady_from: n - 400,
+                    };
+                    let (v, _, _) = predict_voltage(&truth, &s);
+                    s.voltage_v = v.iter().enumerate().map(|(k, v)| v + 0.01 * noise(k, 104_729)).collect();
+                    s
+                })
+                .collect()
+        }
 
         #[test]
-        fn a_test_effect_goes_through_the_registry_paths() {
+        fn selection_over_a_registry_finds_its_test_effect() {
+            let mut opts = crate::DiagnoseOptions::from_pipeline_toml(include_str!("../../../../pipeline.toml"))
+                .expect("pipeline.toml");
+            opts.folds = 3;
+            let runs = runs();
+            let d = crate::select::select_over(TEST_REGISTRY, "test", &runs, (24.0, 0.06), None, &[], &opts)
+                .expect("selection");
+            assert_eq!(d.verdict, ID, "{:?}", d.findings);
+            let f = &d.findings[0];
+            assert!((f.params["limit_v"] - 5.0).abs() < 0.25, "{:?}", f.params);
+            assert!(f.evidence.starts_with("test limit at ") && f.evidence.contains("paired t"), "{}", f.evidence);
+            let tried: Vec<&str> = d.candidates.iter().map(|c| c.effect.as_str()).collect();
+            assert_eq!(tried, [super::super::normal_force_modulation::ID, ID]);
+            // The vocabulary's own registry finds the vocabulary's effect on the same runs.
+            let v = crate::diagnose_signals("test", &runs, 24.0, 0.06, None, &[], &opts).expect("selection");
+            assert_eq!(v.verdict, super::super::drive_voltage_limit::ID);
+            assert_eq!(v.findings[0].params, f.params);
+        }
+
+        #[test]
+        fn the_extended_model_and_the_phases_apply_a_test_effect() {
             let base = crate::channels::tests::base_params();
-            let e = EffectId(TEST_REGISTRY[0]);
-            let nfm = EffectId(TEST_REGISTRY[1]);
+            let (nfm, e) = (EffectId(TEST_REGISTRY[0]), EffectId(TEST_REGISTRY[1]));
             assert_eq!(e.channel(), Channel::Drive);
             let m = |kv: &[(&str, f64)]| kv.iter().map(|(k, v)| (k.to_string(), *v)).collect::<BTreeMap<_, _>>();
             let p = crate::channels::extended_params(
@@ -303,7 +374,6 @@ mod tests {
                 &[(e, m(&[("limit_v", 12.0)])), (nfm, m(&[("amplitude_ratio", 0.1), ("frequency_hz", 1.5)]))],
             );
             assert_eq!(p.drive.limit_v, 11.0);
-            assert_eq!(p.effects.len(), 1);
             let q = crate::channels::with_run_phases_of(TEST_REGISTRY, &p, (0.5, 0.0));
             assert_eq!(
                 q.effects,
@@ -313,8 +383,6 @@ mod tests {
                     phase_rad: 0.5
                 }]
             );
-            assert!(e.evidence(&|_| 12.0).contains("12.0 V"));
-            assert!(!matches!(nfm.term(), Term::Friction(FrictionTerm::AngleSine)));
         }
     }
 }
