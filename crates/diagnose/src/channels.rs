@@ -45,8 +45,8 @@ pub use free_run::{
 pub use step::voltage_step_checks;
 pub use twist::static_twist_checks;
 
-use crate::vocab::EffectId;
-use rig_types::{Effect, FrictionLaw, RigParams};
+use crate::effects::{EffectId, REGISTRY, VocabularyEffect};
+use rig_types::RigParams;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -159,68 +159,44 @@ pub struct ChannelOptions {
 }
 
 /// The extended model for the simulator: the baseline plus the vocabulary
-/// findings (diagnosis.md's table mapped onto rig_types' forms).
+/// findings, each effect applied by its own file
+/// ([`crate::effects::VocabularyEffect::apply`]: diagnosis.md's table mapped
+/// onto rig_types' forms), in the findings' order.
 ///
 /// Per-run phases θ are free nuisance parameters of the diagnosis and are not
-/// reported, so every phase is set to 0. The free-run statistics compared
+/// reported, so every phase is set to 0 here ([`with_run_phases`] sets one
+/// run's). The free-run statistics compared
 /// ([`free_run_checks`]: regime, rotor speed extrema and fundamental over a
 /// steady window of many modulation periods) do not depend on θ beyond the
 /// noise of the window, which is what the calibrated thresholds cover.
-/// `velocity_weakening_friction` replaces the friction law by the Stribeck
-/// law (its μs is both the law's peak and the break-away coefficient, as in
-/// rig-model); `viscous_brake_friction` keeps the baseline's μs.
+pub fn extended_params(baseline: &RigParams, findings: &[(EffectId, BTreeMap<String, f64>)]) -> RigParams {
+    let mut p = baseline.clone();
+    for (e, params) in findings {
+        e.apply(&mut p, baseline, &|k: &str| params.get(k).copied().unwrap_or(0.0));
+    }
+    p
+}
+
 /// `p` with one run's nuisance phases (θ_t, θ_φ) in its time- and
 /// angle-modulation effects: N(t) = N0 (1 + a sin(2π f t + θ_t)) and
 /// N(φ1) = N0 (1 + a sin(n φ1 + θ_φ)) with t and φ1 the run's own (both
-/// start at 0 with the record). The spec leaves θ free per run; a free run
-/// with θ = 0 forces a different run than the one recorded, and near a
-/// regime boundary that alone changes the regime.
+/// start at 0 with the record), each effect of the registry setting its own
+/// ([`crate::effects::VocabularyEffect::set_phases`]). The spec leaves θ free
+/// per run; a free run with θ = 0 forces a different run than the one
+/// recorded, and near a regime boundary that alone changes the regime.
 pub fn with_run_phases(p: &RigParams, phases_rad: (f64, f64)) -> RigParams {
+    with_run_phases_of(REGISTRY, p, phases_rad)
+}
+
+/// [`with_run_phases`] with the effects of `registry`.
+pub fn with_run_phases_of(registry: &[&dyn VocabularyEffect], p: &RigParams, phases_rad: (f64, f64)) -> RigParams {
     let mut q = p.clone();
     for e in &mut q.effects {
-        match e {
-            Effect::NormalForceModulation { phase_rad, .. } => *phase_rad = phases_rad.0,
-            Effect::AnglePeriodicFriction { phase_rad, .. } => *phase_rad = phases_rad.1,
-            _ => {}
+        for v in registry {
+            v.set_phases(e, phases_rad);
         }
     }
     q
-}
-
-pub fn extended_params(baseline: &RigParams, findings: &[(EffectId, BTreeMap<String, f64>)]) -> RigParams {
-    let mut p = baseline.clone();
-    let mu_s0 = rig_model::friction::static_mu(&baseline.friction);
-    for (e, params) in findings {
-        let g = |k: &str| params.get(k).copied().unwrap_or(0.0);
-        match e {
-            EffectId::NormalForceModulation => p.effects.push(Effect::NormalForceModulation {
-                amplitude_ratio: g("amplitude_ratio"),
-                frequency_hz: g("frequency_hz"),
-                phase_rad: 0.0,
-            }),
-            EffectId::AnglePeriodicFriction => p.effects.push(Effect::AnglePeriodicFriction {
-                amplitude_ratio: g("amplitude_ratio"),
-                order: g("order").round().max(1.0) as u32,
-                phase_rad: 0.0,
-            }),
-            EffectId::VelocityWeakeningFriction => {
-                p.friction = FrictionLaw::Stribeck {
-                    mu_static: g("mu_static"),
-                    mu_kinetic: g("mu_kinetic"),
-                    stribeck_speed_rad_s: g("stribeck_speed_rad_s"),
-                }
-            }
-            EffectId::ViscousBrakeFriction => {
-                p.friction = FrictionLaw::Viscous {
-                    mu_static: mu_s0.max(g("mu_kinetic")),
-                    mu_kinetic: g("mu_kinetic"),
-                    viscous_per_rad_s: g("viscous_per_rad_s"),
-                }
-            }
-            EffectId::DriveVoltageLimit => p.drive.limit_v = g("limit_v"),
-        }
-    }
-    p
 }
 
 /// Every check that needs no model to simulate (static twist, voltage steps,
@@ -255,12 +231,12 @@ fn rms(x: &[f64]) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+    use rig_types::FrictionLaw;
 
-    #[test]
-    fn extended_params_maps_every_effect() {
-        let base = RigParams {
+    pub(crate) fn base_params() -> RigParams {
+        RigParams {
             kind: rig_types::ModelKind::Rig,
             rotor_inertia_kgm2: 0.03,
             shaft_stiffness_nm_rad: 0.27,
@@ -281,14 +257,22 @@ mod tests {
             brake_disc_radius_m: 0.062,
             effects: vec![],
             harmonic: None,
-        };
+        }
+    }
+
+    #[test]
+    fn extended_params_maps_every_effect() {
+        use crate::effects::{drive_voltage_limit, normal_force_modulation, viscous_brake_friction};
+        use rig_types::Effect;
+        let base = base_params();
+        let id = |s: &str| EffectId::from_id(s).expect("a registry id");
         let m = |kv: &[(&str, f64)]| kv.iter().map(|(k, v)| (k.to_string(), *v)).collect::<BTreeMap<_, _>>();
         let p = extended_params(
             &base,
             &[
-                (EffectId::NormalForceModulation, m(&[("amplitude_ratio", 0.1), ("frequency_hz", 1.5)])),
-                (EffectId::DriveVoltageLimit, m(&[("limit_v", 12.0)])),
-                (EffectId::ViscousBrakeFriction, m(&[("mu_kinetic", 0.38), ("viscous_per_rad_s", 0.01)])),
+                (id(normal_force_modulation::ID), m(&[("amplitude_ratio", 0.1), ("frequency_hz", 1.5)])),
+                (id(drive_voltage_limit::ID), m(&[("limit_v", 12.0)])),
+                (id(viscous_brake_friction::ID), m(&[("mu_kinetic", 0.38), ("viscous_per_rad_s", 0.01)])),
             ],
         );
         assert_eq!(p.drive.limit_v, 12.0);

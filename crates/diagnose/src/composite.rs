@@ -26,11 +26,25 @@
 //! residuals (effective sample size).
 
 use crate::friction::{self, FrictionModel, SlipData};
-use crate::vocab::EffectId;
 use rig_estimate::linear::Normal;
 use std::f64::consts::PI;
 
-/// Which friction effects a model has.
+/// A term of the composite law: what a friction effect of the vocabulary
+/// contributes to the joint fit ([`crate::effects::VocabularyEffect::term`]).
+/// The fit knows each term's regressors and searches; it never names an effect.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Term {
+    /// (μs − μk) exp(−(Ω/vs)²) in the speed law (Brent's search for vs).
+    Stribeck,
+    /// c Ω in the speed law (a linear column).
+    Viscous,
+    /// The factor 1 + a sin(2π f t + θ_r) (frequency scan, phase per run).
+    TimeSine,
+    /// The factor 1 + a sin(n φ1 + θ_r) (order scan, phase per run).
+    AngleSine,
+}
+
+/// Which terms a composite law has.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
 pub struct FrictionSet {
     pub time_mod: bool,
@@ -40,13 +54,12 @@ pub struct FrictionSet {
 }
 
 impl FrictionSet {
-    pub fn with(mut self, e: EffectId) -> Self {
-        match e {
-            EffectId::NormalForceModulation => self.time_mod = true,
-            EffectId::AnglePeriodicFriction => self.angle_mod = true,
-            EffectId::VelocityWeakeningFriction => self.stribeck = true,
-            EffectId::ViscousBrakeFriction => self.viscous = true,
-            EffectId::DriveVoltageLimit => {}
+    pub fn with(mut self, t: Term) -> Self {
+        match t {
+            Term::TimeSine => self.time_mod = true,
+            Term::AngleSine => self.angle_mod = true,
+            Term::Stribeck => self.stribeck = true,
+            Term::Viscous => self.viscous = true,
         }
         self
     }
@@ -115,8 +128,8 @@ pub struct CompositeFit {
     pub model: Composite,
     /// Per training run.
     pub phases: Vec<Phases>,
-    /// (effect, JSON key, value, standard error).
-    pub params: Vec<(EffectId, &'static str, f64, f64)>,
+    /// (term, JSON key, value, standard error).
+    pub params: Vec<(Term, &'static str, f64, f64)>,
     pub rss_w: f64,
     pub converged: bool,
     /// Frequency scan of the time modulation on the first pass: (Hz, weighted RSS).
@@ -307,14 +320,13 @@ fn refine_speed_time(
 /// The parameters of [`refine_speed_time`]'s fit with their joint standard
 /// errors (σ²(JᵀJ)⁻¹ at the optimum, marginal over every other parameter of
 /// the block, including the phases), in the order the block fits list them.
-fn joint_params(m: &Composite, ne: &Normal, rss: f64, n: usize) -> Vec<(EffectId, &'static str, f64, f64)> {
+fn joint_params(m: &Composite, ne: &Normal, rss: f64, n: usize) -> Vec<(Term, &'static str, f64, f64)> {
     let np = ne.n;
     let var = rss / (n.saturating_sub(np).max(1)) as f64;
     let inv = ne.inverse();
     let cov = |a: usize, b: usize| inv.as_ref().map(|v| v[a * np + b] * var).unwrap_or(f64::NAN);
     let se = |a: usize| cov(a, a).max(0.0).sqrt();
-    let (vw, visc, nfm) =
-        (EffectId::VelocityWeakeningFriction, EffectId::ViscousBrakeFriction, EffectId::NormalForceModulation);
+    let (vw, visc, nfm) = (Term::Stribeck, Term::Viscous, Term::TimeSine);
     let i_c = 1 + 2 * usize::from(m.stribeck.is_some());
     let i_a = i_c + usize::from(m.viscous.is_some());
     let mut out = Vec::new();
@@ -346,7 +358,7 @@ pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order
     let base = friction::fit_coulomb(d);
     let mut m = Composite::coulomb(base.params[0].1);
     let mut phases = vec![(0.0, 0.0); d.n_runs];
-    let mut params: Vec<(EffectId, &'static str, f64, f64)> = Vec::new();
+    let mut params: Vec<(Term, &'static str, f64, f64)> = Vec::new();
     let mut scan = Vec::new();
     let mut rss = weighted_rss(d, &m, &phases);
     let mut converged = set == FrictionSet::default();
@@ -400,16 +412,12 @@ pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order
                 m.stribeck = Some((mu_s, vs));
                 m.viscous = set.viscous.then_some(c);
                 for (k, v, e) in f.params {
-                    let eff = if k == "viscous_per_rad_s" {
-                        EffectId::ViscousBrakeFriction
-                    } else {
-                        EffectId::VelocityWeakeningFriction
-                    };
+                    let eff = if k == "viscous_per_rad_s" { Term::Viscous } else { Term::Stribeck };
                     params.push((eff, k, v, e));
                 }
                 if set.viscous {
                     let mk = params.iter().find(|p| p.1 == "mu_kinetic").copied().expect("fitted");
-                    params.push((EffectId::ViscousBrakeFriction, "mu_kinetic", mk.2, mk.3));
+                    params.push((Term::Viscous, "mu_kinetic", mk.2, mk.3));
                 }
             } else if set.viscous {
                 let f = friction::fit_viscous(ds)?;
@@ -417,7 +425,7 @@ pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order
                 m.mu_k = mu_k;
                 m.viscous = Some(c);
                 for (k, v, e) in f.params {
-                    params.push((EffectId::ViscousBrakeFriction, k, v, e));
+                    params.push((Term::Viscous, k, v, e));
                 }
             } else {
                 m.mu_k = friction::fit_coulomb(ds).params[0].1;
@@ -441,7 +449,7 @@ pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order
                     phases[r].0 = *th;
                 }
                 for (k, v, e) in f.params {
-                    params.push((EffectId::NormalForceModulation, k, v, e));
+                    params.push((Term::TimeSine, k, v, e));
                 }
                 tf = factors(&|i| m.time_factor(d.t[i], phases[d.run[i]].0));
             }
@@ -463,7 +471,7 @@ pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order
                 phases[r].1 = *th;
             }
             for (k, v, e) in f.params {
-                params.push((EffectId::AnglePeriodicFriction, k, v, e));
+                params.push((Term::AngleSine, k, v, e));
             }
             af = factors(&|i| m.angle_factor(d.phi[i], phases[d.run[i]].1));
         }
@@ -573,8 +581,7 @@ mod tests {
                 * (1.0 + 0.12 * (2.0 * PI * 1.3 * t + 0.9 * r as f64).sin())
         });
         let freqs: Vec<f64> = (0..300).map(|j| 0.05 + 0.01 * j as f64).collect();
-        let set =
-            FrictionSet::default().with(EffectId::VelocityWeakeningFriction).with(EffectId::NormalForceModulation);
+        let set = FrictionSet::default().with(Term::Stribeck).with(Term::TimeSine);
         let f = fit_composite(&d, set, &freqs, 8).unwrap();
         let m = &f.model;
         let (mu_s, vs) = m.stribeck.unwrap();
@@ -582,7 +589,7 @@ mod tests {
         assert!((m.mu_k - 0.4).abs() < 4e-3 && (mu_s - 0.6).abs() < 1e-2 && (vs - 2.0).abs() < 0.1, "{m:?}");
         assert!((a - 0.12).abs() < 5e-3 && (fr - 1.3).abs() < 2e-3, "{m:?}");
         // Each single effect alone leaves far more.
-        let one = fit_composite(&d, FrictionSet::default().with(EffectId::VelocityWeakeningFriction), &freqs, 8);
+        let one = fit_composite(&d, FrictionSet::default().with(Term::Stribeck), &freqs, 8);
         assert!(one.unwrap().rss_w > 20.0 * f.rss_w);
         // A held-out run's phase is recovered from its own data with the shared parameters fixed.
         let held = synth(1, |_, t, _, w| {
@@ -609,8 +616,7 @@ mod tests {
                 * (1.0 + 0.1 * (2.0 * PI * 0.5 * t + 0.7 * r as f64).sin())
         });
         let freqs: Vec<f64> = (0..300).map(|j| 0.05 + 0.01 * j as f64).collect();
-        let set =
-            FrictionSet::default().with(EffectId::VelocityWeakeningFriction).with(EffectId::NormalForceModulation);
+        let set = FrictionSet::default().with(Term::Stribeck).with(Term::TimeSine);
         let f = fit_composite(&d, set, &freqs, 8).unwrap();
         assert!(f.converged);
         let se = |key: &str| f.params.iter().find(|p| p.1 == key).map(|p| p.3).unwrap();
@@ -646,7 +652,7 @@ mod tests {
     #[test]
     fn reported_speed_law_is_the_fitted_model() {
         let d = synth(4, |r, _, phi, w| (0.4 + 0.01 * w) * (1.0 + 0.1 * (3.0 * phi + 0.5 * r as f64).sin()));
-        let set = FrictionSet::default().with(EffectId::ViscousBrakeFriction).with(EffectId::AnglePeriodicFriction);
+        let set = FrictionSet::default().with(Term::Viscous).with(Term::AngleSine);
         let f = fit_composite(&d, set, &[], 8).unwrap();
         let value = |key: &str| f.params.iter().find(|p| p.1 == key).map(|p| p.2).unwrap();
         assert_eq!(value("viscous_per_rad_s"), f.model.viscous.unwrap());

@@ -11,6 +11,10 @@ use crate::prepare::RunSignals;
 use rig_estimate::linear::Normal;
 use rig_types::minimize::brent_min;
 
+/// The JSON key [`fit_limit`]'s limit is reported under (the drive term's
+/// one parameter, [`crate::effects::Term::DriveLimit`]).
+pub const LIMIT_PARAM: &str = "limit_v";
+
 /// PI gains and limit of the teacher-forced drive.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pi {

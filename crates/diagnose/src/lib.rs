@@ -15,7 +15,7 @@
 //!    the measured Ω1, φ1, Ω2 and t, so a right model with a small period error
 //!    is not punished): the friction coefficient in slip, μ_obs = F/N0
 //!    ([`friction`], [`composite`], Eq. 4-10), and the armature voltage of the
-//!    PI drive ([`drive`]). The vocabulary is one enum ([`vocab::EffectId`]).
+//!    PI drive ([`drive`]). The vocabulary is one file per effect ([`effects`], `REGISTRY`).
 //! 3. **Forward selection** ([`select`]): starting from the baseline (Coulomb μk,
 //!    drive saturating at `supply_voltage_v`), every remaining effect is added
 //!    to the current model, fitted on the training folds and scored on the
@@ -101,6 +101,7 @@ pub mod breakaway;
 pub mod channels;
 pub mod composite;
 pub mod drive;
+pub mod effects;
 pub mod friction;
 pub mod lines;
 pub mod prepare;
@@ -109,16 +110,15 @@ mod result;
 mod select;
 pub mod signature;
 pub mod structure;
-pub mod vocab;
 
 pub use channels::{ChannelCheck, ChannelOptions, extended_params};
+pub use effects::EffectId;
 pub use prepare::{ForceCal, RunSignals};
 pub use result::{
     Adequacy, CandidateScore, Diagnosis, Finding, ParamAtBound, RunRow, SignatureEntry, StepRow, Structure,
     StructureScore, round_sig,
 };
 pub use select::diagnose_signals;
-pub use vocab::EffectId;
 
 /// Knobs of the diagnosis: the `[stage.params]` of the `diagnosis` stage in
 /// pipeline.toml, which is their one home (no defaults in code: tests read

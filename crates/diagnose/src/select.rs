@@ -4,6 +4,7 @@
 
 use crate::composite::{self, Composite, CompositeFit, FrictionSet, Phases};
 use crate::drive::{self, Pi};
+use crate::effects::{EffectId, NONE, REGISTRY, Term, UNEXPLAINED, VocabularyEffect};
 use crate::friction::SlipData;
 use crate::lines;
 use crate::prepare::RunSignals;
@@ -12,7 +13,6 @@ use crate::result::{
     Adequacy, CandidateScore, Detail, Diagnosis, Features, Finding, RunRow, SignatureEntry, StepRow, round_sig,
 };
 use crate::signature::{self, Library, Samples};
-use crate::vocab::{Channel, EffectId, NONE, UNEXPLAINED};
 use crate::{DiagnoseError, DiagnoseOptions};
 use rayon::prelude::*;
 use rig_spectra::{LineAnalysisOptions, line_analysis};
@@ -29,9 +29,9 @@ struct ModelSet {
 
 impl ModelSet {
     fn with(self, e: EffectId) -> Self {
-        match e.channel() {
-            Channel::Drive => ModelSet { limit: true, ..self },
-            Channel::Friction => ModelSet { friction: self.friction.with(e), ..self },
+        match e.term() {
+            Term::DriveLimit => ModelSet { limit: true, ..self },
+            Term::Friction(t) => ModelSet { friction: self.friction.with(t), ..self },
         }
     }
 }
@@ -151,37 +151,22 @@ impl Cv<'_> {
     }
 }
 
-/// Whether adding `e` to the friction effects `set` gives the effect its name
-/// says, fitted on every run: `viscous_brake_friction` is friction that grows
-/// with slip speed (c > 0) and `velocity_weakening_friction` friction that
-/// falls from a higher static value (μs > μk), diagnosis.md's table. A fit
-/// with the opposite sign is a shape outside the vocabulary (friction falling
-/// linearly with speed, or rising toward a plateau), so the effect is not
-/// accepted and selection stops: a second-best vocabulary effect would only
-/// paper over the mismatch, which the adequacy test then judges. `None` when
-/// admissible (every other effect, whose fitted sign is free or canonical).
-/// `fit_all` is the joint fit of a friction set on every run (memoised: the
-/// final joint fit reuses it).
+/// Whether adding `e` to the current model gives the effect its name says,
+/// fitted on every run: each effect's own rule
+/// ([`VocabularyEffect::inadmissible`], e.g. viscous c > 0, velocity
+/// weakening μs > μk, diagnosis.md's table). A fit with the opposite sign is
+/// a shape outside the vocabulary (friction falling linearly with speed, or
+/// rising toward a plateau), so the effect is not accepted and selection
+/// stops: a second-best vocabulary effect would only paper over the mismatch,
+/// which the adequacy test then judges. `None` when admissible. `fit_all` is
+/// the joint fit of a friction set on every run (memoised: the final joint
+/// fit reuses it), called only by an effect with a rule.
 fn inadmissible(
     fit_all: &mut impl FnMut(FrictionSet) -> Option<CompositeFit>,
-    set: FrictionSet,
+    current: ModelSet,
     e: EffectId,
 ) -> Option<String> {
-    if !matches!(e, EffectId::ViscousBrakeFriction | EffectId::VelocityWeakeningFriction) {
-        return None;
-    }
-    let m = fit_all(set.with(e))?.model;
-    match e {
-        EffectId::ViscousBrakeFriction => m.viscous.filter(|&c| c <= 0.0).map(|c| {
-            format!("fitted on every run c = {c:.3e} per rad/s ≤ 0: friction falls with slip speed, not viscous friction")
-        }),
-        _ => m.stribeck.filter(|&(mu_s, _)| mu_s <= m.mu_k).map(|(mu_s, _)| {
-            format!(
-                "fitted on every run μs = {mu_s:.4} ≤ μk = {:.4}: friction rises with slip speed, not velocity weakening",
-                m.mu_k
-            )
-        }),
-    }
+    e.inadmissible(&mut || fit_all(current.with(e).friction).map(|f| f.model))
 }
 
 /// M_r = sqrt((e_μ² + e_V²)/2), or e_V without slip samples (crate docs).
@@ -408,7 +393,8 @@ fn signature_curve(s: &Samples, col: usize) -> Vec<(f64, f64, bool)> {
 /// The whole selection on prepared signals. `thesis_mu_dynamic` (Table 4.7)
 /// adds the thesis rung to the ladder; `channel_checks` are the significant
 /// mismatches found in the other run kinds (static twist, voltage steps,
-/// free-run operating points), each "run_kind: sentence".
+/// free-run operating points), each "run_kind: sentence". The candidates are
+/// the vocabulary's [`REGISTRY`].
 pub fn diagnose_signals(
     campaign: &str,
     runs: &[RunSignals],
@@ -418,6 +404,21 @@ pub fn diagnose_signals(
     channel_checks: &[(String, String)],
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
+    select_over(REGISTRY, campaign, runs, (supply_v, disc_radius_m), thesis_mu_dynamic, channel_checks, opts)
+}
+
+/// [`diagnose_signals`] with the candidates of `registry` (in its order);
+/// `rig` is (supply voltage V, brake disc radius m).
+pub(crate) fn select_over(
+    registry: &[&'static dyn VocabularyEffect],
+    campaign: &str,
+    runs: &[RunSignals],
+    rig: (f64, f64),
+    thesis_mu_dynamic: Option<f64>,
+    channel_checks: &[(String, String)],
+    opts: &DiagnoseOptions,
+) -> Result<Diagnosis, DiagnoseError> {
+    let (supply_v, disc_radius_m) = rig;
     let folds = opts.folds.min(runs.len());
     if runs.len() < 3 || folds < 2 {
         return Err(DiagnoseError::TooFewRuns { campaign: campaign.into(), needed: 3, found: runs.len() });
@@ -463,9 +464,9 @@ pub fn diagnose_signals(
     let mut first_step: Vec<(EffectId, Comparison, Vec<f64>)> = Vec::new();
     let significant =
         |c: &Comparison| c.gain >= opts.selection.min_relative_gain && c.t >= opts.min_t && c.after.is_finite();
-    for step in 1..=EffectId::ALL.len() {
+    for step in 1..=registry.len() {
         let remaining: Vec<EffectId> =
-            EffectId::ALL.into_iter().filter(|e| !accepted.iter().any(|a| a.0 == *e)).collect();
+            registry.iter().map(|e| EffectId(*e)).filter(|e| !accepted.iter().any(|a| a.0 == *e)).collect();
         // Fit every candidate's friction sets (and the drive limit) at once, in parallel.
         let needed: Vec<FrictionSet> = {
             let mut v: Vec<FrictionSet> = remaining.iter().map(|&e| current.with(e).friction).collect();
@@ -491,9 +492,8 @@ pub fn diagnose_signals(
             .map(|(i, _)| i);
         // A significant best effect must be the effect its name says: its fit on
         // every run has the sign that defines it (crate docs, "admissible").
-        let inadmissible = best
-            .filter(|&i| significant(&tried[i].1))
-            .and_then(|i| inadmissible(&mut fit_all, current.friction, tried[i].0));
+        let inadmissible =
+            best.filter(|&i| significant(&tried[i].1)).and_then(|i| inadmissible(&mut fit_all, current, tried[i].0));
         for (i, (e, c, _)) in tried.iter().enumerate() {
             let is_best = Some(i) == best;
             steps.push(StepRow {
@@ -555,11 +555,9 @@ pub fn diagnose_signals(
         .into_iter()
         .flatten()
         .collect();
-    // A found angle-periodic friction of order n drives the rotor speed at
-    // order n and its harmonics, and the shaft carries that torque to the
-    // motor side, whose angle φ2 = φ1 + twist turns at the rotor's mean rate:
-    // those lines, in either speed, are explained, not left over.
-    let explained_order = full.model.angle_mod.map(|(_, n)| n);
+    // Lines a fitted effect drives (an angle-locked friction of order n: order
+    // n and its harmonics, in either speed) are explained, not left over.
+    let explained_order = registry.iter().find_map(|e| e.explained_order(&full.model));
     let consistent: Vec<lines::ConsistentLine> = lines::consistent_lines(&all_lines, opts.line_ratio)
         .into_iter()
         .filter(|l| explained_order.is_none_or(|n| l.order % n != 0))
@@ -584,34 +582,30 @@ pub fn diagnose_signals(
     };
 
     let run_ids: Vec<String> = runs.iter().map(|s| s.id.clone()).collect();
+    // Every fitted parameter of the final model, by the term that fitted it.
+    let fitted: Vec<(Term, &str, f64, f64)> = full
+        .params
+        .iter()
+        .map(|&(t, k, v, s)| (Term::Friction(t), k, v, s))
+        .chain(limit_fit.map(|(pi, _, _, s)| (Term::DriveLimit, drive::LIMIT_PARAM, pi.limit_v, s)))
+        .collect();
     let mut findings = Vec::new();
     for (e, c) in &accepted {
         let mut params = BTreeMap::new();
         let mut se = BTreeMap::new();
         let mut ptext = Vec::new();
-        match e {
-            EffectId::DriveVoltageLimit => {
-                if let Some((pi, _, _, s)) = limit_fit {
-                    params.insert("limit_v".to_string(), round_sig(pi.limit_v, 4));
-                    se.insert("limit_v".to_string(), round_sig(s, 2));
-                    ptext.push(("limit_v", pi.limit_v));
-                }
-            }
-            _ => {
-                for (eff, k, v, s) in &full.params {
-                    if eff == e && !params.contains_key(*k) {
-                        params.insert(k.to_string(), round_sig(*v, 4));
-                        se.insert(k.to_string(), round_sig(*s, 2));
-                        ptext.push((k, *v));
-                    }
-                }
+        for (term, k, v, s) in &fitted {
+            if *term == e.term() && !params.contains_key(*k) {
+                params.insert(k.to_string(), round_sig(*v, 4));
+                se.insert(k.to_string(), round_sig(*s, 2));
+                ptext.push((*k, *v));
             }
         }
         findings.push(Finding {
             effect: e.id().into(),
             params,
             params_stderr: se,
-            evidence: evidence(*e, &ptext, c),
+            evidence: evidence(e.0, &ptext, c),
             heldout_runs: run_ids.clone(),
             heldout_misfit_baseline: round_sig(c.before, 4),
             heldout_misfit_extended: round_sig(c.after, 4),
@@ -760,7 +754,7 @@ pub fn diagnose_signals(
         detail.freq_scan = c.iter().map(|&(f, r)| (f, 1.0 - r / worst)).collect();
     } else if let Some(fr) = composite::fit_composite(
         &d_all,
-        FrictionSet::default().with(EffectId::NormalForceModulation),
+        FrictionSet::default().with(composite::Term::TimeSine),
         &cv.freqs,
         opts.max_order,
     ) {
@@ -835,34 +829,11 @@ pub fn diagnose_signals(
     })
 }
 
-fn evidence(effect: EffectId, params: &[(&str, f64)], c: &Comparison) -> String {
+/// The evidence sentence: what the effect does in numbers (its own clause,
+/// [`VocabularyEffect::evidence`]) and the criterion's numbers.
+fn evidence(effect: &dyn VocabularyEffect, params: &[(&str, f64)], c: &Comparison) -> String {
     let p = |k: &str| params.iter().find(|x| x.0 == k).map(|x| x.1).unwrap_or(f64::NAN);
-    let what = match effect {
-        EffectId::NormalForceModulation => format!(
-            "The friction coefficient in slip oscillates in time at {:.3} Hz with relative amplitude {:.3} (own phase per run)",
-            p("frequency_hz"),
-            p("amplitude_ratio")
-        ),
-        EffectId::AnglePeriodicFriction => format!(
-            "The friction coefficient in slip varies {} times per rotor revolution with relative amplitude {:.3}",
-            p("order"),
-            p("amplitude_ratio")
-        ),
-        EffectId::VelocityWeakeningFriction => format!(
-            "The friction coefficient falls from {:.3} at low slip speed to {:.3} over {:.2} rad/s",
-            p("mu_static"),
-            p("mu_kinetic"),
-            p("stribeck_speed_rad_s")
-        ),
-        EffectId::ViscousBrakeFriction => format!(
-            "The friction coefficient grows with slip speed by {:.4} per rad/s from {:.3}",
-            p("viscous_per_rad_s"),
-            p("mu_kinetic")
-        ),
-        EffectId::DriveVoltageLimit => {
-            format!("The recorded drive voltage saturates at {:.2} V, below the supply", p("limit_v"))
-        }
-    };
+    let what = effect.evidence(&p);
     format!(
         "{what}; cross-validated misfit {:.4} → {:.4} (gain {:.1} % ± {:.1} % across folds, paired t = {:.1}).",
         c.before,

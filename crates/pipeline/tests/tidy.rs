@@ -564,3 +564,76 @@ fn rendering_has_one_name() {
         .collect();
     assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
+
+/// Files that may spell a vocabulary effect's id as a string literal outside
+/// its effect file, with the reason: diagnosis.json as a reader sees it (the
+/// report crate depends on no workspace crate, and its fixtures and the
+/// report snapshot's are JSON and HTML text), and the virtual rig's
+/// null fingerprint, a test frozen byte for byte since before the registry.
+const ID_LITERALS_ALLOWED: [(&str, &str); 3] = [
+    (
+        "crates/report/src/summary.rs",
+        "a diagnosis.json fixture; rig-report reads JSON and depends on no workspace crate",
+    ),
+    ("crates/pipeline/tests/snap_report.rs", "a diagnosis.json fixture and the HTML the report makes of it"),
+    ("crates/virtual-rig/tests/null_fingerprint.rs", "frozen: must stay byte-identical (ARCHITECTURE.md, virtual rig)"),
+];
+
+/// An effect is one file (issue 26): every vocabulary effect of
+/// `rig_diagnose::effects::REGISTRY` lives in `crates/diagnose/src/effects/<id>.rs`,
+/// which spells its id once (`pub const ID`); everyone else names it through
+/// that constant (so a misspelt id does not compile), never as a string
+/// literal, except the files of [`ID_LITERALS_ALLOWED`].
+#[test]
+fn vocabulary_ids_are_spelt_in_their_effect_file() {
+    let root = root();
+    let mut problems = Vec::new();
+    for e in rig_diagnose::effects::REGISTRY {
+        let id = e.id();
+        let home = format!("crates/diagnose/src/effects/{id}.rs");
+        let literal = format!("\"{id}\"");
+        match std::fs::read_to_string(root.join(&home)) {
+            Ok(text) if text.matches(&literal).count() == 1 => {}
+            Ok(_) => problems.push(format!("{home}: spells {literal} other than once")),
+            Err(_) => problems.push(format!("{home}: missing (the effect `{id}` of the registry is one file)")),
+        }
+        problems.extend(
+            code_lines()
+                .into_iter()
+                .filter(|(f, _, code)| code.contains(&literal) && !f.ends_with(&home))
+                .filter(|(f, _, _)| !ID_LITERALS_ALLOWED.iter().any(|(a, _)| f.ends_with(a)))
+                .map(|(f, i, _)| {
+                    format!("{}:{i}: {literal} spelt outside {home}; name it `effects::{id}::ID`", f.display())
+                }),
+        );
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+/// Every other module of the diagnosis iterates the registry and never names
+/// an effect: outside `effects/`, no library code of rig-diagnose (before
+/// its `#[cfg(test)]` module) names an effect's module, so adding an effect
+/// is its file and its registry line.
+#[test]
+fn the_diagnosis_names_no_effect_outside_its_file() {
+    let root = root();
+    let src = root.join("crates/diagnose/src");
+    let mut problems = Vec::new();
+    for f in rust_files(&src) {
+        if f.starts_with(src.join("effects")) {
+            continue;
+        }
+        let text = std::fs::read_to_string(&f).unwrap();
+        let library = text.split("#[cfg(test)]").next().unwrap_or("");
+        for e in rig_diagnose::effects::REGISTRY {
+            let module = format!("{}::", e.id());
+            for (i, line) in library.lines().enumerate() {
+                let code = line.split("//").next().unwrap_or("");
+                if code.contains(&module) {
+                    problems.push(format!("{}:{}: names `{module}`; iterate the registry", f.display(), i + 1));
+                }
+            }
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}

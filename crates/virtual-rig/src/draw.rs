@@ -309,24 +309,24 @@ pub struct Truth {
 pub fn draw_hidden(class: &str, mu_kinetic: f64, max_setpoint_rpm: f64, seed: u64) -> Hidden {
     let mut r = ChaCha8Rng::seed_from_u64(seed ^ 0x005e_ed0f_4e55);
     match class {
-        "normal_force_modulation" => Hidden::NormalForceModulation {
+        ids::NORMAL_FORCE_MODULATION => Hidden::NormalForceModulation {
             amplitude_ratio: r.random_range(0.08..0.3),
             frequency_hz: r.random_range(0.5..3.0),
         },
-        "angle_periodic_friction" => {
+        ids::ANGLE_PERIODIC_FRICTION => {
             Hidden::AnglePeriodicFriction { amplitude_ratio: r.random_range(0.08..0.3), order: r.random_range(1..=6) }
         }
-        "velocity_weakening_friction" => Hidden::VelocityWeakening {
+        ids::VELOCITY_WEAKENING_FRICTION => Hidden::VelocityWeakening {
             mu_static: mu_kinetic * r.random_range(1.3..1.8),
             mu_kinetic,
             stribeck_speed_rad_s: r.random_range(0.8..4.0),
         },
-        "viscous_brake_friction" => Hidden::ViscousBrake {
+        ids::VISCOUS_BRAKE_FRICTION => Hidden::ViscousBrake {
             mu_kinetic,
             // 10–40 % more friction at 10 rad/s of slip.
             viscous_per_rad_s: mu_kinetic * r.random_range(0.01..0.04),
         },
-        "drive_voltage_limit" => {
+        ids::DRIVE_VOLTAGE_LIMIT => {
             // Armature back-EMF at the highest set-point with the default motor (n = 8, k_e ≈ 0.0588):
             // a limit between 45 % and 80 % of it saturates the fast runs.
             let w_arm = rig_types::units::rpm_to_rad_s(8.0 * max_setpoint_rpm);

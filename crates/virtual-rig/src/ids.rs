@@ -1,19 +1,19 @@
-//! Every id the virtual rig names, in one table: the verdicts of the
-//! diagnosis vocabulary (../shared/spec/diagnosis.md; a test checks them
-//! against `rig_diagnose::vocab::EffectId`), the effects outside it and the
-//! structural faults. Code names an id through these constants, so a
-//! misspelt id does not compile.
+//! Every id the virtual rig names, in one table: the verdicts and the
+//! vocabulary effects of the diagnosis (../shared/spec/diagnosis.md), taken
+//! from the diagnosis' own effect files (`rig_diagnose::effects::<effect>::ID`,
+//! the vocabulary's one home: the only use this crate makes of rig-diagnose,
+//! its physics stays its own), the effects outside it and the structural
+//! faults. Code names an id through these constants, so a misspelt id does
+//! not compile.
 
-/// The verdict when the baseline explains the data within its noise.
-pub const NONE: &str = "none";
-/// The verdict (and the finding) when a significant mismatch is left.
-pub const UNEXPLAINED: &str = "unexplained";
-
-pub const NORMAL_FORCE_MODULATION: &str = "normal_force_modulation";
-pub const ANGLE_PERIODIC_FRICTION: &str = "angle_periodic_friction";
-pub const VELOCITY_WEAKENING_FRICTION: &str = "velocity_weakening_friction";
-pub const VISCOUS_BRAKE_FRICTION: &str = "viscous_brake_friction";
-pub const DRIVE_VOLTAGE_LIMIT: &str = "drive_voltage_limit";
+pub use rig_diagnose::effects::angle_periodic_friction::ID as ANGLE_PERIODIC_FRICTION;
+pub use rig_diagnose::effects::drive_voltage_limit::ID as DRIVE_VOLTAGE_LIMIT;
+pub use rig_diagnose::effects::normal_force_modulation::ID as NORMAL_FORCE_MODULATION;
+pub use rig_diagnose::effects::velocity_weakening_friction::ID as VELOCITY_WEAKENING_FRICTION;
+pub use rig_diagnose::effects::viscous_brake_friction::ID as VISCOUS_BRAKE_FRICTION;
+/// The verdicts `none` (the baseline explains the data within its noise) and
+/// `unexplained` (a significant mismatch is left).
+pub use rig_diagnose::effects::{NONE, UNEXPLAINED};
 
 /// The vocabulary effects (diagnosis.md), in the confusion matrix's order.
 pub const VOCABULARY: [&str; 5] = [

@@ -145,17 +145,17 @@ fn judge_checks_verdict_every_effect_and_its_parameters() {
     let find = |id: &str| full.cases.iter().find(|c| c.id == id).unwrap().clone();
     let null = find("null-00");
     assert!(judge(&null, &answer("none", vec![])).right);
-    assert!(!judge(&null, &answer("viscous_brake_friction", vec![])).right);
+    assert!(!judge(&null, &answer(ids::VISCOUS_BRAKE_FRICTION, vec![])).right);
     assert!(!judge(&null, &Err("boom".into())).right);
 
     let single = find("single-normal_force_modulation-0");
     let Hidden::NormalForceModulation { amplitude_ratio: a, frequency_hz: f } = single.truth.hidden else { panic!() };
-    let nfm = |a, f| finding("normal_force_modulation", &[("amplitude_ratio", a), ("frequency_hz", f)]);
-    assert!(judge(&single, &answer("normal_force_modulation", vec![nfm(a * 1.2, f * 1.04)])).right);
-    let j = judge(&single, &answer("normal_force_modulation", vec![nfm(a * 1.3, f)]));
+    let nfm = |a, f| finding(ids::NORMAL_FORCE_MODULATION, &[("amplitude_ratio", a), ("frequency_hz", f)]);
+    assert!(judge(&single, &answer(ids::NORMAL_FORCE_MODULATION, vec![nfm(a * 1.2, f * 1.04)])).right);
+    let j = judge(&single, &answer(ids::NORMAL_FORCE_MODULATION, vec![nfm(a * 1.3, f)]));
     assert!(!j.right && j.reason.contains("amplitude_ratio"), "{}", j.reason);
-    assert!(!judge(&single, &answer("normal_force_modulation", vec![nfm(a, f * 1.06)])).right, "frequency 5 %");
-    let spurious = answer("normal_force_modulation", vec![nfm(a, f), finding("drive_voltage_limit", &[])]);
+    assert!(!judge(&single, &answer(ids::NORMAL_FORCE_MODULATION, vec![nfm(a, f * 1.06)])).right, "frequency 5 %");
+    let spurious = answer(ids::NORMAL_FORCE_MODULATION, vec![nfm(a, f), finding(ids::DRIVE_VOLTAGE_LIMIT, &[])]);
     assert!(!judge(&single, &spurious).right);
 
     let comp = full.cases.iter().find(|c| c.group == Group::Compound).unwrap();
@@ -189,7 +189,7 @@ fn judge_checks_verdict_every_effect_and_its_parameters() {
     assert!(judge(&st, &answer(ids::DAMPING_ROTOR_ABSOLUTE, vec![finding(ids::DAMPING_ROTOR_ABSOLUTE, &[])])).right);
     assert!(!judge(&st, &answer("none", vec![])).right);
     assert!(!judge(&st, &answer(ids::CHANNEL_DELAY, vec![finding(ids::CHANNEL_DELAY, &[])])).right);
-    let j = judge(&st, &answer("viscous_brake_friction", vec![finding("viscous_brake_friction", &[])]));
+    let j = judge(&st, &answer(ids::VISCOUS_BRAKE_FRICTION, vec![finding(ids::VISCOUS_BRAKE_FRICTION, &[])]));
     assert!(!j.right && j.reason.contains("spurious"), "a vocabulary effect compensating a structure: {}", j.reason);
     // With a vocabulary effect: that effect found, and the structure named or `unexplained`.
     let sv = full.cases.iter().find(|c| c.group == Group::StructuralPlusVocabulary).unwrap();
@@ -354,14 +354,14 @@ fn stick_slipping_nulls_stick_slip() {
     println!("stick-slipping runs per null: {counts:?}; a plain null: {n}");
 }
 
-/// Every id the virtual rig names for the vocabulary is the diagnosis's
-/// (its `EffectId` list, the vocabulary's one home), and the other way round.
+/// The virtual rig's vocabulary (the confusion matrix's rows) is the
+/// diagnosis' registry, in its order, every effect once: each id is the
+/// effect file's own constant (`ids.rs` re-exports them), and no effect of
+/// the registry is missing from the table.
 #[test]
 fn vocabulary_ids_are_the_diagnosis_ids() {
-    let theirs: Vec<&str> = rig_diagnose::vocab::EffectId::ALL.iter().map(|e| e.id()).collect();
+    let theirs: Vec<&str> = rig_diagnose::effects::REGISTRY.iter().map(|e| e.id()).collect();
     assert_eq!(theirs, ids::VOCABULARY.to_vec());
-    assert_eq!(rig_diagnose::vocab::NONE, ids::NONE);
-    assert_eq!(rig_diagnose::vocab::UNEXPLAINED, ids::UNEXPLAINED);
     // No id of the virtual rig is used twice.
     let mut all: Vec<&str> = [ids::NONE, ids::UNEXPLAINED].into_iter().chain(ids::VOCABULARY).collect();
     all.extend(ids::OUTSIDE);
@@ -450,7 +450,7 @@ fn ladders_shrink_the_effect_towards_the_noise() {
             let with = generate("with", &case.truth, &proto, case.seed).unwrap();
             let without = generate("with", &draw_rig(case.seed), &proto, case.seed).unwrap();
             let (ticks, mv, volts) = change(&with, &without);
-            if effect == "drive_voltage_limit" { volts + ticks } else { mv }
+            if effect == ids::DRIVE_VOLTAGE_LIMIT { volts + ticks } else { mv }
         };
         let (first, last) = (mark(0), mark(LADDER_STEPS - 1));
         assert!(first > 2.0 * last && first > 1.0, "{effect}: first rung {first}, last {last}");

@@ -8,7 +8,7 @@
 use rig_diagnose::channels::{ChannelCheck, all_checks};
 use rig_diagnose::{DiagnoseOptions, EffectId, extended_params};
 use rig_types::{Campaign, RigParams, RunKind};
-use rig_virtual_rig::{Protocol, draw_truth, generate};
+use rig_virtual_rig::{Protocol, draw_truth, generate, ids};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -132,7 +132,7 @@ fn drive_balance_sees_a_motor_that_warms_up() {
         let (r, f, detail) = ratio("motor_warm_up", seed);
         assert!(f && r > 4.0 * o.channels.drive_balance_ratio, "warm-up seed {seed}: ratio {r:.2} ({detail})");
         assert!(detail.contains("a +"), "a warming winding raises a: {detail}");
-        for class in ["none", "drive_voltage_limit", "velocity_weakening_friction"] {
+        for class in ["none", ids::DRIVE_VOLTAGE_LIMIT, ids::VELOCITY_WEAKENING_FRICTION] {
             let (r, f, detail) = ratio(class, seed);
             assert!(!f, "{class} seed {seed}: ratio {r:.2} flagged ({detail})");
         }
@@ -166,7 +166,7 @@ fn force_linearity_sees_a_bent_sensor() {
         assert!(!f, "null seed {seed}: ratio {r:.2} flagged ({detail})");
         null_max = null_max.max(r);
     }
-    for class in ["normal_force_modulation", "velocity_weakening_friction", "drive_voltage_limit"] {
+    for class in [ids::NORMAL_FORCE_MODULATION, ids::VELOCITY_WEAKENING_FRICTION, ids::DRIVE_VOLTAGE_LIMIT] {
         let (r, f, detail) = ratio(class, 9000);
         assert!(!f, "{class}: ratio {r:.2} flagged ({detail})");
     }
@@ -240,14 +240,14 @@ fn free_run_sees_a_drive_limit_and_not_its_fix() {
     let th = thesis();
     let o = opts().channels;
     let dopts = opts();
-    let truth = draw_truth("drive_voltage_limit", 130.0, 16);
+    let truth = draw_truth(ids::DRIVE_VOLTAGE_LIMIT, 130.0, 16);
     let c = generate("dvl", &truth, &Protocol::small(), 16).expect("generate");
     let (cal, base) = calibrate(&c, &th);
     let s = rig_diagnose::channels::FreeRunSettings::of(&dopts, &o);
     let vb = rig_diagnose::channels::free_run_checks(&c, &base, &s, &o);
     show("baseline", &vb);
     let f = findings(&c, &cal);
-    assert_eq!(f.first().map(|x| x.0), Some(EffectId::DriveVoltageLimit));
+    assert_eq!(f.first().map(|x| x.0.id()), Some(ids::DRIVE_VOLTAGE_LIMIT));
     let ext = extended_params(&base, &f);
     let ve = rig_diagnose::channels::free_run_checks(&c, &ext, &s, &o);
     show("extended", &ve);
@@ -279,7 +279,7 @@ fn shipped_campaign_with_baseline_and_extended_model() {
     show("baseline", &vb);
     let ve = all_checks(&c, &cal, &base, &ext, &dopts, &o);
     show("extended", &ve);
-    assert_eq!(f.first().map(|x| x.0), Some(EffectId::NormalForceModulation));
+    assert_eq!(f.first().map(|x| x.0.id()), Some(ids::NORMAL_FORCE_MODULATION));
     let left: Vec<&str> = ve
         .iter()
         .filter(|c| c.flagged && (c.run_kind != "operating_point" || c.channel == "operating_point.torque_balance"))

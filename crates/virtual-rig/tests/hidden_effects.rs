@@ -9,7 +9,7 @@
 //! test at the end and (its CI subset) the `confusion` pipeline stage.
 
 use rig_virtual_rig::confusion::tolerance;
-use rig_virtual_rig::{Protocol, draw_truth, generate, write_campaign};
+use rig_virtual_rig::{Protocol, draw_truth, generate, ids, write_campaign};
 
 /// The diagnosis options of pipeline.toml (their one home).
 fn opts() -> rig_diagnose::DiagnoseOptions {
@@ -46,23 +46,23 @@ fn clean_rig_is_none() {
 }
 #[test]
 fn normal_force_modulation_is_found() {
-    check("normal_force_modulation", 12);
+    check(ids::NORMAL_FORCE_MODULATION, 12);
 }
 #[test]
 fn angle_periodic_friction_is_found() {
-    check("angle_periodic_friction", 13);
+    check(ids::ANGLE_PERIODIC_FRICTION, 13);
 }
 #[test]
 fn velocity_weakening_is_found() {
-    check("velocity_weakening_friction", 14);
+    check(ids::VELOCITY_WEAKENING_FRICTION, 14);
 }
 #[test]
 fn viscous_brake_is_found() {
-    check("viscous_brake_friction", 15);
+    check(ids::VISCOUS_BRAKE_FRICTION, 15);
 }
 #[test]
 fn drive_voltage_limit_is_found() {
-    check("drive_voltage_limit", 16);
+    check(ids::DRIVE_VOLTAGE_LIMIT, 16);
 }
 #[test]
 fn motor_cogging_is_unexplained() {
@@ -79,8 +79,8 @@ fn bent_force_sensor_is_unexplained_and_the_friction_behind_it_is_found() {
     // The full battery's case (full protocol), where the line-read forces gave the spurious term.
     let (d, effects) = battery_case("mixed-velocity_weakening_friction+force_sensor_nonlinearity-0");
     assert_eq!(d.verdict, "unexplained", "findings {effects:?}");
-    assert!(effects.iter().any(|e| e == "velocity_weakening_friction"), "findings {effects:?}");
-    assert!(!effects.iter().any(|e| e == "viscous_brake_friction"), "findings {effects:?}");
+    assert!(effects.iter().any(|e| e == ids::VELOCITY_WEAKENING_FRICTION), "findings {effects:?}");
+    assert!(!effects.iter().any(|e| e == ids::VISCOUS_BRAKE_FRICTION), "findings {effects:?}");
 }
 
 /// One case of the full battery (full protocol), diagnosed blind: the diagnosis and its effects.
@@ -101,7 +101,7 @@ fn battery_case(id: &str) -> (rig_diagnose::Diagnosis, Vec<String>) {
 fn a_fading_brake_is_not_named_viscous_friction() {
     let (d, effects) = battery_case("outside-brake_fade-1");
     assert_eq!(d.verdict, "unexplained", "findings {effects:?}");
-    assert!(!effects.iter().any(|e| e == "viscous_brake_friction"), "findings {effects:?}");
+    assert!(!effects.iter().any(|e| e == ids::VISCOUS_BRAKE_FRICTION), "findings {effects:?}");
 }
 
 /// Angle-periodic friction of order 2 with viscous friction: both found, and
@@ -119,8 +119,8 @@ fn angle_periodic_friction_explains_its_line_in_the_motor_speed() {
     let (d, effects) = battery_case("compound-angle_periodic_friction+viscous_brake_friction-0");
     let left: Vec<&str> =
         d.findings.iter().filter(|f| f.effect == "unexplained").map(|f| f.evidence.as_str()).collect();
-    assert_eq!(d.verdict, "angle_periodic_friction", "findings {effects:?}; left: {left:?}");
-    assert!(effects.iter().any(|e| e == "viscous_brake_friction"), "findings {effects:?}");
+    assert_eq!(d.verdict, ids::ANGLE_PERIODIC_FRICTION, "findings {effects:?}; left: {left:?}");
+    assert!(effects.iter().any(|e| e == ids::VISCOUS_BRAKE_FRICTION), "findings {effects:?}");
 }
 
 /// The whole battery (rig_virtual_rig::battery::Battery::full: 20+ nulls, every

@@ -139,12 +139,12 @@ pub const LADDER_STEPS: usize = 6;
 ///   highest set-point (above 1 the limit only bites under load, at 1.15 hardly).
 pub fn ladder(effect: &str) -> (&'static str, [f64; LADDER_STEPS]) {
     match effect {
-        "normal_force_modulation" | "angle_periodic_friction" => {
+        ids::NORMAL_FORCE_MODULATION | ids::ANGLE_PERIODIC_FRICTION => {
             ("amplitude_ratio", [0.16, 0.08, 0.04, 0.02, 0.01, 0.005])
         }
-        "velocity_weakening_friction" => ("static_excess_ratio", [0.4, 0.2, 0.1, 0.05, 0.025, 0.0125]),
-        "viscous_brake_friction" => ("excess_at_10_rad_s_ratio", [0.3, 0.15, 0.075, 0.0375, 0.019, 0.0094]),
-        "drive_voltage_limit" => ("limit_over_back_emf", [0.55, 0.7, 0.8, 0.9, 1.0, 1.15]),
+        ids::VELOCITY_WEAKENING_FRICTION => ("static_excess_ratio", [0.4, 0.2, 0.1, 0.05, 0.025, 0.0125]),
+        ids::VISCOUS_BRAKE_FRICTION => ("excess_at_10_rad_s_ratio", [0.3, 0.15, 0.075, 0.0375, 0.019, 0.0094]),
+        ids::DRIVE_VOLTAGE_LIMIT => ("limit_over_back_emf", [0.55, 0.7, 0.8, 0.9, 1.0, 1.15]),
         _ => ("", [0.0; LADDER_STEPS]),
     }
 }
@@ -427,7 +427,7 @@ impl Battery {
         k = 0;
         for (a, ea) in Hidden::VOCABULARY.iter().enumerate() {
             for eb in &Hidden::VOCABULARY[a + 1..] {
-                if *ea == "velocity_weakening_friction" && *eb == "viscous_brake_friction" {
+                if *ea == ids::VELOCITY_WEAKENING_FRICTION && *eb == ids::VISCOUS_BRAKE_FRICTION {
                     continue;
                 }
                 for j in 0..sizes.compound_seeds {

@@ -220,7 +220,7 @@ pub fn detection_sheet(t: &Table, battery: &str) -> Option<Sheet> {
                     ),
                 ],
             );
-            let x_scale = if effect == "drive_voltage_limit" { AxisScale::Linear } else { AxisScale::Log10 };
+            let x_scale = if effect == crate::ids::DRIVE_VOLTAGE_LIMIT { AxisScale::Linear } else { AxisScale::Log10 };
             Panel { spec, x_scale }
         })
         .collect();
