@@ -15,9 +15,16 @@ scipy integrates the same equations with the same event-handled stick/slip
 It prints CPU time (time.process_time) and wall time per run, the ratio to
 rig-model (a fresh trajectory per run, and one reused trajectory), and how far each result is from rig-model's (rotor speed, break-aways).
 
-Usage: scripts/peer_scipy.py [--repeat N]   (run from the workspace root)
+With --criterion it first runs the criterion benches `simulate` (mimalloc as
+the global allocator) and `simulate_system_alloc` (the system allocator) and
+prints scipy's best wall time over criterion's mean wall time per case, so
+the peer and the floor are measured in one run (issue 23: the plain call into
+a fresh trajectory >= 300x LSODA).
+
+Usage: scripts/peer_scipy.py [--repeat N] [--criterion]   (run from the workspace root)
 """
 import argparse
+import glob
 import json
 import os
 import subprocess
@@ -34,7 +41,15 @@ from rig_model_scipy import simulate  # noqa: E402
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3, help="scipy runs per method (the best is reported)")
+    ap.add_argument("--criterion", action="store_true",
+                    help="run the criterion benches simulate and simulate_system_alloc first and compare with them")
     args = ap.parse_args()
+    if args.criterion:
+        subprocess.run(
+            ["cargo", "bench", "-q", "--workspace", "--bench", "simulate", "--bench", "simulate_system_alloc",
+             "--", "--noplot"],
+            cwd=ROOT, check=True, stdout=subprocess.DEVNULL,
+        )
     out = subprocess.run(
         ["cargo", "run", "-q", "-p", "rig-model", "--example", "cpu_time", "--", "--peer-case"],
         cwd=ROOT, check=True, capture_output=True, text=True,
@@ -46,6 +61,7 @@ def main():
           f"  ({len(rust['release_times_s'])} break-aways; a fresh trajectory per run)")
     print(f"rig-model   default tol : CPU {rust['cpu_ms_per_run_reused']:9.3f} ms  wall {rust['wall_ms_per_run_reused']:9.3f} ms per run"
           f"  (into one reused trajectory, simulate_into)")
+    lsoda_wall_ms = None
     w_rust = np.array(rust["rotor_speed_rad_s"])
     rel_rust = np.array(rust["release_times_s"])
     for method, rtol, atol in [("LSODA", 1e-8, 1e-10), ("DOP853", 1e-10, 1e-12)]:
@@ -55,12 +71,33 @@ def main():
             w, releases = simulate(case, method=method, rtol=rtol, atol=atol)
             best_cpu = min(best_cpu, time.process_time() - c0)
             best_wall = min(best_wall, time.perf_counter() - w0)
+        if method == "LSODA":
+            lsoda_wall_ms = best_wall * 1e3
         dw = np.nanmax(np.abs(w - w_rust))
         drel = np.max(np.abs(np.array(releases) - rel_rust)) if len(releases) == len(rel_rust) else float("nan")
         print(f"scipy {method:6s} rtol {rtol:.0e}: CPU {best_cpu * 1e3:9.1f} ms  wall {best_wall * 1e3:9.1f} ms per run"
               f"  ratio CPU {best_cpu * 1e3 / rust['cpu_ms_per_run']:5.0f}x fresh, {best_cpu * 1e3 / rust['cpu_ms_per_run_reused']:5.0f}x reused"
               f"  wall {best_wall * 1e3 / rust['wall_ms_per_run']:5.0f}x / {best_wall * 1e3 / rust['wall_ms_per_run_reused']:5.0f}x"
               f"  | max |dOmega1| {dw:.1e} rad/s, {len(releases)} break-aways, max |d release| {drel:.1e} s")
+    if args.criterion:
+        print_criterion(lsoda_wall_ms)
+
+
+def print_criterion(lsoda_wall_ms):
+    """scipy LSODA's best wall time over each rig-model criterion case's mean (and 95 % interval)."""
+    print(f"criterion (this run, mean [95 % interval]) against scipy LSODA's best wall {lsoda_wall_ms:.1f} ms:")
+    rows = []
+    for bench in glob.glob(os.path.join(ROOT, "target", "criterion", "*", "*", "new", "benchmark.json")):
+        with open(bench) as f:
+            name = json.load(f)["full_id"]
+        if name.split("/")[0] not in ("mimalloc", "system allocator") or "rig model 40 s" not in name:
+            continue
+        with open(os.path.join(os.path.dirname(bench), "estimates.json")) as f:
+            mean = json.load(f)["mean"]
+        lo, hi = mean["confidence_interval"]["lower_bound"], mean["confidence_interval"]["upper_bound"]
+        rows.append((name, mean["point_estimate"] / 1e6, lo / 1e6, hi / 1e6))
+    for name, ms, lo, hi in sorted(rows):
+        print(f"  {name:88s} {ms:7.3f} ms [{lo:.3f}, {hi:.3f}]  LSODA / it {lsoda_wall_ms / ms:5.0f}x")
 
 
 if __name__ == "__main__":

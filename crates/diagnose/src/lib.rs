@@ -282,11 +282,24 @@ pub fn diagnose(
         )
     };
     // The findings do not depend on the flagged checks (only the adequacy
-    // test does), so the selection runs once on the model-free checks, and
-    // again only when the checks that need the final model flag something.
+    // test does), so the selection runs once on every check that needs no
+    // finding — the model-free ones and the voltage steps, which judge the
+    // estimate alone — and again only when the final model's free-run
+    // checks flag something. The baseline's free runs need no finding
+    // either: they run beside the selection.
     let flagged0 = flagged_of(&checks);
-    let mut d = select(&flagged0)?;
-    if let (Some(p), Some(data)) = (baseline, &balance) {
+    let s = channels::FreeRunSettings::of(opts, o);
+    // The voltage steps judge the estimate on the runs it was fitted to, in
+    // the structure it was fitted in (rig-estimate fits the twist-rate
+    // placement; with another structure its motor-side coefficients absorb
+    // the rotor's drag, so the selected structure on top of the estimate
+    // would count that drag twice on the steps).
+    let steps = baseline.map(|p| channels::voltage_step_checks(c, cal, p, o, &opts.integrator)).unwrap_or_default();
+    let mut flagged1 = flagged0.clone();
+    flagged1.extend(flagged_of(&steps));
+    let (d, base_pairs) = rayon::join(|| select(&flagged1), || baseline.map(|p| channels::free_run_pairs(c, p, &s)));
+    let mut d = d?;
+    if let (Some(p), Some(data), Some(base_pairs)) = (baseline, &balance, base_pairs) {
         let vocab: Vec<(EffectId, std::collections::BTreeMap<String, f64>)> =
             d.findings.iter().filter_map(|f| EffectId::from_id(&f.effect).map(|e| (e, f.params.clone()))).collect();
         // Each run's free run with its own nuisance phases (θ free per run, as
@@ -298,34 +311,23 @@ pub fn diagnose(
         let ext = extended_params(p, &vocab);
         let level = breakaway::breakaway_level(c, &law, &ext, &phases, &opts.stick_episodes);
         let ext = level.as_ref().map_or(ext.clone(), |l| breakaway::with_static_level(&ext, l));
-        let s = channels::FreeRunSettings::of(opts, o);
         let phased = |m: &rig_types::RigParams, id: &str| {
             channels::with_run_phases(m, phases.get(id).copied().unwrap_or_default())
         };
-        let (base_pairs, ext_pairs) = rayon::join(
-            || channels::free_run_pairs(c, p, &s),
-            || channels::free_run_pairs_by(c, &s, |id| Some(phased(&ext, id))),
-        );
+        let ext_pairs = channels::free_run_pairs_by(c, &s, |id| Some(phased(&ext, id)));
         let sel = structure::select_structure(c, data, &ext, &ext_pairs, &d.detail.runs, &s, opts);
         let moved = sel.damping != structure::REGISTRY[0].id();
         let final_pairs =
             if moved { channels::free_run_pairs_by(c, &s, |id| Some(phased(&sel.model, id))) } else { ext_pairs };
-        // The voltage steps judge the estimate on the runs it was fitted to,
-        // in the structure it was fitted in (rig-estimate fits the twist-rate
-        // placement; with another structure its motor-side coefficients
-        // absorb the rotor's drag, so the selected structure on top of the
-        // estimate would count that drag twice on the steps).
-        let steps = channels::voltage_step_checks(c, cal, p, o, &opts.integrator);
         let free_run_baseline = channels::free_run_checks_of(c, &base_pairs, &s, o);
         let free_run_final = channels::free_run_checks_of(c, &final_pairs, &s, o);
         // Free run is part of adequacy (issue 25): a flagged free-run check of
         // the final model makes the answer `unexplained` (`where`: free_run);
         // the selection is rerun with it so the unexplained finding, its
         // signature and the adequacy record come from the one place that makes them.
-        let mut flagged = flagged0.clone();
-        flagged.extend(flagged_of(&steps));
+        let mut flagged = flagged1.clone();
         flagged.extend(free_run_final.iter().filter(|k| k.flagged).map(|k| ("free_run".to_string(), k.as_pair().1)));
-        if flagged != flagged0 {
+        if flagged != flagged1 {
             d = select(&flagged)?;
         }
         let at = checks.iter().take_while(|k| k.run_kind == "static_twist").count();

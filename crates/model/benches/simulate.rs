@@ -1,39 +1,21 @@
-//! One 40 s operating-point run (40 rpm, 15 N) of the rig model, sampled at
-//! the campaign's 500 Hz and at its end only, and the thesis model, at the
-//! default tolerances, into a fresh trajectory and into a reused one.
-//! Targets (issue 12): rig ≤ 0.4 ms, thesis ≤ 1 ms.
-//! scripts/peer_scipy.py times scipy on the same problem.
+//! One 40 s operating-point run (40 rpm, 15 N) of the rig model and the
+//! thesis model ([`cases`]), in a binary whose global allocator is mimalloc:
+//! freed trajectories' pages are reused instead of returned to the kernel and
+//! faulted in again, so the plain `simulate` into a fresh trajectory costs
+//! what the reused path costs (docs/performance.md; `simulate_system_alloc`
+//! times the same cases with the system allocator, what a program that sets
+//! none gets). Targets (issues 12, 23): rig ≤ 0.4 ms, thesis ≤ 1 ms, the
+//! plain call ≥ 300× scipy LSODA (scripts/peer_scipy.py --criterion, same run).
 
-#[path = "../tests/common/mod.rs"]
-mod common;
+mod cases;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use rig_model::{SimOptions, simulate_into, simulate_with_stats};
-use rig_types::RunInput;
-use std::hint::black_box;
+
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn bench(c: &mut Criterion) {
-    let p = common::rig_params();
-    let input = RunInput::OperatingPoint { motor_rpm_setpoint: 40.0, normal_force_n: 15.0, ramp_s: 2.0 };
-    let t = common::grid(40.0, 500.0);
-    let o = SimOptions::default();
-    c.bench_function("rig model 40 s, 40 rpm, 15 N, default tol", |b| {
-        b.iter(|| simulate_with_stats(black_box(&p), black_box(&input), black_box(&t), &o).unwrap())
-    });
-    // A batch that keeps one trajectory per thread (simulate_into): the samples go into
-    // memory it already owns instead of 1.4 MB of freshly faulted pages per run.
-    let mut out = rig_types::Trajectory::default();
-    c.bench_function("rig model 40 s, 40 rpm, 15 N, default tol, into a reused trajectory", |b| {
-        b.iter(|| simulate_into(black_box(&p), black_box(&input), black_box(&t), &o, &mut out).unwrap())
-    });
-    let last = [40.0];
-    c.bench_function("rig model 40 s, 40 rpm, 15 N, default tol, one sample", |b| {
-        b.iter(|| simulate_with_stats(black_box(&p), black_box(&input), black_box(&last), &o).unwrap())
-    });
-    let thesis = common::thesis_params();
-    c.bench_function("thesis model 40 s, 40 rpm, 15 N, default tol", |b| {
-        b.iter(|| simulate_with_stats(black_box(&thesis), black_box(&input), black_box(&t), &o).unwrap())
-    });
+    cases::bench(c, "mimalloc");
 }
 
 criterion_group!(benches, bench);

@@ -14,6 +14,11 @@ fn cpu_s() -> f64 {
     let f: Vec<&str> = s.rsplit(')').next().unwrap().split_whitespace().collect();
     (f[11].parse::<f64>().unwrap() + f[12].parse::<f64>().unwrap()) / 100.0
 }
+/// Minor page faults of this process so far (/proc/self/stat field 10).
+fn minor_faults() -> f64 {
+    let s = std::fs::read_to_string("/proc/self/stat").unwrap();
+    s.rsplit(')').next().unwrap().split_whitespace().nth(7).unwrap().parse().unwrap()
+}
 fn main() {
     let input = RunInput::OperatingPoint { motor_rpm_setpoint: 40.0, normal_force_n: 15.0, ramp_s: 2.0 };
     let t = common::grid(40.0, 500.0);
@@ -26,23 +31,25 @@ fn main() {
         ("thesis 500 Hz", common::thesis_params(), t.clone()),
     ] {
         let n = 500;
-        let c0 = cpu_s();
+        let (c0, f0) = (cpu_s(), minor_faults());
         let w0 = std::time::Instant::now();
         let mut st = None;
         for _ in 0..n {
             st = Some(simulate_with_stats(&p, &input, &samples, &SimOptions::default()).unwrap().1);
         }
         let (cpu_fresh, wall_fresh) = ((cpu_s() - c0) / n as f64 * 1e3, w0.elapsed().as_secs_f64() / n as f64 * 1e3);
+        let faults_fresh = (minor_faults() - f0) / n as f64;
         let mut out = rig_types::Trajectory::default();
-        let (c0, w0) = (cpu_s(), std::time::Instant::now());
+        let (c0, w0, f0) = (cpu_s(), std::time::Instant::now(), minor_faults());
         for _ in 0..n {
             simulate_into(&p, &input, &samples, &SimOptions::default(), &mut out).unwrap();
         }
         println!(
-            "{name}: cpu {cpu_fresh:.3} ms, wall {wall_fresh:.3} ms per run; into a reused trajectory cpu {:.3} ms, \
-             wall {:.3} ms; {:?}",
+            "{name}: cpu {cpu_fresh:.3} ms, wall {wall_fresh:.3} ms, {faults_fresh:.0} page faults per run; into a \
+             reused trajectory cpu {:.3} ms, wall {:.3} ms, {:.0} page faults; {:?}",
             (cpu_s() - c0) / n as f64 * 1e3,
             w0.elapsed().as_secs_f64() / n as f64 * 1e3,
+            (minor_faults() - f0) / n as f64,
             st.unwrap()
         );
     }
