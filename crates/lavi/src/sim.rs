@@ -106,7 +106,9 @@ pub struct Inputs<'a> {
     pub top_ref_rad_s: &'a [f64],
 }
 
-/// Measured state at the first sample: bit speed, its derivative, measured torque.
+/// Measured state at the first sample: bit speed, its derivative, and the
+/// contact torque at that instant as the torque channel reads it, i.e. the
+/// channel's sample `torque_delay_s` later (the caller aligns it).
 #[derive(Debug, Clone, Copy)]
 pub struct Start {
     pub bit_rad_s: f64,
@@ -146,6 +148,11 @@ impl Friction for Contact {
             state[0] += if held.is_some() { 1.0 } else { (h / self.lag_s).min(1.0) } * (target - state[0]);
         }
     }
+}
+
+/// A channel delay in whole samples (rounded; negative: early).
+pub fn delay_samples(delay_s: f64, fs_hz: f64) -> isize {
+    (delay_s * fs_hz).round() as isize
 }
 
 /// Integrates `m` from `start` under `u` (see the module docs) on the one
@@ -210,9 +217,10 @@ pub fn simulate(m: &Model, u: &Inputs, start: Start, substeps: usize) -> Result<
     let mut sensor: Vec<f64> =
         r.friction_nm.iter().zip(&r.accel_rad_s2).map(|(f, a)| f + m.sensor_inertia_kgm2 * a).collect();
     sensor[0] = start.torque_nm;
-    // A torque channel late by `torque_delay_s` reads, at sample i, the torque of sample i − d.
-    let d = (m.torque_delay_s * u.fs_hz).round() as usize;
-    let torque_nm = (0..n).map(|i| sensor[i.saturating_sub(d)]).collect();
+    // A torque channel late by `torque_delay_s` reads, at sample i, the torque of sample i − d
+    // (d < 0: early; the run's first and last samples stand in beyond its ends).
+    let d = delay_samples(m.torque_delay_s, u.fs_hz);
+    let torque_nm = (0..n).map(|i| sensor[(i as isize - d).clamp(0, n as isize - 1) as usize]).collect();
     Ok(Run { bit_rad_s: r.bit_rad_s, torque_nm, top_rad_s: r.top_rad_s })
 }
 
