@@ -515,6 +515,37 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
         );
     }
     let _ = writeln!(md);
+    let chosen: Vec<Candidate> = sel.chosen.iter().map(|&i| sel.trials[i].candidate).collect();
+    if let (Some(d), Some(l)) = (
+        chosen.iter().position(|c| *c == Candidate::ChannelDelay),
+        chosen.iter().position(|c| *c == Candidate::FrictionLaw),
+    ) && d < l
+    {
+        let _ = writeln!(
+            md,
+            "`channel_delay` already refits the law by simulation; `friction_law` at step {} refits the same three families from \
+             that law: what it gains is the law's fit continued from a better start, not a second effect.\n",
+            l + 1
+        );
+    }
+    if let Some(d) = chosen.iter().position(|c| *c == Candidate::ChannelDelay) {
+        let memory =
+            |step: usize| sel.trials.iter().find(|t| t.step == step && t.candidate == Candidate::FrictionMemory);
+        if let (Some(first), Some(after)) = (memory(1), memory(d + 2).filter(|t| !t.earns_place)) {
+            let _ = writeln!(
+                md,
+                "Was `friction_memory` compensating the delay? Alone (step 1) it reaches {:.3} with its lag at {} s; on top of \
+                 `channel_delay` (step {}) it gains {:.3} (paired t {:.2}) and does not earn its place: once the torque is read on \
+                 the speeds' time base and the law is fitted by simulation, no memory is needed. Its frozen slip level stood in for a \
+                 law that does not fall with speed, the law the free run accepts (rung 3).\n",
+                first.heldout_mean,
+                first.fitted.params.get("lag_s").map_or("?".to_string(), |x| format!("{x:.3}")),
+                d + 2,
+                after.relative_gain,
+                after.paired_t
+            );
+        }
+    }
     let _ = writeln!(md, "{}", side_by_side(s));
     let _ = writeln!(md, "{}", structure_paragraph(s));
     match sel.chosen.first() {
@@ -626,14 +657,24 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
             let _ = writeln!(md, "- no library signal lowers the held-out residual.");
         }
         let missed: Vec<&str> = FEATURES.iter().zip(met_ext).filter(|(_, k)| **k < nh).map(|(f, _)| *f).collect();
-        let _ = writeln!(
-            md,
-            "\nWhat would reach the missed targets ({}): the leftover torque follows `{}` most, so the next rung is a model term in that \
-             signal inside the simulated contact, fitted on the calibration window like the candidates above (and, for the torque level, a \
-             misfit that also scores the measured break-away torque: see rung 2's note).\n",
-            if missed.is_empty() { "none".to_string() } else { missed.join(", ") },
-            s.signature.first().map_or("no library signal", |t| t.signal.as_str())
-        );
+        let missed = if missed.is_empty() { "none".to_string() } else { missed.join(", ") };
+        let top = s.signature.first().map_or("no library signal", |t| t.signal.as_str());
+        if top == "bit_speed_rad_s" {
+            let _ = writeln!(
+                md,
+                "\nWhat would reach the missed targets ({missed}): the leftover torque follows the bit speed most, i.e. the recorded \
+                 torque falls with speed more steeply than the law the free run accepts (the torque-level hypothesis above). A steeper \
+                 law inside the contact is what runs away in free run, so the next rung is not a law term but a dissipation outside the \
+                 contact (at the drive or along the shaft) that keeps a falling law's free run bounded, fitted on the calibration window \
+                 like the candidates above.\n"
+            );
+        } else {
+            let _ = writeln!(
+                md,
+                "\nWhat would reach the missed targets ({missed}): the leftover torque follows `{top}` most, so the next rung is a model \
+                 term in that signal inside the simulated contact, fitted on the calibration window like the candidates above.\n"
+            );
+        }
     }
     let h = &s.wob;
     let _ = writeln!(md, "## The chapter's hypothesis: a varying normal force\n");
