@@ -507,6 +507,58 @@ pub fn nelder_mead(f: impl Fn(&[f64]) -> f64, x0: &[f64], step: &[f64], max_eval
 mod tests {
     use super::*;
 
+    /// 10 s at 1 kHz: bit speed 80 + 60 sin(2π 2 t) rpm, and a torque channel that
+    /// reads the single-valued law 3 − 0.01 Ω(t − 0.025 s) (late by 25 ms).
+    fn late_channel() -> (Prepared, WindowSpec) {
+        let n = 10_000;
+        let time_s: Vec<f64> = (0..n).map(|i| i as f64 / 1000.0).collect();
+        let speed = |t: f64| 80.0 + 60.0 * (std::f64::consts::TAU * 2.0 * t).sin();
+        let bit_rpm: Vec<f64> = time_s.iter().map(|t| speed(*t)).collect();
+        let torque_nm: Vec<f64> = time_s.iter().map(|t| 3.0 - 0.01 * speed(t - 0.025)).collect();
+        let d = Prepared {
+            fs_hz: 1000.0,
+            top_rpm: vec![80.0; n],
+            wob_n: vec![500.0; n],
+            bit_raw_rpm: bit_rpm.clone(),
+            torque_raw_nm: torque_nm.clone(),
+            time_s,
+            bit_rpm,
+            torque_nm,
+            glitches: rig_spectra::stickslip::GlitchReport { runs: 0, samples: 0, longest_run: 0 },
+            top_noise_rad_s: 0.0,
+            twist_excursion_rad: (0.0, 0.0),
+            repairs: Vec::new(),
+        };
+        let cal = WindowSpec {
+            label: "3-7".into(),
+            split: crate::data::Split::Train,
+            start_s: 3.0,
+            end_s: 7.0,
+            span: 2000..7000,
+            window: 1000..5000,
+        };
+        (d, cal)
+    }
+
+    #[test]
+    fn a_late_channel_draws_a_loop_that_its_delay_closes() {
+        let (d, cal) = late_channel();
+        // As recorded, the torque at a given speed differs between acceleration and deceleration:
+        // Ω(t − τ) − Ω(t) ≈ −τ Ω̇, up to 0.01 · 0.025 · 60 · 4π ≈ 0.19 N m apart.
+        let raw = loop_spread(&d, &cal, 5.0, 20, 0.0);
+        assert!(raw.max_bin_std_nm > 0.05, "{raw:?}");
+        // Read 25 ms later it is the law again: the spread left is the law across a bin's width,
+        // 0.01 N m/rpm over 140/20 = 7 rpm: a std of 0.07/√12 = 0.020 N m for evenly spread speeds,
+        // never above half the bin's torque range, 0.035 N m.
+        let aligned = loop_spread(&d, &cal, 5.0, 20, 0.025);
+        assert!(
+            aligned.max_bin_std_nm < 0.035 && aligned.rms_bin_std_nm < 0.2 * raw.rms_bin_std_nm,
+            "{aligned:?} {raw:?}"
+        );
+        let best = narrowest_loop(&d, &cal, 5.0, 20, MAX_DELAY_S);
+        assert!((best.shift_s - 0.025).abs() < 1.5e-3, "{best:?}");
+    }
+
     #[test]
     fn nelder_mead_finds_a_quadratic_minimum() {
         let (x, v, _) =

@@ -276,6 +276,27 @@ mod tests {
     }
 
     #[test]
+    fn a_late_or_early_torque_channel_is_the_contact_torque_shifted() {
+        // Stick-slip (slow drive): a torque with structure to shift.
+        let on_time = run(&base(), 1.0, 5.0);
+        for (delay_s, d) in [(0.02, 20isize), (-0.02, -20)] {
+            let m = Model { torque_delay_s: delay_s, ..base() };
+            let r = run(&m, 1.0, 5.0);
+            // The motion is the contact's, whatever the channel reads.
+            assert_eq!(r.bit_rad_s, on_time.bit_rad_s);
+            let n = r.torque_nm.len() as isize;
+            for i in 100..n - 100 {
+                assert_eq!(
+                    r.torque_nm[i as usize],
+                    on_time.torque_nm[(i - d) as usize],
+                    "delay {delay_s} s, sample {i}"
+                );
+            }
+        }
+        assert_eq!(delay_samples(-0.0204, 1000.0), -20);
+    }
+
+    #[test]
     fn the_extensions_run() {
         let mut m = base();
         m.mid = Some(MidDof { inertia_kgm2: 0.02, split: 0.5 });
