@@ -46,6 +46,10 @@ pub struct Prepared {
     pub bit_rpm: Vec<f64>,
     pub torque_nm: Vec<f64>,
     pub wob_n: Vec<f64>,
+    /// Bit speed and torque as recorded (not low-passed): the window features
+    /// filter them once, as they filter a simulated run (rig_lavi::features).
+    pub bit_raw_rpm: Vec<f64>,
+    pub torque_raw_nm: Vec<f64>,
     /// The top-speed dips found by the glitch detector (not bridged unless its audit accepts it).
     pub glitches: GlitchReport,
     /// The top speed's noise outside the dips: rms of raw − low-passed, rad/s.
@@ -193,6 +197,8 @@ pub fn prepare(path: &Path, p: &StudyParams) -> Result<(LaviRecording, Prepared)
         bit_rpm: lp(&rec.bit_speed_rpm)?,
         torque_nm: lp(&rec.bit_torque_nm)?,
         wob_n: lp(&rec.wob_n)?,
+        bit_raw_rpm: rec.bit_speed_rpm.clone(),
+        torque_raw_nm: rec.bit_torque_nm.clone(),
         glitches,
         top_noise_rad_s,
         twist_excursion_rad,

@@ -36,6 +36,10 @@ pub struct Features {
     pub slip_torque_nm: f64,
     /// Mean over the complete stick phases of each one's largest torque, N m (NaN: no stick phase ends in the window).
     pub breakaway_torque_nm: f64,
+    /// Mean length of the complete stick phases, s (NaN: none); not a target, what `stick_fraction` is made of.
+    pub stick_phase_s: f64,
+    /// Complete stick phases in the window.
+    pub stick_phases: usize,
     /// Complete cycles found (0: the window is one pseudo-cycle).
     pub cycles: usize,
 }
@@ -55,6 +59,20 @@ pub const FEATURES: [&str; N_FEATURES] = [
 pub const N_FEATURES: usize = 7;
 
 impl Features {
+    /// Every feature NaN (a run that failed).
+    pub const NAN: Features = Features {
+        bit_speed_max_rpm: f64::NAN,
+        bit_speed_min_rpm: f64::NAN,
+        stick_fraction: f64::NAN,
+        fundamental_hz: f64::NAN,
+        loop_area: f64::NAN,
+        slip_torque_nm: f64::NAN,
+        breakaway_torque_nm: f64::NAN,
+        stick_phase_s: f64::NAN,
+        stick_phases: 0,
+        cycles: 0,
+    };
+
     pub fn get(&self, i: usize) -> f64 {
         [
             self.bit_speed_max_rpm,
@@ -95,8 +113,10 @@ pub fn window_features(
     let stick_fraction = v.iter().filter(|x| **x < o.stick_speed_rpm).count() as f64 / v.len() as f64;
     let slip: Vec<f64> = v.iter().zip(t).filter(|(x, _)| **x >= o.stick_speed_rpm).map(|(_, y)| *y).collect();
     let slip_torque_nm = if slip.is_empty() { f64::NAN } else { mean(&slip) };
-    let phases = stick_phase_maxima(v, t, o.stick_speed_rpm);
-    let breakaway_torque_nm = if phases.is_empty() { f64::NAN } else { mean(&phases) };
+    let phases = stick_phases(v, t, o.stick_speed_rpm);
+    let (peaks, lengths): (Vec<f64>, Vec<f64>) = phases.iter().map(|(p, n)| (*p, *n as f64 / o.fs_hz)).unzip();
+    let breakaway_torque_nm = if phases.is_empty() { f64::NAN } else { mean(&peaks) };
+    let stick_phase_s = if phases.is_empty() { f64::NAN } else { mean(&lengths) };
     let starts = cycle_starts(v);
     let (mut maxs, mut mins, mut areas) = (Vec::new(), Vec::new(), Vec::new());
     for w in starts.windows(2) {
@@ -119,6 +139,8 @@ pub fn window_features(
         loop_area: mean(&areas),
         slip_torque_nm,
         breakaway_torque_nm,
+        stick_phase_s,
+        stick_phases: phases.len(),
         cycles,
     })
 }
@@ -163,11 +185,16 @@ fn cycle_starts(v: &[f64]) -> Vec<usize> {
 /// The largest torque of each complete stick phase (consecutive samples with
 /// speed below `stick`, followed by a slip); a phase still open at the end is left out.
 pub fn stick_phase_maxima(speed: &[f64], torque: &[f64], stick: f64) -> Vec<f64> {
+    stick_phases(speed, torque, stick).into_iter().map(|(t, _)| t).collect()
+}
+
+/// Each complete stick phase (as [`stick_phase_maxima`]): its largest torque and its length in samples.
+pub fn stick_phases(speed: &[f64], torque: &[f64], stick: f64) -> Vec<(f64, usize)> {
     let mut out = Vec::new();
-    let mut cur: Option<f64> = None;
+    let mut cur: Option<(f64, usize)> = None;
     for (v, t) in speed.iter().zip(torque) {
         if *v < stick {
-            cur = Some(cur.map_or(*t, |c| c.max(*t)));
+            cur = Some(cur.map_or((*t, 1), |(c, n)| (c.max(*t), n + 1)));
         } else if let Some(c) = cur.take() {
             out.push(c);
         }

@@ -8,6 +8,7 @@ use crate::eom::{Damping, EomFit, fit_equation_of_motion};
 use crate::score::Evaluator;
 use crate::sim::{Drive, FrictionLaw, MidDof, Model};
 use crate::{Candidate, LaviError};
+use rayon::prelude::*;
 use rig_spectra::stickslip::fit_weakening;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -185,6 +186,50 @@ pub fn best_delay_s(d: &Prepared, cal: &WindowSpec, st: Structure, max_s: f64) -
     best.1
 }
 
+/// How far the torque–bit-speed cloud of the calibration window's slip
+/// samples is from a curve when the torque is read `shift_s` later: the
+/// standard deviation of the torque in each of `bins` equal bit-speed bins
+/// (0 to the window's largest bit speed; bins with fewer than 10 samples left
+/// out), its RMS and largest value. A single-valued law T(Ω) leaves only the
+/// noise; a loop leaves its width.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct LoopSpread {
+    pub shift_s: f64,
+    pub rms_bin_std_nm: f64,
+    pub max_bin_std_nm: f64,
+}
+
+/// [`LoopSpread`] of the calibration window at `shift_s`.
+pub fn loop_spread(d: &Prepared, cal: &WindowSpec, slip_speed_rpm: f64, bins: usize, shift_s: f64) -> LoopSpread {
+    let r = (cal.span.start + cal.window.start)..(cal.span.start + cal.window.end);
+    let shift = (shift_s * d.fs_hz).round() as isize;
+    let (v, t): (Vec<f64>, Vec<f64>) = r
+        .filter(|&i| d.bit_rpm[i] > slip_speed_rpm)
+        .map(|i| (d.bit_rpm[i], d.torque_nm[(i as isize + shift).clamp(0, d.len() as isize - 1) as usize]))
+        .unzip();
+    let vmax = v.iter().cloned().fold(0.0, f64::max);
+    let stds: Vec<f64> = rig_spectra::stickslip::bin_means(&v, &t, 0.0, vmax * (1.0 + 1e-9), bins.max(1))
+        .iter()
+        .filter(|b| b.count >= 10)
+        .map(|b| b.std)
+        .collect();
+    LoopSpread {
+        shift_s: shift as f64 / d.fs_hz,
+        rms_bin_std_nm: (stds.iter().map(|x| x * x).sum::<f64>() / stds.len().max(1) as f64).sqrt(),
+        max_bin_std_nm: stds.iter().cloned().fold(0.0, f64::max),
+    }
+}
+
+/// The shift within ±`max_s` (one-sample steps) at which the cloud is closest
+/// to a curve (least RMS bin spread of [`loop_spread`]).
+pub fn narrowest_loop(d: &Prepared, cal: &WindowSpec, slip_speed_rpm: f64, bins: usize, max_s: f64) -> LoopSpread {
+    let m = (max_s * d.fs_hz).round() as isize;
+    (-m..=m)
+        .map(|k| loop_spread(d, cal, slip_speed_rpm, bins, k as f64 / d.fs_hz))
+        .reduce(|a, b| if b.rms_bin_std_nm < a.rms_bin_std_nm { b } else { a })
+        .expect("at least the zero shift")
+}
+
 /// A candidate fitted on the calibration window.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Fitted {
@@ -244,44 +289,20 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
             (m, 1)
         }
         Candidate::ChannelDelay => {
-            // The delay that best fits the equation of motion (teacher-forced, calibration window).
+            // The delay that best fits the equation of motion (teacher-forced, calibration window);
+            // J, k, c and the least-squares law on the aligned torque T(t + τ) against Ω(t) refitted,
+            // then the law refitted by simulation like `friction_law` (the least-squares law's own free
+            // run is the structure table's: rig_lavi::study::structure_lead).
             let tau = best_delay_s(ev.data, &ev.windows[cal], current.structure, MAX_DELAY_S);
-            let m = restructure(current, ev, Structure { torque_delay_s: tau, ..current.structure })?;
+            let aligned = restructure(current, ev, Structure { torque_delay_s: tau, ..current.structure })?;
+            let (m, n, family) = law_by_simulation(&aligned, ev, max_evals);
             params.insert("torque_delay_s".into(), m.torque_delay_s);
-            (m, 2 * (MAX_DELAY_S * ev.data.fs_hz).round() as usize + 1)
+            insert_law_params(&mut params, &m, family);
+            (m, n + 2 * (MAX_DELAY_S * ev.data.fs_hz).round() as usize + 1)
         }
         Candidate::FrictionLaw => {
-            // Three families, each fitted; the best on the calibration window is kept.
-            let mut best: Option<(f64, Model, usize, f64)> = None;
-            let mut total = 0;
-            for family in [0.0, 1.0, 2.0] {
-                let f0 = current.friction;
-                let build = |x: &[f64]| -> Model {
-                    let ts = x[0].exp();
-                    let law = FrictionLaw {
-                        static_nm: ts,
-                        kinetic_nm: ts * logistic(x[1]),
-                        // Coulomb: the fall from T_s to T_k happens within 0.01 rad/s (a jump).
-                        stribeck_speed_rad_s: if family == 0.0 { 0.01 } else { x[2].exp() },
-                        shape_exponent: if family == 0.0 { 1.0 } else { family },
-                        viscous_nm_s_rad: x[3].exp(),
-                    };
-                    Model { friction: law, ..*current }
-                };
-                let ratio = (f0.kinetic_nm / f0.static_nm).clamp(0.05, 0.95);
-                let x0 = [f0.static_nm.ln(), logit(ratio), f0.stribeck_speed_rad_s.ln(), (1e-4f64).ln()];
-                let (x, v, n) = nelder_mead(|x| misfit(&build(x)), &x0, &[0.2, 0.5, 0.5, 2.0], max_evals);
-                total += n;
-                if best.as_ref().is_none_or(|b| v < b.0) {
-                    best = Some((v, build(&x), n, family));
-                }
-            }
-            let (_, m, _, family) = best.expect("three families tried");
-            params.insert("family".into(), family);
-            params.insert("static_nm".into(), m.friction.static_nm);
-            params.insert("kinetic_nm".into(), m.friction.kinetic_nm);
-            params.insert("stribeck_speed_rad_s".into(), m.friction.stribeck_speed_rad_s);
-            params.insert("viscous_nm_s_rad".into(), m.friction.viscous_nm_s_rad);
+            let (m, total, family) = law_by_simulation(current, ev, max_evals);
+            insert_law_params(&mut params, &m, family);
             (m, total)
         }
         Candidate::FrictionMemory => {
@@ -358,6 +379,48 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
         at_bounds.extend(info.at_bounds);
     }
     Ok(Fitted { model, at_bounds, params, calibration_misfit, evaluations: evals })
+}
+
+/// The friction law refitted by simulation on the calibration window on top
+/// of `current`: three families of T_k + (T_s − T_k) e^{−(|Ω|/v_s)^δ} + c_v |Ω|
+/// (Coulomb: a jump within 0.01 rad/s; exponential δ = 1; Gaussian δ = 2),
+/// each by Nelder–Mead from `current`'s law, fitted in parallel; the best on
+/// the calibration window is kept (ties: family order). Returns the model, the
+/// evaluations spent and the family (0, 1, 2).
+fn law_by_simulation(current: &Model, ev: &Evaluator, max_evals: usize) -> (Model, usize, f64) {
+    let cal = ev.calibration();
+    let f0 = current.friction;
+    let fits: Vec<(f64, Model, usize, f64)> = [0.0, 1.0, 2.0]
+        .par_iter()
+        .map(|&family| {
+            let build = |x: &[f64]| -> Model {
+                let ts = x[0].exp();
+                let law = FrictionLaw {
+                    static_nm: ts,
+                    kinetic_nm: ts * logistic(x[1]),
+                    stribeck_speed_rad_s: if family == 0.0 { 0.01 } else { x[2].exp() },
+                    shape_exponent: if family == 0.0 { 1.0 } else { family },
+                    viscous_nm_s_rad: x[3].exp(),
+                };
+                Model { friction: law, ..*current }
+            };
+            let ratio = (f0.kinetic_nm / f0.static_nm).clamp(0.05, 0.95);
+            let x0 = [f0.static_nm.ln(), logit(ratio), f0.stribeck_speed_rad_s.ln(), (1e-4f64).ln()];
+            let (x, v, n) = nelder_mead(|x| ev.misfit(&build(x), cal), &x0, &[0.2, 0.5, 0.5, 2.0], max_evals);
+            (v, build(&x), n, family)
+        })
+        .collect();
+    let total = fits.iter().map(|f| f.2).sum();
+    let best = fits.into_iter().reduce(|a, b| if b.0 < a.0 { b } else { a }).expect("three families tried");
+    (best.1, total, best.3)
+}
+
+fn insert_law_params(params: &mut BTreeMap<String, f64>, m: &Model, family: f64) {
+    params.insert("family".into(), family);
+    params.insert("static_nm".into(), m.friction.static_nm);
+    params.insert("kinetic_nm".into(), m.friction.kinetic_nm);
+    params.insert("stribeck_speed_rad_s".into(), m.friction.stribeck_speed_rad_s);
+    params.insert("viscous_nm_s_rad".into(), m.friction.viscous_nm_s_rad);
 }
 
 /// Largest channel delay the `channel_delay` candidate scans, s (±50 ms: a fifth
@@ -443,6 +506,58 @@ pub fn nelder_mead(f: impl Fn(&[f64]) -> f64, x0: &[f64], step: &[f64], max_eval
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// 10 s at 1 kHz: bit speed 80 + 60 sin(2π 2 t) rpm, and a torque channel that
+    /// reads the single-valued law 3 − 0.01 Ω(t − 0.025 s) (late by 25 ms).
+    fn late_channel() -> (Prepared, WindowSpec) {
+        let n = 10_000;
+        let time_s: Vec<f64> = (0..n).map(|i| i as f64 / 1000.0).collect();
+        let speed = |t: f64| 80.0 + 60.0 * (std::f64::consts::TAU * 2.0 * t).sin();
+        let bit_rpm: Vec<f64> = time_s.iter().map(|t| speed(*t)).collect();
+        let torque_nm: Vec<f64> = time_s.iter().map(|t| 3.0 - 0.01 * speed(t - 0.025)).collect();
+        let d = Prepared {
+            fs_hz: 1000.0,
+            top_rpm: vec![80.0; n],
+            wob_n: vec![500.0; n],
+            bit_raw_rpm: bit_rpm.clone(),
+            torque_raw_nm: torque_nm.clone(),
+            time_s,
+            bit_rpm,
+            torque_nm,
+            glitches: rig_spectra::stickslip::GlitchReport { runs: 0, samples: 0, longest_run: 0 },
+            top_noise_rad_s: 0.0,
+            twist_excursion_rad: (0.0, 0.0),
+            repairs: Vec::new(),
+        };
+        let cal = WindowSpec {
+            label: "3-7".into(),
+            split: crate::data::Split::Train,
+            start_s: 3.0,
+            end_s: 7.0,
+            span: 2000..7000,
+            window: 1000..5000,
+        };
+        (d, cal)
+    }
+
+    #[test]
+    fn a_late_channel_draws_a_loop_that_its_delay_closes() {
+        let (d, cal) = late_channel();
+        // As recorded, the torque at a given speed differs between acceleration and deceleration:
+        // Ω(t − τ) − Ω(t) ≈ −τ Ω̇, up to 0.01 · 0.025 · 60 · 4π ≈ 0.19 N m apart.
+        let raw = loop_spread(&d, &cal, 5.0, 20, 0.0);
+        assert!(raw.max_bin_std_nm > 0.05, "{raw:?}");
+        // Read 25 ms later it is the law again: the spread left is the law across a bin's width,
+        // 0.01 N m/rpm over 140/20 = 7 rpm: a std of 0.07/√12 = 0.020 N m for evenly spread speeds,
+        // never above half the bin's torque range, 0.035 N m.
+        let aligned = loop_spread(&d, &cal, 5.0, 20, 0.025);
+        assert!(
+            aligned.max_bin_std_nm < 0.035 && aligned.rms_bin_std_nm < 0.2 * raw.rms_bin_std_nm,
+            "{aligned:?} {raw:?}"
+        );
+        let best = narrowest_loop(&d, &cal, 5.0, 20, MAX_DELAY_S);
+        assert!((best.shift_s - 0.025).abs() < 1.5e-3, "{best:?}");
+    }
 
     #[test]
     fn nelder_mead_finds_a_quadratic_minimum() {

@@ -23,7 +23,7 @@
 //! | `friction_memory` | the friction follows its steady law with a lag | τ ṁ = T_ss(Ω) − m in slip | `lag_s` |
 //! | `second_dof` | a second torsional degree of freedom (a mid inertia on the shaft) | J_1 between k_1 = k/s and k_2 = k/(1−s) | `mid_inertia_kgm2`, `stiffness_split` |
 //! | `absolute_damping` | the damping acts on the absolute bit speed (Eq. 4-7's placement), or on both it and the twist rate: J Ω̇ = k φ + c (Ω_top − Ω) − c_a Ω − T_f | J, k, c, c_a refitted by least squares on the calibration window; a damping below 0 pinned there and reported | `damping_nm_s_rad`, `absolute_damping_nm_s_rad` |
-//! | `channel_delay` | the torque channel is late (or early) on the speed channels: T_m(t) = T_f(t − τ) | τ by least squares of the equation of motion over ±50 ms, then J, k, c and the law refitted | `torque_delay_s` |
+//! | `channel_delay` | the torque channel is late (or early) on the speed channels: T_m(t) = T_f(t − τ) | τ by least squares of the equation of motion over ±50 ms, J, k, c refitted with T_m(t + τ) as the contact torque, the law then refitted by simulation as `friction_law`'s; the simulated torque channel is read τ late, like the measured one, so every torque–speed feature compares one time base | `torque_delay_s`, and `friction_law`'s keys |
 //! | `compliant_drive` | the top speed is not imposed: a PI speed loop on a motor inertia | J_m, K_p, K_i; set point = moving mean of the measured top speed | `drive_inertia_kgm2`, `kp_nm_s_rad`, `ki_nm_rad` |
 //! | `unexplained` | a significant mismatch is left (adequacy below) | — | — |
 //!

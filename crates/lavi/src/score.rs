@@ -17,7 +17,8 @@
 use crate::LaviError;
 use crate::data::{Prepared, RPM_TO_RAD_S, WindowSpec, derivative};
 use crate::features::{FeatureOptions, Features, N_FEATURES, window_features};
-use crate::sim::{Inputs, Model, Run, Start, simulate};
+use crate::sim::{Inputs, Model, Run, Start, delay_samples, simulate};
+use rayon::prelude::*;
 
 /// Cap on one feature's normalised error.
 pub const ERROR_CAP: f64 = 10.0;
@@ -93,12 +94,13 @@ impl<'a> Evaluator<'a> {
                     / ((i + half + 1).min(n) - i.saturating_sub(half)) as f64
             })
             .collect();
+        // The recorded channels through the same one low-pass as a simulated run's.
         let measured = windows
             .iter()
             .map(|w| {
                 window_features(
-                    &data.bit_rpm[w.span.clone()],
-                    &data.torque_nm[w.span.clone()],
+                    &data.bit_raw_rpm[w.span.clone()],
+                    &data.torque_raw_nm[w.span.clone()],
                     w.window.clone(),
                     &fopts,
                 )
@@ -136,10 +138,13 @@ impl<'a> Evaluator<'a> {
             wob_n: &self.data.wob_n[s.clone()],
             top_ref_rad_s: &self.top_ref_rad_s[s.clone()],
         };
+        // The contact torque at the start as the channel reads it: τ later when the channel is late by τ.
+        let at = (s.start as isize + delay_samples(m.torque_delay_s, self.data.fs_hz))
+            .clamp(0, self.data.len() as isize - 1) as usize;
         let start = Start {
             bit_rad_s: self.data.bit_rpm[s.start] * RPM_TO_RAD_S,
             bit_acc_rad_s2: self.bit_acc_rad_s2[s.start],
-            torque_nm: self.data.torque_nm[s.start],
+            torque_nm: self.data.torque_nm[at],
         };
         simulate(m, &u, start, self.substeps)
     }
@@ -159,8 +164,15 @@ impl<'a> Evaluator<'a> {
         }
     }
 
-    /// Misfits on every held-out window, in window order.
+    /// Misfits on every held-out window, in window order (run in parallel,
+    /// collected in order: the same numbers on any thread count).
     pub fn heldout_misfits(&self, m: &Model) -> Vec<f64> {
-        self.heldout().into_iter().map(|w| self.misfit(m, w)).collect()
+        self.heldout().into_par_iter().map(|w| self.misfit(m, w)).collect()
+    }
+
+    /// Features of the free run on every window (calibration first), in
+    /// parallel and in window order; a run that fails has NaN features.
+    pub fn all_features(&self, m: &Model) -> Vec<Features> {
+        (0..self.windows.len()).into_par_iter().map(|w| self.features(m, w).unwrap_or(Features::NAN)).collect()
     }
 }

@@ -106,7 +106,9 @@ pub struct Inputs<'a> {
     pub top_ref_rad_s: &'a [f64],
 }
 
-/// Measured state at the first sample: bit speed, its derivative, measured torque.
+/// Measured state at the first sample: bit speed, its derivative, and the
+/// contact torque at that instant as the torque channel reads it, i.e. the
+/// channel's sample `torque_delay_s` later (the caller aligns it).
 #[derive(Debug, Clone, Copy)]
 pub struct Start {
     pub bit_rad_s: f64,
@@ -146,6 +148,11 @@ impl Friction for Contact {
             state[0] += if held.is_some() { 1.0 } else { (h / self.lag_s).min(1.0) } * (target - state[0]);
         }
     }
+}
+
+/// A channel delay in whole samples (rounded; negative: early).
+pub fn delay_samples(delay_s: f64, fs_hz: f64) -> isize {
+    (delay_s * fs_hz).round() as isize
 }
 
 /// Integrates `m` from `start` under `u` (see the module docs) on the one
@@ -210,9 +217,10 @@ pub fn simulate(m: &Model, u: &Inputs, start: Start, substeps: usize) -> Result<
     let mut sensor: Vec<f64> =
         r.friction_nm.iter().zip(&r.accel_rad_s2).map(|(f, a)| f + m.sensor_inertia_kgm2 * a).collect();
     sensor[0] = start.torque_nm;
-    // A torque channel late by `torque_delay_s` reads, at sample i, the torque of sample i − d.
-    let d = (m.torque_delay_s * u.fs_hz).round() as usize;
-    let torque_nm = (0..n).map(|i| sensor[i.saturating_sub(d)]).collect();
+    // A torque channel late by `torque_delay_s` reads, at sample i, the torque of sample i − d
+    // (d < 0: early; the run's first and last samples stand in beyond its ends).
+    let d = delay_samples(m.torque_delay_s, u.fs_hz);
+    let torque_nm = (0..n).map(|i| sensor[(i as isize - d).clamp(0, n as isize - 1) as usize]).collect();
     Ok(Run { bit_rad_s: r.bit_rad_s, torque_nm, top_rad_s: r.top_rad_s })
 }
 
@@ -265,6 +273,27 @@ mod tests {
         assert!(stuck > 2000, "stuck samples {stuck}");
         // The sensor never reads more than the static torque in stick.
         assert!(r.torque_nm.iter().all(|t| *t <= 1.8 + 1e-9));
+    }
+
+    #[test]
+    fn a_late_or_early_torque_channel_is_the_contact_torque_shifted() {
+        // Stick-slip (slow drive): a torque with structure to shift.
+        let on_time = run(&base(), 1.0, 5.0);
+        for (delay_s, d) in [(0.02, 20isize), (-0.02, -20)] {
+            let m = Model { torque_delay_s: delay_s, ..base() };
+            let r = run(&m, 1.0, 5.0);
+            // The motion is the contact's, whatever the channel reads.
+            assert_eq!(r.bit_rad_s, on_time.bit_rad_s);
+            let n = r.torque_nm.len() as isize;
+            for i in 100..n - 100 {
+                assert_eq!(
+                    r.torque_nm[i as usize],
+                    on_time.torque_nm[(i - d) as usize],
+                    "delay {delay_s} s, sample {i}"
+                );
+            }
+        }
+        assert_eq!(delay_samples(-0.0204, 1000.0), -20);
     }
 
     #[test]

@@ -3,12 +3,14 @@
 
 use crate::data::{Prepared, RPM_TO_RAD_S, WindowSpec, prepare, windows};
 use crate::eom::Damping;
-use crate::fit::{AtBound, Derivation, MAX_DELAY_S, Structure, best_delay_s, derive};
+use crate::fit::{
+    AtBound, Derivation, LoopSpread, MAX_DELAY_S, Structure, best_delay_s, derive, loop_spread, narrowest_loop,
+};
 use crate::render::{StudyOutput, render};
 use crate::score::Evaluator;
 use crate::select::{Selection, forward_select, mean};
 use crate::signature::{SignatureTerm, residual_signature};
-use crate::sim::Model;
+use crate::sim::{FrictionLaw, Model};
 use crate::{Candidate, FeatureOptions, Features, LaviError, StudyParams, window_features};
 use rig_ingest::lavi::LaviRecording;
 use serde::Serialize;
@@ -44,6 +46,16 @@ pub struct Study {
     pub candidate_features: Vec<(Candidate, Vec<Features>)>,
     /// The equation of motion under each structure tried, unconstrained (structure lead).
     pub structures: Vec<(String, Derivation)>,
+    /// Per structure (order of `structures`): the mean held-out misfit of its
+    /// free run with J, k, c and the least-squares law of that structure (the
+    /// law fitted to the torque as that structure reads it: T(t + τ) against Ω(t)
+    /// for a delay), no simulation fit.
+    pub structure_heldout: Vec<f64>,
+    /// Per structure: that least-squares law.
+    pub structure_laws: Vec<FrictionLaw>,
+    /// The torque–speed cloud of the calibration window: as recorded, read at
+    /// the equation of motion's best delay, and at its narrowest shift (±50 ms).
+    pub loop_spread: [LoopSpread; 3],
     /// Parameters of the final model at a bound (least squares and simulation fits).
     pub parameters_at_bounds: Vec<AtBound>,
 }
@@ -71,8 +83,7 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
     };
     let ev = Evaluator::new(&d, wins.clone(), fopts, p.substeps, p.slip_speed_rpm, p.drive_ref_window_s)?;
     let (baseline, derivation) = derive(&d, &wins[0], p.slip_speed_rpm, Structure::BASELINE)?;
-    let sim_features =
-        |m: &Model| -> Vec<Features> { (0..wins.len()).map(|w| ev.features(m, w).unwrap_or(NAN_FEATURES)).collect() };
+    let sim_features = |m: &Model| -> Vec<Features> { ev.all_features(m) };
     let baseline_features = sim_features(&baseline);
     let selection = forward_select(
         &ev,
@@ -89,6 +100,18 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
     let candidate_features =
         selection.trials.iter().filter(|t| t.step == 1).map(|t| (t.candidate, sim_features(&t.fitted.model))).collect();
     let structures = structure_lead(&d, &wins[0], p.slip_speed_rpm, &selection)?;
+    let (structure_heldout, structure_laws) = structures
+        .iter()
+        .map(|(_, der)| {
+            let (m, _) = derive(&d, &wins[0], p.slip_speed_rpm, der.structure)?;
+            Ok((mean(&ev.heldout_misfits(&m)), m.friction))
+        })
+        .collect::<Result<Vec<(f64, FrictionLaw)>, LaviError>>()?
+        .into_iter()
+        .unzip();
+    let tau = best_delay_s(&d, &wins[0], Structure::BASELINE, MAX_DELAY_S);
+    let spread = |shift_s| loop_spread(&d, &wins[0], p.slip_speed_rpm, p.bins, shift_s);
+    let loop_spread = [spread(0.0), spread(tau), narrowest_loop(&d, &wins[0], p.slip_speed_rpm, p.bins, MAX_DELAY_S)];
     let (_, final_der) = derive(&d, &wins[0], p.slip_speed_rpm, selection.final_model.structure)?;
     let mut parameters_at_bounds = final_der.at_bounds;
     for &i in &selection.chosen {
@@ -112,6 +135,9 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
         signature,
         candidate_features,
         structures,
+        structure_heldout,
+        structure_laws,
+        loop_spread,
         parameters_at_bounds,
     };
     Ok((study, d, rec))
@@ -150,17 +176,6 @@ fn structure_lead(
     ];
     list.into_iter().map(|(name, st)| Ok((name, derive(d, cal, slip_speed_rpm, st)?.1))).collect()
 }
-
-const NAN_FEATURES: Features = Features {
-    bit_speed_max_rpm: f64::NAN,
-    bit_speed_min_rpm: f64::NAN,
-    stick_fraction: f64::NAN,
-    fundamental_hz: f64::NAN,
-    loop_area: f64::NAN,
-    slip_torque_nm: f64::NAN,
-    breakaway_torque_nm: f64::NAN,
-    cycles: 0,
-};
 
 fn wob_hypothesis(ev: &Evaluator, sel: &Selection) -> Result<WobHypothesis, LaviError> {
     let d = ev.data;

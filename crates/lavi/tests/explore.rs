@@ -7,7 +7,10 @@ fn setup() -> (std::path::PathBuf, rig_lavi::StudyParams) {
         std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../pipeline.toml")).unwrap();
     let v: toml::Value = toml::from_str(&text).unwrap();
     let st = v["stage"].as_array().unwrap().iter().find(|s| s["name"].as_str() == Some("lavi")).unwrap();
-    (path, st["params"].clone().try_into().unwrap())
+    let mut params = st["params"].clone();
+    // `[shared.selection]` is merged into the stage's params by the pipeline's runner.
+    params.as_table_mut().unwrap().insert("selection".into(), v["shared"]["selection"].clone());
+    (path, params.try_into().unwrap())
 }
 
 #[test]
