@@ -107,7 +107,7 @@ pub mod lines;
 pub mod prepare;
 pub mod render;
 mod result;
-mod select;
+pub mod select;
 pub mod signature;
 pub mod structure;
 
@@ -270,23 +270,16 @@ pub fn diagnose(
     // So does the force sensor's linearity: the calibration runs against their own line.
     checks.push(force_check);
     let flagged_of = |v: &[ChannelCheck]| v.iter().filter(|k| k.flagged).map(ChannelCheck::as_pair).collect::<Vec<_>>();
-    let select = |flagged: &[(String, String)]| {
-        diagnose_signals(
-            &c.name,
-            &runs,
-            c.rig.supply_voltage_v,
-            c.rig.brake_disc_radius_m,
-            thesis_mu_dynamic,
-            flagged,
-            opts,
-        )
-    };
     // The findings do not depend on the flagged checks (only the adequacy
-    // test does), so the selection runs once on every check that needs no
-    // finding — the model-free ones and the voltage steps, which judge the
-    // estimate alone — and again only when the final model's free-run
-    // checks flag something. The baseline's free runs need no finding
-    // either: they run beside the selection.
+    // test does): one forward selection, concluded once per set of flags.
+    let conclude = |sel: &select::Selection, flagged: &[(String, String)]| {
+        sel.conclude(&c.name, c.rig.brake_disc_radius_m, thesis_mu_dynamic, flagged, opts)
+    };
+    // The selection is concluded on every check that needs no finding —
+    // the model-free ones and the voltage steps, which judge the estimate
+    // alone — and again only when the final model's free-run checks flag
+    // something. The baseline's free runs need no finding either: they run
+    // beside the selection.
     let flagged0 = flagged_of(&checks);
     let s = channels::FreeRunSettings::of(opts, o);
     // The voltage steps judge the estimate on the runs it was fitted to, in
@@ -297,8 +290,12 @@ pub fn diagnose(
     let steps = baseline.map(|p| channels::voltage_step_checks(c, cal, p, o, &opts.integrator)).unwrap_or_default();
     let mut flagged1 = flagged0.clone();
     flagged1.extend(flagged_of(&steps));
-    let (d, base_pairs) = rayon::join(|| select(&flagged1), || baseline.map(|p| channels::free_run_pairs(c, p, &s)));
-    let mut d = d?;
+    let (sel, base_pairs) = rayon::join(
+        || select::select_effects(&c.name, &runs, c.rig.supply_voltage_v, opts),
+        || baseline.map(|p| channels::free_run_pairs(c, p, &s)),
+    );
+    let found = sel?;
+    let mut d = conclude(&found, &flagged1);
     if let (Some(p), Some(data), Some(base_pairs)) = (baseline, &balance, base_pairs) {
         let vocab: Vec<(EffectId, std::collections::BTreeMap<String, f64>)> =
             d.findings.iter().filter_map(|f| EffectId::from_id(&f.effect).map(|e| (e, f.params.clone()))).collect();
@@ -323,12 +320,12 @@ pub fn diagnose(
         let free_run_final = channels::free_run_checks_of(c, &final_pairs, &s, o);
         // Free run is part of adequacy (issue 25): a flagged free-run check of
         // the final model makes the answer `unexplained` (`where`: free_run);
-        // the selection is rerun with it so the unexplained finding, its
-        // signature and the adequacy record come from the one place that makes them.
+        // the selection is concluded again with it so the unexplained finding,
+        // its signature and the adequacy record come from the one place that makes them.
         let mut flagged = flagged1.clone();
         flagged.extend(free_run_final.iter().filter(|k| k.flagged).map(|k| ("free_run".to_string(), k.as_pair().1)));
         if flagged != flagged1 {
-            d = select(&flagged)?;
+            d = conclude(&found, &flagged);
         }
         let at = checks.iter().take_while(|k| k.run_kind == "static_twist").count();
         checks.splice(at..at, steps);

@@ -404,21 +404,38 @@ pub fn diagnose_signals(
     channel_checks: &[(String, String)],
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
-    select_over(REGISTRY, campaign, runs, (supply_v, disc_radius_m), thesis_mu_dynamic, channel_checks, opts)
+    Ok(select_effects(campaign, runs, supply_v, opts)?.conclude(
+        campaign,
+        disc_radius_m,
+        thesis_mu_dynamic,
+        channel_checks,
+        opts,
+    ))
 }
 
-/// [`diagnose_signals`] with the candidates of `registry` (in its order);
-/// `rig` is (supply voltage V, brake disc radius m).
-pub(crate) fn select_over(
-    registry: &[&'static dyn VocabularyEffect],
+/// The forward selection over the vocabulary's [`REGISTRY`]: what the
+/// findings are, before any check of another run kind is known (the
+/// findings do not depend on them: [`Selection::conclude`] turns the same
+/// selection into a diagnosis for each set of flagged checks, so the
+/// diagnosis that learns of a free-run flag after simulating the final
+/// model does not select again).
+pub fn select_effects<'a>(
     campaign: &str,
-    runs: &[RunSignals],
-    rig: (f64, f64),
-    thesis_mu_dynamic: Option<f64>,
-    channel_checks: &[(String, String)],
+    runs: &'a [RunSignals],
+    supply_v: f64,
     opts: &DiagnoseOptions,
-) -> Result<Diagnosis, DiagnoseError> {
-    let (supply_v, disc_radius_m) = rig;
+) -> Result<Selection<'a>, DiagnoseError> {
+    select_over(REGISTRY, campaign, runs, supply_v, opts)
+}
+
+/// [`diagnose_signals`] with the candidates of `registry` (in its order).
+pub(crate) fn select_over<'a>(
+    registry: &'static [&'static dyn VocabularyEffect],
+    campaign: &str,
+    runs: &'a [RunSignals],
+    supply_v: f64,
+    opts: &DiagnoseOptions,
+) -> Result<Selection<'a>, DiagnoseError> {
     let folds = opts.folds.min(runs.len());
     if runs.len() < 3 || folds < 2 {
         return Err(DiagnoseError::TooFewRuns { campaign: campaign.into(), needed: 3, found: runs.len() });
@@ -529,137 +546,216 @@ pub(crate) fn select_over(
     let pi_base = drive::fit_gains(&all, supply_v).ok_or(DiagnoseError::Singular("PI gains of the baseline drive"))?;
     let coulomb = composite::fit_composite(&d_all, FrictionSet::default(), &[], opts.max_order)
         .ok_or(DiagnoseError::Singular("the Coulomb baseline"))?;
+    Ok(Selection {
+        registry,
+        runs,
+        supply_v,
+        cv,
+        fr_cache,
+        dr_cache,
+        current,
+        base_ms,
+        cur_ms,
+        accepted,
+        steps,
+        first_step,
+        full,
+        limit_fit,
+        pi_base,
+        coulomb,
+        d_all,
+    })
+}
 
-    // Adequacy: the final model against noise, and the other run kinds.
-    let floor_parts: Vec<(Option<f64>, f64)> = runs.iter().map(|s| noise_floor_parts(s, supply_v)).collect();
-    let floor_ms: Vec<f64> = floor_parts.iter().map(|(a, b)| combine(*a, *b)).collect();
-    let floor_m = overall(&floor_ms);
-    let final_m = overall(&cur_ms);
-    let ratio = final_m / floor_m;
-    let fr_final = fr_cache.get(&current.friction).expect("evaluated").clone();
-    let dr_final = dr_cache.get(&current.limit).expect("evaluated").clone();
-    let ch_mu = {
-        let e: Vec<f64> = fr_final.e_mu.iter().flatten().copied().collect();
-        let f: Vec<f64> = floor_parts.iter().filter_map(|p| p.0).collect();
-        overall(&e) / overall(&f)
-    };
-    let ch_v = overall(&dr_final.e_v) / overall(&floor_parts.iter().map(|p| p.1).collect::<Vec<_>>());
-    let all_lines: Vec<lines::OrderLine> = runs
-        .par_iter()
-        .map(|s| {
-            let mut v = lines::order_lines(s, true, opts.max_order);
-            v.extend(lines::order_lines(s, false, opts.max_order));
-            v
-        })
-        .collect::<Vec<_>>()
-        .into_iter()
-        .flatten()
-        .collect();
-    // Lines a fitted effect drives (an angle-locked friction of order n: order
-    // n and its harmonics, in either speed) are explained, not left over.
-    let explained_order = registry.iter().find_map(|e| e.explained_order(&full.model));
-    let consistent: Vec<lines::ConsistentLine> = lines::consistent_lines(&all_lines, opts.line_ratio)
-        .into_iter()
-        .filter(|l| explained_order.is_none_or(|n| l.order % n != 0))
-        .collect();
-    let line_text: Vec<String> = consistent
-        .iter()
-        .map(|l| {
-            format!(
-                "{} speed has an order-{} line (per {} revolution) in {}/{} runs, median {:.0}× the local floor",
-                l.channel, l.order, l.channel, l.runs_significant, l.runs_tested, l.median_ratio
-            )
-        })
-        .collect();
-    let adequate = ratio <= opts.adequacy_ratio && consistent.is_empty() && channel_checks.is_empty();
-    let adequacy = Adequacy {
-        residual_over_noise: round_sig(ratio, 3),
-        threshold: opts.adequacy_ratio,
-        order_lines: consistent.len(),
-        channel_checks: channel_checks.iter().filter(|(k, _)| k != "free_run").count(),
-        free_run_checks: channel_checks.iter().filter(|(k, _)| k == "free_run").count(),
-        adequate,
-    };
+/// What the forward selection found ([`select_effects`]), ready to be
+/// concluded against the checks of the other run kinds.
+pub struct Selection<'a> {
+    registry: &'static [&'static dyn VocabularyEffect],
+    runs: &'a [RunSignals],
+    supply_v: f64,
+    cv: Cv<'a>,
+    fr_cache: BTreeMap<FrictionSet, FrictionCv>,
+    dr_cache: BTreeMap<bool, DriveCv>,
+    current: ModelSet,
+    base_ms: Vec<f64>,
+    cur_ms: Vec<f64>,
+    accepted: Vec<(EffectId, Comparison)>,
+    steps: Vec<StepRow>,
+    first_step: Vec<(EffectId, Comparison, Vec<f64>)>,
+    full: CompositeFit,
+    limit_fit: Option<(Pi, f64, usize, f64)>,
+    pi_base: Pi,
+    coulomb: CompositeFit,
+    d_all: SlipData,
+}
 
-    let run_ids: Vec<String> = runs.iter().map(|s| s.id.clone()).collect();
-    // Every fitted parameter of the final model, by the term that fitted it.
-    let fitted: Vec<(Term, &str, f64, f64)> = full
-        .params
-        .iter()
-        .map(|&(t, k, v, s)| (Term::Friction(t), k, v, s))
-        .chain(limit_fit.map(|(pi, _, _, s)| (Term::DriveLimit, drive::LIMIT_PARAM, pi.limit_v, s)))
-        .collect();
-    let mut findings = Vec::new();
-    for (e, c) in &accepted {
-        let mut params = BTreeMap::new();
-        let mut se = BTreeMap::new();
-        let mut ptext = Vec::new();
-        for (term, k, v, s) in &fitted {
-            if *term == e.term() && !params.contains_key(*k) {
-                params.insert(k.to_string(), round_sig(*v, 4));
-                se.insert(k.to_string(), round_sig(*s, 2));
-                ptext.push((*k, *v));
-            }
-        }
-        findings.push(Finding {
-            effect: e.id().into(),
-            params,
-            params_stderr: se,
-            evidence: evidence(e.0, &ptext, c),
-            heldout_runs: run_ids.clone(),
-            heldout_misfit_baseline: round_sig(c.before, 4),
-            heldout_misfit_extended: round_sig(c.after, 4),
-            relative_gain: round_sig(c.gain, 4),
-            relative_gain_fold_sd: round_sig(c.gain_fold_sd, 2),
-            criterion: Some(round_sig(-c.t, 4)),
-            ..Default::default()
-        });
-    }
+impl Selection<'_> {
+    /// The diagnosis of this selection given the significant checks of the
+    /// other run kinds (`channel_checks`: (run kind, text)): adequacy, the
+    /// `unexplained` finding and its signature, the report's detail.
+    pub fn conclude(
+        &self,
+        campaign: &str,
+        disc_radius_m: f64,
+        thesis_mu_dynamic: Option<f64>,
+        channel_checks: &[(String, String)],
+        opts: &DiagnoseOptions,
+    ) -> Diagnosis {
+        let Selection {
+            registry,
+            runs,
+            supply_v,
+            cv,
+            fr_cache,
+            dr_cache,
+            current,
+            base_ms,
+            cur_ms,
+            accepted,
+            steps,
+            first_step,
+            full,
+            limit_fit,
+            pi_base,
+            coulomb,
+            d_all,
+        } = self;
+        let (registry, runs, supply_v, current) = (*registry, *runs, *supply_v, *current);
+        let folds = cv.folds;
+        let all: Vec<&RunSignals> = runs.iter().collect();
+        let significant =
+            |c: &Comparison| c.gain >= opts.selection.min_relative_gain && c.t >= opts.min_t && c.after.is_finite();
 
-    // What is left: the signature of the final model's residual.
-    let mut detail = Detail { folds, ..Default::default() };
-    let mut verdict = accepted.first().map(|a| a.0.id().to_string()).unwrap_or_else(|| NONE.into());
-    let mut ext_ms = cur_ms.clone();
-    if !adequate {
-        let (mu_s, v_s) = residual_samples(&cv, &fr_final, &dr_final, disc_radius_m);
-        let sig_mu = signature::channel_signature(&mu_s, "friction", folds, runs.len(), opts.signature_threshold);
-        let sig_v = signature::channel_signature(&v_s, "drive", folds, runs.len(), opts.signature_threshold);
-        // Best data-driven extension: each channel corrected by its sparse model, per run.
-        ext_ms = (0..runs.len())
-            .map(|r| {
-                let e_mu = fr_final.e_mu[r].map(|e| e * sig_mu.run_factor[r].max(0.0).sqrt());
-                combine(e_mu, dr_final.e_v[r] * sig_v.run_factor[r].max(0.0).sqrt())
+        // Adequacy: the final model against noise, and the other run kinds.
+        let floor_parts: Vec<(Option<f64>, f64)> = runs.iter().map(|s| noise_floor_parts(s, supply_v)).collect();
+        let floor_ms: Vec<f64> = floor_parts.iter().map(|(a, b)| combine(*a, *b)).collect();
+        let floor_m = overall(&floor_ms);
+        let final_m = overall(&cur_ms);
+        let ratio = final_m / floor_m;
+        let fr_final = fr_cache.get(&current.friction).expect("evaluated").clone();
+        let dr_final = dr_cache.get(&current.limit).expect("evaluated").clone();
+        let ch_mu = {
+            let e: Vec<f64> = fr_final.e_mu.iter().flatten().copied().collect();
+            let f: Vec<f64> = floor_parts.iter().filter_map(|p| p.0).collect();
+            overall(&e) / overall(&f)
+        };
+        let ch_v = overall(&dr_final.e_v) / overall(&floor_parts.iter().map(|p| p.1).collect::<Vec<_>>());
+        let all_lines: Vec<lines::OrderLine> = runs
+            .par_iter()
+            .map(|s| {
+                let mut v = lines::order_lines(s, true, opts.max_order);
+                v.extend(lines::order_lines(s, false, opts.max_order));
+                v
+            })
+            .collect::<Vec<_>>()
+            .into_iter()
+            .flatten()
+            .collect();
+        // Lines a fitted effect drives (an angle-locked friction of order n: order
+        // n and its harmonics, in either speed) are explained, not left over.
+        let explained_order = registry.iter().find_map(|e| e.explained_order(&full.model));
+        let consistent: Vec<lines::ConsistentLine> = lines::consistent_lines(&all_lines, opts.line_ratio)
+            .into_iter()
+            .filter(|l| explained_order.is_none_or(|n| l.order % n != 0))
+            .collect();
+        let line_text: Vec<String> = consistent
+            .iter()
+            .map(|l| {
+                format!(
+                    "{} speed has an order-{} line (per {} revolution) in {}/{} runs, median {:.0}× the local floor",
+                    l.channel, l.order, l.channel, l.runs_significant, l.runs_tested, l.median_ratio
+                )
             })
             .collect();
-        let mut terms: Vec<signature::Term> =
-            sig_mu.terms.iter().chain(sig_v.terms.iter()).filter(|t| t.heldout_gain > 0.0).cloned().collect();
-        terms.sort_by(|a, b| b.heldout_gain.total_cmp(&a.heldout_gain).then(a.signal.cmp(b.signal)));
-        if let Some(t0) = terms.first() {
-            let (s, _) = if t0.channel == "friction" { (&mu_s, ()) } else { (&v_s, ()) };
-            let col = signature::SIGNALS.iter().position(|x| *x == t0.signal).expect("library signal");
-            detail.signature_curve = signature_curve(s, col);
-        }
-        detail.signature_gain = sig_mu.combined_gain.max(sig_v.combined_gain);
-        let mut where_: Vec<String> = Vec::new();
-        if ratio > opts.adequacy_ratio || !consistent.is_empty() {
-            where_.push("operating_point".into());
-        }
-        for (kind, _) in channel_checks {
-            if !where_.contains(kind) {
-                where_.push(kind.clone());
+        let adequate = ratio <= opts.adequacy_ratio && consistent.is_empty() && channel_checks.is_empty();
+        let adequacy = Adequacy {
+            residual_over_noise: round_sig(ratio, 3),
+            threshold: opts.adequacy_ratio,
+            order_lines: consistent.len(),
+            channel_checks: channel_checks.iter().filter(|(k, _)| k != "free_run").count(),
+            free_run_checks: channel_checks.iter().filter(|(k, _)| k == "free_run").count(),
+            adequate,
+        };
+
+        let run_ids: Vec<String> = runs.iter().map(|s| s.id.clone()).collect();
+        // Every fitted parameter of the final model, by the term that fitted it.
+        let fitted: Vec<(Term, &str, f64, f64)> = full
+            .params
+            .iter()
+            .map(|&(t, k, v, s)| (Term::Friction(t), k, v, s))
+            .chain(limit_fit.map(|(pi, _, _, s)| (Term::DriveLimit, drive::LIMIT_PARAM, pi.limit_v, s)))
+            .collect();
+        let mut findings = Vec::new();
+        for (e, c) in accepted {
+            let mut params = BTreeMap::new();
+            let mut se = BTreeMap::new();
+            let mut ptext = Vec::new();
+            for (term, k, v, s) in &fitted {
+                if *term == e.term() && !params.contains_key(*k) {
+                    params.insert(k.to_string(), round_sig(*v, 4));
+                    se.insert(k.to_string(), round_sig(*s, 2));
+                    ptext.push((*k, *v));
+                }
             }
+            findings.push(Finding {
+                effect: e.id().into(),
+                params,
+                params_stderr: se,
+                evidence: evidence(e.0, &ptext, c),
+                heldout_runs: run_ids.clone(),
+                heldout_misfit_baseline: round_sig(c.before, 4),
+                heldout_misfit_extended: round_sig(c.after, 4),
+                relative_gain: round_sig(c.gain, 4),
+                relative_gain_fold_sd: round_sig(c.gain_fold_sd, 2),
+                criterion: Some(round_sig(-c.t, 4)),
+                ..Default::default()
+            });
         }
-        let mut what = Vec::new();
-        if ratio > opts.adequacy_ratio {
-            what.push(format!(
+
+        // What is left: the signature of the final model's residual.
+        let mut detail = Detail { folds, ..Default::default() };
+        let mut verdict = accepted.first().map(|a| a.0.id().to_string()).unwrap_or_else(|| NONE.into());
+        let mut ext_ms = cur_ms.clone();
+        if !adequate {
+            let (mu_s, v_s) = residual_samples(&cv, &fr_final, &dr_final, disc_radius_m);
+            let sig_mu = signature::channel_signature(&mu_s, "friction", folds, runs.len(), opts.signature_threshold);
+            let sig_v = signature::channel_signature(&v_s, "drive", folds, runs.len(), opts.signature_threshold);
+            // Best data-driven extension: each channel corrected by its sparse model, per run.
+            ext_ms = (0..runs.len())
+                .map(|r| {
+                    let e_mu = fr_final.e_mu[r].map(|e| e * sig_mu.run_factor[r].max(0.0).sqrt());
+                    combine(e_mu, dr_final.e_v[r] * sig_v.run_factor[r].max(0.0).sqrt())
+                })
+                .collect();
+            let mut terms: Vec<signature::Term> =
+                sig_mu.terms.iter().chain(sig_v.terms.iter()).filter(|t| t.heldout_gain > 0.0).cloned().collect();
+            terms.sort_by(|a, b| b.heldout_gain.total_cmp(&a.heldout_gain).then(a.signal.cmp(b.signal)));
+            if let Some(t0) = terms.first() {
+                let (s, _) = if t0.channel == "friction" { (&mu_s, ()) } else { (&v_s, ()) };
+                let col = signature::SIGNALS.iter().position(|x| *x == t0.signal).expect("library signal");
+                detail.signature_curve = signature_curve(s, col);
+            }
+            detail.signature_gain = sig_mu.combined_gain.max(sig_v.combined_gain);
+            let mut where_: Vec<String> = Vec::new();
+            if ratio > opts.adequacy_ratio || !consistent.is_empty() {
+                where_.push("operating_point".into());
+            }
+            for (kind, _) in channel_checks {
+                if !where_.contains(kind) {
+                    where_.push(kind.clone());
+                }
+            }
+            let mut what = Vec::new();
+            if ratio > opts.adequacy_ratio {
+                what.push(format!(
                 "the final model's cross-validated misfit is {:.1}× the noise floor (threshold {:.1}; friction channel \
                  {:.1}×, drive channel {:.1}×)",
                 ratio, opts.adequacy_ratio, ch_mu, ch_v
             ));
-        }
-        what.extend(line_text.iter().take(2).cloned());
-        what.extend(channel_checks.iter().take(3).map(|(k, t)| format!("{k}: {t}")));
-        let signature_entries: Vec<SignatureEntry> = terms
+            }
+            what.extend(line_text.iter().take(2).cloned());
+            what.extend(channel_checks.iter().take(3).map(|(k, t)| format!("{k}: {t}")));
+            let signature_entries: Vec<SignatureEntry> = terms
             .iter()
             .take(4)
             .map(|t| SignatureEntry {
@@ -677,156 +773,157 @@ pub(crate) fn select_over(
                 ),
             })
             .collect();
-        let explained = if findings.is_empty() {
-            "No vocabulary effect earns its place".to_string()
-        } else {
-            format!(
-                "The vocabulary explains part of the mismatch ({})",
-                findings.iter().map(|f| f.effect.as_str()).collect::<Vec<_>>().join(", ")
-            )
-        };
-        // A mismatch seen only in the free run, with the teacher-forced
-        // channels within their noise: the residual signature describes
-        // noise-level structure of those channels, not the motion's gap.
-        let motion_only = ratio <= opts.adequacy_ratio
-            && consistent.is_empty()
-            && channel_checks.iter().all(|(k, _)| k == "free_run");
-        let follows = match terms.first() {
-            _ if motion_only => format!(
-                " The teacher-forced channels are within their noise ({ratio:.1}× the floor): the mismatch shows only \
+            let explained = if findings.is_empty() {
+                "No vocabulary effect earns its place".to_string()
+            } else {
+                format!(
+                    "The vocabulary explains part of the mismatch ({})",
+                    findings.iter().map(|f| f.effect.as_str()).collect::<Vec<_>>().join(", ")
+                )
+            };
+            // A mismatch seen only in the free run, with the teacher-forced
+            // channels within their noise: the residual signature describes
+            // noise-level structure of those channels, not the motion's gap.
+            let motion_only = ratio <= opts.adequacy_ratio
+                && consistent.is_empty()
+                && channel_checks.iter().all(|(k, _)| k == "free_run");
+            let follows = match terms.first() {
+                _ if motion_only => format!(
+                    " The teacher-forced channels are within their noise ({ratio:.1}× the floor): the mismatch shows only \
                  in the motion, where the residual signature of those channels (listed, best {}) cannot see it.",
-                terms.first().map_or("none", |t| t.signal)
-            ),
-            Some(t) => format!(
-                " The leftover follows {} (held-out gain {:.0} %), pointing to {}.",
-                t.signal,
-                100.0 * t.heldout_gain,
-                signature::causes(t.signal)
-            ),
-            None => " No signal of the library explains the leftover on held-out runs.".into(),
-        };
-        findings.push(Finding {
-            effect: UNEXPLAINED.into(),
-            evidence: format!("{explained}, but {}.{follows}", what.join("; ")),
-            residual_over_noise: Some(round_sig(ratio, 3)),
-            where_,
-            signature: signature_entries,
-            heldout_runs: run_ids.clone(),
-            heldout_misfit_baseline: round_sig(final_m, 4),
-            heldout_misfit_extended: round_sig(overall(&ext_ms), 4),
-            relative_gain: round_sig(1.0 - overall(&ext_ms) / final_m, 4),
-            relative_gain_fold_sd: round_sig(compare(&cur_ms, &ext_ms, runs, folds).gain_fold_sd, 2),
-            criterion: None,
-            ..Default::default()
-        });
-        detail.signature = terms;
-        verdict = UNEXPLAINED.into();
-    }
+                    terms.first().map_or("none", |t| t.signal)
+                ),
+                Some(t) => format!(
+                    " The leftover follows {} (held-out gain {:.0} %), pointing to {}.",
+                    t.signal,
+                    100.0 * t.heldout_gain,
+                    signature::causes(t.signal)
+                ),
+                None => " No signal of the library explains the leftover on held-out runs.".into(),
+            };
+            findings.push(Finding {
+                effect: UNEXPLAINED.into(),
+                evidence: format!("{explained}, but {}.{follows}", what.join("; ")),
+                residual_over_noise: Some(round_sig(ratio, 3)),
+                where_,
+                signature: signature_entries,
+                heldout_runs: run_ids.clone(),
+                heldout_misfit_baseline: round_sig(final_m, 4),
+                heldout_misfit_extended: round_sig(overall(&ext_ms), 4),
+                relative_gain: round_sig(1.0 - overall(&ext_ms) / final_m, 4),
+                relative_gain_fold_sd: round_sig(compare(&cur_ms, &ext_ms, runs, folds).gain_fold_sd, 2),
+                criterion: None,
+                ..Default::default()
+            });
+            detail.signature = terms;
+            verdict = UNEXPLAINED.into();
+        }
 
-    let base_m = overall(&base_ms);
-    let mut candidates = Vec::new();
-    for (e, c, _) in &first_step {
-        candidates.push(CandidateScore {
-            effect: e.id().into(),
-            heldout_misfit_extended: round_sig(c.after, 4),
-            relative_gain: round_sig(c.gain, 4),
-            relative_gain_fold_sd: round_sig(c.gain_fold_sd, 2),
-            criterion: round_sig(-c.t, 4),
-        });
-        detail.scores.push((e.id().into(), -c.t, c.after, c.gain, significant(c), String::new()));
-    }
+        let base_m = overall(&base_ms);
+        let mut candidates = Vec::new();
+        for (e, c, _) in first_step {
+            candidates.push(CandidateScore {
+                effect: e.id().into(),
+                heldout_misfit_extended: round_sig(c.after, 4),
+                relative_gain: round_sig(c.gain, 4),
+                relative_gain_fold_sd: round_sig(c.gain_fold_sd, 2),
+                criterion: round_sig(-c.t, 4),
+            });
+            detail.scores.push((e.id().into(), -c.t, c.after, c.gain, significant(c), String::new()));
+        }
 
-    // Detail for the report.
-    detail.steps = steps;
-    detail.heldout_misfit_baseline = base_m;
-    detail.heldout_misfit_noise_floor = floor_m;
-    detail.lines = line_text;
-    detail.channel_over_noise = (ch_mu, ch_v);
-    detail.baseline_text = format!(
-        "μk = {:.4} (Coulomb, all slip samples); voltage predictor kp = {:.3} V·s/rad, ki = {:.3} V/rad, limit {:.1} V \
+        // Detail for the report.
+        detail.steps = steps.clone();
+        detail.heldout_misfit_baseline = base_m;
+        detail.heldout_misfit_noise_floor = floor_m;
+        detail.lines = line_text;
+        detail.channel_over_noise = (ch_mu, ch_v);
+        detail.baseline_text = format!(
+            "μk = {:.4} (Coulomb, all slip samples); voltage predictor kp = {:.3} V·s/rad, ki = {:.3} V/rad, limit {:.1} V \
          (supply). These gains are the best teacher-forced predictor of the recorded voltage from the measured, \
          differentiated motor speed: speed noise biases kp low (errors in variables), so they are not the drive's \
          physical gains, which estimation.md gives with that bias corrected",
-        coulomb.model.mu_k, pi_base.kp_v_s_rad, pi_base.ki_v_rad, supply_v
-    );
-    if let Some(c) = full.scan.first().map(|_| &full.scan) {
-        let worst = c.iter().map(|x| x.1).fold(f64::NEG_INFINITY, f64::max);
-        detail.freq_scan = c.iter().map(|&(f, r)| (f, 1.0 - r / worst)).collect();
-    } else if let Some(fr) = composite::fit_composite(
-        &d_all,
-        FrictionSet::default().with(composite::Term::TimeSine),
-        &cv.freqs,
-        opts.max_order,
-    ) {
-        let worst = fr.scan.iter().map(|x| x.1).fold(f64::NEG_INFINITY, f64::max);
-        detail.freq_scan = fr.scan.iter().map(|&(f, r)| (f, 1.0 - r / worst)).collect();
-    }
-    for (r, s) in runs.iter().enumerate() {
-        detail.runs.push(RunRow {
-            id: s.id.clone(),
-            fold: s.fold,
-            normal_force_n: s.normal_force_n,
-            motor_rpm_setpoint: rig_types::units::rad_s_to_rpm(s.setpoint_rad_s),
-            slip_samples: s.slip_idx.len(),
-            misfit_baseline: base_ms[r],
-            misfit_extended: cur_ms[r],
-            misfit_noise_floor: floor_ms[r],
-            force_noise_n: s.force_noise_n,
-            voltage_noise_v: s.voltage_noise_v,
-            measured: measured_features(s, opts.slip_speed_rad_s, &opts.classify),
-            simulated: None,
-            extended: None,
-            phases_rad: full.phases.get(r).copied().unwrap_or((0.0, 0.0)),
-        });
-    }
-    detail.mu_vs_speed = mu_vs_speed(&d_all, &coulomb.model, &full.model, &full.phases);
-    detail.residual_vs_angle = residual_vs_angle(&all, coulomb.model.mu_k);
-    if let Some(mu_dyn) = thesis_mu_dynamic {
-        let thesis = Composite::coulomb(mu_dyn);
-        let tm: Vec<f64> = runs
-            .iter()
-            .enumerate()
-            .map(|(r, s)| {
-                let dr = SlipData::from_runs(&[s]);
-                combine(composite::relative_mu_error(&thesis, &dr, (0.0, 0.0)), dr_cache[&false].e_v[r])
-            })
-            .collect();
+            coulomb.model.mu_k, pi_base.kp_v_s_rad, pi_base.ki_v_rad, supply_v
+        );
+        if let Some(c) = full.scan.first().map(|_| &full.scan) {
+            let worst = c.iter().map(|x| x.1).fold(f64::NEG_INFINITY, f64::max);
+            detail.freq_scan = c.iter().map(|&(f, r)| (f, 1.0 - r / worst)).collect();
+        } else if let Some(fr) = composite::fit_composite(
+            &d_all,
+            FrictionSet::default().with(composite::Term::TimeSine),
+            &cv.freqs,
+            opts.max_order,
+        ) {
+            let worst = fr.scan.iter().map(|x| x.1).fold(f64::NEG_INFINITY, f64::max);
+            detail.freq_scan = fr.scan.iter().map(|&(f, r)| (f, 1.0 - r / worst)).collect();
+        }
+        for (r, s) in runs.iter().enumerate() {
+            detail.runs.push(RunRow {
+                id: s.id.clone(),
+                fold: s.fold,
+                normal_force_n: s.normal_force_n,
+                motor_rpm_setpoint: rig_types::units::rad_s_to_rpm(s.setpoint_rad_s),
+                slip_samples: s.slip_idx.len(),
+                misfit_baseline: base_ms[r],
+                misfit_extended: cur_ms[r],
+                misfit_noise_floor: floor_ms[r],
+                force_noise_n: s.force_noise_n,
+                voltage_noise_v: s.voltage_noise_v,
+                measured: measured_features(s, opts.slip_speed_rad_s, &opts.classify),
+                simulated: None,
+                extended: None,
+                phases_rad: full.phases.get(r).copied().unwrap_or((0.0, 0.0)),
+            });
+        }
+        detail.mu_vs_speed = mu_vs_speed(&d_all, &coulomb.model, &full.model, &full.phases);
+        detail.residual_vs_angle = residual_vs_angle(&all, coulomb.model.mu_k);
+        if let Some(mu_dyn) = thesis_mu_dynamic {
+            let thesis = Composite::coulomb(mu_dyn);
+            let tm: Vec<f64> = runs
+                .iter()
+                .enumerate()
+                .map(|(r, s)| {
+                    let dr = SlipData::from_runs(&[s]);
+                    combine(composite::relative_mu_error(&thesis, &dr, (0.0, 0.0)), dr_cache[&false].e_v[r])
+                })
+                .collect();
+            detail.rungs.push((
+                "thesis model as published".into(),
+                overall(&tm),
+                format!("Table 4.7 μ_dyn = {mu_dyn} in slip, drive saturating at the supply"),
+            ));
+        }
         detail.rungs.push((
-            "thesis model as published".into(),
-            overall(&tm),
-            format!("Table 4.7 μ_dyn = {mu_dyn} in slip, drive saturating at the supply"),
+            "rig model recalibrated".into(),
+            base_m,
+            format!("μk = {:.4} fitted on the campaign's slip samples", coulomb.model.mu_k),
         ));
+        let mut names = Vec::new();
+        for (e, c) in accepted {
+            names.push(e.id());
+            detail.rungs.push(("extended model".into(), c.after, format!("+ {}", names.join(" + "))));
+        }
+        if verdict == UNEXPLAINED {
+            detail.rungs.push((
+                "data-driven extension".into(),
+                overall(&ext_ms),
+                format!(
+                    "+ sparse regression of the residual on {}",
+                    detail.signature.iter().take(2).map(|t| t.signal).collect::<Vec<_>>().join(", ")
+                ),
+            ));
+        }
+        Diagnosis {
+            campaign: campaign.into(),
+            verdict,
+            findings,
+            candidates,
+            adequacy,
+            structure: Default::default(),
+            parameters_at_bounds: Vec::new(),
+            detail,
+        }
     }
-    detail.rungs.push((
-        "rig model recalibrated".into(),
-        base_m,
-        format!("μk = {:.4} fitted on the campaign's slip samples", coulomb.model.mu_k),
-    ));
-    let mut names = Vec::new();
-    for (e, c) in &accepted {
-        names.push(e.id());
-        detail.rungs.push(("extended model".into(), c.after, format!("+ {}", names.join(" + "))));
-    }
-    if verdict == UNEXPLAINED {
-        detail.rungs.push((
-            "data-driven extension".into(),
-            overall(&ext_ms),
-            format!(
-                "+ sparse regression of the residual on {}",
-                detail.signature.iter().take(2).map(|t| t.signal).collect::<Vec<_>>().join(", ")
-            ),
-        ));
-    }
-    Ok(Diagnosis {
-        campaign: campaign.into(),
-        verdict,
-        findings,
-        candidates,
-        adequacy,
-        structure: Default::default(),
-        parameters_at_bounds: Vec::new(),
-        detail,
-    })
 }
 
 /// The evidence sentence: what the effect does in numbers (its own clause,

@@ -349,8 +349,13 @@ mod tests {
                 .expect("pipeline.toml");
             opts.folds = 3;
             let runs = runs();
-            let d = crate::select::select_over(TEST_REGISTRY, "test", &runs, (24.0, 0.06), None, &[], &opts)
-                .expect("selection");
+            let d = crate::select::select_over(TEST_REGISTRY, "test", &runs, 24.0, &opts).expect("selection").conclude(
+                "test",
+                0.06,
+                None,
+                &[],
+                &opts,
+            );
             assert_eq!(d.verdict, ID, "{:?}", d.findings);
             let f = &d.findings[0];
             assert!((f.params["limit_v"] - 5.0).abs() < 0.25, "{:?}", f.params);
