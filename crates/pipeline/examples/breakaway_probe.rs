@@ -48,6 +48,32 @@ fn main() -> Result<()> {
             println!("  {:<28} ratio {:6.2} thr {:.1} {} {}", k.channel, k.ratio, k.threshold, k.flagged, k.detail);
         }
         println!("  structure {} | {}", d.structure.damping, d.structure.notes);
+        if let Ok(list) = std::env::var("SCAN") {
+            let vocab: Vec<_> = d
+                .findings
+                .iter()
+                .filter_map(|f| rig_diagnose::EffectId::from_id(&f.effect).map(|e| (e, f.params.clone())))
+                .collect();
+            let mut ext = rig_diagnose::extended_params(&p, &vocab);
+            if let Some(l) = &d.detail.breakaway {
+                ext = rig_diagnose::breakaway::with_static_level(&ext, l);
+            }
+            let s = rig_diagnose::channels::FreeRunSettings::of(&opts, &opts.channels);
+            for v in list.split(',') {
+                let c_r: f64 = v.parse()?;
+                let m = RigParams { shaft_damping_nm_s_rad: 0.0, rotor_damping_nm_s_rad: c_r, ..ext.clone() };
+                let pairs = rig_diagnose::channels::free_run_pairs_by(&c, &s, |id| {
+                    let row = d.detail.runs.iter().find(|r| r.id == id)?;
+                    Some(rig_diagnose::channels::with_run_phases(&m, row.phases_rad))
+                });
+                let ch = rig_diagnose::channels::free_run_checks_of(&c, &pairs, &s, &opts.channels);
+                println!(
+                    "  C_r {c_r:.2e}: {}",
+                    ch.iter().map(|k| format!("{} {:.2}", k.channel, k.ratio)).collect::<Vec<_>>().join(" | ")
+                );
+                println!("     {}", ch[0].detail);
+            }
+        }
         let cr: f64 = std::env::var("CR").map_or(6.92e-3, |v| v.parse().unwrap());
         for id in ["op-19", "op-27", "op-03", "op-20"] {
             blocks(&c, &d, &p, id, cr, &opts.integrator);
