@@ -39,8 +39,8 @@ pub use balance::{BalanceData, BalanceFit, balance_data, torque_balance_check, t
 pub use drive_balance::drive_balance_check;
 pub use force_linearity::{force_linearity_check, force_parabola};
 pub use free_run::{
-    FreeRunSettings, Pair as FreeRunPair, free_run_checks, free_run_checks_of, free_run_misfit, free_run_pairs,
-    free_run_pairs_by, speed_floor_rad_s, speed_traces,
+    FreeRunSettings, FreeRunThresholds, Pair as FreeRunPair, free_run_check_names, free_run_checks, free_run_checks_of,
+    free_run_misfit, free_run_pairs, free_run_pairs_by, speed_floor_rad_s, speed_traces,
 };
 pub use step::voltage_step_checks;
 pub use twist::static_twist_checks;
@@ -156,6 +156,9 @@ pub struct ChannelOptions {
     pub balance_window_s: f64,
     /// Steady-state seconds of each free-run simulation (after ramp + settle).
     pub free_run_steady_s: f64,
+    /// Thresholds of the free-run checks of the other channels (motor speed,
+    /// voltage, friction level, stick fraction): `[stage.params.channels.free_run]`.
+    pub free_run: FreeRunThresholds,
 }
 
 /// The extended model for the simulator: the baseline plus the vocabulary

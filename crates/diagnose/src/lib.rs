@@ -66,11 +66,15 @@
 //! # The free-run misfit (structure selection)
 //!
 //! For a model simulated free from rest at run r and the record, over the
-//! same steady window: `M_fr,r = sqrt(1 + mean(e²))`, with e_max, e_min the
-//! measured − simulated extreme of Ω1 over the speed resolution of the
-//! centred difference, and e_f the stick-slip fundamental's relative error
-//! over the relative Rayleigh resolution 1/(T·f) when record and simulation
-//! both stick and slip ([`channels::free_run_misfit`]). Over runs, RMS, as M.
+//! same steady window: `M_fr,r = sqrt(1 + mean(e²))`, with e the measured −
+//! simulated feature of every recorded channel (extremes of Ω1 and Ω2, mean
+//! and swing of the voltage, slip and break-away friction force, stick
+//! fraction) in units of that run's floor of it (resolution ⊕ spread over
+//! cycles), and e_f the stick-slip fundamental's relative error over the
+//! relative Rayleigh resolution 1/(T·f) when record and simulation both
+//! stick and slip ([`channels::free_run_misfit`]; features and floors in
+//! `channels::free_run`'s docs). Over runs, RMS, as M. The structure and the
+//! extension of an `unexplained` answer ([`extension`]) are selected on it.
 //!
 //! # The criterion (one that can say no)
 //!
@@ -100,6 +104,7 @@
 pub mod channels;
 pub mod composite;
 pub mod drive;
+pub mod extension;
 pub mod friction;
 pub mod lines;
 pub mod prepare;
@@ -113,8 +118,8 @@ pub mod vocab;
 pub use channels::{ChannelCheck, ChannelOptions, extended_params};
 pub use prepare::{ForceCal, RunSignals};
 pub use result::{
-    Adequacy, CandidateScore, Diagnosis, Finding, ParamAtBound, RunRow, SignatureEntry, StepRow, Structure,
-    StructureScore, round_sig,
+    Adequacy, CandidateScore, ChannelFeatures, Diagnosis, Extension, ExtensionStep, ExtensionTerm, Finding,
+    ParamAtBound, RunRow, SignatureEntry, StepRow, Structure, StructureScore, round_sig,
 };
 pub use select::diagnose_signals;
 pub use vocab::EffectId;
@@ -285,7 +290,7 @@ pub fn diagnose(
         let vocab: Vec<(EffectId, std::collections::BTreeMap<String, f64>)> =
             d.findings.iter().filter_map(|f| EffectId::from_id(&f.effect).map(|e| (e, f.params.clone()))).collect();
         let ext = extended_params(p, &vocab);
-        let s = channels::FreeRunSettings::of(opts, o);
+        let s = channels::FreeRunSettings::of(opts, o).with_force(law);
         // Each run's free run with its own nuisance phases (θ free per run, as
         // the spec's laws and the teacher-forced fit have them).
         let phases: std::collections::BTreeMap<String, (f64, f64)> =
@@ -332,9 +337,12 @@ pub fn diagnose(
         d.detail.free_run_extended = free_run_final;
         d.detail.speed_traces = channels::speed_traces(&base_pairs, &final_pairs);
         d.detail.motor_speed_tick_rad_s = base_pairs.first().map_or(0.0, |q| q.motor_tick_rad_s);
+        // An `unexplained` answer carries the best data-driven extension (issue 25, item 6).
+        extension::attach(&mut d, c, &runs, if moved { &sel.model } else { &ext }, &final_pairs, &phases, &s, opts);
         d.detail.structure_scores = sel.scores;
         d.structure = Structure { damping: sel.damping.into(), notes: sel.notes };
         d.parameters_at_bounds = sel.at_bounds;
+        d.parameters_at_bounds.extend(extension::vocabulary_bounds(p, &d.findings));
     }
     d.detail.channel_checks = checks;
     Ok(d)
