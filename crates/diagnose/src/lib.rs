@@ -66,16 +66,18 @@
 //! # The free-run misfit (structure selection)
 //!
 //! For a model simulated free from rest at run r and the record, over the
-//! same steady window: `M_fr,r = sqrt(1 + mean(e²))`, with e the measured −
-//! simulated feature of every recorded channel (extremes of Ω1 and Ω2, mean
-//! and swing of the voltage, slip and break-away friction force, stick
-//! fraction) in units of that run's floor of it (resolution ⊕ spread over
-//! cycles), and e_f the stick-slip fundamental's relative error over the
-//! relative Rayleigh resolution 1/(T·f) when record and simulation both
-//! stick and slip ([`channels::free_run_misfit`]; features and floors in
-//! `channels::free_run`'s docs). Over runs, RMS, as M. The structure and the
-//! extension of an `unexplained` answer ([`extension`]) are selected on it.
-//!
+//! same steady window: `M_fr,r = sqrt(1 + mean(e²))`, with e_max, e_min the
+//! measured − simulated extreme of Ω1 in units of that run's floor of it
+//! (the speed resolution of the centred difference ⊕ the extreme's spread
+//! over the record's stick-slip cycles), and e_f the stick-slip fundamental's
+//! relative error over the relative Rayleigh resolution 1/(T·f) when record
+//! and simulation both stick and slip ([`channels::free_run_misfit`]; the
+//! structure is selected on it). Over runs, RMS, as M. The extension of an
+//! `unexplained` answer ([`extension`]) is selected on the same misfit over
+//! every recorded channel's feature ([`channels::free_run_misfit_channels`]:
+//! also Ω2 extremes, voltage mean and swing, slip and break-away friction,
+//! stick fraction; features and floors in `channels::free_run`'s docs).
+
 //! # The criterion (one that can say no)
 //!
 //! The 500 Hz samples of a run are strongly correlated (the friction residual

@@ -413,9 +413,13 @@ pub fn markdown(d: &Diagnosis) -> String {
         let _ = writeln!(
             s,
             "\n## Free run: baseline and final model\n\nEvery operating point simulated from rest with the baseline \
-             and with the final model (baseline + findings, phases 0, with the selected structure), compared with the \
-             record on phase-insensitive features. The final model's checks are part of the adequacy test \
-             (thresholds calibrated on stick-slipping effect-free campaigns, rig-diagnose `ChannelOptions`).\n\n\
+             and with the final model (baseline + findings, each run with its own phases, with the selected \
+             structure), compared with the record on phase-insensitive features of every recorded channel (rotor and \
+             motor speed extremes, fundamental, voltage mean and swing, slip and break-away friction force, stick \
+             fraction), each error in units of the run's floor: sensor resolution ⊕ the feature's spread over the \
+             record's stick-slip cycles (rig-diagnose `channels::free_run` docs). The final model's checks are part of \
+             the adequacy test (thresholds calibrated on stick-slipping effect-free campaigns, rig-diagnose \
+             `ChannelOptions`).\n\n\
              | check | baseline ratio | final ratio | threshold | final detail |\n|---|---|---|---|---|"
         );
         for (b, e) in det.free_run_baseline.iter().zip(&det.free_run_extended) {

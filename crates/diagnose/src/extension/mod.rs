@@ -27,7 +27,7 @@
 //! solver, no intercept: the signals' coefficients are relative changes of the
 //! model's coefficients) on the training folds, and every held-out run is then
 //! **simulated free** with the model fitted without it; its free-run misfit
-//! ([`crate::channels::free_run_misfit`], every channel) is compared with the
+//! ([`crate::channels::free_run_misfit_channels`], every channel) is compared with the
 //! final model's on the same run by the selection's rule (gain ≥ the minimum
 //! and paired run-level t ≥ `min_t`, [`crate::select`]'s comparison). Forward
 //! selection adds the best signal while it passes; the reported extension is
@@ -45,7 +45,7 @@
 //! baseline model pays it.
 
 use crate::channels::{
-    FreeRunPair, FreeRunSettings, free_run_misfit, free_run_pairs_by, speed_floor_rad_s, with_run_phases,
+    FreeRunPair, FreeRunSettings, free_run_misfit_channels, free_run_pairs_by, speed_floor_rad_s, with_run_phases,
 };
 use crate::prepare::RunSignals;
 use crate::result::{Extension, ExtensionStep, ExtensionTerm, SpeedTraces, round_sig};
@@ -98,7 +98,7 @@ pub fn extend(
     let folds = runs.iter().map(|r| r.fold + 1).max().unwrap_or(0);
     let floor = speed_floor_rad_s(c, s);
     let base: BTreeMap<&str, f64> =
-        before.iter().filter_map(|q| free_run_misfit(q, floor).map(|m| (q.id.as_str(), m))).collect();
+        before.iter().filter_map(|q| free_run_misfit_channels(q, floor).map(|m| (q.id.as_str(), m))).collect();
     // Coefficients of a signal set fitted without fold `f` (None: every run).
     let fit = |set: &[usize], f: Option<usize>| -> Option<[f64; 4]> {
         let keep = |r: usize| f.is_none_or(|f| runs[r].fold != f);
@@ -141,7 +141,7 @@ pub fn extend(
         });
         let (mut b, mut a, mut fv) = (Vec::new(), Vec::new(), Vec::new());
         for q in &pairs {
-            if let (Some(x), Some(y)) = (base.get(q.id.as_str()), free_run_misfit(q, floor)) {
+            if let (Some(x), Some(y)) = (base.get(q.id.as_str()), free_run_misfit_channels(q, floor)) {
                 b.push(*x);
                 a.push(y);
                 fv.push(fold_of[q.id.as_str()]);
