@@ -120,8 +120,8 @@ pub mod vocab;
 pub use channels::{ChannelCheck, ChannelOptions, extended_params};
 pub use prepare::{ForceCal, RunSignals};
 pub use result::{
-    Adequacy, CandidateScore, ChannelFeatures, Diagnosis, Extension, ExtensionStep, ExtensionTerm, Finding,
-    ParamAtBound, RunRow, SignatureEntry, StepRow, Structure, StructureScore, round_sig,
+    Adequacy, CandidateScore, ChannelFeatures, Diagnosis, Extension, ExtensionTerm, Finding, ParamAtBound, RunRow,
+    SignatureEntry, StepRow, Structure, StructureScore, round_sig,
 };
 pub use select::diagnose_signals;
 pub use vocab::EffectId;
@@ -340,7 +340,9 @@ pub fn diagnose(
         d.detail.speed_traces = channels::speed_traces(&base_pairs, &final_pairs);
         d.detail.motor_speed_tick_rad_s = base_pairs.first().map_or(0.0, |q| q.motor_tick_rad_s);
         // An `unexplained` answer carries the best data-driven extension (issue 25, item 6).
-        extension::attach(&mut d, c, &runs, if moved { &sel.model } else { &ext }, &final_pairs, &phases, &s, opts);
+        let model = if moved { &sel.model } else { &ext };
+        let inputs = extension::Inputs { c, runs: &runs, model, before: &final_pairs, phases: &phases, s: &s, opts };
+        extension::attach(&mut d, &inputs);
         d.detail.structure_scores = sel.scores;
         d.structure = Structure { damping: sel.damping.into(), notes: sel.notes };
         d.parameters_at_bounds = sel.at_bounds;

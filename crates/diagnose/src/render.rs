@@ -491,7 +491,7 @@ fn extension_markdown(s: &mut String, x: &crate::Extension, det: &crate::result:
         let _ = writeln!(
             s,
             "| {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {} |",
-            r.step, r.signal, r.misfit_before, r.misfit_after, r.gain, r.gain_fold_sd, r.t, r.accepted
+            r.step, r.effect, r.misfit_before, r.misfit_after, r.gain, r.gain_fold_sd, r.t, r.accepted
         );
     }
     s.push('\n');

@@ -97,20 +97,6 @@ pub struct ExtensionTerm {
     pub stderr: f64,
 }
 
-/// One signal tried in one step of the extension's forward selection (report table).
-#[derive(Debug, Clone, PartialEq)]
-pub struct ExtensionStep {
-    pub step: usize,
-    pub signal: String,
-    /// Cross-validated free-run misfit before and with the signal.
-    pub misfit_before: f64,
-    pub misfit_after: f64,
-    pub gain: f64,
-    pub gain_fold_sd: f64,
-    pub t: f64,
-    pub accepted: bool,
-}
-
 /// One term of an `unexplained` finding's `signature`.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct SignatureEntry {
@@ -322,8 +308,9 @@ pub struct Detail {
     /// One encoder tick over the motor-speed differentiator window, rad/s:
     /// the resolution of the motor-dip feature (0 when not computed).
     pub motor_speed_tick_rad_s: f64,
-    /// The extension's forward selection (`unexplained` with a baseline only).
-    pub extension_steps: Vec<ExtensionStep>,
+    /// The extension's forward selection, one row per library signal tried
+    /// per step (`effect` is the signal; `unexplained` with a baseline only).
+    pub extension_steps: Vec<StepRow>,
     /// Rotor speed per operating point: measured, the final model's free run
     /// (`baseline_rad_s`) and the extension's held-out free run (`extended_rad_s`).
     pub extension_traces: Vec<SpeedTraces>,

@@ -45,10 +45,11 @@
 //! baseline model pays it.
 
 use crate::channels::{
-    FreeRunPair, FreeRunSettings, free_run_misfit_channels, free_run_pairs_by, speed_floor_rad_s, with_run_phases,
+    FreeRunPair, FreeRunSettings, free_run_misfit_channels, free_run_pairs_by, speed_floor_rad_s, stuck_stretches,
+    with_run_phases,
 };
 use crate::prepare::RunSignals;
-use crate::result::{Extension, ExtensionStep, ExtensionTerm, SpeedTraces, round_sig};
+use crate::result::{Extension, ExtensionTerm, SpeedTraces, StepRow, round_sig};
 use crate::select::compare_folds;
 use rig_model::extension::{BREAKAWAY_TIME_S, DWELL_TIME_S, slip_signals, static_signals};
 use rig_model::friction::{normal_force_n, slip_mu, static_mu};
@@ -73,22 +74,29 @@ struct RunRows {
 #[derive(Debug, Clone)]
 pub struct ExtensionResult {
     pub extension: Extension,
-    pub steps: Vec<ExtensionStep>,
+    pub steps: Vec<StepRow>,
     pub traces: Vec<SpeedTraces>,
 }
 
-/// Fits, selects and simulates the extension on top of `model` (module
-/// docs). `before` are `model`'s free runs (campaign order), `phases` each
-/// run's nuisance phases. `None` without operating points to fit.
-pub fn extend(
-    c: &Campaign,
-    runs: &[RunSignals],
-    model: &RigParams,
-    before: &[FreeRunPair],
-    phases: &BTreeMap<String, (f64, f64)>,
-    s: &FreeRunSettings,
-    opts: &crate::DiagnoseOptions,
-) -> Option<ExtensionResult> {
+/// What the extension is fitted and simulated from.
+pub struct Inputs<'a> {
+    pub c: &'a Campaign,
+    /// The diagnosis' signals of every operating point (folds, slip samples, μ_obs).
+    pub runs: &'a [RunSignals],
+    /// The final model: baseline + findings + selected structure.
+    pub model: &'a RigParams,
+    /// `model`'s free runs (campaign order).
+    pub before: &'a [FreeRunPair],
+    /// Each run's nuisance phases (θ of the time and angle modulations).
+    pub phases: &'a BTreeMap<String, (f64, f64)>,
+    pub s: &'a FreeRunSettings,
+    pub opts: &'a crate::DiagnoseOptions,
+}
+
+/// Fits, selects and simulates the extension on top of the final model
+/// (module docs). `None` without operating points to fit.
+pub fn extend(x: &Inputs) -> Option<ExtensionResult> {
+    let Inputs { c, runs, model, before, phases, s, opts } = *x;
     let phase = |id: &str| phases.get(id).copied().unwrap_or_default();
     let rows: Vec<RunRows> = {
         use rayon::prelude::*;
@@ -168,15 +176,16 @@ pub fn extend(
         let Some(bi) = (0..tried.len()).max_by(|&a, &b| key(a).total_cmp(&key(b))) else { break };
         let ok = passes(tried[bi].2.gain, tried[bi].2.t);
         for (i, (j, _, cmp, _, _)) in tried.iter().enumerate() {
-            steps.push(ExtensionStep {
+            steps.push(StepRow {
                 step,
-                signal: SIGNALS[*j].into(),
+                effect: SIGNALS[*j].into(),
                 misfit_before: cmp.before,
                 misfit_after: cmp.after,
                 gain: cmp.gain,
                 gain_fold_sd: cmp.gain_fold_sd,
                 t: cmp.t,
                 accepted: i == bi && ok,
+                inadmissible: None,
             });
         }
         let (j, set, cmp, pairs, fits) = tried.swap_remove(bi);
@@ -292,20 +301,12 @@ fn run_rows(r: &RunSignals, p: &RigParams, s: &FreeRunSettings) -> RunRows {
     let h = half_window_samples(&r.time_s, s.rotor_speed_half_window_s);
     let force = centred_moving_average(&r.friction_force_n, h);
     let mu_s = static_mu(&p.friction);
-    let mut start = None;
-    for k in 1..r.time_s.len() {
-        let (was, is) = (r.rotor_speed_rad_s[k - 1].abs() < slip, r.rotor_speed_rad_s[k].abs() < slip);
-        if is && !was {
-            start = Some(k);
-        } else if was && !is {
-            if let Some(j) = start.take() {
-                let kp = (j..k).max_by(|&a, &b| force[a].total_cmp(&force[b])).unwrap_or(j);
-                let level = mu_s * n_of(kp);
-                if level > 0.0 {
-                    let dwell = r.time_s[k] - r.time_s[j];
-                    out.breakaway.push((static_signals(dwell), force[kp] / level - 1.0));
-                }
-            }
+    for (j, k) in stuck_stretches(&r.rotor_speed_rad_s, slip) {
+        let kp = (j..k).max_by(|&a, &b| force[a].total_cmp(&force[b])).unwrap_or(j);
+        let level = mu_s * n_of(kp);
+        if level > 0.0 {
+            let dwell = r.time_s[k] - r.time_s[j];
+            out.breakaway.push((static_signals(dwell), force[kp] / level - 1.0));
         }
     }
     out
@@ -314,21 +315,11 @@ fn run_rows(r: &RunSignals, p: &RigParams, s: &FreeRunSettings) -> RunRows {
 /// Puts the extension into an `unexplained` diagnosis (its finding's
 /// `extension`, the selection steps and the free runs for the report);
 /// nothing for any other verdict. The one call from [`crate::diagnose`].
-#[allow(clippy::too_many_arguments)]
-pub fn attach(
-    d: &mut crate::Diagnosis,
-    c: &Campaign,
-    runs: &[RunSignals],
-    model: &RigParams,
-    before: &[FreeRunPair],
-    phases: &BTreeMap<String, (f64, f64)>,
-    s: &FreeRunSettings,
-    opts: &crate::DiagnoseOptions,
-) {
+pub fn attach(d: &mut crate::Diagnosis, inputs: &Inputs) {
     if d.verdict != "unexplained" {
         return;
     }
-    let Some(x) = extend(c, runs, model, before, phases, s, opts) else { return };
+    let Some(x) = extend(inputs) else { return };
     if let Some(f) = d.findings.iter_mut().find(|f| f.effect == "unexplained") {
         f.extension = Some(x.extension);
     }
@@ -346,19 +337,19 @@ pub fn vocabulary_bounds(baseline: &RigParams, findings: &[crate::Finding]) -> V
     let mu_s0 = static_mu(&baseline.friction);
     for f in findings {
         let g = |k: &str| f.params.get(k).copied();
-        if f.effect == "viscous_brake_friction" {
-            if let Some(mu_k) = g("mu_kinetic").filter(|&m| m > mu_s0) {
-                out.push(crate::ParamAtBound {
-                    parameter: "viscous_brake_friction.mu_static".into(),
-                    bound: round_sig(mu_k, 4),
-                    unconstrained: round_sig(mu_s0, 4),
-                    meaning: format!(
-                        "the slip law's μk {mu_k:.4} exceeds the baseline's break-away coefficient μs {mu_s0:.4}; the \
-                         extended model holds μs at μk (no break-away below the slip level): the break-away level is \
-                         not measured by the slip channel, see the free-run breakaway_friction check"
-                    ),
-                });
-            }
+        if f.effect == "viscous_brake_friction"
+            && let Some(mu_k) = g("mu_kinetic").filter(|&m| m > mu_s0)
+        {
+            out.push(crate::ParamAtBound {
+                parameter: "viscous_brake_friction.mu_static".into(),
+                bound: round_sig(mu_k, 4),
+                unconstrained: round_sig(mu_s0, 4),
+                meaning: format!(
+                    "the slip law's μk {mu_k:.4} exceeds the baseline's break-away coefficient μs {mu_s0:.4}; the \
+                     extended model holds μs at μk (no break-away below the slip level): the break-away level is \
+                     not measured by the slip channel, see the free-run breakaway_friction check"
+                ),
+            });
         }
         if let Some(a) = g("amplitude_ratio").filter(|a| !(0.0..=1.0).contains(a)) {
             out.push(crate::ParamAtBound {
