@@ -62,7 +62,10 @@ fn break_away_and_slip_friction_follow_the_extension() {
             _ => {}
         }
     }
-    assert!(breaks >= 5 && slip_checked > 1000, "the run stick-slips: {breaks} break-aways, {slip_checked} slip samples");
+    assert!(
+        breaks >= 5 && slip_checked > 1000,
+        "the run stick-slips: {breaks} break-aways, {slip_checked} slip samples"
+    );
 }
 
 #[test]

@@ -246,8 +246,15 @@ fn damping_on_the_rotor_speed_is_named_with_its_free_run_gain() {
     let left: Vec<&str> = d.detail.free_run_extended.iter().filter(|k| k.flagged).map(|k| k.channel.as_str()).collect();
     assert!(left.is_empty(), "final model's free run flagged: {left:?}");
     assert!(d.findings.iter().all(|f| !f.where_.iter().any(|w| w == "free_run")), "{:?}", d.findings);
-    let base_flags = d.detail.free_run_baseline.iter().filter(|k| k.flagged).count();
-    assert!(base_flags > 0, "the baseline's free run should miss the rotor drag");
+    // The baseline's free run misses the drag by the structure's criterion
+    // (the gain above). Its adequacy checks no longer flag it: since the
+    // per-run floors carry the spread of the extremes over cycles (issue 25's
+    // rotor_max regression), the drag's rotor-extreme error is within them,
+    // and the voltage mean that the drag moves is reported, not in the
+    // adequacy test (ChannelOptions' docs). Printed, not asserted.
+    for k in &d.detail.free_run_baseline {
+        println!("baseline {} {:.2} (threshold {:.1})", k.channel, k.ratio, k.threshold);
+    }
 }
 
 #[test]
