@@ -67,11 +67,17 @@
 //!
 //! For a model simulated free from rest at run r and the record, over the
 //! same steady window: `M_fr,r = sqrt(1 + mean(e²))`, with e_max, e_min the
-//! measured − simulated extreme of Ω1 over the speed resolution of the
-//! centred difference, and e_f the stick-slip fundamental's relative error
-//! over the relative Rayleigh resolution 1/(T·f) when record and simulation
-//! both stick and slip ([`channels::free_run_misfit`]). Over runs, RMS, as M.
-//!
+//! measured − simulated extreme of Ω1 in units of that run's floor of it
+//! (the speed resolution of the centred difference ⊕ the extreme's spread
+//! over the record's stick-slip cycles), and e_f the stick-slip fundamental's
+//! relative error over the relative Rayleigh resolution 1/(T·f) when record
+//! and simulation both stick and slip ([`channels::free_run_misfit`]; the
+//! structure is selected on it). Over runs, RMS, as M. The extension of an
+//! `unexplained` answer ([`extension`]) is selected on the same misfit over
+//! every recorded channel's feature ([`channels::free_run_misfit_channels`]:
+//! also Ω2 extremes, voltage mean and swing, slip and break-away friction,
+//! stick fraction; features and floors in `channels::free_run`'s docs).
+
 //! # The criterion (one that can say no)
 //!
 //! The 500 Hz samples of a run are strongly correlated (the friction residual
@@ -102,6 +108,7 @@ pub mod channels;
 pub mod composite;
 pub mod drive;
 pub mod effects;
+pub mod extension;
 pub mod friction;
 pub mod lines;
 pub mod prepare;
@@ -115,8 +122,8 @@ pub use channels::{ChannelCheck, ChannelOptions, extended_params};
 pub use effects::EffectId;
 pub use prepare::{ForceCal, RunSignals};
 pub use result::{
-    Adequacy, CandidateScore, Diagnosis, Finding, ParamAtBound, RunRow, SignatureEntry, StepRow, Structure,
-    StructureScore, round_sig,
+    Adequacy, CandidateScore, ChannelFeatures, Diagnosis, Extension, ExtensionTerm, Finding, ParamAtBound, RunRow,
+    SignatureEntry, StepRow, Structure, StructureScore, round_sig,
 };
 pub use select::diagnose_signals;
 
@@ -281,7 +288,14 @@ pub fn diagnose(
     // something. The baseline's free runs need no finding either: they run
     // beside the selection.
     let flagged0 = flagged_of(&checks);
-    let s = channels::FreeRunSettings::of(opts, o);
+    // The model's kinetic level is the estimation's, fitted on these records:
+    // its standard error bounds how well any free run can match the slip force.
+    let mu_k_se =
+        rig_estimate::estimate_friction(c, cal.force_offset_mv, cal.force_factor_mv_per_n, &opts.stick_episodes)
+            .ok()
+            .and_then(|f| f.mu_kinetic_stderr)
+            .unwrap_or(0.0);
+    let s = channels::FreeRunSettings::of(opts, o).with_force(law).with_mu_kinetic_stderr(mu_k_se);
     // The voltage steps judge the estimate on the runs it was fitted to, in
     // the structure it was fitted in (rig-estimate fits the twist-rate
     // placement; with another structure its motor-side coefficients absorb
@@ -341,9 +355,14 @@ pub fn diagnose(
         d.detail.free_run_extended = free_run_final;
         d.detail.speed_traces = channels::speed_traces(&base_pairs, &final_pairs);
         d.detail.motor_speed_tick_rad_s = base_pairs.first().map_or(0.0, |q| q.motor_tick_rad_s);
+        // An `unexplained` answer carries the best data-driven extension (issue 25, item 6).
+        let model = if moved { &sel.model } else { &ext };
+        let inputs = extension::Inputs { c, runs: &runs, model, before: &final_pairs, phases: &phases, s: &s, opts };
+        extension::attach(&mut d, &inputs);
         d.detail.structure_scores = sel.scores;
         d.structure = Structure { damping: sel.damping.into(), notes: sel.notes };
         d.parameters_at_bounds = sel.at_bounds;
+        d.parameters_at_bounds.extend(extension::vocabulary_bounds(p, &d.findings));
     }
     d.detail.channel_checks = checks;
     Ok(d)

@@ -208,6 +208,9 @@ pub fn figures(d: &Diagnosis) -> Vec<FigureSpec> {
     if let Some(f) = residual_vs_angle_figure(d) {
         out.push(f);
     }
+    if let Some(f) = extension_figure(d) {
+        out.push(f);
+    }
     let dips: Vec<_> = det.runs.iter().collect();
     if !dips.is_empty() {
         let mut series = vec![Series {
@@ -302,6 +305,9 @@ pub fn markdown(d: &Diagnosis) -> String {
         }
         if !f.signature.is_empty() {
             s.push('\n');
+        }
+        if let Some(x) = &f.extension {
+            extension_markdown(&mut s, x, det);
         }
         let _ = writeln!(
             s,
@@ -408,8 +414,12 @@ pub fn markdown(d: &Diagnosis) -> String {
             s,
             "\n## Free run: baseline and final model\n\nEvery operating point simulated from rest with the baseline \
              and with the final model (baseline + findings with each run's fitted phases, the break-away level read \
-             under its normal force, and the selected structure), compared with the record on phase-insensitive features. The final model's checks are part of the adequacy test \
-             (thresholds calibrated on stick-slipping effect-free campaigns, rig-diagnose `ChannelOptions`).\n\n\
+             under its normal force, and the selected structure), compared with the record on phase-insensitive features of every recorded channel (rotor and \
+             motor speed extremes, fundamental, voltage mean and swing, slip and break-away friction force, stick \
+             fraction), each error in units of the run's floor: sensor resolution ⊕ the feature's spread over the \
+             record's stick-slip cycles (rig-diagnose `channels::free_run` docs). The final model's checks are part of \
+             the adequacy test (thresholds calibrated on stick-slipping effect-free campaigns, rig-diagnose \
+             `ChannelOptions`).\n\n\
              | check | baseline ratio | final ratio | threshold | final detail |\n|---|---|---|---|---|"
         );
         for (b, e) in det.free_run_baseline.iter().zip(&det.free_run_extended) {
@@ -465,6 +475,84 @@ pub fn markdown(d: &Diagnosis) -> String {
         );
     }
     s
+}
+
+/// The `extension` of an `unexplained` finding: law, terms, free-run gain
+/// and the forward selection that chose it (rig-diagnose `extension` docs).
+fn extension_markdown(s: &mut String, x: &crate::Extension, det: &crate::result::Detail) {
+    let _ = writeln!(
+        s,
+        "**Extension (simulated in free run).** {}. Cross-validated free-run misfit of the final model {} → {} with \
+         it, relative gain {} ± {} (sd across folds); figure diagnosis-extension-free-run.\n",
+        x.formula, x.free_run_misfit_before, x.free_run_misfit_after, x.relative_gain, x.relative_gain_sd
+    );
+    let _ = writeln!(s, "| signal | coefficient | standard error (jackknife over folds) |\n|---|---|---|");
+    for t in &x.terms {
+        let _ = writeln!(s, "| {} | {} | {} |", t.signal, t.coefficient, t.stderr);
+    }
+    let _ = writeln!(
+        s,
+        "\n| step | signal | free-run misfit before | after | gain | gain sd (folds) | paired t | accepted |\n\
+         |---|---|---|---|---|---|---|---|"
+    );
+    for r in &det.extension_steps {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {} |",
+            r.step, r.effect, r.misfit_before, r.misfit_after, r.gain, r.gain_fold_sd, r.t, r.accepted
+        );
+    }
+    s.push('\n');
+}
+
+/// The extension's free run beside the record and the final model's, for
+/// the operating point whose rotor-speed extremes the extension moves most
+/// towards the record's (held-out: that run's extension was fitted without it).
+fn extension_figure(d: &Diagnosis) -> Option<FigureSpec> {
+    let x = d.findings.iter().find_map(|f| f.extension.as_ref())?;
+    let span = |y: &[f64]| {
+        let lo = y.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = y.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        (lo, hi)
+    };
+    let miss = |m: (f64, f64), y: &Option<Vec<f64>>| {
+        y.as_ref().map(|y| {
+            let (lo, hi) = span(y);
+            (lo - m.0).abs() + (hi - m.1).abs()
+        })
+    };
+    let t = d
+        .detail
+        .extension_traces
+        .iter()
+        .filter_map(|t| {
+            let m = span(&t.measured_rad_s);
+            Some((t, miss(m, &t.baseline_rad_s)? - miss(m, &t.extended_rad_s)?))
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1))?
+        .0;
+    let line = |name: &str, y: &[f64], style| Series { name: name.into(), x: t.time_s.clone(), y: y.to_vec(), style };
+    Some(FigureSpec {
+        id: "diagnosis-extension-free-run".into(),
+        title: format!("The extension's free run beside the record ({})", t.id),
+        caption: format!(
+            "Rotor speed Ω1 of {} over its steady window: measured, the final model's free run and the final model \
+             with the data-driven extension ({}), each simulated from rest under the run's protocol; the extension's \
+             coefficients were fitted without this run's fold. The run shown is the one whose extremes the extension \
+             moves most towards the record's. Cross-validated free-run misfit over every run {} → {}.",
+            t.id, x.formula, x.free_run_misfit_before, x.free_run_misfit_after
+        ),
+        x_label: "time [s]".into(),
+        y_label: "Ω1 [rad/s]".into(),
+        series: vec![
+            line("measured", &t.measured_rad_s, SeriesStyle::Line),
+            line("final model", t.baseline_rad_s.as_deref()?, SeriesStyle::Dashed),
+            line("with the extension", t.extended_rad_s.as_deref()?, SeriesStyle::Line),
+        ],
+        x_decimals: 2,
+        y_decimals: 3,
+        heatmap: None,
+    })
 }
 
 /// μ residual against rotor angle for the run with most slip: the mean over

@@ -68,6 +68,33 @@ pub struct Finding {
     /// The selection criterion of this step (crate docs); absent for `unexplained`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub criterion: Option<f64>,
+    /// `unexplained` only: the best data-driven extension, simulated in free
+    /// run ([`crate::extension`]; spec: `extension`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub extension: Option<Extension>,
+}
+
+/// An `unexplained` finding's `extension` (spec): the extended law, its
+/// terms, and the cross-validated free-run misfit of the final model before
+/// and after it ([`crate::extension`]).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Extension {
+    pub formula: String,
+    pub terms: Vec<ExtensionTerm>,
+    pub free_run_misfit_before: f64,
+    pub free_run_misfit_after: f64,
+    pub relative_gain: f64,
+    /// Standard deviation of the relative gain across the folds.
+    pub relative_gain_sd: f64,
+}
+
+/// One term of an [`Extension`]: a library signal, its coefficient fitted
+/// on every run and its standard error (jackknife over the folds).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct ExtensionTerm {
+    pub signal: String,
+    pub coefficient: f64,
+    pub stderr: f64,
 }
 
 /// One term of an `unexplained` finding's `signature`.
@@ -189,6 +216,48 @@ impl Features {
     }
 }
 
+/// Every recorded channel of an operating point reduced to phase-insensitive
+/// run-level features over the steady window (issue 25, item 3), measured or
+/// simulated; `values[i]` is the feature [`ChannelFeatures::NAMES`]`[i]` in
+/// [`ChannelFeatures::UNITS`]`[i]`, NaN where the run does not define it (no
+/// slip sample, no break-away, no force channel). The definitions and noise
+/// floors are in `channels::free_run`'s docs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChannelFeatures {
+    pub values: [f64; ChannelFeatures::N],
+}
+
+impl ChannelFeatures {
+    pub const N: usize = 9;
+    /// Check names (`operating_point.<name>`).
+    pub const NAMES: [&'static str; Self::N] = [
+        "rotor_max",
+        "rotor_min",
+        "motor_max",
+        "motor_min",
+        "voltage_mean",
+        "voltage_swing",
+        "slip_friction",
+        "breakaway_friction",
+        "stick_fraction",
+    ];
+    pub const UNITS: [&'static str; Self::N] = ["rad/s", "rad/s", "rad/s", "rad/s", "V", "V", "N", "N", ""];
+    pub const ROTOR_MAX: usize = 0;
+    pub const ROTOR_MIN: usize = 1;
+    pub const BREAKAWAY: usize = 7;
+    pub const STICK_FRACTION: usize = 8;
+
+    pub fn nan() -> Self {
+        ChannelFeatures { values: [f64::NAN; Self::N] }
+    }
+}
+
+impl Default for ChannelFeatures {
+    fn default() -> Self {
+        Self::nan()
+    }
+}
+
 /// Everything else the report shows.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Detail {
@@ -242,6 +311,12 @@ pub struct Detail {
     /// The extended model's static level when a finding modulates the
     /// normal force ([`crate::breakaway`]); `None`: the baseline's stands.
     pub breakaway: Option<crate::breakaway::BreakAwayLevel>,
+    /// The extension's forward selection, one row per library signal tried
+    /// per step (`effect` is the signal; `unexplained` with a baseline only).
+    pub extension_steps: Vec<StepRow>,
+    /// Rotor speed per operating point: measured, the final model's free run
+    /// (`baseline_rad_s`) and the extension's held-out free run (`extended_rad_s`).
+    pub extension_traces: Vec<SpeedTraces>,
 }
 
 /// One operating point's rotor speed over the steady window (about 20 Hz).

@@ -102,7 +102,12 @@
 //! uses the same seventh state as the stuck contact's age (dt/dt = 1 in
 //! stick, held in slip, reset to 0 each time rotor 1 comes to rest) and
 //! raises the stick threshold to (μs + B ln(1 + age/τ))·N·r: a break-away
-//! event whose threshold grows while stuck, found by the same root finder. `DriveCurrentLimit` clamps
+//! event whose threshold grows while stuck, found by the same root finder.
+//! `FrictionExtension`, the diagnosis' data-driven term of an `unexplained`
+//! answer ([`extension`]), uses the seventh state as the time since the last
+//! stick/slip event (dt/dt = 1 in both modes, reset to 0 at every event) and
+//! multiplies μ in slip and μs at break-away by factors linear in its
+//! library's signals. `DriveCurrentLimit` clamps
 //! the terminal voltage to n k_e Ω2 ± R I_max after the PI loop, whose
 //! integral does not see it (windup), and in voltage steps too.
 //!
@@ -182,6 +187,7 @@
 
 mod dopri;
 mod exact;
+pub mod extension;
 pub mod friction;
 pub mod one_dof;
 mod sim;
@@ -564,15 +570,30 @@ fn validate(p: &RigParams, o: &SimOptions) -> Result<(), ModelError> {
                 non_negative("effects.aging_mu_per_efold", *aging_mu_per_efold)?;
                 positive("effects.aging_time_s", *aging_time_s)?;
             }
+            Effect::FrictionExtension { slip_speed_per_rad_s, breakaway_transient, static_level, dwell_per_efold } => {
+                finite("effects.slip_speed_per_rad_s", *slip_speed_per_rad_s)?;
+                finite("effects.breakaway_transient", *breakaway_transient)?;
+                finite("effects.static_level", *static_level)?;
+                finite("effects.dwell_per_efold", *dwell_per_efold)?;
+            }
         }
     }
-    let fade = p.effects.iter().any(|e| matches!(e, Effect::BrakeFade { .. }));
-    if fade && p.effects.iter().any(|e| matches!(e, Effect::StaticFrictionAging { .. })) {
-        // Both live in the one pad state (the temperature rise or the contact age).
+    let pad_states = p
+        .effects
+        .iter()
+        .filter(|e| {
+            matches!(
+                e,
+                Effect::BrakeFade { .. } | Effect::StaticFrictionAging { .. } | Effect::FrictionExtension { .. }
+            )
+        })
+        .count();
+    if pad_states > 1 {
+        // They live in the one pad state (temperature rise, contact age, time since the last event).
         return Err(ModelError::InvalidParameter {
             name: "effects",
-            value: 2.0,
-            rule: "brake_fade and static_friction_aging cannot be combined (one pad state)",
+            value: pad_states as f64,
+            rule: "brake_fade, static_friction_aging and friction_extension cannot be combined (one pad state)",
         });
     }
     match &p.harmonic {

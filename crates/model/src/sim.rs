@@ -431,7 +431,13 @@ pub(crate) fn run(
             stats.events += 1;
             mode = match old {
                 // Break-away: slip in the direction the shaft pulls.
-                Mode::Stick => Mode::Slip { sign: sys.rotor_torque_nm(&y).signum() },
+                Mode::Stick => {
+                    if sys.has_slip_age() {
+                        // Break-away: the time since break-away starts at 0 (friction extension).
+                        y[TEMP] = 0.0;
+                    }
+                    Mode::Slip { sign: sys.rotor_torque_nm(&y).signum() }
+                }
                 // Ω1 reached zero: stick if static friction can hold the shaft, else reverse.
                 _ => {
                     y[W1] = 0.0;

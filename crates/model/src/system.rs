@@ -4,6 +4,7 @@
 
 use crate::dopri::{DIM, Vector};
 use crate::exact::{AUG, Mat, ONE, TIME};
+use crate::extension::Extension;
 use crate::friction::{
     RAD_S_TO_RPM, cogging_nm, imbalance_torque_nm, normal_force_n, slip_mu, slip_mu_affine, static_mu, thesis_lookup,
     thesis_segment, torque_factor,
@@ -126,6 +127,9 @@ pub(crate) struct System<'a> {
     current_limit_a: Option<f64>,
     /// Static friction aging (B per e-fold, τ in s), if any; the contact age is `y[TEMP]`.
     aging: Option<(f64, f64)>,
+    /// The diagnosis' friction extension, if any; the time since the last
+    /// stick/slip event is `y[TEMP]` (crate::extension).
+    extension: Option<Extension>,
     /// 1 / (ki T_t) of the anti-windup, inverted once instead of divided by
     /// on every right-hand side.
     inv_ki_tracking: f64,
@@ -170,6 +174,7 @@ impl<'a> System<'a> {
             fade,
             current_limit_a,
             aging,
+            extension: Extension::of(&p.effects),
             inv_ki_tracking: 1.0 / (p.drive.ki_v_rad * ANTI_WINDUP_TRACKING_S),
         }
     }
@@ -177,13 +182,19 @@ impl<'a> System<'a> {
     /// Whether the state has the pad component (brake fade's temperature or
     /// static friction aging's contact age): the error norm then covers it.
     pub fn has_thermal_state(&self) -> bool {
-        self.fade.is_some() || self.aging.is_some()
+        self.fade.is_some() || self.aging.is_some() || self.extension.is_some()
     }
 
     /// Whether the pad state is the stuck contact's age ([`Effect::StaticFrictionAging`]):
     /// it restarts at 0 whenever rotor 1 comes to rest.
     pub fn has_contact_age(&self) -> bool {
-        self.aging.is_some()
+        self.aging.is_some() || self.extension.is_some()
+    }
+
+    /// Whether the pad state also restarts at break-away (the friction
+    /// extension's time since break-away, crate::extension).
+    pub fn has_slip_age(&self) -> bool {
+        self.extension.is_some()
     }
 
     /// Whether friction can act at all (brake closed).
@@ -376,6 +387,10 @@ impl<'a> System<'a> {
             Some((b, tau_s)) => static_mu(&self.p.friction) + b * (y[TEMP].max(0.0) / tau_s).ln_1p(),
             None => static_mu(&self.p.friction),
         };
+        let mu_s = match &self.extension {
+            Some(x) => mu_s * x.static_factor(y[TEMP]),
+            None => mu_s,
+        };
         mu_s * self.normal_force_n(t, y) * self.p.brake_disc_radius_m * factor
     }
 
@@ -395,7 +410,10 @@ impl<'a> System<'a> {
             },
             // Static friction balances the shaft (and gravity) exactly (Ω̇1 = 0).
             (ModelKind::Rig, Mode::Stick) => self.rotor_torque_nm(y),
-            (ModelKind::Rig, Mode::Slip { sign }) => sign * slip_mu(&self.p.friction, y[W1]) * nr,
+            (ModelKind::Rig, Mode::Slip { sign }) => match &self.extension {
+                Some(x) => sign * slip_mu(&self.p.friction, y[W1]) * x.slip_factor(y[W1].abs(), y[TEMP]) * nr,
+                None => sign * slip_mu(&self.p.friction, y[W1]) * nr,
+            },
             (ModelKind::Rig, Mode::Continuous) => 0.0,
         }
     }
@@ -437,7 +455,7 @@ impl<'a> System<'a> {
                 // Stuck: no friction power, the pad cools.
                 dy[TEMP] = -y[TEMP] / tau;
             }
-            if self.aging.is_some() {
+            if self.aging.is_some() || self.extension.is_some() {
                 // Stuck: the contact ages at the rate of time.
                 dy[TEMP] = 1.0;
             }
@@ -460,6 +478,10 @@ impl<'a> System<'a> {
         if let Some((c, tau, _)) = self.fade {
             // C dϑ/dt = T1·Ω1 − C ϑ/τ: friction power heats the pad, Newton cooling.
             dy[TEMP] = t1 * y[W1] / c - y[TEMP] / tau;
+        }
+        if self.extension.is_some() {
+            // Slipping: the time since break-away grows at the rate of time.
+            dy[TEMP] = 1.0;
         }
         dy
     }

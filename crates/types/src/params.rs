@@ -109,6 +109,23 @@ pub enum Effect {
     /// torque). The slip law is unchanged. The contact age restarts at 0 each
     /// time rotor 1 comes to rest (and at the start of a run).
     StaticFrictionAging { aging_mu_per_efold: f64, aging_time_s: f64 },
+    /// The diagnosis' data-driven extension of an `unexplained` answer
+    /// (rig-model `extension` module: the signal library, its physics and
+    /// its state). The slip coefficient is multiplied by
+    /// 1 + a_v·|Ω1| + a_b·exp(−t_slip/τ_b) and the break-away coefficient by
+    /// 1 + c_0 + c_d·ln(1 + t_stick/τ_d), with t_slip the time since the last
+    /// break-away and t_stick the age of the stuck contact (τ_b, τ_d fixed by
+    /// rig-model). Every coefficient 0 is the model without it.
+    FrictionExtension {
+        /// a_v, per rad/s of slip speed.
+        slip_speed_per_rad_s: f64,
+        /// a_b, relative friction excess just after break-away.
+        breakaway_transient: f64,
+        /// c_0, relative change of the static (break-away) level.
+        static_level: f64,
+        /// c_d, relative growth of the static level per e-fold of dwell time.
+        dwell_per_efold: f64,
+    },
 }
 
 /// Eq. 4-11 and its physically consistent alternative (issue 4).

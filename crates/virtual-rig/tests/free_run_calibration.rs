@@ -139,7 +139,7 @@ fn free_run_nulls() {
     for (k, mut r) in by_check {
         r.sort_by(f64::total_cmp);
         let q = |p: f64| r[((r.len() - 1) as f64 * p).round() as usize];
-        println!("  {k:<30} {:.2} / {:.2} / {:.2} / {:.2}", q(0.0), q(0.5), q(0.9), q(1.0));
+        println!("  {k:<36} {:.2} / {:.2} / {:.2} / {:.2}", q(0.0), q(0.5), q(0.9), q(1.0));
     }
     let (lo, hi) = clopper_pearson(flagged.len(), n as usize);
     println!(
@@ -148,6 +148,71 @@ fn free_run_nulls() {
     );
     println!("verdict not `none`: {not_none:?}; structure not twist_rate: {structure_moved:?}");
     assert!(flagged.len() as f64 <= 0.05 * n as f64 + 1e-9, "free-run false alarms {}/{n}", flagged.len());
+}
+
+/// The free-run checks on RIGHT models (issue 25: a right in-vocabulary
+/// model must pass them): each vocabulary effect drawn on a stick-slipping
+/// rig (the nulls' draw with the effect hidden), diagnosed blind; among the
+/// campaigns whose findings contain the hidden effect, the rate with a
+/// flagged free-run check of the final model, with its Clopper–Pearson
+/// interval. `RIGHT` draws per effect (default 4: 20 campaigns).
+#[test]
+#[ignore]
+fn free_run_right_models() {
+    let n: u64 = std::env::var("RIGHT").ok().and_then(|s| s.parse().ok()).unwrap_or(4);
+    let th = thesis();
+    let o = opts();
+    let classes = [
+        "normal_force_modulation",
+        "angle_periodic_friction",
+        "velocity_weakening_friction",
+        "viscous_brake_friction",
+        "drive_voltage_limit",
+    ];
+    let mut by_check: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    let (mut right, mut flagged, mut missed) = (0usize, Vec::new(), Vec::new());
+    for (ci, class) in classes.iter().enumerate() {
+        for i in 0..n {
+            let seed = 9300 + 10 * ci as u64 + i;
+            let mut truth = draw_truth(class, 130.0, seed);
+            truth.params.shaft_damping_nm_s_rad *= 0.3;
+            let c = generate("right-ss", &truth, &stick_slip_protocol(), seed).expect("generate");
+            let d = rig_diagnose::diagnose_campaign(&c, Some(&th), &o).expect("diagnosis");
+            let found = d.findings.iter().any(|f| f.effect == *class);
+            let line: Vec<String> = d
+                .detail
+                .free_run_extended
+                .iter()
+                .filter(|k| k.flagged)
+                .map(|k| format!("{} {:.2}", k.channel, k.ratio))
+                .collect();
+            println!("{class} seed {seed}: verdict {}; found {found}; flagged: {}", d.verdict, line.join(", "));
+            if !found {
+                missed.push((seed, class.to_string(), d.verdict.clone()));
+                continue;
+            }
+            right += 1;
+            for k in &d.detail.free_run_extended {
+                by_check.entry(k.channel.clone()).or_default().push(k.ratio);
+            }
+            if d.detail.free_run_extended.iter().any(|k| k.flagged) {
+                flagged.push((seed, class.to_string()));
+            }
+        }
+    }
+    println!("free-run ratios of right final models over {right} campaigns (min / median / 90 % / max):");
+    for (k, mut r) in by_check {
+        r.sort_by(f64::total_cmp);
+        let q = |p: f64| r[((r.len() - 1) as f64 * p).round() as usize];
+        println!("  {k:<36} {:.2} / {:.2} / {:.2} / {:.2}", q(0.0), q(0.5), q(0.9), q(1.0));
+    }
+    let (lo, hi) = clopper_pearson(flagged.len(), right);
+    println!(
+        "right models with a flagged free-run check: {}/{right} (95 % Clopper–Pearson {lo:.3}–{hi:.3}): {flagged:?}",
+        flagged.len()
+    );
+    println!("effect not found: {missed:?}");
+    assert!(right > 0, "no campaign was diagnosed right");
 }
 
 /// The small protocol with two slow, heavily braked points (stick-slip).
@@ -181,8 +246,15 @@ fn damping_on_the_rotor_speed_is_named_with_its_free_run_gain() {
     let left: Vec<&str> = d.detail.free_run_extended.iter().filter(|k| k.flagged).map(|k| k.channel.as_str()).collect();
     assert!(left.is_empty(), "final model's free run flagged: {left:?}");
     assert!(d.findings.iter().all(|f| !f.where_.iter().any(|w| w == "free_run")), "{:?}", d.findings);
-    let base_flags = d.detail.free_run_baseline.iter().filter(|k| k.flagged).count();
-    assert!(base_flags > 0, "the baseline's free run should miss the rotor drag");
+    // The baseline's free run misses the drag by the structure's criterion
+    // (the gain above). Its adequacy checks no longer flag it: since the
+    // per-run floors carry the spread of the extremes over cycles (issue 25's
+    // rotor_max regression), the drag's rotor-extreme error is within them,
+    // and the voltage mean that the drag moves is reported, not in the
+    // adequacy test (ChannelOptions' docs). Printed, not asserted.
+    for k in &d.detail.free_run_baseline {
+        println!("baseline {} {:.2} (threshold {:.1})", k.channel, k.ratio, k.threshold);
+    }
 }
 
 #[test]

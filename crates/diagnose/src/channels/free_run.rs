@@ -1,15 +1,75 @@
 //! Free-run checks of the operating points: a model (baseline or extended)
 //! simulated from rest under the run's protocol and compared with the record
-//! on phase-insensitive steady-state features.
+//! on phase-insensitive steady-state features of every recorded channel.
+//!
+//! # Features and their noise floors (issue 25, item 3)
+//!
+//! Over the steady window (ramp + settle to + `free_run_steady_s`), through
+//! the same operators on both sides (Ω1, Ω2 by the diagnosis' centred
+//! differences, the force by the calibrated sensor line, smoothed over the
+//! rotor-speed window for the break-away peak):
+//!
+//! | check | feature | floor of run r (from the record) |
+//! |---|---|---|
+//! | `regime` | stick-slip or not ([`steady_features`]) | one run |
+//! | `rotor_max`, `rotor_min` | extreme of Ω1, rad/s | resolution tick/(2h·dt)/√6 ⊕ spread of the extreme over cycles |
+//! | `motor_max`, `motor_min` | extreme of Ω2, rad/s | the same with Ω2's window |
+//! | `fundamental` | stick-slip frequency | Rayleigh resolution 1/(T·f) |
+//! | `voltage_mean` | mean drive voltage, V | σ_V/√n ⊕ spread of cycle means/√cycles |
+//! | `voltage_swing` | SD of the voltage, white noise removed: √(var − σ_V²), V | σ_V/√(2n) ⊕ spread of cycle SDs/√cycles |
+//! | `slip_friction` | mean friction force over slip samples (μ·N), N | σ_F/√n_slip ⊕ spread of cycle means/√cycles ⊕ N0·se(μk) of the model's fitted level |
+//! | `breakaway_friction` | mean over break-aways of the peak friction force in the stuck stretch before, N | σ_F/√(2h+1) ⊕ spread of the peaks/√events |
+//! | `stick_fraction` | fraction of the window with \|Ω1\| below the slip speed | 2h·dt per cycle ⊕ spread of cycle fractions/√cycles |
+//!
+//! ⊕ is the root sum of squares; σ_V, σ_F the white noise of the recorded
+//! channel (first differences, [`crate::prepare::diff_noise`]); a *cycle* is
+//! one measured stick-slip period 1/f0 (1 s without stick-slip). The spread
+//! over cycles is the floor of an effect that makes stick-slip irregular
+//! (angle-periodic friction, a modulation): the window's extreme is one draw
+//! of the cycles' extremes, and a free run started from rest visits other
+//! cycles than the record (issue 25's regression: angle-periodic + viscous
+//! friction, op-30's rotor maximum 4.52 measured vs 6.70 simulated is one
+//! cycle of a record whose cycle maxima spread over several rad/s).
+//!
+//! A check's ratio is the RMS over runs of the run's error in units of its
+//! floor, z_r = (measured − simulated)/floor_r (runs of very different force
+//! levels count alike); the table's statistic is the RMS error in the
+//! feature's unit and its floor the statistic over that ratio. The runs a
+//! check uses: those that define the feature on both sides; the break-away
+//! and stick-fraction checks only runs that stick and slip on both sides (a
+//! regime change is the regime check's).
+//!
+//! # Calibration (crates/virtual-rig/tests/free_run_calibration.rs)
+//!
+//! `free_run_nulls`, 24 stick-slipping effect-free campaigns (seeds
+//! 9100–9123, 3–9 of 12 runs stick-slip), final model's largest ratios:
+//! rotor_max 1.47, rotor_min 0.19 (with the cycle-spread floors; 1.81 and
+//! 1.37 before), fundamental 0.01, regime 0 runs, motor_max 2.30, motor_min
+//! 2.01, voltage_mean 4.66, voltage_swing 2.27, slip_friction 2.18,
+//! breakaway_friction 13.63, stick_fraction 0.18. Thresholds ≈ 2× the null
+//! maximum, at least 4 ([`FreeRunThresholds`], pipeline.toml): 0/24 nulls
+//! flagged (95 % Clopper–Pearson 0–14.2 %; in-sample, the same campaigns set
+//! the thresholds; voltage mean and swing ≈ 2× would be 9.5 and 5). The break-away ratio of a null is 6–14, not ≈ 1: the
+//! estimate's μs (rig-estimate: the median of the raw, noisy peak forces)
+//! sits a few force-noise σ above the record's smoothed break-away level,
+//! which the break-aways of a regular null resolve; a bias of rig-estimate
+//! the check names, ≈ 0.3 % of the level. `free_run_right_models` (each
+//! vocabulary effect on the same stick-slipping rigs, diagnosed right):
+//! 8/20 flagged (95 % Clopper–Pearson 19–64 %), 4/20 by the rotor-speed
+//! checks alone; the voltage mean and swing are reported, not in the
+//! adequacy test (thresholds unset: right drive-limit models give 81–116×);
+//! details in [`ChannelOptions`]' docs.
 
 use super::{ChannelCheck, ChannelOptions, rms};
 use crate::DiagnoseOptions;
-use crate::prepare::centred_speed;
-use crate::result::Features;
+use crate::prepare::{SensorLaw, centred_speed, diff_noise};
+use crate::result::{ChannelFeatures, Features};
 use crate::select::steady_features;
 use rig_model::SimOptions;
+use rig_types::sensor::centred_moving_average;
 use rig_types::sensor::{half_window_samples, nominal_window_samples, tick_rad, ticks_to_rad};
 use rig_types::{Campaign, RigParams, RunInput, RunKind};
+use serde::{Deserialize, Serialize};
 
 /// What the free-run comparison needs from the diagnosis options.
 #[derive(Debug, Clone, PartialEq)]
@@ -23,6 +83,37 @@ pub struct FreeRunSettings {
     pub classify: rig_sweep::ClassifyOptions,
     /// `[shared.integrator]`.
     pub integrator: SimOptions,
+    /// How the force sensor's mV are read as newtons (the diagnosis' slip
+    /// channel's law); `None`: no friction-level features.
+    pub force: Option<SensorLaw>,
+    /// Standard error of the model's kinetic friction coefficient (the
+    /// estimation's μk, fitted on these records: between-run scatter,
+    /// rig_estimate::estimate_friction); N0 times it joins the
+    /// `slip_friction` floor, since the simulated slip force is only as
+    /// certain as the level it was given (0: not known).
+    pub mu_kinetic_stderr: f64,
+}
+
+/// Thresholds (ratio to the noise floor) of the free-run checks of every
+/// channel beyond the rotor speed: `[stage.params.channels.free_run]` of
+/// pipeline.toml, calibrated on stick-slipping nulls
+/// (crates/virtual-rig/tests/free_run_calibration.rs; the numbers are in
+/// pipeline.toml's comment and [`ChannelOptions`]' docs).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FreeRunThresholds {
+    pub motor_max_ratio: f64,
+    pub motor_min_ratio: f64,
+    /// `None`: the check is reported, not part of the adequacy test (the
+    /// voltage mean and swing: their floors lack the fitted drive's
+    /// uncertainty, [`ChannelOptions`]' docs).
+    #[serde(default)]
+    pub voltage_mean_ratio: Option<f64>,
+    #[serde(default)]
+    pub voltage_swing_ratio: Option<f64>,
+    pub slip_friction_ratio: f64,
+    pub breakaway_friction_ratio: f64,
+    pub stick_fraction_ratio: f64,
 }
 
 impl FreeRunSettings {
@@ -35,7 +126,22 @@ impl FreeRunSettings {
             motor_speed_half_window_s: opts.motor_speed_half_window_s,
             classify: opts.classify.clone(),
             integrator: opts.integrator.clone(),
+            force: None,
+            mu_kinetic_stderr: 0.0,
         }
+    }
+
+    /// The settings with the force sensor read through `law` (enables the
+    /// friction-level features).
+    pub fn with_force(mut self, law: SensorLaw) -> Self {
+        self.force = Some(law);
+        self
+    }
+
+    /// The settings with the model's kinetic level known to ± `se`.
+    pub fn with_mu_kinetic_stderr(mut self, se: f64) -> Self {
+        self.mu_kinetic_stderr = se;
+        self
     }
 }
 
@@ -52,6 +158,11 @@ pub struct Pair {
     /// One encoder tick over the motor-speed differentiator window,
     /// tick/(2h·dt), rad/s: the smallest motor-speed step (dip) it can show.
     pub motor_tick_rad_s: f64,
+    /// Every channel's features, measured and simulated (module docs).
+    pub channels_measured: ChannelFeatures,
+    pub channels_simulated: Option<ChannelFeatures>,
+    /// Each feature's noise floor in this run, from the record (module docs).
+    pub floors: ChannelFeatures,
 }
 
 /// Ω1 over a run's steady window at about [`TRACE_RATE_HZ`] (every k-th
@@ -101,30 +212,195 @@ pub fn speed_floor_rad_s(c: &Campaign, s: &FreeRunSettings) -> f64 {
         / 6f64.sqrt()
 }
 
-/// Free-run misfit of one run (crate docs, "The free-run misfit"):
-/// M_fr = sqrt(1 + mean(e²)) over the feature errors in units of their
-/// floors — e_max, e_min: measured − simulated extreme of Ω1 over the speed
-/// resolution `floor_rad_s`; e_f: the relative error of the stick-slip
-/// fundamental over the window's relative Rayleigh resolution 1/(T·f), when
-/// both record and simulation stick and slip. The 1 is the floor itself (a
-/// model at the noise scores ≈ 1.4, never 0, so ln ratios stay finite).
-/// `None` when the simulation failed.
+/// Free-run misfit of one run's motion (crate docs, "The free-run misfit";
+/// the structure's selection criterion): M_fr = sqrt(1 + mean(e²)) over
+/// e_max, e_min, the measured − simulated extremes of Ω1 over the speed
+/// resolution `floor_rad_s` (the criterion the structure was calibrated
+/// with: with the per-run floors of the checks, ⊕ the spread over cycles,
+/// the rotor-drag campaign of `free_run_calibration.rs` gives t = 1.98 for
+/// its placement instead of ≥ 2), and e_f, the relative error of the stick-slip fundamental
+/// over the window's relative Rayleigh resolution 1/(T·f) when both stick
+/// and slip. The 1 is the floor itself (a model at the noise scores ≈ 1.4,
+/// never 0, so ln ratios stay finite). `None` when the simulation failed.
 pub fn free_run_misfit(q: &Pair, floor_rad_s: f64) -> Option<f64> {
-    let f = q.simulated?;
-    let m = &q.measured;
-    let mut e2 = vec![
-        ((m.rotor_max_rad_s - f.rotor_max_rad_s) / floor_rad_s).powi(2),
-        ((m.rotor_min_rad_s - f.rotor_min_rad_s) / floor_rad_s).powi(2),
-    ];
-    if m.stick_slip() && f.stick_slip() && m.fundamental_hz > 0.0 {
-        e2.push(((m.fundamental_hz - f.fundamental_hz) * q.window_s).powi(2));
-    }
-    Some((1.0 + e2.iter().sum::<f64>() / e2.len() as f64).sqrt())
+    misfit_over(q, floor_rad_s, ChannelFeatures::ROTOR_MIN + 1, false)
 }
 
-/// Features of one run: measured from the encoders and simulated with `p`,
-/// both through the same centred difference (the diagnosis' speed operator,
-/// so the smoothing of the extrema is the same on both sides).
+/// [`free_run_misfit`] over every channel's feature (module docs: Ω1 and Ω2
+/// extremes, voltage mean and swing, slip and break-away friction, stick
+/// fraction — the last two when both stick and slip) and the fundamental:
+/// the extension's selection criterion ([`crate::extension`]).
+pub fn free_run_misfit_channels(q: &Pair, floor_rad_s: f64) -> Option<f64> {
+    misfit_over(q, floor_rad_s, ChannelFeatures::N, true)
+}
+
+/// M_fr over the first `n_features` channel features and the fundamental;
+/// the Ω1 extremes over the run's own floors (≥ `floor_rad_s`) when
+/// `run_floors`, else over `floor_rad_s`.
+fn misfit_over(q: &Pair, floor_rad_s: f64, n_features: usize, run_floors: bool) -> Option<f64> {
+    let f = q.simulated?;
+    let sim = q.channels_simulated?;
+    let m = &q.measured;
+    let both = m.stick_slip() && f.stick_slip();
+    let mut e2 = Vec::new();
+    for i in 0..n_features {
+        if !both && (i == ChannelFeatures::BREAKAWAY || i == ChannelFeatures::STICK_FRACTION) {
+            continue;
+        }
+        let (a, b) = (q.channels_measured.values[i], sim.values[i]);
+        let floor = match (i <= ChannelFeatures::ROTOR_MIN, run_floors) {
+            (true, true) => q.floors.values[i].max(floor_rad_s),
+            (true, false) => floor_rad_s,
+            (false, _) => q.floors.values[i],
+        };
+        if a.is_finite() && b.is_finite() && floor > 0.0 {
+            e2.push(((a - b) / floor).powi(2));
+        }
+    }
+    if both && m.fundamental_hz > 0.0 {
+        e2.push(((m.fundamental_hz - f.fundamental_hz) * q.window_s).powi(2));
+    }
+    let mean = if e2.is_empty() { 0.0 } else { e2.iter().sum::<f64>() / e2.len() as f64 };
+    Some((1.0 + mean).sqrt())
+}
+
+/// The steady-window signals of one side (measured or simulated) that the
+/// channel features are computed from.
+struct Window<'a> {
+    w1: &'a [f64],
+    w2: &'a [f64],
+    voltage_v: Option<&'a [f64]>,
+    /// Friction force, N, smoothed over the rotor-speed window.
+    force_n: Option<&'a [f64]>,
+}
+
+/// Every stuck stretch (|Ω1| below the slip speed) that starts and ends
+/// inside the window, as [first, end) sample ranges: the stick phases that
+/// end in a break-away (one definition for the free-run features and the
+/// extension's break-away rows).
+pub fn stuck_stretches(w1: &[f64], slip_rad_s: f64) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    let mut start: Option<usize> = None;
+    for k in 1..w1.len() {
+        let (was, is) = (w1[k - 1].abs() < slip_rad_s, w1[k].abs() < slip_rad_s);
+        if is && !was {
+            start = Some(k);
+        } else if was
+            && !is
+            && let Some(j) = start.take()
+        {
+            out.push((j, k));
+        }
+    }
+    out
+}
+
+/// Peak friction force in every stuck stretch ([`stuck_stretches`]): the
+/// break-away level of each slip onset.
+fn breakaway_peaks(w1: &[f64], force_n: &[f64], slip_rad_s: f64) -> Vec<f64> {
+    stuck_stretches(w1, slip_rad_s)
+        .into_iter()
+        .map(|(j, k)| force_n[j..k].iter().copied().fold(f64::NEG_INFINITY, f64::max))
+        .collect()
+}
+
+fn mean(x: &[f64]) -> f64 {
+    if x.is_empty() { f64::NAN } else { x.iter().sum::<f64>() / x.len() as f64 }
+}
+
+/// Sample standard deviation (NaN below two values).
+fn sd(x: &[f64]) -> f64 {
+    if x.len() < 2 {
+        return f64::NAN;
+    }
+    let m = mean(x);
+    (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (x.len() - 1) as f64).sqrt()
+}
+
+/// The channel features of one window (module docs); `sigma_v` is removed
+/// from the voltage's SD (0 for a simulation).
+fn channel_values(w: &Window, slip_rad_s: f64, sigma_v: f64) -> [f64; ChannelFeatures::N] {
+    let ext = |x: &[f64], max: bool| {
+        x.iter()
+            .copied()
+            .fold(if max { f64::NEG_INFINITY } else { f64::INFINITY }, if max { f64::max } else { f64::min })
+    };
+    let (vm, vs) = match w.voltage_v {
+        Some(v) => {
+            let m = mean(v);
+            let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64;
+            (m, (var - sigma_v * sigma_v).max(0.0).sqrt())
+        }
+        None => (f64::NAN, f64::NAN),
+    };
+    let (slip, breakaway) = match w.force_n {
+        Some(f) => {
+            let s: Vec<f64> = w.w1.iter().zip(f).filter(|(w, _)| w.abs() >= slip_rad_s).map(|(_, f)| *f).collect();
+            (mean(&s), mean(&breakaway_peaks(w.w1, f, slip_rad_s)))
+        }
+        None => (f64::NAN, f64::NAN),
+    };
+    let stuck = w.w1.iter().filter(|x| x.abs() < slip_rad_s).count() as f64 / w.w1.len().max(1) as f64;
+    [ext(w.w1, true), ext(w.w1, false), ext(w.w2, true), ext(w.w2, false), vm, vs, slip, breakaway, stuck]
+}
+
+/// The resolution and white noise a run's floors start from: the speed
+/// resolutions of Ω1 and Ω2, rad/s, σ_V, V, and σ_F of the raw force, N.
+struct Noise {
+    res_rad_s: (f64, f64),
+    sigma_v: f64,
+    sigma_f: f64,
+}
+
+/// Each feature's floor in one run, from the record (module docs): the
+/// sensor's resolution or noise ⊕ the feature's spread over cycles of
+/// `cycle` samples.
+fn channel_floors(w: &Window, slip_rad_s: f64, noise: &Noise, h1: usize, cycle: usize) -> ChannelFeatures {
+    let n = w.w1.len();
+    let Noise { res_rad_s, sigma_v, sigma_f } = *noise;
+    let cycles: Vec<[f64; ChannelFeatures::N]> = (0..n / cycle.max(1))
+        .map(|i| {
+            let r = i * cycle..(i + 1) * cycle;
+            let sub = Window {
+                w1: &w.w1[r.clone()],
+                w2: &w.w2[r.clone()],
+                voltage_v: w.voltage_v.map(|v| &v[r.clone()]),
+                force_n: w.force_n.map(|f| &f[r.clone()]),
+            };
+            channel_values(&sub, slip_rad_s, sigma_v.max(0.0))
+        })
+        .collect();
+    // Spread over cycles (0 below two cycles that define it) and its count.
+    let spread = |i: usize| {
+        let v: Vec<f64> = cycles.iter().map(|c| c[i]).filter(|x| x.is_finite()).collect();
+        let s = sd(&v);
+        (if s.is_finite() { s } else { 0.0 }, v.len().max(1) as f64)
+    };
+    let q = |a: f64, b: f64| a.hypot(b);
+    let nf = n.max(1) as f64;
+    let n_slip = w.w1.iter().filter(|x| x.abs() >= slip_rad_s).count().max(1) as f64;
+    let peaks = w.force_n.map(|f| breakaway_peaks(w.w1, f, slip_rad_s)).unwrap_or_default();
+    let sd_peaks = if peaks.len() >= 2 { sd(&peaks) } else { 0.0 };
+    let mut v = [0.0; ChannelFeatures::N];
+    for (i, x) in v.iter_mut().enumerate() {
+        let (s, nc) = spread(i);
+        *x = match i {
+            0 | 1 => q(res_rad_s.0, s),
+            2 | 3 => q(res_rad_s.1, s),
+            4 => q(sigma_v / nf.sqrt(), s / nc.sqrt()),
+            5 => q(sigma_v / (2.0 * nf).sqrt(), s / nc.sqrt()),
+            6 => q(sigma_f / n_slip.sqrt(), s / nc.sqrt()),
+            7 => q(sigma_f / ((2 * h1 + 1) as f64).sqrt(), sd_peaks / (peaks.len().max(1) as f64).sqrt()),
+            _ => q(2.0 * h1 as f64 / cycle.max(1) as f64, s / nc.sqrt()),
+        };
+    }
+    ChannelFeatures { values: v }
+}
+
+/// Features of one run: measured from the encoders, the voltage and force
+/// channels, and simulated with `p`, all through the same operators (the
+/// diagnosis' centred differences, so the smoothing of the extrema is the
+/// same on both sides; the force smoothed over the rotor-speed window).
 fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) -> Option<Pair> {
     let RunKind::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s } = run.kind else { return None };
     let t = &run.data.time_s;
@@ -142,20 +418,70 @@ fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) 
     let stride = ((1.0 / (TRACE_RATE_HZ * dt)).round() as usize).max(1);
     let (h1, h2) =
         (half_window_samples(tt, s.rotor_speed_half_window_s), half_window_samples(tt, s.motor_speed_half_window_s));
-    let feat = |a1: &[f64], a2: &[f64]| {
-        let w1 = centred_speed(tt, a1, h1);
-        let w2 = centred_speed(tt, a2, h2);
-        let f = steady_features(&tt[from..], &w1[from..], &w2[from..], w_set, s.slip_speed_rad_s, &s.classify);
-        (f, w1[from..].iter().step_by(stride).copied().collect::<Vec<f64>>())
+    let speeds = |a1: &[f64], a2: &[f64]| (centred_speed(tt, a1, h1), centred_speed(tt, a2, h2));
+    let feat = |w1: &[f64], w2: &[f64]| {
+        steady_features(&tt[from..], &w1[from..], &w2[from..], w_set, s.slip_speed_rad_s, &s.classify)
     };
-    let (measured, measured_rad_s) = feat(&phi1, &phi2);
+    let trace_of = |w1: &[f64]| w1[from..].iter().step_by(stride).copied().collect::<Vec<f64>>();
+    let (m1, m2) = speeds(&phi1, &phi2);
+    let measured = feat(&m1, &m2);
+    let m_voltage = run.data.motor_voltage_v.as_ref().map(|v| v[from..to].to_vec());
+    let m_force = match (s.force, run.data.brake_force_mv.as_ref()) {
+        (Some(law), Some(mv)) if normal_force_n > 0.0 => Some(law.force_n(&mv[..to])),
+        _ => None,
+    };
+    let m_force_smooth = m_force.as_ref().map(|f| centred_moving_average(f, h1)[from..].to_vec());
+    let m_win = Window {
+        w1: &m1[from..],
+        w2: &m2[from..],
+        voltage_v: m_voltage.as_deref(),
+        force_n: m_force_smooth.as_deref(),
+    };
+    let sigma_v = m_voltage.as_deref().map_or(f64::NAN, diff_noise);
+    let channels_measured = ChannelFeatures { values: channel_values(&m_win, s.slip_speed_rad_s, sigma_v.max(0.0)) };
+    let cycle_s =
+        if measured.stick_slip() && measured.fundamental_hz > 0.0 { 1.0 / measured.fundamental_hz } else { 1.0 };
+    let res = |h: usize| rad / (2.0 * h as f64 * dt) / 6f64.sqrt();
+    let noise = Noise {
+        res_rad_s: (res(h1), res(h2)),
+        sigma_v,
+        sigma_f: m_force.as_ref().map_or(f64::NAN, |f| diff_noise(&f[from..])),
+    };
+    let mut floors = channel_floors(&m_win, s.slip_speed_rad_s, &noise, h1, (cycle_s / dt).round() as usize);
+    let slip = &mut floors.values[6];
+    *slip = slip.hypot(normal_force_n * s.mu_kinetic_stderr);
     let input = RunInput::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s };
-    let sim =
-        rig_model::simulate(p, &input, tt, &s.integrator).ok().map(|tr| feat(&tr.rotor_angle_rad, &tr.motor_angle_rad));
-    let (simulated, simulated_rad_s) = sim.map_or((None, None), |(f, w)| (Some(f), Some(w)));
-    let trace = Trace { time_s: tt[from..].iter().step_by(stride).copied().collect(), measured_rad_s, simulated_rad_s };
+    let sim = rig_model::simulate(p, &input, tt, &s.integrator).ok().map(|tr| {
+        let (w1, w2) = speeds(&tr.rotor_angle_rad, &tr.motor_angle_rad);
+        let force: Vec<f64> = tr.friction_torque_nm.iter().map(|x| x / p.brake_disc_radius_m).collect();
+        let force_smooth = m_force.as_ref().map(|_| centred_moving_average(&force, h1)[from..].to_vec());
+        let win = Window {
+            w1: &w1[from..],
+            w2: &w2[from..],
+            voltage_v: m_voltage.as_ref().map(|_| &tr.voltage_v[from..]),
+            force_n: force_smooth.as_deref(),
+        };
+        (feat(&w1, &w2), trace_of(&w1), ChannelFeatures { values: channel_values(&win, s.slip_speed_rad_s, 0.0) })
+    });
+    let (simulated, simulated_rad_s, channels_simulated) =
+        sim.map_or((None, None, None), |(f, w, ch)| (Some(f), Some(w), Some(ch)));
+    let trace = Trace {
+        time_s: tt[from..].iter().step_by(stride).copied().collect(),
+        measured_rad_s: trace_of(&m1),
+        simulated_rad_s,
+    };
     let motor_tick_rad_s = rad / (2.0 * h2 as f64 * dt);
-    Some(Pair { id: run.id.clone(), measured, simulated, window_s: tt[to - 1] - tt[from], trace, motor_tick_rad_s })
+    Some(Pair {
+        id: run.id.clone(),
+        measured,
+        simulated,
+        window_s: tt[to - 1] - tt[from],
+        trace,
+        motor_tick_rad_s,
+        channels_measured,
+        channels_simulated,
+        floors,
+    })
 }
 
 /// Each operating point's measured rotor speed with the baseline's and the
@@ -173,35 +499,41 @@ pub fn speed_traces(baseline: &[Pair], extended: &[Pair]) -> Vec<crate::result::
         .collect()
 }
 
-/// The four free-run checks of model `p` (one simulation per operating point,
+/// The free-run checks of model `p` (one simulation per operating point,
 /// over ramp + settle + `steady_s` only, in parallel, campaign order kept).
 ///
 /// The thesis compares measured and simulated motion on the same features
-/// (Figs. 4.16–4.29: regime, rotor speed range, stick-slip frequency); the
-/// features are [`steady_features`], the one definition the per-run table uses:
+/// (Figs. 4.16–4.29: regime, rotor speed range, stick-slip frequency); issue
+/// 25 asks for every recorded channel at its level. The features and floors
+/// are in the module docs; the regime and fundamental come from
+/// [`steady_features`], the one definition the per-run table uses:
 /// - regime: runs where one side sticks-and-slips and the other does not
 ///   (floor: one run, the boundary of the severity map being uncertain);
-/// - rotor_max / rotor_min: RMS over the runs of measured − simulated extreme
-///   of Ω1, rad/s; floor: the speed resolution of the centred difference,
-///   tick/(2h·dt)/√6;
+/// - every channel feature: RMS over runs of (measured − simulated)/floor_r;
 /// - fundamental: RMS over the runs that stick-slip on both sides of the
 ///   relative error of the stick-slip frequency; floor: the relative Rayleigh
 ///   resolution 1/(T·f) of the window, RMS over those runs.
 ///
-/// Extrema and fundamental over a window of many cycles do not depend on the
-/// phases of a modulation, which [`super::extended_params`] sets to 0.
+/// Extrema, means and the fundamental over a window of many cycles do not
+/// depend on the phases of a modulation beyond the spread over cycles that
+/// the floors carry.
 pub fn free_run_checks(c: &Campaign, p: &RigParams, s: &FreeRunSettings, o: &ChannelOptions) -> Vec<ChannelCheck> {
     free_run_checks_of(c, &free_run_pairs(c, p, s), s, o)
 }
 
-/// The four free-run checks of pairs already simulated ([`free_run_pairs`]).
+/// Check names of [`free_run_checks_of`], in its order.
+pub fn free_run_check_names() -> Vec<String> {
+    let mut v = vec!["operating_point.regime".to_string()];
+    v.extend(ChannelFeatures::NAMES[..2].iter().map(|n| format!("operating_point.{n}")));
+    v.push("operating_point.fundamental".into());
+    v.extend(ChannelFeatures::NAMES[2..].iter().map(|n| format!("operating_point.{n}")));
+    v
+}
+
+/// The free-run checks of pairs already simulated ([`free_run_pairs`]):
+/// regime, rotor_max, rotor_min, fundamental, then the other channels'.
 pub fn free_run_checks_of(c: &Campaign, pairs: &[Pair], s: &FreeRunSettings, o: &ChannelOptions) -> Vec<ChannelCheck> {
-    let names = [
-        "operating_point.regime",
-        "operating_point.rotor_max",
-        "operating_point.rotor_min",
-        "operating_point.fundamental",
-    ];
+    let names = free_run_check_names();
     let ids: Vec<String> = pairs.iter().map(|q| q.id.clone()).collect();
     let failed: Vec<&str> = pairs.iter().filter(|q| q.simulated.is_none()).map(|q| q.id.as_str()).collect();
     let ok: Vec<(&Pair, Features)> = pairs.iter().filter_map(|q| q.simulated.map(|f| (q, f))).collect();
@@ -217,7 +549,7 @@ pub fn free_run_checks_of(c: &Campaign, pairs: &[Pair], s: &FreeRunSettings, o: 
     let differ: Vec<&str> =
         ok.iter().filter(|(q, f)| q.measured.stick_slip() != f.stick_slip()).map(|(q, _)| q.id.as_str()).collect();
     out.push(ChannelCheck::new(
-        names[0],
+        &names[0],
         ids.clone(),
         differ.len() as f64,
         1.0,
@@ -231,27 +563,22 @@ pub fn free_run_checks_of(c: &Campaign, pairs: &[Pair], s: &FreeRunSettings, o: 
     ));
 
     let floor = speed_floor_rad_s(c, s);
-    for (name, th, get) in [
-        (names[1], o.rotor_max_ratio, (|f: &Features| f.rotor_max_rad_s) as fn(&Features) -> f64),
-        (names[2], o.rotor_min_ratio, |f: &Features| f.rotor_min_rad_s),
-    ] {
-        let d: Vec<f64> = ok.iter().map(|(q, f)| get(&q.measured) - get(f)).collect();
-        let worst = ok
-            .iter()
-            .zip(&d)
-            .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
-            .map(|((q, f), _)| format!("{} measured {:.2}, simulated {:.2} rad/s", q.id, get(&q.measured), get(f)))
-            .unwrap_or_default();
-        let bias = d.iter().sum::<f64>() / d.len() as f64;
-        out.push(ChannelCheck::new(
-            name,
-            ids.clone(),
-            rms(&d),
-            floor,
-            th,
-            format!("measured − simulated: RMS {:.3} rad/s, mean {bias:+.3} rad/s; worst {worst}{fail_note}", rms(&d)),
-        ));
-    }
+    let t = &o.free_run;
+    let thresholds = [
+        o.rotor_max_ratio,
+        o.rotor_min_ratio,
+        t.motor_max_ratio,
+        t.motor_min_ratio,
+        t.voltage_mean_ratio.unwrap_or(f64::INFINITY),
+        t.voltage_swing_ratio.unwrap_or(f64::INFINITY),
+        t.slip_friction_ratio,
+        t.breakaway_friction_ratio,
+        t.stick_fraction_ratio,
+    ];
+    let mut channel_checks: Vec<ChannelCheck> = (0..ChannelFeatures::N)
+        .map(|i| feature_check(&names, i, &ok, floor, thresholds[i], &ids, &fail_note))
+        .collect();
+    out.extend(channel_checks.drain(..2));
 
     let both: Vec<(&Pair, Features)> = ok
         .iter()
@@ -260,7 +587,7 @@ pub fn free_run_checks_of(c: &Campaign, pairs: &[Pair], s: &FreeRunSettings, o: 
         .collect();
     if both.is_empty() {
         out.push(ChannelCheck::not_testable(
-            names[3],
+            &names[3],
             ids,
             "no run sticks and slips in both record and simulation".into(),
         ));
@@ -275,7 +602,7 @@ pub fn free_run_checks_of(c: &Campaign, pairs: &[Pair], s: &FreeRunSettings, o: 
             .map(|(q, f)| format!("{} {:.2}/{:.2} Hz", q.id, q.measured.fundamental_hz, f.fundamental_hz))
             .collect();
         out.push(ChannelCheck::new(
-            names[3],
+            &names[3],
             both.iter().map(|(q, _)| q.id.clone()).collect(),
             rms(&rel),
             rms(&res),
@@ -283,5 +610,66 @@ pub fn free_run_checks_of(c: &Campaign, pairs: &[Pair], s: &FreeRunSettings, o: 
             format!("stick-slip fundamental measured/simulated: {}", rows.join(", ")),
         ));
     }
+    out.extend(channel_checks);
     out
+}
+
+/// The check of channel feature `i` over the runs that define it on both
+/// sides (module docs): ratio = RMS of z_r = (measured − simulated)/floor_r;
+/// statistic = RMS error in the feature's unit, floor = statistic / ratio.
+fn feature_check(
+    names: &[String],
+    i: usize,
+    ok: &[(&Pair, Features)],
+    floor_rad_s: f64,
+    threshold: f64,
+    ids: &[String],
+    fail_note: &str,
+) -> ChannelCheck {
+    let name = &names[if i < 2 { i + 1 } else { i + 2 }];
+    let unit = ChannelFeatures::UNITS[i];
+    let needs_both_stick_slip = i == ChannelFeatures::BREAKAWAY || i == ChannelFeatures::STICK_FRACTION;
+    // (run, measured, simulated, floor).
+    let rows: Vec<(&str, f64, f64, f64)> = ok
+        .iter()
+        .filter(|(q, f)| !needs_both_stick_slip || (q.measured.stick_slip() && f.stick_slip()))
+        .filter_map(|(q, _)| {
+            let (m, sim) = (q.channels_measured.values[i], q.channels_simulated?.values[i]);
+            let fl =
+                if i <= ChannelFeatures::ROTOR_MIN { q.floors.values[i].max(floor_rad_s) } else { q.floors.values[i] };
+            (m.is_finite() && sim.is_finite() && fl > 0.0).then_some((q.id.as_str(), m, sim, fl))
+        })
+        .collect();
+    if rows.is_empty() {
+        let why = if needs_both_stick_slip {
+            "no run sticks and slips in both record and simulation"
+        } else {
+            "no run records this channel"
+        };
+        return ChannelCheck::not_testable(name, ids.to_vec(), why.into());
+    }
+    let d: Vec<f64> = rows.iter().map(|r| r.1 - r.2).collect();
+    let z: Vec<f64> = rows.iter().map(|r| (r.1 - r.2) / r.3).collect();
+    let (stat, ratio) = (rms(&d), rms(&z));
+    let noise_floor = if ratio > 0.0 { stat / ratio } else { rms(&rows.iter().map(|r| r.3).collect::<Vec<_>>()) };
+    let bias = d.iter().sum::<f64>() / d.len() as f64;
+    let worst = rows
+        .iter()
+        .zip(&z)
+        .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+        .map(|(r, z)| {
+            format!("{} measured {:.3}, simulated {:.3} {unit} ({z:+.1}× its floor {:.3})", r.0, r.1, r.2, r.3)
+        })
+        .unwrap_or_default();
+    ChannelCheck::new(
+        name,
+        rows.iter().map(|r| r.0.to_string()).collect(),
+        stat,
+        noise_floor,
+        threshold,
+        format!(
+            "measured − simulated over {} runs: RMS {stat:.3} {unit}, mean {bias:+.3} {unit}; worst {worst}{fail_note}",
+            rows.len()
+        ),
+    )
 }

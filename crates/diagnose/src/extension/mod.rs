@@ -1,0 +1,366 @@
+//! The extension of an `unexplained` answer (issue 25, item 6;
+//! ../shared/spec/diagnosis.md, `extension`): the best data-driven friction
+//! term from a library of state and history signals the simulator carries
+//! (rig-model's `extension` module and `Effect::FrictionExtension`), chosen
+//! by sparse forward selection on the cross-validated **free-run** misfit.
+//!
+//! # The library
+//!
+//! | signal | acts on | fitted on |
+//! |---|---|---|
+//! | `slip_speed_rad_s` (\|Ω1\|) | μ in slip | every 5th slip sample: μ_obs/μ̂ − 1 |
+//! | `breakaway_transient` (exp(−t_slip/τ_b), t_slip the time since the rotor last stood) | μ in slip | the same |
+//! | `static_level` (1) | μs at break-away | every break-away: F_peak/(μ̂s·N) − 1 |
+//! | `log_dwell` (ln(1 + t_stick/τ_d), t_stick the length of the stuck stretch) | μs at break-away | the same |
+//!
+//! μ̂ and μ̂s are the final model's (findings and structure, each run with its
+//! own nuisance phases); the records give μ_obs = F/N0 in slip
+//! ([`crate::prepare`]) and, for every stuck stretch (|Ω1| below the slip
+//! speed) that starts and ends inside the run, the peak of the friction force
+//! smoothed over the rotor-speed window. Heat (integrated friction power) and
+//! slid distance would need more simulator states (rig-model's docs); the
+//! teacher-forced residual signature still names them.
+//!
+//! # Fit, selection and gain
+//!
+//! A set of signals is fitted teacher-forced by least squares (the workspace's
+//! solver, no intercept: the signals' coefficients are relative changes of the
+//! model's coefficients) on the training folds, and every held-out run is then
+//! **simulated free** with the model fitted without it; its free-run misfit
+//! ([`crate::channels::free_run_misfit_channels`], every channel) is compared with the
+//! final model's on the same run by the selection's rule (gain ≥ the minimum
+//! and paired run-level t ≥ `min_t`, [`crate::select`]'s comparison). Forward
+//! selection adds the best signal while it passes; the reported extension is
+//! the selected set, or, when no signal passes, the best single signal (its
+//! gain then says it explains nothing). Coefficients are fitted on every run;
+//! their standard errors are the jackknife over the folds (the run, not the
+//! sample, is the independent unit).
+//!
+//! # Cost
+//!
+//! One free-run simulation of every operating point per candidate set: at
+//! most 4 + 3 + 2 + 1 = 10 sets (the library has four signals), each one
+//! rayon-parallel over runs (campaign order kept; deterministic), and the
+//! teacher-forced rows are built once. Only an `unexplained` verdict with a
+//! baseline model pays it.
+
+use crate::channels::{
+    FreeRunPair, FreeRunSettings, free_run_misfit_channels, free_run_pairs_by, speed_floor_rad_s, stuck_stretches,
+    with_run_phases,
+};
+use crate::prepare::RunSignals;
+use crate::result::{Extension, ExtensionTerm, SpeedTraces, StepRow, round_sig};
+use crate::select::compare_folds;
+use rig_model::extension::{BREAKAWAY_TIME_S, DWELL_TIME_S, slip_signals, static_signals};
+use rig_model::friction::{normal_force_n, slip_mu, static_mu};
+use rig_types::sensor::{centred_moving_average, half_window_samples};
+use rig_types::{Campaign, Effect, RigParams};
+use std::collections::BTreeMap;
+
+/// The library's signals, in the order of [`Effect::FrictionExtension`]'s
+/// coefficients; the first two act in slip, the last two at break-away.
+pub const SIGNALS: [&str; 4] = ["slip_speed_rad_s", "breakaway_transient", "static_level", "log_dwell"];
+
+/// Teacher-forced rows of one run: (signals, relative error of the model).
+#[derive(Debug, Default)]
+struct RunRows {
+    slip: Vec<([f64; 2], f64)>,
+    breakaway: Vec<([f64; 2], f64)>,
+}
+
+/// The extension with its selection steps and the free runs of the
+/// reported extension beside the record (held-out: each run simulated with
+/// the coefficients fitted without its fold).
+#[derive(Debug, Clone)]
+pub struct ExtensionResult {
+    pub extension: Extension,
+    pub steps: Vec<StepRow>,
+    pub traces: Vec<SpeedTraces>,
+}
+
+/// What the extension is fitted and simulated from.
+pub struct Inputs<'a> {
+    pub c: &'a Campaign,
+    /// The diagnosis' signals of every operating point (folds, slip samples, μ_obs).
+    pub runs: &'a [RunSignals],
+    /// The final model: baseline + findings + selected structure.
+    pub model: &'a RigParams,
+    /// `model`'s free runs (campaign order).
+    pub before: &'a [FreeRunPair],
+    /// Each run's nuisance phases (θ of the time and angle modulations).
+    pub phases: &'a BTreeMap<String, (f64, f64)>,
+    pub s: &'a FreeRunSettings,
+    pub opts: &'a crate::DiagnoseOptions,
+}
+
+/// Fits, selects and simulates the extension on top of the final model
+/// (module docs). `None` without operating points to fit.
+pub fn extend(x: &Inputs) -> Option<ExtensionResult> {
+    let Inputs { c, runs, model, before, phases, s, opts } = *x;
+    let phase = |id: &str| phases.get(id).copied().unwrap_or_default();
+    let rows: Vec<RunRows> = {
+        use rayon::prelude::*;
+        runs.par_iter().map(|r| run_rows(r, &with_run_phases(model, phase(&r.id)), s)).collect()
+    };
+    let fold_of: BTreeMap<&str, usize> = runs.iter().map(|r| (r.id.as_str(), r.fold)).collect();
+    let folds = runs.iter().map(|r| r.fold + 1).max().unwrap_or(0);
+    let floor = speed_floor_rad_s(c, s);
+    let base: BTreeMap<&str, f64> =
+        before.iter().filter_map(|q| free_run_misfit_channels(q, floor).map(|m| (q.id.as_str(), m))).collect();
+    // Coefficients of a signal set fitted without fold `f` (None: every run).
+    let fit = |set: &[usize], f: Option<usize>| -> Option<[f64; 4]> {
+        let keep = |r: usize| f.is_none_or(|f| runs[r].fold != f);
+        let mut coef = [0.0; 4];
+        for (part, offset) in [(0usize, 0usize), (1, 2)] {
+            let cols: Vec<usize> = set.iter().filter(|&&j| j / 2 == part).map(|&j| j - offset).collect();
+            if cols.is_empty() {
+                continue;
+            }
+            let (mut x, mut y) = (Vec::new(), Vec::new());
+            for (_, rr) in rows.iter().enumerate().filter(|(r, _)| keep(*r)) {
+                for (sig, e) in if part == 0 { &rr.slip } else { &rr.breakaway } {
+                    x.push(cols.iter().map(|&j| sig[j]).collect::<Vec<f64>>());
+                    y.push(*e);
+                }
+            }
+            let b = rig_estimate::linear::ols(&x, &y, "friction extension").ok()?.beta;
+            for (k, &j) in cols.iter().enumerate() {
+                coef[j + offset] = b[k];
+            }
+        }
+        Some(coef)
+    };
+    let with_ext = |coef: [f64; 4], id: &str| {
+        let mut p = model.clone();
+        p.effects.push(Effect::FrictionExtension {
+            slip_speed_per_rad_s: coef[0],
+            breakaway_transient: coef[1],
+            static_level: coef[2],
+            dwell_per_efold: coef[3],
+        });
+        with_run_phases(&p, phase(id))
+    };
+    // Cross-validated free runs of a set and its comparison with the model.
+    let score = |set: &[usize]| {
+        let fits: Vec<Option<[f64; 4]>> = (0..folds).map(|f| fit(set, Some(f))).collect();
+        let pairs = free_run_pairs_by(c, s, |id| {
+            let coef = (*fits.get(*fold_of.get(id)?)?)?;
+            Some(with_ext(coef, id))
+        });
+        let (mut b, mut a, mut fv) = (Vec::new(), Vec::new(), Vec::new());
+        for q in &pairs {
+            if let (Some(x), Some(y)) = (base.get(q.id.as_str()), free_run_misfit_channels(q, floor)) {
+                b.push(*x);
+                a.push(y);
+                fv.push(fold_of[q.id.as_str()]);
+            }
+        }
+        (compare_folds(&b, &a, &fv, folds), pairs, fits)
+    };
+    if folds == 0 || base.is_empty() {
+        return None;
+    }
+    let passes = |g: f64, t: f64| g >= opts.selection.min_relative_gain && t >= opts.min_t;
+    let mut chosen: Vec<usize> = Vec::new();
+    let mut steps = Vec::new();
+    let mut best_single = None;
+    let mut kept = None;
+    for step in 1..=SIGNALS.len() {
+        let mut tried = Vec::new();
+        for j in (0..SIGNALS.len()).filter(|j| !chosen.contains(j)) {
+            let set: Vec<usize> = chosen.iter().copied().chain([j]).collect();
+            let (cmp, pairs, fits) = score(&set);
+            tried.push((j, set, cmp, pairs, fits));
+        }
+        let key = |i: usize| if tried[i].2.gain.is_finite() { tried[i].2.gain } else { f64::NEG_INFINITY };
+        let Some(bi) = (0..tried.len()).max_by(|&a, &b| key(a).total_cmp(&key(b))) else { break };
+        let ok = passes(tried[bi].2.gain, tried[bi].2.t);
+        for (i, (j, _, cmp, _, _)) in tried.iter().enumerate() {
+            steps.push(StepRow {
+                step,
+                effect: SIGNALS[*j].into(),
+                misfit_before: cmp.before,
+                misfit_after: cmp.after,
+                gain: cmp.gain,
+                gain_fold_sd: cmp.gain_fold_sd,
+                t: cmp.t,
+                accepted: i == bi && ok,
+                inadmissible: None,
+            });
+        }
+        let (j, set, cmp, pairs, fits) = tried.swap_remove(bi);
+        if step == 1 {
+            best_single = Some((set.clone(), cmp, pairs.clone(), fits.clone()));
+        }
+        if !ok {
+            break;
+        }
+        chosen.push(j);
+        kept = Some((set, cmp, pairs, fits));
+    }
+    let (set, cmp, pairs, fits) = kept.or(best_single)?;
+    let full = fit(&set, None)?;
+    let terms = set
+        .iter()
+        .map(|&j| {
+            let v: Vec<f64> = fits.iter().flatten().map(|c| c[j]).collect();
+            let k = v.len() as f64;
+            let m = v.iter().sum::<f64>() / k.max(1.0);
+            let se = if v.len() == folds && folds > 1 {
+                ((k - 1.0) / k * v.iter().map(|x| (x - m).powi(2)).sum::<f64>()).sqrt()
+            } else {
+                f64::NAN
+            };
+            ExtensionTerm { signal: SIGNALS[j].into(), coefficient: round_sig(full[j], 4), stderr: round_sig(se, 2) }
+        })
+        .collect();
+    let traces = before
+        .iter()
+        .map(|b| SpeedTraces {
+            id: b.id.clone(),
+            time_s: b.trace.time_s.clone(),
+            measured_rad_s: b.trace.measured_rad_s.clone(),
+            baseline_rad_s: b.trace.simulated_rad_s.clone(),
+            extended_rad_s: pairs.iter().find(|e| e.id == b.id).and_then(|e| e.trace.simulated_rad_s.clone()),
+        })
+        .collect();
+    Some(ExtensionResult {
+        extension: Extension {
+            formula: formula(&set, &full, !chosen.is_empty()),
+            terms,
+            free_run_misfit_before: round_sig(cmp.before, 4),
+            free_run_misfit_after: round_sig(cmp.after, 4),
+            relative_gain: round_sig(cmp.gain, 3),
+            relative_gain_sd: round_sig(cmp.gain_fold_sd, 2),
+        },
+        steps,
+        traces,
+    })
+}
+
+/// The extended law in words and symbols, with the coefficients fitted on every run.
+fn formula(set: &[usize], coef: &[f64; 4], selected: bool) -> String {
+    let has = |j: usize| set.contains(&j);
+    let mut slip = Vec::new();
+    if has(0) {
+        slip.push(format!("{:+.4}·|Ω1|", coef[0]));
+    }
+    if has(1) {
+        slip.push(format!("{:+.4}·exp(−t_slip/{BREAKAWAY_TIME_S} s)", coef[1]));
+    }
+    let mut stat = Vec::new();
+    if has(2) {
+        stat.push(format!("{:+.4}", coef[2]));
+    }
+    if has(3) {
+        stat.push(format!("{:+.4}·ln(1 + t_stick/{DWELL_TIME_S} s)", coef[3]));
+    }
+    let mut parts = Vec::new();
+    if !slip.is_empty() {
+        parts.push(format!("μ = μ_model·(1 {})", slip.join(" ")));
+    }
+    if !stat.is_empty() {
+        parts.push(format!("μs = μs_model·(1 {})", stat.join(" ")));
+    }
+    let note = if selected {
+        "selected on the cross-validated free-run misfit"
+    } else {
+        "the best single signal; it does not pass the selection rule"
+    };
+    format!(
+        "{} (t_slip: time since the rotor last stood, t_stick: time stuck, rad/s for |Ω1|; {note})",
+        parts.join("; ")
+    )
+}
+
+/// The teacher-forced rows of one run against model `p` (its phases set).
+fn run_rows(r: &RunSignals, p: &RigParams, s: &FreeRunSettings) -> RunRows {
+    let mut out = RunRows::default();
+    let n0 = r.normal_force_n;
+    if n0 <= 0.0 || r.time_s.len() < 3 {
+        return out;
+    }
+    let slip = s.slip_speed_rad_s;
+    let n_of = |k: usize| normal_force_n(n0, &p.effects, p.harmonic.as_ref(), r.time_s[k], r.rotor_angle_rad[k]);
+    // Time since the rotor last stood (|Ω1| below the slip speed); the run starts at rest.
+    let mut since = vec![0.0; r.time_s.len()];
+    let mut last = r.time_s[0];
+    for (k, w) in r.rotor_speed_rad_s.iter().enumerate() {
+        if w.abs() < slip {
+            last = r.time_s[k];
+        }
+        since[k] = r.time_s[k] - last;
+    }
+    for (j, &k) in r.slip_idx.iter().enumerate().step_by(5) {
+        let w = r.rotor_speed_rad_s[k].abs();
+        let mu = slip_mu(&p.friction, w) * n_of(k) / n0;
+        if mu.abs() > 1e-9 && j < r.mu_obs.len() {
+            out.slip.push((slip_signals(w, since[k]), r.mu_obs[j] / mu - 1.0));
+        }
+    }
+    let h = half_window_samples(&r.time_s, s.rotor_speed_half_window_s);
+    let force = centred_moving_average(&r.friction_force_n, h);
+    let mu_s = static_mu(&p.friction);
+    for (j, k) in stuck_stretches(&r.rotor_speed_rad_s, slip) {
+        let kp = (j..k).max_by(|&a, &b| force[a].total_cmp(&force[b])).unwrap_or(j);
+        let level = mu_s * n_of(kp);
+        if level > 0.0 {
+            let dwell = r.time_s[k] - r.time_s[j];
+            out.breakaway.push((static_signals(dwell), force[kp] / level - 1.0));
+        }
+    }
+    out
+}
+
+/// Puts the extension into an `unexplained` diagnosis (its finding's
+/// `extension`, the selection steps and the free runs for the report);
+/// nothing for any other verdict. The one call from [`crate::diagnose`].
+pub fn attach(d: &mut crate::Diagnosis, inputs: &Inputs) {
+    if d.verdict != "unexplained" {
+        return;
+    }
+    let Some(x) = extend(inputs) else { return };
+    if let Some(f) = d.findings.iter_mut().find(|f| f.effect == "unexplained") {
+        f.extension = Some(x.extension);
+    }
+    d.detail.extension_steps = x.steps;
+    d.detail.extension_traces = x.traces;
+}
+
+/// Parameters of the vocabulary findings that the extended model
+/// ([`crate::channels::extended_params`]) or the simulator can only use at a
+/// bound (issue 25, item 4: reported, never silently fixed): the viscous
+/// law's break-away coefficient, held at max(μs of the baseline, μk), and a
+/// modulation depth outside [0, 1] (N would change sign; rig-model refuses it).
+pub fn vocabulary_bounds(baseline: &RigParams, findings: &[crate::Finding]) -> Vec<crate::ParamAtBound> {
+    let mut out = Vec::new();
+    let mu_s0 = static_mu(&baseline.friction);
+    for f in findings {
+        let g = |k: &str| f.params.get(k).copied();
+        if f.effect == "viscous_brake_friction"
+            && let Some(mu_k) = g("mu_kinetic").filter(|&m| m > mu_s0)
+        {
+            out.push(crate::ParamAtBound {
+                parameter: "viscous_brake_friction.mu_static".into(),
+                bound: round_sig(mu_k, 4),
+                unconstrained: round_sig(mu_s0, 4),
+                meaning: format!(
+                    "the slip law's μk {mu_k:.4} exceeds the baseline's break-away coefficient μs {mu_s0:.4}; the \
+                     extended model holds μs at μk (no break-away below the slip level): the break-away level is \
+                     not measured by the slip channel, see the free-run breakaway_friction check"
+                ),
+            });
+        }
+        if let Some(a) = g("amplitude_ratio").filter(|a| !(0.0..=1.0).contains(a)) {
+            out.push(crate::ParamAtBound {
+                parameter: format!("{}.amplitude_ratio", f.effect),
+                bound: if a < 0.0 { 0.0 } else { 1.0 },
+                unconstrained: round_sig(a, 4),
+                meaning: "a modulation depth outside [0, 1] makes the normal force change sign: the simulator \
+                          refuses it, so the extended model's free run fails"
+                    .into(),
+            });
+        }
+    }
+    out
+}
