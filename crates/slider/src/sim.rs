@@ -23,6 +23,7 @@
 //!   `one_dof::RateStateAgeing`, μ = μ0 + a ln(v/v*) + b ln(v* θ/Dc),
 //!   dθ/dt = 1 − v θ/Dc, regularised at v = 0 (Rice, Lapusta & Ranjith 2001).
 
+use rig_model::ModelError;
 use rig_model::one_dof::{
     self, Drive, ImplicitFriction, MAX_FRICTION_STATES, OneDofRun, OneDofState, RateStateAgeing, Shaft,
 };
@@ -77,21 +78,23 @@ impl Law {
 /// Spring force over weight at `sample_rate_hz` over `duration_s`, from rest
 /// with the spring preloaded to `initial_force_over_weight` (the drive starts
 /// at t = 0).
-pub fn simulate(law: &Law, s: &Setup) -> Vec<f64> {
+pub fn simulate(law: &Law, s: &Setup) -> Result<Vec<f64>, ModelError> {
     let mut run = OneDofRun::default();
     let mut out = Vec::new();
-    simulate_into(law, s, &mut run, &mut out);
-    out
+    simulate_into(law, s, &mut run, &mut out)?;
+    Ok(out)
 }
 
 /// [`simulate`] into a caller's buffers (a batch's per-thread scratch): the
 /// one_dof run and the force over weight, both overwritten.
-pub fn simulate_into(law: &Law, s: &Setup, run: &mut OneDofRun, out: &mut Vec<f64>) {
+/// An error is one_dof's refusal: a set-up out of range, or a law whose
+/// simulation left the physical range.
+pub fn simulate_into(law: &Law, s: &Setup, run: &mut OneDofRun, out: &mut Vec<f64>) -> Result<(), ModelError> {
     let n_out = (s.duration_s * s.sample_rate_hz).floor() as usize;
     out.clear();
     if n_out < 2 {
         out.extend(std::iter::repeat_n(s.initial_force_over_weight, n_out));
-        return;
+        return Ok(());
     }
     let dt_out = 1.0 / s.sample_rate_hz;
     // An integer number of steps per output sample, at least the requested density.
@@ -112,11 +115,10 @@ pub fn simulate_into(law: &Law, s: &Setup, run: &mut OneDofRun, out: &mut Vec<f6
         ..OneDofState::default()
     };
     let drive = Drive::ConstantSpeed(s.drive_speed_m_s);
-    // The inputs are checked by the caller (positive k, m, rate): a refusal here is a bug.
-    one_dof::simulate_implicit_into(&shaft, &contact, drive, start, s.sample_rate_hz, n_out, sub, run)
-        .expect("a slider set-up with positive mass, stiffness and sample rate");
+    one_dof::simulate_implicit_into(&shaft, &contact, drive, start, s.sample_rate_hz, n_out, sub, run)?;
     let to_fw = s.stiffness_n_m / weight_n;
     out.extend(run.twist_rad.iter().map(|x| to_fw * x));
+    Ok(())
 }
 
 /// A [`Law`] as one_dof's implicit contact, forces in N (μ times the weight).
@@ -195,7 +197,7 @@ mod tests {
         // Undamped Coulomb stick-slip: slip at μs, drop 2(μs − μk) when V ≪ ω Δx,
         // period = stick time 2(μs − μk) m g/(k V) + slip time ≈ T0/2.
         let s = setup(168.0, 42.0, 20.0);
-        let f = simulate(&Law::Coulomb { mu_static: 0.4, mu_kinetic: 0.35 }, &s);
+        let f = simulate(&Law::Coulomb { mu_static: 0.4, mu_kinetic: 0.35 }, &s).unwrap();
         let max = f.iter().cloned().fold(f64::MIN, f64::max);
         assert!((max - 0.4).abs() < 2e-3, "peak {max}");
         let after_first = f.iter().position(|&y| y > 0.399).unwrap() + 200;
