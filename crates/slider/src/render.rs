@@ -38,7 +38,7 @@ fn inertial_note(s: &Study) -> String {
         .runs
         .iter()
         .filter(|r| r.features.regime == Regime::InertialOscillation && r.features.period_s.n > 0)
-        .filter(|r| r.features.period_s.median < r.features.natural_period_s)
+        .filter(|r| r.features.period_s.median < 0.9 * r.features.natural_period_s)
         .map(|r| {
             format!(
                 "{} ({:.4} s = {:.2} T0, frequency {:.2} × 1/T0)",
@@ -53,12 +53,12 @@ fn inertial_note(s: &Study) -> String {
         return String::new();
     }
     format!(
-        "What no candidate here can reach: inertial oscillations faster than the spring and mass allow, at {}. \
+        "What no candidate here can reach: inertial oscillations more than 10 % faster than the spring and mass allow, at {}. \
          An undamped Coulomb cycle lasts T0 (1 − atan(r)/π) + 2r/ω ≥ T0 = 2π√(m/k) (a slip from rest, r = ω(μs − μk) m g/(k V), \
          then a stick of 2r/ω), and linearised about steady sliding rate and state adds damping (N a iω/V) and a negative \
          stiffness (−N b ω² Dc/(V² + ω² Dc²); Rice & Ruina 1983's linear analysis, ageing law) to the spring: no friction law on \
-         one mass m = {} kg and one spring k oscillates faster than 1/T0. A frequency ratio that is the same at two stiffnesses \
-         13 × apart points at the set-up, not at the friction: an effective mass about 1/ratio² of the stated one, or springs \
+         one mass m = {} kg and one spring k oscillates faster than 1/T0. A frequency ratio about the same at both stiffnesses \
+         (13 × apart) points at the set-up, not at the friction: an effective mass about 1/ratio² of the stated one, or springs \
          stiffer than stated by ratio², which one run per (k, V) cannot tell apart. The ±15 % bound on the inertial period is \
          unreachable for every candidate while m and k are the README's.\n",
         fast.join(", "),
