@@ -523,7 +523,7 @@ pub fn ageing_law_step(theta_s: f64, v: f64, h_s: f64, dc: f64) -> f64 {
 ///
 /// the equation of the module docs. The linear oscillator keeps its energy
 /// on average (no numerical damping of an undamped oscillation; period
-/// error (ωh)²/24, 0.2 % at 100 steps per natural period). Starts from
+/// error (ωh)²/24, 0.016 % at 100 steps per natural period). Starts from
 /// `start` (its `friction_state` as given: see
 /// [`ImplicitFriction::initial_state`]); `substeps` steps per sample.
 #[allow(clippy::too_many_arguments)]

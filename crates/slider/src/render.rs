@@ -585,6 +585,35 @@ fn markdown(s: &Study) -> String {
                 extension(s).fitted.candidate.id(),
                 extension(s).heldout_mean
             );
+            // Where each memory law loses to the baseline, run by run (held out).
+            for c in s.candidates.iter().skip(1) {
+                let worse: Vec<String> = c
+                    .heldout
+                    .iter()
+                    .zip(&s.candidates[0].heldout)
+                    .filter(|(h, b)| h.1 > b.1)
+                    .map(|(h, b)| {
+                        format!(
+                            "{} {:.2} vs {:.2} ({})",
+                            s.runs[h.0].name,
+                            h.1,
+                            b.1,
+                            if h.2.regime == s.runs[h.0].features.regime {
+                                "regime right".to_string()
+                            } else {
+                                format!("predicts {}", h.2.regime.label())
+                            }
+                        )
+                    })
+                    .collect();
+                let _ = writeln!(
+                    md,
+                    "- {} is worse than Coulomb held out at: {}.",
+                    c.fitted.candidate.id(),
+                    if worse.is_empty() { "no run".to_string() } else { worse.join("; ") }
+                );
+            }
+            let _ = writeln!(md);
         }
     }
     let _ = writeln!(

@@ -10,7 +10,7 @@
 //! [`Law`]'s; each maps onto one_dof's implicit contact
 //! ([`one_dof::ImplicitFriction`]: Moreau's time stepping, friction implicit
 //! in the new speed, symplectic Euler for the oscillator, period error
-//! (ωh)²/24, 0.2 % at 100 steps per natural period; a stiff law, rate and
+//! (ωh)²/24, 0.07 % at 50 steps per natural period; a stiff law, rate and
 //! state at creep speeds with m g a/(m v) ≈ 10⁸ s⁻¹, stays stable).
 //! - Coulomb: stick (v⁺ = 0) while the spring force stays within μs m g,
 //!   slip at μk m g, sticking again when v⁺ would change sign
