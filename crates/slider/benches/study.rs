@@ -23,5 +23,10 @@ fn study(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, study);
+// No plots: criterion's PDF/SVG plotter needs a system font this machine may lack.
+criterion_group! {
+    name = benches;
+    config = Criterion::default().without_plots();
+    targets = study
+}
 criterion_main!(benches);
