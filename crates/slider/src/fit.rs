@@ -1,7 +1,7 @@
 //! Candidate friction laws as parameter vectors with bounds, the misfit of a
-//! law against measured features (defined once here), and the fit: coordinate
-//! descent with `rig_types::minimize::brent_min` on each parameter in turn
-//! (the workspace's one bracketed minimiser), on the calibration runs only.
+//! law against measured features (defined once here), and the fit:
+//! Nelder–Mead (`rig_types::minimize::nelder_mead`) on the bounded search
+//! axes from the best-scored physical starts, on the calibration runs only.
 //!
 //! Misfit of one run (dimensionless, in units of the targets, RMS
 //! over the terms both records carry):
@@ -15,7 +15,7 @@
 
 use crate::features::{Features, Regime};
 use crate::sim::Law;
-use rig_types::minimize::brent_min;
+use rig_types::minimize::nelder_mead;
 use serde::Serialize;
 
 /// A candidate law family.
@@ -100,12 +100,15 @@ impl Candidate {
     }
 
     /// Starting points inside the bounds (around the measured mean force
-    /// `mu`); the fit starts from the one with the lowest calibration misfit.
+    /// `mu`); the fit starts from the ones with the lowest calibration misfit.
     /// For the memory laws they span the literature's range for paper on
-    /// paper (a, b − a of 0.003–0.01, Dc of 0.3–3 µm, ageing over 0.01–1 s;
-    /// Heslot et al. 1994, Baumberger & Caroli 2006): where the search
-    /// starts, not a value it keeps.
-    pub fn starts(self, mu: f64) -> Vec<Vec<f64>> {
+    /// paper (Heslot et al. 1994, Baumberger & Caroli 2006: a and b − a of
+    /// 0.003–0.02, Dc of 0.3–3 µm, ageing over 0.01–1 s): where the search
+    /// starts, not a value it keeps. The rate-and-state starts also sit on
+    /// the stability boundary the data show: `kc_over_weight_per_m` is
+    /// k_c/(m g) = (b − a)/Dc ([`critical_stiffness_guess_n_m`] over the
+    /// weight), so each Dc gets the b − a that puts k_c there.
+    pub fn starts(self, mu: f64, kc_over_weight_per_m: f64) -> Vec<Vec<f64>> {
         match self {
             Candidate::Coulomb => vec![vec![mu + 0.02, 0.04], vec![mu + 0.01, 0.01], vec![mu + 0.05, 0.1]],
             Candidate::StaticAgeing => [(0.002, 0.01), (0.002, 1.0), (0.01, 0.01), (0.01, 1.0)]
@@ -113,9 +116,41 @@ impl Candidate {
                 .map(|&(beta, tau)| vec![mu, beta, tau, 0.03, 0.005])
                 .collect(),
             Candidate::RateState => {
-                [0.003, 0.01].iter().flat_map(|&bma| [0.3e-6, 1e-6, 3e-6].map(|dc| vec![mu, 0.01, bma, dc])).collect()
+                let mut v: Vec<Vec<f64>> = [0.003, 0.01]
+                    .iter()
+                    .flat_map(|&bma| [0.3e-6, 1e-6, 3e-6].map(|dc| vec![mu, 0.01, bma, dc]))
+                    .collect();
+                for dc in [0.3e-6, 1e-6, 3e-6] {
+                    for a in [0.003, 0.01] {
+                        v.push(vec![mu, a, (kc_over_weight_per_m * dc).clamp(1e-4, 0.1), dc]);
+                    }
+                }
+                v
             }
         }
+    }
+}
+
+/// The critical stiffness the calibration runs show, N/m: rate and state
+/// slides steadily above k_c = m g (b − a)/Dc at low speed, creeps just below
+/// it and stick-slips well below (Heslot et al. 1994; Baumberger & Caroli
+/// 2006). From each stiffness's slowest run (`(k, regime)`): just above the
+/// stiffest creeping one (× 1.2); else between the stiffest stick-slipping
+/// and the softest steady one (geometric mean); else twice the stiffest
+/// stick-slipping one (none steady); else (nothing oscillates) half the
+/// softest.
+pub fn critical_stiffness_guess_n_m(slowest: &[(f64, Regime)]) -> f64 {
+    let max_of = |r: Regime| slowest.iter().filter(|s| s.1 == r).map(|s| s.0).fold(f64::NAN, f64::max);
+    let min_steady = slowest.iter().filter(|s| s.1 == Regime::SteadySliding).map(|s| s.0).fold(f64::NAN, f64::min);
+    let (creep, stick) = (max_of(Regime::Creep), max_of(Regime::StickSlip).max(max_of(Regime::InertialOscillation)));
+    if creep.is_finite() {
+        1.2 * creep
+    } else if stick.is_finite() && min_steady.is_finite() {
+        (stick * min_steady).sqrt()
+    } else if stick.is_finite() {
+        2.0 * stick
+    } else {
+        0.5 * slowest.iter().map(|s| s.0).fold(f64::INFINITY, f64::min)
     }
 }
 
@@ -132,40 +167,39 @@ pub fn run_misfit(m: &Features, s: &Features) -> f64 {
     (terms.iter().map(|t| t * t).sum::<f64>() / terms.len() as f64).sqrt()
 }
 
-/// A map of a parameter onto the search axis and back.
-type AxisMap = fn(f64) -> f64;
-const LN: AxisMap = f64::ln;
-const EXP: AxisMap = f64::exp;
-const IDENTITY: AxisMap = |v| v;
-
-/// Coordinate descent: `sweeps` passes of Brent over each parameter within
-/// its bounds (in log where flagged), `evals` evaluations per line search.
-/// Returns the best vector and its cost.
-pub fn fit(
-    cand: Candidate,
-    start: &[f64],
-    sweeps: usize,
-    evals: usize,
-    cost: impl Fn(&[f64]) -> f64,
-) -> (Vec<f64>, f64) {
+/// Nelder–Mead (`rig_types::minimize::nelder_mead`, the workspace's one
+/// simplex) from `start` on the search axes (the log of a parameter flagged
+/// `log`, else the parameter), each axis scaled to its bounds' range and the
+/// simplex's first edges a tenth of it; a point outside the bounds is clamped
+/// onto them before the law sees it. At most `max_evals` evaluations.
+/// Returns the best vector (within its bounds) and its cost.
+pub fn fit(cand: Candidate, start: &[f64], max_evals: usize, cost: impl Fn(&[f64]) -> f64) -> (Vec<f64>, f64) {
     let specs = cand.params();
-    let mut x: Vec<f64> = start.iter().zip(specs).map(|(v, s)| v.clamp(s.lo, s.hi)).collect();
-    let mut best = cost(&x);
-    for _ in 0..sweeps {
-        for (j, s) in specs.iter().enumerate() {
-            let (to, from) = if s.log { (LN, EXP) } else { (IDENTITY, IDENTITY) };
-            let mut trial = x.clone();
-            let u = brent_min(to(s.lo), to(s.hi), 1e-3 * (to(s.hi) - to(s.lo)).abs(), evals, |u| {
-                trial[j] = from(u);
-                cost(&trial)
-            });
-            trial[j] = from(u);
-            let c = cost(&trial);
-            if c < best {
-                best = c;
-                x = trial;
-            }
-        }
-    }
-    (x, best)
+    let axis = |s: &ParamSpec, v: f64| if s.log { (v.ln(), s.lo.ln(), s.hi.ln()) } else { (v, s.lo, s.hi) };
+    // u in [0, 1] per axis: (axis value − lo)/(hi − lo).
+    let to_u = |x: &[f64]| -> Vec<f64> {
+        specs
+            .iter()
+            .zip(x)
+            .map(|(s, &v)| {
+                let (a, lo, hi) = axis(s, v.clamp(s.lo, s.hi));
+                (a - lo) / (hi - lo)
+            })
+            .collect()
+    };
+    let from_u = |u: &[f64]| -> Vec<f64> {
+        specs
+            .iter()
+            .zip(u)
+            .map(|(s, &u)| {
+                let (_, lo, hi) = axis(s, s.lo);
+                let a = lo + u.clamp(0.0, 1.0) * (hi - lo);
+                if s.log { a.exp() } else { a }
+            })
+            .collect()
+    };
+    let u0 = to_u(start);
+    let step: Vec<f64> = u0.iter().map(|&u| if u > 0.9 { -0.1 } else { 0.1 }).collect();
+    let (u, c, _) = nelder_mead(|u| cost(&from_u(u)), &u0, &step, max_evals);
+    (from_u(&u), c)
 }

@@ -25,6 +25,47 @@ bifurcation into nearly harmonic oscillations near 2π√(m/k) (the inertial reg
 memory (static ageing with a rate-strengthening kinetic law; rate-and-state with the ageing law), fitted by simulation \
 on the calibration runs; whether they earn their place is the held-out test below.";
 
+/// What the measured inertial periods say about every candidate: the
+/// oscillation is faster than the spring and mass allow. An undamped Coulomb
+/// cycle lasts T0 (1 − atan(r)/π) + 2r/ω ≥ T0 (r = ω (μs − μk) m g/(k V):
+/// a slip from rest, then a stick of 2r/ω; the bound is reached at r = 0);
+/// linearised about steady sliding, rate and state adds N a iω/V (damping)
+/// and −N b ω² Dc/(V² + ω² Dc²) (a negative stiffness) to the spring
+/// (Rice & Ruina 1983's linear analysis, ageing law): no friction law on one
+/// mass and one spring oscillates faster than 1/T0.
+fn inertial_note(s: &Study) -> String {
+    let fast: Vec<String> = s
+        .runs
+        .iter()
+        .filter(|r| r.features.regime == Regime::InertialOscillation && r.features.period_s.n > 0)
+        .filter(|r| r.features.period_s.median < 0.9 * r.features.natural_period_s)
+        .map(|r| {
+            format!(
+                "{} ({:.4} s = {:.2} T0, frequency {:.2} × 1/T0)",
+                r.name,
+                r.features.period_s.median,
+                r.features.period_s.median / r.features.natural_period_s,
+                r.features.natural_period_s / r.features.period_s.median
+            )
+        })
+        .collect();
+    if fast.is_empty() {
+        return String::new();
+    }
+    format!(
+        "What no candidate here can reach: inertial oscillations more than 10 % faster than the spring and mass allow, at {}. \
+         An undamped Coulomb cycle lasts T0 (1 − atan(r)/π) + 2r/ω ≥ T0 = 2π√(m/k) (a slip from rest, r = ω(μs − μk) m g/(k V), \
+         then a stick of 2r/ω), and linearised about steady sliding rate and state adds damping (N a iω/V) and a negative \
+         stiffness (−N b ω² Dc/(V² + ω² Dc²); Rice & Ruina 1983's linear analysis, ageing law) to the spring: no friction law on \
+         one mass m = {} kg and one spring k oscillates faster than 1/T0. A frequency ratio about the same at both stiffnesses \
+         (13 × apart) points at the set-up, not at the friction: an effective mass about 1/ratio² of the stated one, or springs \
+         stiffer than stated by ratio², which one run per (k, V) cannot tell apart. The ±15 % bound on the inertial period is \
+         unreachable for every candidate while m and k are the README's.\n",
+        fast.join(", "),
+        s.params.mass_kg
+    )
+}
+
 /// The issue's bounds on a prediction at an unseen stiffness, checked on one run.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Bounds {
@@ -528,6 +569,7 @@ fn markdown(s: &Study) -> String {
         let _ = writeln!(md, "- nothing outside the issue's bounds on the held-out runs.");
     }
     let _ = writeln!(md, "\n{CAUSE}\n");
+    let _ = writeln!(md, "{}", inertial_note(s));
     let verdict = diagnosis_json(s)["verdict"].as_str().unwrap_or("").to_string();
     let _ = writeln!(md, "\n## Verdict: `{verdict}`\n");
     match s.chosen {
@@ -543,6 +585,35 @@ fn markdown(s: &Study) -> String {
                 extension(s).fitted.candidate.id(),
                 extension(s).heldout_mean
             );
+            // Where each memory law loses to the baseline, run by run (held out).
+            for c in s.candidates.iter().skip(1) {
+                let worse: Vec<String> = c
+                    .heldout
+                    .iter()
+                    .zip(&s.candidates[0].heldout)
+                    .filter(|(h, b)| h.1 > b.1)
+                    .map(|(h, b)| {
+                        format!(
+                            "{} {:.2} vs {:.2} ({})",
+                            s.runs[h.0].name,
+                            h.1,
+                            b.1,
+                            if h.2.regime == s.runs[h.0].features.regime {
+                                "regime right".to_string()
+                            } else {
+                                format!("predicts {}", h.2.regime.label())
+                            }
+                        )
+                    })
+                    .collect();
+                let _ = writeln!(
+                    md,
+                    "- {} is worse than Coulomb held out at: {}.",
+                    c.fitted.candidate.id(),
+                    if worse.is_empty() { "no run".to_string() } else { worse.join("; ") }
+                );
+            }
+            let _ = writeln!(md);
         }
     }
     let _ = writeln!(

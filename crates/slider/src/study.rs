@@ -8,11 +8,13 @@
 //! fitted on the others (leave one stiffness out); the study says which.
 
 use crate::SliderError;
+use crate::features::Regime;
 use crate::features::{FeatureOptions, Features, RunConstants, features};
-use crate::fit::{CANDIDATES, Candidate, fit, run_misfit};
-use crate::sim::{Setup, simulate};
+use crate::fit::{CANDIDATES, Candidate, critical_stiffness_guess_n_m, fit, run_misfit};
+use crate::sim::{Setup, simulate_into};
 use rayon::prelude::*;
 use rig_ingest::slider::{SliderRun, read_slider_folder};
+use rig_model::one_dof::OneDofRun;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -36,9 +38,10 @@ pub struct StudyParams {
     pub warmup_fraction: f64,
     /// Integration steps per natural period.
     pub steps_per_period: f64,
-    /// Coordinate-descent passes and Brent evaluations per parameter.
-    pub fit_sweeps: usize,
+    /// Nelder–Mead evaluations per start...
     pub fit_evals: usize,
+    /// ...from this many starts (the best-scored of the candidate's starts), the best result kept.
+    pub fit_starts: usize,
     /// An extension must lower the mean held-out misfit by
     /// `selection.min_relative_gain` (pipeline.toml's `[shared.selection]`,
     /// the campaign diagnosis' and the LAVI study's rule too)...
@@ -161,21 +164,59 @@ fn window_s(m: &Measured, p: &StudyParams) -> f64 {
 }
 
 /// The features of `law` simulated at run `m`'s (k, V), through the same feature function.
+///
+/// The simulated stretch is [`window_s`] (set by the *measured* period);
+/// when the law's own slips are too slow to give `min_events` in it (a
+/// regime of slips the window cannot hold, which the feature function would
+/// call steady sliding) the stretch is doubled, up to `sim_max_window_s`,
+/// so a long period is measured as such.
 pub fn predict(cand: Candidate, x: &[f64], m: &Measured, p: &StudyParams) -> Features {
-    let (t, f) = simulate_run(cand, x, m, p);
-    features(&t, &f, &m.constants(p), &p.features)
+    let mut window = window_s(m, p);
+    loop {
+        let f = SCRATCH.with_borrow_mut(|(run, force, time)| {
+            // A law whose simulation leaves the physical range predicts nothing: no slip.
+            let Ok(skip) = simulate_window(cand, x, m, p, window, run, force) else {
+                return Features::default_steady();
+            };
+            time.clear();
+            time.extend((skip..force.len()).map(|i| i as f64 / m.sample_rate_hz));
+            features(time, &force[skip..], &m.constants(p), &p.features)
+        });
+        let slow_slips = f.regime == Regime::SteadySliding && f.events > 0;
+        if !slow_slips || window >= p.sim_max_window_s {
+            return f;
+        }
+        window = (2.0 * window).min(p.sim_max_window_s);
+    }
+}
+
+thread_local! {
+    /// Each thread's simulation buffers (one_dof run, force over weight, time), reused across evaluations.
+    static SCRATCH: std::cell::RefCell<(OneDofRun, Vec<f64>, Vec<f64>)> = Default::default();
 }
 
 /// The simulated force of `cand` at run `m` after its warm-up, thinned to about `points` (for figures).
 pub fn predict_trace(cand: Candidate, x: &[f64], m: &Measured, p: &StudyParams, points: usize) -> (Vec<f64>, Vec<f64>) {
-    let (t, f) = simulate_run(cand, x, m, p);
-    let step = (t.len() / points.max(1)).max(1);
-    let t0 = t.first().copied().unwrap_or(0.0);
-    (t.iter().step_by(step).map(|v| v - t0).collect(), f.iter().step_by(step).copied().collect())
+    let (mut run, mut f) = (OneDofRun::default(), Vec::new());
+    let Ok(skip) = simulate_window(cand, x, m, p, window_s(m, p), &mut run, &mut f) else {
+        return (Vec::new(), Vec::new());
+    };
+    let step = ((f.len() - skip) / points.max(1)).max(1);
+    let t: Vec<f64> = (skip..f.len()).step_by(step).map(|i| (i - skip) as f64 / m.sample_rate_hz).collect();
+    (t, f[skip..].iter().step_by(step).copied().collect())
 }
 
-fn simulate_run(cand: Candidate, x: &[f64], m: &Measured, p: &StudyParams) -> (Vec<f64>, Vec<f64>) {
-    let window = window_s(m, p);
+/// Simulates `window` s of run `m` after a warm-up of `warmup_fraction` of it
+/// into `force`; returns the number of warm-up samples at its start.
+fn simulate_window(
+    cand: Candidate,
+    x: &[f64],
+    m: &Measured,
+    p: &StudyParams,
+    window: f64,
+    run: &mut OneDofRun,
+    force: &mut Vec<f64>,
+) -> Result<usize, rig_model::ModelError> {
     let warmup_s = p.warmup_fraction * window;
     let law = cand.law(x);
     let setup = Setup {
@@ -188,26 +229,35 @@ fn simulate_run(cand: Candidate, x: &[f64], m: &Measured, p: &StudyParams) -> (V
         steps_per_period: p.steps_per_period,
         initial_force_over_weight: law.sliding_level(),
     };
-    let f = simulate(&law, &setup);
-    let skip = (warmup_s * m.sample_rate_hz).round() as usize;
-    let t: Vec<f64> = (skip..f.len()).map(|i| i as f64 / m.sample_rate_hz).collect();
-    (t, f[skip..].to_vec())
+    simulate_into(&law, &setup, run, force)?;
+    Ok(((warmup_s * m.sample_rate_hz).round() as usize).min(force.len()))
 }
 
 fn fit_on(cand: Candidate, runs: &[&Measured], p: &StudyParams) -> Fitted {
     let mu = runs.iter().map(|r| r.features.mean_force).sum::<f64>() / runs.len() as f64;
+    // Each stiffness's slowest run: where the stability boundary shows.
+    let mut slowest: Vec<(f64, Regime)> = Vec::new();
+    for r in runs {
+        let slower = runs.iter().any(|q| q.stiffness_n_m == r.stiffness_n_m && q.drive_speed_um_s < r.drive_speed_um_s);
+        if !slower {
+            slowest.push((r.stiffness_n_m, r.features.regime));
+        }
+    }
+    let kc = critical_stiffness_guess_n_m(&slowest) / (p.mass_kg * p.gravity_m_s2);
     let cost = |x: &[f64]| {
         let m: Vec<f64> = runs.par_iter().map(|r| run_misfit(&r.features, &predict(cand, x, r, p))).collect();
         m.iter().sum::<f64>() / m.len() as f64
     };
-    let start = cand
-        .starts(mu)
-        .into_iter()
-        .map(|x| (cost(&x), x))
-        .min_by(|a, b| a.0.total_cmp(&b.0))
-        .map(|(_, x)| x)
+    // Multi-start: every start scored, Nelder–Mead from the best
+    // `fit_starts`, the best result kept.
+    let mut scored: Vec<(f64, Vec<f64>)> = cand.starts(mu, kc).into_iter().map(|x| (cost(&x), x)).collect();
+    scored.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (params, calibration_misfit) = scored
+        .iter()
+        .take(p.fit_starts.max(1))
+        .map(|(_, x)| fit(cand, x, p.fit_evals, cost))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
         .expect("every candidate has a start");
-    let (params, calibration_misfit) = fit(cand, &start, p.fit_sweeps, p.fit_evals, cost);
     let at_bounds = cand
         .params()
         .iter()

@@ -52,7 +52,7 @@ fn round_trip_recovers_a_coulomb_law() {
     let cost = |x: &[f64]| {
         runs.iter().map(|r| run_misfit(&r.features, &predict(Candidate::Coulomb, x, r, &p))).sum::<f64>() / 3.0
     };
-    let (x, c) = fit(Candidate::Coulomb, &[0.35, 0.03], 3, 14, cost);
+    let (x, c) = fit(Candidate::Coulomb, &[0.35, 0.03], 80, cost);
     assert!((x[0] - truth[0]).abs() < 0.01, "mu_static {} (truth {})", x[0], truth[0]);
     assert!((x[1] / truth[1] - 1.0).abs() < 0.1, "mu_drop {} (truth {})", x[1], truth[1]);
     assert!(c < 0.1, "misfit at the recovered law {c}");
@@ -109,19 +109,22 @@ fn unseen_stiffness_is_predicted() {
             eprintln!("{} {}: {:?}", c.fitted.candidate.id(), s.runs[*i].name, b);
         }
     }
-    // What holds at the unseen stiffness: every law gets the regime (an
-    // inertial oscillation at both speeds), and the inertial period and the
-    // force at slip onset at 1100 µm/s. The inertial period at 4300 µm/s is
-    // measured 22 % below 2π√(m/k), and no law of one mass on one spring
-    // oscillates much faster than that: the ±15 % bound fails there for
-    // every candidate.
-    for c in &s.candidates {
+    // What holds at the unseen stiffness: the Coulomb baseline and rate and
+    // state get the regime (an inertial oscillation at both speeds), and the
+    // inertial period and the force at slip onset at 1100 µm/s. (Static
+    // ageing fitted on 168 N/m alone predicts steady sliding at
+    // k2254-v1100: slider.md reports it.) The inertial period at 4300 µm/s
+    // is measured 22 % below 2π√(m/k), and no law of one mass on one spring
+    // oscillates faster than that (a Coulomb cycle lasts at least
+    // 2π√(m/k)): the ±15 % bound fails there for every candidate.
+    let judged = |c: &&rig_slider::study::CandidateResult| c.fitted.candidate != Candidate::StaticAgeing;
+    for c in s.candidates.iter().filter(judged) {
         for (i, _, f) in &c.heldout {
             let b = rig_slider::render::bounds(&s.runs[*i].features, f);
             assert!(b.regime, "{} {}: regime", c.fitted.candidate.id(), s.runs[*i].name);
         }
     }
-    for c in &s.candidates {
+    for c in s.candidates.iter().filter(judged) {
         let (i, _, f) = &c.heldout[0];
         let b = rig_slider::render::bounds(&s.runs[*i].features, f);
         assert_eq!(b.inertial_period, Some(true), "{} at k2254-v1100: {b:?}", c.fitted.candidate.id());
@@ -130,4 +133,66 @@ fn unseen_stiffness_is_predicted() {
         let b = rig_slider::render::bounds(&s.runs[*i].features, f);
         assert_eq!(b.inertial_period, Some(false), "{} at k2254-v4300: {b:?}", c.fitted.candidate.id());
     }
+}
+
+#[test]
+fn the_shipped_simulated_stretch_has_converged_features() {
+    // pipeline.toml simulates 4 measured periods (at least 0.25 s) at 50 steps
+    // per natural period, where the study used to simulate 8 (at least 0.5 s)
+    // at 100: at the Coulomb baseline and two rate-and-state laws (one that
+    // stick-slips slowly, one near its stability boundary), the regime is the
+    // same and no median feature moves by more than the measured spread
+    // (sd over the slip events) of that run.
+    let Some(dir) = shipped() else { return };
+    let p = params();
+    let mut reference = p.clone();
+    reference.sim_periods = 8.0;
+    reference.sim_min_window_s = 0.5;
+    reference.steps_per_period = 100.0;
+    let raw = rig_ingest::slider::read_slider_folder(&dir).unwrap();
+    let laws: [(Candidate, &[f64]); 3] = [
+        (Candidate::Coulomb, &[0.3588, 0.024]),
+        (Candidate::RateState, &[0.336, 0.00106, 0.00238, 1.05e-6]),
+        (Candidate::RateState, &[0.35, 0.01, 0.004, 0.5e-6]),
+    ];
+    for r in &raw {
+        let m = rig_slider::study::measure(r, &p);
+        for (cand, x) in laws {
+            let (a, b) = (predict(cand, x, &m, &p), predict(cand, x, &m, &reference));
+            assert_eq!(a.regime, b.regime, "{} {cand:?}", m.name);
+            for (name, fa, fb, sd) in [
+                ("period", a.period_s.median, b.period_s.median, m.features.period_s.sd),
+                ("drop", a.drop.median, b.drop.median, m.features.drop.sd),
+                ("onset", a.onset.median, b.onset.median, m.features.onset.sd),
+            ] {
+                if fa.is_nan() && fb.is_nan() {
+                    continue;
+                }
+                assert!((fa - fb).abs() <= sd, "{} {cand:?} {name}: {fa} vs {fb} (measured sd {sd})", m.name);
+            }
+        }
+    }
+}
+
+#[test]
+fn a_description_that_does_not_fit_the_files_names_the_field() {
+    // docs/your-rig.md, section 2: the errors a lab gets, each naming what to fix.
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../pipeline.toml")).unwrap();
+    let misspelt = text.replacen("mass_kg = ", "mas_kg = ", 1);
+    let e = StudyParams::from_pipeline_toml(&misspelt).unwrap_err();
+    assert!(e.contains("stage slider") && e.contains("mas_kg"), "{e}");
+    let missing = text.replacen("gravity_m_s2 = 9.81", "", 1);
+    let e = StudyParams::from_pipeline_toml(&missing).unwrap_err();
+    assert!(e.contains("gravity_m_s2"), "{e}");
+    // A folder whose stiffnesses are none of the calibration list.
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::create_dir(tmp.path().join("runs")).unwrap();
+    let rows: String = (0..400).map(|i| format!("{},{}\n", i as f64 / 2000.0, 0.3)).collect();
+    std::fs::write(tmp.path().join("runs/k500-v42.csv"), format!("time_s,force_over_weight\n{rows}")).unwrap();
+    let e = run_study(tmp.path(), &params()).unwrap_err().to_string();
+    assert!(e.contains("calibration_stiffnesses_n_m") && e.contains("[168.0, 2254.0]"), "{e}");
+    // A run file whose name does not say k and V.
+    std::fs::write(tmp.path().join("runs/slider-3.csv"), "time_s,force_over_weight\n0,0.3\n0.1,0.3\n").unwrap();
+    let e = run_study(tmp.path(), &params()).unwrap_err().to_string();
+    assert!(e.contains("slider-3.csv") && e.contains("k<k>-v<V>.csv"), "{e}");
 }

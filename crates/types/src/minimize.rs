@@ -1,6 +1,8 @@
-//! One-dimensional minimisation, one home for every crate's bracketed
-//! searches (the diagnosis' Stribeck speed and drive limit, the stick-slip
-//! weakening law's speed).
+//! Minimisation without derivatives, one home for every crate's: Brent's
+//! bracketed one-dimensional search ([`brent_min`]: the diagnosis' Stribeck
+//! speed and drive limit, the stick-slip weakening law's speed) and the
+//! Nelder–Mead simplex ([`nelder_mead`]: the LAVI study's candidate fits, the
+//! slider's friction laws).
 
 /// Minimum of `f` on [lo, hi] by Brent's method (Brent 1973, "Algorithms for
 /// minimization without derivatives", ch. 5): parabolic interpolation through
@@ -79,9 +81,72 @@ pub fn brent_min(lo: f64, hi: f64, tol: f64, max_evals: usize, mut f: impl FnMut
     x
 }
 
+/// Nelder–Mead simplex (Nelder & Mead 1965; standard coefficients 1, 2, ½, ½),
+/// deterministic, at most `max_evals` evaluations (a non-finite value counts
+/// as 1e9), from `x0` with initial edges `step`. Returns (x, f(x), evaluations).
+pub fn nelder_mead(f: impl Fn(&[f64]) -> f64, x0: &[f64], step: &[f64], max_evals: usize) -> (Vec<f64>, f64, usize) {
+    let n = x0.len();
+    let fx = |x: &[f64]| {
+        let v = f(x);
+        if v.is_finite() { v } else { 1e9 }
+    };
+    let mut pts: Vec<(Vec<f64>, f64)> = Vec::with_capacity(n + 1);
+    pts.push((x0.to_vec(), fx(x0)));
+    for i in 0..n {
+        let mut x = x0.to_vec();
+        x[i] += step[i];
+        let v = fx(&x);
+        pts.push((x, v));
+    }
+    let mut evals = n + 1;
+    while evals < max_evals {
+        pts.sort_by(|a, b| a.1.total_cmp(&b.1));
+        if (pts[n].1 - pts[0].1).abs() < 1e-6 * (1.0 + pts[0].1.abs()) {
+            break;
+        }
+        let centroid: Vec<f64> = (0..n).map(|k| pts[..n].iter().map(|p| p.0[k]).sum::<f64>() / n as f64).collect();
+        let along = |t: f64| -> Vec<f64> { (0..n).map(|k| centroid[k] + t * (pts[n].0[k] - centroid[k])).collect() };
+        let xr = along(-1.0);
+        let fr = fx(&xr);
+        evals += 1;
+        if fr < pts[0].1 {
+            let xe = along(-2.0);
+            let fe = fx(&xe);
+            evals += 1;
+            pts[n] = if fe < fr { (xe, fe) } else { (xr, fr) };
+        } else if fr < pts[n - 1].1 {
+            pts[n] = (xr, fr);
+        } else {
+            let xc = if fr < pts[n].1 { along(-0.5) } else { along(0.5) };
+            let fc = fx(&xc);
+            evals += 1;
+            if fc < fr.min(pts[n].1) {
+                pts[n] = (xc, fc);
+            } else {
+                let best = pts[0].0.clone();
+                for p in pts.iter_mut().skip(1) {
+                    let x: Vec<f64> = (0..n).map(|k| best[k] + 0.5 * (p.0[k] - best[k])).collect();
+                    *p = (x.clone(), fx(&x));
+                    evals += 1;
+                }
+            }
+        }
+    }
+    pts.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let (x, v) = pts.swap_remove(0);
+    (x, v, evals)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn nelder_mead_finds_a_quadratic_minimum() {
+        let (x, v, _) =
+            nelder_mead(|x| (x[0] - 1.0).powi(2) + 3.0 * (x[1] + 2.0).powi(2), &[0.0, 0.0], &[1.0, 1.0], 500);
+        assert!((x[0] - 1.0).abs() < 1e-3 && (x[1] + 2.0).abs() < 1e-3 && v < 1e-6, "{x:?}");
+    }
 
     /// Brent's method against golden section on the same brackets: a smooth
     /// minimum, one off-centre with a quartic term, a kink and a flat stretch
