@@ -162,13 +162,7 @@ fn free_run_right_models() {
     let n: u64 = std::env::var("RIGHT").ok().and_then(|s| s.parse().ok()).unwrap_or(4);
     let th = thesis();
     let o = opts();
-    let classes = [
-        "normal_force_modulation",
-        "angle_periodic_friction",
-        "velocity_weakening_friction",
-        "viscous_brake_friction",
-        "drive_voltage_limit",
-    ];
+    let classes = rig_virtual_rig::ids::VOCABULARY;
     let mut by_check: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let (mut right, mut flagged, mut missed) = (0usize, Vec::new(), Vec::new());
     for (ci, class) in classes.iter().enumerate() {

@@ -329,19 +329,22 @@ pub fn attach(d: &mut crate::Diagnosis, inputs: &Inputs) {
 
 /// Parameters of the vocabulary findings that the extended model
 /// ([`crate::channels::extended_params`]) or the simulator can only use at a
-/// bound (issue 25, item 4: reported, never silently fixed): the viscous
-/// law's break-away coefficient, held at max(μs of the baseline, μk), and a
+/// bound (issue 25, item 4: reported, never silently fixed): the break-away
+/// coefficient of a slip law that fits μk but not μs (the viscous law), held
+/// at max(μs of the baseline, μk), and a
 /// modulation depth outside [0, 1] (N would change sign; rig-model refuses it).
 pub fn vocabulary_bounds(baseline: &RigParams, findings: &[crate::Finding]) -> Vec<crate::ParamAtBound> {
     let mut out = Vec::new();
     let mu_s0 = static_mu(&baseline.friction);
     for f in findings {
         let g = |k: &str| f.params.get(k).copied();
-        if f.effect == "viscous_brake_friction"
+        // A slip law that fits its own μk but not its own μs (the viscous law)
+        // keeps the baseline's break-away coefficient, held at μk when below it.
+        if g("mu_static").is_none()
             && let Some(mu_k) = g("mu_kinetic").filter(|&m| m > mu_s0)
         {
             out.push(crate::ParamAtBound {
-                parameter: "viscous_brake_friction.mu_static".into(),
+                parameter: format!("{}.mu_static", f.effect),
                 bound: round_sig(mu_k, 4),
                 unconstrained: round_sig(mu_s0, 4),
                 meaning: format!(
