@@ -136,9 +136,11 @@ impl ChannelCheck {
 /// nulls (numbers in `channels::free_run`'s docs and pipeline.toml), 0/24
 /// flagged (95 % Clopper–Pearson 0–14.2 %, in-sample). Right models
 /// (`free_run_right_models`: each vocabulary effect drawn four times on those
-/// stick-slipping rigs, seeds 9300–9343, the effect found in 20/20): 8/20
+/// stick-slipping rigs, seeds 9300–9343, the effect found in 20/20): 0/20
 /// have a free-run check of the final model above these thresholds (95 %
-/// Clopper–Pearson 19–64 %; normal-force modulation 4/4, angle-periodic 3/4,
+/// Clopper–Pearson 0–16.8 %) since the break-away level is read under the
+/// extended model's normal force ([`crate::breakaway`]) and the slip-force
+/// floor carries N0·se(μk); before those two: 8/20 (19–64 %; normal-force modulation 4/4, angle-periodic 3/4,
 /// velocity weakening 1/4, viscous 0/4, drive limit 0/4), 4/20 by the
 /// regime, rotor-extreme and fundamental checks alone (6–44 %); the new
 /// ones that add flags: slip friction (up to 27× for the modulations) and

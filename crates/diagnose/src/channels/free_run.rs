@@ -55,8 +55,10 @@
 //! which the break-aways of a regular null resolve; a bias of rig-estimate
 //! the check names, ≈ 0.3 % of the level. `free_run_right_models` (each
 //! vocabulary effect on the same stick-slipping rigs, diagnosed right):
-//! 8/20 flagged (95 % Clopper–Pearson 19–64 %), 4/20 by the rotor-speed
-//! checks alone; the voltage mean and swing are reported, not in the
+//! 0/20 flagged (95 % Clopper–Pearson 0–16.8 %; 8/20 before the extended
+//! model read its break-away level under its own normal force,
+//! [`crate::breakaway`], and before the slip-force floor carried N0·se(μk));
+//! the nulls stay 0/24 (rerun after both); the voltage mean and swing are reported, not in the
 //! adequacy test (thresholds unset: right drive-limit models give 81–116×);
 //! details in [`ChannelOptions`]' docs.
 
