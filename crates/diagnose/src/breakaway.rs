@@ -93,7 +93,8 @@ pub fn breakaway_level(
 }
 
 /// `model` with its static coefficient set to `level` (never below μk: the
-/// law's break-away needs μs ≥ μk, rig_model's validation).
+/// law's break-away needs μs ≥ μk, rig_model's validation; [`at_bound`]
+/// reports a level held there).
 pub fn with_static_level(model: &RigParams, level: &BreakAwayLevel) -> RigParams {
     let mut p = model.clone();
     match &mut p.friction {
@@ -103,6 +104,24 @@ pub fn with_static_level(model: &RigParams, level: &BreakAwayLevel) -> RigParams
         _ => {}
     }
     p
+}
+
+/// The level as a parameter at its bound when it reads below the model's μk
+/// (issue 25, item 4: reported, never silently fixed).
+pub fn at_bound(model: &RigParams, level: &BreakAwayLevel) -> Option<crate::ParamAtBound> {
+    let mu_k = match model.friction {
+        FrictionLaw::Coulomb { mu_kinetic, .. } | FrictionLaw::Viscous { mu_kinetic, .. } => mu_kinetic,
+        _ => return None,
+    };
+    (level.mu_static < mu_k).then(|| crate::ParamAtBound {
+        parameter: "breakaway.mu_static".into(),
+        bound: crate::result::round_sig(mu_k, 4),
+        unconstrained: crate::result::round_sig(level.mu_static, 4),
+        meaning: "the break-away level read under the extended model's normal force is below its slip level: the \
+                  model's stick cannot hold it, so μs is held at μk (the modulation found may not act on the static \
+                  threshold as the model has it)"
+            .into(),
+    })
 }
 
 #[cfg(test)]

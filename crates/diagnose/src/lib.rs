@@ -363,6 +363,7 @@ pub fn diagnose(
         d.structure = Structure { damping: sel.damping.into(), notes: sel.notes };
         d.parameters_at_bounds = sel.at_bounds;
         d.parameters_at_bounds.extend(extension::vocabulary_bounds(p, &d.findings));
+        d.parameters_at_bounds.extend(d.detail.breakaway.as_ref().and_then(|l| breakaway::at_bound(p, l)));
     }
     d.detail.channel_checks = checks;
     Ok(d)
