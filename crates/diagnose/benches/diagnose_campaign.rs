@@ -85,5 +85,10 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+criterion_group! {
+    name = benches;
+    // No plots: criterion's plotters backend panics on this machine (no font); the numbers are what is recorded.
+    config = Criterion::default().without_plots();
+    targets = bench
+}
 criterion_main!(benches);
