@@ -5,10 +5,12 @@
 //! [`run_study`] is the front door: read a folder in the layout
 //! `runs/k<k>-v<V>.csv` (`rig_ingest::slider`), measure every run with the
 //! one feature function ([`features`]), fit the Coulomb baseline and the
-//! candidate laws ([`fit`]) on the calibration stiffnesses by simulating
-//! them ([`sim`]) through the same feature function, predict the held-out
-//! runs, choose the extension by its held-out gain ([`study`]), and render
-//! `slider.md`, tables, figures and `slider-diagnosis.json` ([`render`]).
+//! candidate models — a friction law on a set-up ([`fit`]) — on the
+//! calibration stiffnesses by simulating them ([`sim`]) through the same
+//! feature function, predict the held-out runs, choose the extensions by
+//! forward selection on their held-out gain ([`select`], [`study`]), and
+//! render `slider.md`, tables, figures and `slider-diagnosis.json`
+//! ([`render`]).
 //!
 //! # Effect ids of this rig (`slider-diagnosis.json`)
 //!
@@ -17,11 +19,19 @@
 //! | `coulomb` | the baseline: one static and one kinetic coefficient | stick below μs, slip at μk | `mu_static`, `mu_drop` (μs − μk) |
 //! | `static_ageing` | the static threshold grows with the time stuck (contacts age), the kinetic friction grows with speed | μs(t) = μs0 + β ln(1 + t/τ); μk(v) = μk0 + α ln(1 + v/v1), v1 = 100 µm/s | `mu_static0`, `ageing_beta`, `ageing_time_s`, `mu_drop`, `alpha` |
 //! | `rate_state_ageing` | friction with a memory of the contact's age θ (Dieterich–Ruina) | μ = μ0 + a ln(v/v*) + b ln(v*θ/Dc), dθ/dt = 1 − vθ/Dc, v* = 100 µm/s | `mu0`, `a`, `b_minus_a`, `dc_m` |
+//! | `effective_mass` | the mass that oscillates is not the slider's weighed mass (a spring's own mass adds m_s/3) | m_eff = r m in m_eff ẍ = k (V t − x) − m g μ | `mass_ratio` |
+//! | `series_compliance` | a compliance in series with the spring (force sensor, loading stage) | 1/k_eff = 1/k + 1/k_s | `series_stiffness_n_m` |
+//! | `spring_scale` | the springs as mounted are stiffer or softer than stated, by one factor | k_eff = r k | `stiffness_ratio` |
 //! | `none` / `unexplained` | as in ../shared/spec/diagnosis.md | — | — |
+//!
+//! A model is a friction law on a set-up (`stated_setup`: the README's m and
+//! k), its id `law+set-up` (`coulomb+effective_mass`); a finding names the
+//! element its step added.
 
 pub mod features;
 pub mod fit;
 pub mod render;
+pub mod select;
 pub mod sim;
 pub mod study;
 

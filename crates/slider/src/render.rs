@@ -3,8 +3,8 @@
 //! schema of ../shared/spec/diagnosis.md.
 
 use crate::features::{Features, Regime, Spread};
-use crate::fit::Candidate;
-use crate::study::{CandidateResult, Study, predict_trace};
+use crate::fit::{Candidate, Model, SetupCandidate};
+use crate::study::{CandidateResult, Step, Study, predict_trace};
 use rig_types::{SeriesStyle, Table, figure, fmt_fixed, series};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
@@ -21,49 +21,87 @@ a length Dc of about a micrometre; before a slip the slider creeps. A Coulomb la
 (no creep), its threshold does not depend on the stick time, and it stick-slips at any stiffness. Rate-and-state \
 friction (Dieterich–Ruina) turns this into a stability boundary in (k, V): below k_c = m g (b − a)/Dc the sliding is \
 unstable (stick-slip; creep-dominated near k_c), above it the slider slides steadily, and at high V inertia turns the \
-bifurcation into nearly harmonic oscillations near 2π√(m/k) (the inertial regime). The candidates here are two forms of that \
-memory (static ageing with a rate-strengthening kinetic law; rate-and-state with the ageing law), fitted by simulation \
-on the calibration runs; whether they earn their place is the held-out test below.";
+bifurcation into nearly harmonic oscillations near 2π√(m/k) (the inertial regime). Heslot et al. 1994 measured the memory \
+length D0 at about a micrometre on paper and the logarithmic ageing of the static threshold; their heuristic model is the \
+rate-and-state law with an inertia term, whose Hopf frequency Ω² = k/(m + N a D0/V²) gives the creep regime at low V (the \
+interface term dominates) and the inertial one at high V (m dominates). The candidates here are two forms of that \
+memory (static ageing with a rate-strengthening kinetic law; rate-and-state with the ageing law) and three set-ups (an \
+effective mass, a compliance in series, a scaled spring), fitted by simulation on the calibration runs and chosen by \
+forward selection on the held-out runs.";
 
-/// What the measured inertial periods say about every candidate: the
-/// oscillation is faster than the spring and mass allow. An undamped Coulomb
-/// cycle lasts T0 (1 − atan(r)/π) + 2r/ω ≥ T0 (r = ω (μs − μk) m g/(k V):
+/// What the measured inertial periods say about the set-up. An undamped
+/// Coulomb cycle lasts T0 (1 − atan(r)/π) + 2r/ω ≥ T0 (r = ω (μs − μk) m g/(k V):
 /// a slip from rest, then a stick of 2r/ω; the bound is reached at r = 0);
 /// linearised about steady sliding, rate and state adds N a iω/V (damping)
 /// and −N b ω² Dc/(V² + ω² Dc²) (a negative stiffness) to the spring
 /// (Rice & Ruina 1983's linear analysis, ageing law): no friction law on one
-/// mass and one spring oscillates faster than 1/T0.
+/// mass m and one spring k oscillates faster than 1/T0. A spring's own mass
+/// and a compliance in series both slow the oscillation further; only a
+/// lighter mass that oscillates or a stiffer spring than stated speed it up.
+/// Then the set-up models' fitted parameters, fold by fold (a set-up
+/// parameter is one number for every spring: folds that disagree say it is
+/// not one).
 fn inertial_note(s: &Study) -> String {
-    let fast: Vec<String> = s
+    let inertial: Vec<&crate::study::Measured> = s
         .runs
         .iter()
         .filter(|r| r.features.regime == Regime::InertialOscillation && r.features.period_s.n > 0)
-        .filter(|r| r.features.period_s.median < 0.9 * r.features.natural_period_s)
+        .collect();
+    let mut out = String::from("## The set-up: what the inertial oscillations say\n\n");
+    if inertial.is_empty() {
+        out.push_str(
+            "No run oscillates in the inertial regime: the records say nothing of the mass that oscillates.\n",
+        );
+        return out;
+    }
+    let list: Vec<String> = inertial
+        .iter()
         .map(|r| {
+            let f = &r.features;
             format!(
-                "{} ({:.4} s = {:.2} T0, frequency {:.2} × 1/T0)",
+                "{} {:.4} ± {:.4} s = {:.2} T0",
                 r.name,
-                r.features.period_s.median,
-                r.features.period_s.median / r.features.natural_period_s,
-                r.features.natural_period_s / r.features.period_s.median
+                f.period_s.median,
+                f.period_s.sd,
+                f.period_s.median / f.natural_period_s
             )
         })
         .collect();
-    if fast.is_empty() {
-        return String::new();
+    let _ = writeln!(
+        out,
+        "Measured inertial periods (median ± sd over cycles) against T0 = 2π√(m/k) with the README's m = {} kg and the \
+         file names' k: {}. An undamped Coulomb cycle lasts T0 (1 − atan(r)/π) + 2r/ω ≥ T0 (a slip from rest, \
+         r = ω(μs − μk) m g/(k V), then a stick of 2r/ω), and linearised about steady sliding rate and state adds damping \
+         (N a iω/V) and a negative stiffness (−N b ω² Dc/(V² + ω² Dc²); Rice & Ruina 1983, ageing law) to the spring: no \
+         friction law on one mass m and one spring k oscillates faster than 1/T0. A spring's own mass (m + m_s/3, \
+         Rayleigh) and a compliance in series (1/k + 1/k_s) both make it slower still. What is left is a lighter mass that \
+         oscillates or springs stiffer than stated, by (P/T0)², the same factor at stiffnesses 13 × apart — a set-up \
+         number, not a friction one — which the period alone cannot tell apart (the loading rate in stick can: k_eff V/(m g)).\n",
+        s.params.mass_kg,
+        list.join(", ")
+    );
+    for c in s.candidates.iter().filter(|c| c.model.setup != SetupCandidate::Stated) {
+        let n = c.model.friction.params().len();
+        let specs = c.model.setup.params();
+        let per_fold: Vec<String> = c
+            .fold_fits
+            .iter()
+            .map(|f| {
+                let ks = distinct(f.train.iter().map(|&i| s.runs[i].stiffness_n_m));
+                format!("{:.3} fitted on k = {:?} N/m", f.params[n], ks)
+            })
+            .collect();
+        let _ = writeln!(
+            out,
+            "- {}: {} = {:.3} on all calibration runs; {}{}.",
+            c.model.id(),
+            specs[0].name,
+            c.fitted.params[n],
+            per_fold.join(", "),
+            if c.fitted.at_bounds.contains(&specs[0].name) { " (at its bound)" } else { "" }
+        );
     }
-    format!(
-        "What no candidate here can reach: inertial oscillations more than 10 % faster than the spring and mass allow, at {}. \
-         An undamped Coulomb cycle lasts T0 (1 − atan(r)/π) + 2r/ω ≥ T0 = 2π√(m/k) (a slip from rest, r = ω(μs − μk) m g/(k V), \
-         then a stick of 2r/ω), and linearised about steady sliding rate and state adds damping (N a iω/V) and a negative \
-         stiffness (−N b ω² Dc/(V² + ω² Dc²); Rice & Ruina 1983's linear analysis, ageing law) to the spring: no friction law on \
-         one mass m = {} kg and one spring k oscillates faster than 1/T0. A frequency ratio about the same at both stiffnesses \
-         (13 × apart) points at the set-up, not at the friction: an effective mass about 1/ratio² of the stated one, or springs \
-         stiffer than stated by ratio², which one run per (k, V) cannot tell apart. The ±15 % bound on the inertial period is \
-         unreachable for every candidate while m and k are the README's.\n",
-        fast.join(", "),
-        s.params.mass_kg
-    )
+    out
 }
 
 /// The issue's bounds on a prediction at an unseen stiffness, checked on one run.
@@ -177,7 +215,7 @@ pub fn render(s: &Study) -> StudyOutput {
     ]);
     for c in &s.candidates {
         ct.push([
-            c.fitted.candidate.id().into(),
+            c.model.id(),
             params_text(c),
             c.fitted.at_bounds.join(" "),
             f4(c.fitted.calibration_misfit),
@@ -215,7 +253,7 @@ pub fn render(s: &Study) -> StudyOutput {
             let meas = &s.runs[*i].features;
             let b = bounds(meas, f);
             pt.push([
-                c.fitted.candidate.id().into(),
+                c.model.id(),
                 s.runs[*i].name.clone(),
                 f4(*m),
                 meas.regime.label().into(),
@@ -242,7 +280,7 @@ pub fn render(s: &Study) -> StudyOutput {
 }
 
 fn params_text(c: &CandidateResult) -> String {
-    let specs = c.fitted.candidate.params();
+    let specs = c.model.params();
     specs.iter().zip(&c.fitted.params).map(|(p, v)| format!("{}={:.4e}", p.name, v)).collect::<Vec<_>>().join(" ")
 }
 
@@ -250,11 +288,9 @@ fn regimes_right(s: &Study, pred: &[Features]) -> usize {
     s.runs.iter().zip(pred).filter(|(r, p)| r.features.regime == p.regime).count()
 }
 
-/// The extension: the chosen candidate, else the best non-baseline one.
+/// The extension: the selected model, else the best model the first step tried.
 fn extension(s: &Study) -> &CandidateResult {
-    let best =
-        (1..s.candidates.len()).min_by(|&a, &b| s.candidates[a].heldout_mean.total_cmp(&s.candidates[b].heldout_mean));
-    &s.candidates[s.chosen.or(best).unwrap_or(0)]
+    &s.candidates[s.chosen.or(s.steps.first().map(|st| st.best)).unwrap_or(0)]
 }
 
 fn figures(s: &Study, out: &mut StudyOutput) {
@@ -267,8 +303,8 @@ fn figures(s: &Study, out: &mut StudyOutput) {
             if style == SeriesStyle::Line && std::ptr::eq(c, base) {
                 continue; // no candidate besides the baseline
             }
-            let (ts, fs) = predict_trace(c.fitted.candidate, &c.fitted.params, r, &s.params, t.len());
-            sers.push(series(&format!("{} (fitted on the calibration runs)", c.fitted.candidate.id()), ts, fs, style));
+            let (ts, fs) = predict_trace(c.model, &c.fitted.params, r, &s.params, t.len());
+            sers.push(series(&format!("{} (fitted on the calibration runs)", c.model.id()), ts, fs, style));
         }
         out.figures.push(figure(
             &format!("slider-force-{}", r.name),
@@ -281,7 +317,7 @@ fn figures(s: &Study, out: &mut StudyOutput) {
                 r.drive_speed_um_s,
                 s.params.features.median_window_s,
                 s.params.sim_periods,
-                ext.fitted.candidate.id()
+                ext.model.id()
             ),
             ("time [s]", 4),
             ("F/(m g)", 4),
@@ -309,7 +345,7 @@ fn figures(s: &Study, out: &mut StudyOutput) {
                     .iter()
                     .map(|&i| c.heldout.iter().find(|h| h.0 == i).map(|h| pick(&h.2)).unwrap_or(f64::NAN))
                     .collect();
-                sers.push(series(&format!("{} held out, k = {k} N/m", c.fitted.candidate.id()), x.clone(), y, style));
+                sers.push(series(&format!("{} held out, k = {k} N/m", c.model.id()), x.clone(), y, style));
             }
         }
         out.figures.push(figure(
@@ -318,7 +354,7 @@ fn figures(s: &Study, out: &mut StudyOutput) {
             &format!(
                 "Median over the slip events of each run (markers: measured), and the prediction of the Coulomb baseline \
                  (dashed) and of {} (line) for runs held out of their fit ({}). NaN where a record has no slip.",
-                ext.fitted.candidate.id(),
+                ext.model.id(),
                 if s.leave_one_out { "leave one stiffness out" } else { "fitted on the calibration stiffnesses" }
             ),
             ("log10 V [µm/s]", 3),
@@ -339,35 +375,52 @@ fn heldout_names(s: &Study, c: &CandidateResult) -> Vec<String> {
     c.heldout.iter().map(|h| s.runs[h.0].name.clone()).collect()
 }
 
+/// The elements a forward step added: the memory law or the set-up that
+/// differs, both (`law+set-up`) after a look-ahead step.
+fn added(from: Model, to: Model) -> String {
+    match (from.friction != to.friction, from.setup != to.setup) {
+        (true, true) => format!("{}+{}", to.friction.id(), to.setup.id()),
+        (true, false) => to.friction.id().to_string(),
+        _ => to.setup.id().to_string(),
+    }
+}
+
+/// The parameters of the element `to` adds over `from`, by name.
+fn added_params(from: Model, c: &CandidateResult, values: Option<&[f64]>) -> Value {
+    let n = c.model.friction.params().len();
+    let all = c.model.params();
+    let keep = |j: usize| if j < n { from.friction != c.model.friction } else { from.setup != c.model.setup };
+    Value::Object(
+        all.iter()
+            .enumerate()
+            .filter(|(j, _)| keep(*j))
+            .map(|(j, p)| (p.name.to_string(), values.map_or(Value::Null, |v| json!(v[j]))))
+            .collect(),
+    )
+}
+
+/// The kept steps, in order.
+fn kept_steps(s: &Study) -> impl Iterator<Item = &Step> {
+    s.steps.iter().filter(|st| st.kept)
+}
+
 fn diagnosis_json(s: &Study) -> Value {
     let base = &s.candidates[0];
-    let params_of = |c: &CandidateResult| -> Value {
-        let m: serde_json::Map<String, Value> = c
-            .fitted
-            .candidate
-            .params()
-            .iter()
-            .zip(&c.fitted.params)
-            .map(|(p, v)| (p.name.to_string(), json!(v)))
-            .collect();
-        Value::Object(m)
-    };
-    let nulls = |c: &CandidateResult| -> Value {
-        Value::Object(c.fitted.candidate.params().iter().map(|p| (p.name.to_string(), Value::Null)).collect())
-    };
     let mut findings = Vec::new();
-    let final_mean = s.chosen.map(|c| s.candidates[c].heldout_mean).unwrap_or(base.heldout_mean);
-    if let Some(ci) = s.chosen {
-        let c = &s.candidates[ci];
+    for st in kept_steps(s) {
+        let (from, to) = (&s.candidates[st.from], &s.candidates[st.best]);
         findings.push(json!({
-            "effect": c.fitted.candidate.id(),
-            "params": params_of(c),
-            "params_stderr": nulls(c),
-            "evidence": evidence(s, c),
-            "heldout_runs": heldout_names(s, c),
-            "heldout_misfit_baseline": base.heldout_mean,
-            "heldout_misfit_extended": c.heldout_mean,
-            "relative_gain": 1.0 - c.heldout_mean / base.heldout_mean,
+            "effect": added(from.model, to.model),
+            "model": to.model.id(),
+            "params": added_params(from.model, to, Some(&to.fitted.params)),
+            "params_stderr": added_params(from.model, to, None),
+            "evidence": evidence(s, st),
+            "heldout_runs": heldout_names(s, to),
+            "heldout_misfit_baseline": from.heldout_mean,
+            "heldout_misfit_extended": to.heldout_mean,
+            "relative_gain": st.gain.relative,
+            "gain_per_run_mean": st.gain.mean,
+            "gain_per_run_sd": st.gain.sd,
         }));
     }
     let final_c = s.chosen.map(|c| &s.candidates[c]).unwrap_or(base);
@@ -384,32 +437,32 @@ fn diagnosis_json(s: &Study) -> Value {
             "effect": "unexplained",
             "evidence": format!(
                 "the final model ({1}) has a mean held-out misfit of {0:.2} (adequacy threshold {2}) and misses the regime or exceeds the threshold at: {3}",
-                final_mean, final_c.fitted.candidate.id(), s.params.adequacy_threshold, where_.join(", ")),
-            "residual_over_noise": final_mean / s.params.adequacy_threshold,
+                final_c.heldout_mean, final_c.model.id(), s.params.adequacy_threshold, where_.join(", ")),
+            "residual_over_noise": final_c.heldout_mean / s.params.adequacy_threshold,
             "where": where_,
             "signature": [],
             "heldout_misfit_baseline": base.heldout_mean,
             "heldout_misfit_extended": ext.heldout_mean,
         }));
     }
-    let verdict = match (s.chosen, adequate) {
+    let verdict = match (kept_steps(s).next(), adequate) {
         (_, false) => "unexplained".to_string(),
-        (Some(c), true) => s.candidates[c].fitted.candidate.id().to_string(),
+        (Some(st), true) => added(s.candidates[st.from].model, s.candidates[st.best].model),
         (None, true) => "none".to_string(),
     };
     let at_bounds: Vec<Value> = s
         .candidates
         .iter()
         .flat_map(|c| {
+            let specs = c.model.params();
             c.fitted.at_bounds.iter().map(move |p| {
-                let spec = c.fitted.candidate.params().iter().find(|q| q.name == *p).expect("a parameter of the candidate");
-                let j = c.fitted.candidate.params().iter().position(|q| q.name == *p).expect("a parameter");
-                let v = c.fitted.params[j];
+                let j = specs.iter().position(|q| q.name == *p).expect("a parameter of the model");
+                let (spec, v) = (specs[j], c.fitted.params[j]);
                 json!({
-                    "parameter": format!("{}.{}", c.fitted.candidate.id(), p),
+                    "parameter": format!("{}.{}", c.model.id(), p),
                     "bound": if (v - spec.lo).abs() < (v - spec.hi).abs() { spec.lo } else { spec.hi },
                     "unconstrained": Value::Null,
-                    "meaning": "the fit pressed this parameter against its bound: the law family cannot reach what the calibration runs want there",
+                    "meaning": "the fit pressed this parameter against its bound: the model cannot reach what the calibration runs want there",
                 })
             })
         })
@@ -419,11 +472,14 @@ fn diagnosis_json(s: &Study) -> Value {
         "verdict": verdict,
         "findings": findings,
         "candidates": s.candidates.iter().skip(1).map(|c| json!({
-            "effect": c.fitted.candidate.id(),
+            "effect": c.model.id(),
             "heldout_misfit_extended": c.heldout_mean,
             "criterion": c.fitted.calibration_misfit,
         })).collect::<Vec<_>>(),
-        "structure": {"notes": "one mass on one spring with an imposed drive speed; the friction law is the only thing the candidates change"},
+        "structure": {
+            "notes": "one mass on one spring with an imposed drive speed; a model is a friction law on a set-up (the README's m and k, or an effective mass, a compliance in series, a scaled spring)",
+            "final_model": final_c.model.id(),
+        },
         "parameters_at_bounds": at_bounds,
     })
 }
@@ -433,19 +489,53 @@ fn adequate(s: &Study, c: &CandidateResult) -> bool {
     c.heldout_mean <= s.params.adequacy_threshold && c.heldout.iter().all(|h| h.2.regime == s.runs[h.0].features.regime)
 }
 
-fn evidence(s: &Study, c: &CandidateResult) -> String {
-    let base = &s.candidates[0];
+fn regimes_heldout(s: &Study, c: &CandidateResult) -> usize {
+    c.heldout.iter().filter(|h| s.runs[h.0].features.regime == h.2.regime).count()
+}
+
+fn evidence(s: &Study, st: &Step) -> String {
+    let (from, to) = (&s.candidates[st.from], &s.candidates[st.best]);
     format!(
-        "held out ({}), {} lowers the mean misfit from {:.2} to {:.2} and gets {}/{} regimes right against the Coulomb law's {}/{} (tables/slider-heldout.csv)",
+        "held out ({}), {} lowers the mean misfit of {} from {:.2} to {:.2} (gain per run {:.2} ± {:.2} sd over {} runs) and gets {}/{} regimes right against {}/{} (tables/slider-heldout.csv)",
         if s.leave_one_out { "leave one stiffness out" } else { "runs at stiffnesses outside the calibration list" },
-        c.fitted.candidate.id(),
-        base.heldout_mean,
-        c.heldout_mean,
-        c.heldout.iter().filter(|h| s.runs[h.0].features.regime == h.2.regime).count(),
-        c.heldout.len(),
-        base.heldout.iter().filter(|h| s.runs[h.0].features.regime == h.2.regime).count(),
-        base.heldout.len(),
+        added(from.model, to.model),
+        from.model.id(),
+        from.heldout_mean,
+        to.heldout_mean,
+        st.gain.mean,
+        st.gain.sd,
+        st.gain.runs,
+        regimes_heldout(s, to),
+        to.heldout.len(),
+        regimes_heldout(s, from),
+        from.heldout.len(),
     )
+}
+
+/// The issue's bounds on every held-out run of `c`: one table row per run, and the count of checks passed.
+fn bounds_rows(s: &Study, c: &CandidateResult, md: &mut String) -> (usize, usize) {
+    let (mut pass, mut all) = (0, 0);
+    for (i, _, f) in &c.heldout {
+        let m = &s.runs[*i].features;
+        let b = bounds(m, f);
+        for ok in [Some(b.regime), b.inertial_period, b.period, b.drop, b.onset].into_iter().flatten() {
+            all += 1;
+            pass += usize::from(ok);
+        }
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} → {} | {} | {} | {} | {} |",
+            c.model.id(),
+            s.runs[*i].name,
+            m.regime.label(),
+            f.regime.label(),
+            yes(b.inertial_period),
+            yes(b.period),
+            yes(b.drop),
+            yes(b.onset)
+        );
+    }
+    (pass, all)
 }
 
 fn markdown(s: &Study) -> String {
@@ -462,7 +552,7 @@ fn markdown(s: &Study) -> String {
         p.mass_kg,
         s.calibration_stiffnesses,
         if s.leave_one_out {
-            "none outside the calibration list, so every stiffness is held out in turn (leave one stiffness out: the laws are fitted on the runs of the other stiffnesses)".to_string()
+            "none outside the calibration list, so every stiffness is held out in turn (leave one stiffness out: the models are fitted on the runs of the other stiffnesses)".to_string()
         } else {
             "every run at a stiffness outside the calibration list".to_string()
         }
@@ -490,51 +580,82 @@ fn markdown(s: &Study) -> String {
             pm(&f.creep)
         );
     }
-    let _ = writeln!(md, "\n## Candidates (fitted on all calibration runs; held-out misfit from the held-out fits)\n");
+    let _ = writeln!(md, "\n{}", inertial_note(s));
     let _ = writeln!(
         md,
-        "| law | parameters | calibration misfit | held-out misfit | regimes right (fitted) | regimes right (held out) | at bounds |"
+        "## Forward selection (held-out misfit, {})\n",
+        if s.leave_one_out { "leave one stiffness out" } else { "held-out stiffnesses" }
+    );
+    let _ = writeln!(
+        md,
+        "Each step tries the current model's extensions — a friction law with memory in place of Coulomb, a set-up in place \
+         of the README's m and k — and keeps the best when it lowers the mean held-out misfit by {} % or more \
+         (`[shared.selection]`). Gain: the current model's held-out misfit minus the extension's, run by run (mean ± sd).\n",
+        100.0 * p.selection.min_relative_gain
+    );
+    let _ = writeln!(md, "| step | from | tried | held-out misfit | gain per run | kept |");
+    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    for (n, st) in s.steps.iter().enumerate() {
+        let from = &s.candidates[st.from];
+        for &t in &st.tried {
+            let c = &s.candidates[t];
+            let pairs = |c: &CandidateResult| c.heldout.iter().map(|h| (h.0, h.1)).collect::<Vec<_>>();
+            let g = crate::select::gain(&pairs(from), &pairs(c));
+            let _ = writeln!(
+                md,
+                "| {} | {} ({:.3}) | {} | {:.3} | {:.3} ± {:.3} | {} |",
+                n + 1,
+                from.model.id(),
+                from.heldout_mean,
+                c.model.id(),
+                c.heldout_mean,
+                g.mean,
+                g.sd,
+                if t == st.best && st.kept { "yes" } else { "no" }
+            );
+        }
+    }
+    let _ = writeln!(md, "\n## Models (fitted on all calibration runs; held-out misfit from the held-out fits)\n");
+    let _ = writeln!(
+        md,
+        "| model | parameters | calibration misfit | held-out misfit | regimes right (fitted) | regimes right (held out) | at bounds |"
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|");
     for c in &s.candidates {
         let _ = writeln!(
             md,
             "| {} | {} | {:.3} | {:.3} | {}/{} | {}/{} | {} |",
-            c.fitted.candidate.id(),
+            c.model.id(),
             params_text(c),
             c.fitted.calibration_misfit,
             c.heldout_mean,
             regimes_right(s, &c.predicted),
             s.runs.len(),
-            c.heldout.iter().filter(|h| s.runs[h.0].features.regime == h.2.regime).count(),
+            regimes_heldout(s, c),
             c.heldout.len(),
             if c.fitted.at_bounds.is_empty() { "—".to_string() } else { c.fitted.at_bounds.join(", ") }
         );
     }
+    let ext = extension(s);
     let _ = writeln!(md, "\n## Held-out predictions against the issue's bounds\n");
     let _ = writeln!(
         md,
-        "| law | run | regime (measured → predicted) | inertial period ±15 % | period ×2 | drop ×2 | onset ±0.05 |"
+        "The Coulomb baseline and {} ({}), each run predicted by the fit that did not see its stiffness.\n",
+        ext.model.id(),
+        if s.chosen.is_some() { "the selected model" } else { "the best extension, not selected" }
+    );
+    let _ = writeln!(
+        md,
+        "| model | run | regime (measured → predicted) | inertial period ±15 % | period ×2 | drop ×2 | onset ±0.05 |"
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|");
-    for c in &s.candidates {
-        for (i, _, f) in &c.heldout {
-            let m = &s.runs[*i].features;
-            let b = bounds(m, f);
-            let _ = writeln!(
-                md,
-                "| {} | {} | {} → {} | {} | {} | {} | {} |",
-                c.fitted.candidate.id(),
-                s.runs[*i].name,
-                m.regime.label(),
-                f.regime.label(),
-                yes(b.inertial_period),
-                yes(b.period),
-                yes(b.drop),
-                yes(b.onset)
-            );
-        }
-    }
+    let (bp, ba) = bounds_rows(s, &s.candidates[0], &mut md);
+    let (ep, ea) = if std::ptr::eq(ext, &s.candidates[0]) { (bp, ba) } else { bounds_rows(s, ext, &mut md) };
+    let _ = writeln!(
+        md,
+        "\nChecks passed (regime and every bound that applies): Coulomb {bp}/{ba}, {} {ep}/{ea}.",
+        ext.model.id()
+    );
     let _ = writeln!(md, "\n## What the Coulomb law gets wrong, held out\n");
     let base = &s.candidates[0];
     let mut any = false;
@@ -569,60 +690,53 @@ fn markdown(s: &Study) -> String {
         let _ = writeln!(md, "- nothing outside the issue's bounds on the held-out runs.");
     }
     let _ = writeln!(md, "\n{CAUSE}\n");
-    let _ = writeln!(md, "{}", inertial_note(s));
     let verdict = diagnosis_json(s)["verdict"].as_str().unwrap_or("").to_string();
-    let _ = writeln!(md, "\n## Verdict: `{verdict}`\n");
-    match s.chosen {
-        Some(c) => {
-            let _ = writeln!(md, "{}.\n", evidence(s, &s.candidates[c]));
-        }
-        None => {
-            let _ = writeln!(
-                md,
-                "No candidate lowers the Coulomb law's mean held-out misfit ({:.3}) by {} % or more; the best is {} at {:.3}.\n",
-                s.candidates[0].heldout_mean,
-                100.0 * p.selection.min_relative_gain,
-                extension(s).fitted.candidate.id(),
-                extension(s).heldout_mean
-            );
-            // Where each memory law loses to the baseline, run by run (held out).
-            for c in s.candidates.iter().skip(1) {
-                let worse: Vec<String> = c
-                    .heldout
-                    .iter()
-                    .zip(&s.candidates[0].heldout)
-                    .filter(|(h, b)| h.1 > b.1)
-                    .map(|(h, b)| {
-                        format!(
-                            "{} {:.2} vs {:.2} ({})",
-                            s.runs[h.0].name,
-                            h.1,
-                            b.1,
-                            if h.2.regime == s.runs[h.0].features.regime {
-                                "regime right".to_string()
-                            } else {
-                                format!("predicts {}", h.2.regime.label())
-                            }
-                        )
-                    })
-                    .collect();
-                let _ = writeln!(
-                    md,
-                    "- {} is worse than Coulomb held out at: {}.",
-                    c.fitted.candidate.id(),
-                    if worse.is_empty() { "no run".to_string() } else { worse.join("; ") }
-                );
-            }
-            let _ = writeln!(md);
-        }
+    let _ = writeln!(md, "## Verdict: `{verdict}`\n");
+    for st in kept_steps(s) {
+        let _ = writeln!(md, "- {}.", evidence(s, st));
     }
+    if let Some(st) = s.steps.iter().find(|st| !st.kept) {
+        let (from, best) = (&s.candidates[st.from], &s.candidates[st.best]);
+        let _ = writeln!(
+            md,
+            "- No extension of {} lowers its mean held-out misfit ({:.3}) by {} % or more; the best is {} at {:.3} (gain per run {:.3} ± {:.3}).",
+            from.model.id(),
+            from.heldout_mean,
+            100.0 * p.selection.min_relative_gain,
+            best.model.id(),
+            best.heldout_mean,
+            st.gain.mean,
+            st.gain.sd
+        );
+    }
+    let final_c = s.chosen.map(|c| &s.candidates[c]).unwrap_or(base);
+    let missed: Vec<String> = final_c
+        .heldout
+        .iter()
+        .filter(|h| h.2.regime != s.runs[h.0].features.regime)
+        .map(|h| {
+            format!("{} ({} predicted {})", s.runs[h.0].name, s.runs[h.0].features.regime.label(), h.2.regime.label())
+        })
+        .collect();
+    let _ = writeln!(
+        md,
+        "- Final model {}: regimes right {}/{} held out, {}/{} fitted on all calibration runs{}.\n",
+        final_c.model.id(),
+        regimes_heldout(s, final_c),
+        final_c.heldout.len(),
+        regimes_right(s, &final_c.predicted),
+        s.runs.len(),
+        if missed.is_empty() { String::new() } else { format!("; held out it misses {}", missed.join(", ")) }
+    );
     let _ = writeln!(
         md,
         "What the data can resolve: each (k, V) was recorded once, so the spread given is over slip events within one run; \
          run-to-run reproducibility (a new strip of paper, another part of the track) is not measured. `tables/slider-heldout.csv` \
          marks a predicted median as resolved from the measured one when they differ by more than twice the standard error of \
          the measured median (1.253 sd/√n); with hundreds of events almost every difference is resolved within a run, which \
-         says nothing about another run at the same (k, V).\n"
+         says nothing about another run at the same (k, V). The gains above are over {} held-out runs: a per-run gain whose \
+         sd exceeds its mean is not resolved by this data set, whatever the mean.\n",
+        base.heldout.len()
     );
     let _ = writeln!(
         md,
@@ -631,10 +745,14 @@ fn markdown(s: &Study) -> String {
     );
     let _ = writeln!(
         md,
-        "Candidate ids: `{}`, `{}`, `{}` (crate docs of `rig_slider`).",
+        "Ids (crate docs of `rig_slider`): friction laws `{}`, `{}`, `{}`; set-ups `{}`, `{}`, `{}`, `{}`; a model is `law+set-up`.",
         Candidate::Coulomb.id(),
         Candidate::StaticAgeing.id(),
-        Candidate::RateState.id()
+        Candidate::RateState.id(),
+        SetupCandidate::Stated.id(),
+        SetupCandidate::EffectiveMass.id(),
+        SetupCandidate::SeriesCompliance.id(),
+        SetupCandidate::SpringScale.id()
     );
     md
 }

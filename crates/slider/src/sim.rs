@@ -2,6 +2,10 @@
 //! `rig_model::one_dof::simulate_implicit`: m ẍ = k (V t − x) − m g μ, the
 //! recorded signal being the spring force over weight k (V t − x)/(m g).
 //!
+//! With a set-up other than the README's ([`Structure`]) m becomes the mass
+//! that oscillates, m_eff, and k the chain's stiffness, k_eff: m_eff ẍ =
+//! k_eff (V t − x) − m g μ, recorded as k_eff (V t − x)/(m g).
+//!
 //! This is the equation of the chapter's rotor on its shaft with the brake
 //! (Eq. 4-6 with one inertia, the shaft's stiffness and an imposed drive
 //! angle) in translation, which is `one_dof`'s equation with J = m, k the
@@ -38,13 +42,54 @@ pub enum Law {
     RateState { mu0: f64, a: f64, b: f64, dc_m: f64, v_ref_m_s: f64 },
 }
 
+/// The set-up as the simulation sees it, beside the friction law: the mass
+/// that oscillates and the spring the force is read through, from the
+/// stated (README) mass m and stiffness k. The normal load stays the
+/// slider's weight m g and the recorded force stays over m g in every case.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Structure {
+    /// The README's: the slider's mass m on the stated spring k.
+    Stated,
+    /// The mass that oscillates is m_eff = r m: more than m when part of the
+    /// spring moves with the slider (a uniform spring adds a third of its own
+    /// mass, Rayleigh's estimate), less than m only if part of the weighed
+    /// mass does not move with the slider.
+    EffectiveMass { mass_ratio: f64 },
+    /// A compliance in series with the spring (the force sensor, the loading
+    /// stage): the chain is 1/k_eff = 1/k + 1/k_s, the same k_s whichever
+    /// spring is mounted; the force through the chain is k_eff (V t − x).
+    SeriesCompliance { series_stiffness_n_m: f64 },
+    /// The spring as mounted is k_eff = r k (a stiffness stated from a
+    /// calibration, not measured in place, off by the same factor for every
+    /// spring).
+    SpringScale { stiffness_ratio: f64 },
+}
+
+impl Structure {
+    /// (the mass that oscillates, kg; the chain's stiffness, N/m) for the stated m and k.
+    pub fn effective(&self, mass_kg: f64, stiffness_n_m: f64) -> (f64, f64) {
+        match *self {
+            Structure::Stated => (mass_kg, stiffness_n_m),
+            Structure::EffectiveMass { mass_ratio } => (mass_ratio * mass_kg, stiffness_n_m),
+            Structure::SeriesCompliance { series_stiffness_n_m: ks } => {
+                (mass_kg, stiffness_n_m * ks / (stiffness_n_m + ks))
+            }
+            Structure::SpringScale { stiffness_ratio } => (mass_kg, stiffness_ratio * stiffness_n_m),
+        }
+    }
+}
+
 /// What one run imposes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Setup {
+    /// The stated spring (the run's file name), N/m.
     pub stiffness_n_m: f64,
     pub drive_speed_m_s: f64,
+    /// The stated slider mass (the README's), kg: the normal load is its weight.
     pub mass_kg: f64,
     pub gravity_m_s2: f64,
+    /// How the set-up departs from the stated m and k.
+    pub structure: Structure,
     /// Simulated time, s (from rest, spring relaxed).
     pub duration_s: f64,
     /// Output rate, Hz (the recording's, so one feature function serves both).
@@ -57,9 +102,10 @@ pub struct Setup {
 }
 
 impl Setup {
-    /// Natural period 2π √(m/k), s.
+    /// Natural period of the set-up as modelled, 2π √(m_eff/k_eff), s.
     pub fn natural_period_s(&self) -> f64 {
-        2.0 * std::f64::consts::PI * (self.mass_kg / self.stiffness_n_m).sqrt()
+        let (m, k) = self.structure.effective(self.mass_kg, self.stiffness_n_m);
+        2.0 * std::f64::consts::PI * (m / k).sqrt()
     }
 }
 
@@ -100,23 +146,24 @@ pub fn simulate_into(law: &Law, s: &Setup, run: &mut OneDofRun, out: &mut Vec<f6
     // An integer number of steps per output sample, at least the requested density.
     let sub = ((dt_out / (s.natural_period_s() / s.steps_per_period)).ceil() as usize).max(1);
     let weight_n = s.mass_kg * s.gravity_m_s2;
+    let (inertia_kg, chain_n_m) = s.structure.effective(s.mass_kg, s.stiffness_n_m);
     let shaft = Shaft {
-        inertia_kgm2: s.mass_kg,
-        stiffness_nm_rad: s.stiffness_n_m,
+        inertia_kgm2: inertia_kg,
+        stiffness_nm_rad: chain_n_m,
         twist_damping_nm_s_rad: 0.0,
         absolute_damping_nm_s_rad: 0.0,
         mid: None,
     };
     let contact = Contact { law: *law, weight_n };
     let start = OneDofState {
-        twist_rad: s.initial_force_over_weight * weight_n / s.stiffness_n_m,
+        twist_rad: s.initial_force_over_weight * weight_n / chain_n_m,
         stuck: true,
         friction_state: contact.initial_state(s.drive_speed_m_s),
         ..OneDofState::default()
     };
     let drive = Drive::ConstantSpeed(s.drive_speed_m_s);
     one_dof::simulate_implicit_into(&shaft, &contact, drive, start, s.sample_rate_hz, n_out, sub, run)?;
-    let to_fw = s.stiffness_n_m / weight_n;
+    let to_fw = chain_n_m / weight_n;
     out.extend(run.twist_rad.iter().map(|x| to_fw * x));
     Ok(())
 }
@@ -185,6 +232,7 @@ mod tests {
             drive_speed_m_s: v_um_s * 1e-6,
             mass_kg: 0.0307,
             gravity_m_s2: 9.81,
+            structure: Structure::Stated,
             duration_s: dur,
             sample_rate_hz: 2000.0,
             steps_per_period: 100.0,

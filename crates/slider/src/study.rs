@@ -1,6 +1,9 @@
-//! The study ([`run_study`]): measure every run, fit the Coulomb baseline and
-//! every candidate on the calibration stiffnesses, predict the held-out
-//! runs, choose the extension by its held-out gain.
+//! The study ([`run_study`]): measure every run, fit the Coulomb baseline on
+//! the calibration stiffnesses, predict the held-out runs, then forward
+//! selection ([`crate::select`]): each step fits the current model's
+//! extensions (a memory law in place of Coulomb, a set-up in place of the
+//! README's m and k) fold by fold and keeps the best when its held-out gain
+//! passes `[shared.selection]`.
 //!
 //! Held-out runs are the runs at a stiffness not in
 //! `calibration_stiffnesses_n_m`. When there is none (the shipped folder with
@@ -8,9 +11,9 @@
 //! fitted on the others (leave one stiffness out); the study says which.
 
 use crate::SliderError;
-use crate::features::Regime;
-use crate::features::{FeatureOptions, Features, RunConstants, features};
-use crate::fit::{CANDIDATES, Candidate, critical_stiffness_guess_n_m, fit, run_misfit};
+use crate::features::{FeatureOptions, Features, Regime, RunConstants, Spread, features};
+use crate::fit::{Model, SetupCandidate, critical_stiffness_guess_n_m, fit, run_misfit};
+use crate::select::{Fold, FoldCandidate, Gain, evaluate, gain, step};
 use crate::sim::{Setup, simulate_into};
 use rayon::prelude::*;
 use rig_ingest::slider::{SliderRun, read_slider_folder};
@@ -85,10 +88,12 @@ pub struct Measured {
     pub features: Features,
 }
 
-/// A law fitted on some runs.
+/// A model fitted on some runs.
 #[derive(Debug, Clone)]
 pub struct Fitted {
-    pub candidate: Candidate,
+    pub model: Model,
+    /// The runs it was fitted on.
+    pub train: Vec<usize>,
     pub params: Vec<f64>,
     /// Mean misfit on the runs it was fitted on.
     pub calibration_misfit: f64,
@@ -96,16 +101,33 @@ pub struct Fitted {
     pub at_bounds: Vec<&'static str>,
 }
 
-/// A candidate's held-out record.
+/// A model's record.
 #[derive(Debug, Clone)]
 pub struct CandidateResult {
+    pub model: Model,
     /// Fitted on every calibration run.
     pub fitted: Fitted,
     /// Its features at every run (fitted on all calibration runs).
     pub predicted: Vec<Features>,
-    /// Per held-out run: (run index, misfit, predicted features) under the split that held it out.
+    /// One fit per fold (leave one stiffness out: one per stiffness).
+    pub fold_fits: Vec<Fitted>,
+    /// Per held-out run: (run index, misfit, predicted features) under the fold that held it out.
     pub heldout: Vec<(usize, f64, Features)>,
     pub heldout_mean: f64,
+}
+
+/// One forward step: from a model, the extensions tried and the one kept.
+#[derive(Debug, Clone)]
+pub struct Step {
+    /// Index into `Study::candidates` of the model the step starts from.
+    pub from: usize,
+    /// Indices of the models tried.
+    pub tried: Vec<usize>,
+    /// The best of them (lowest mean held-out misfit) and its gain over `from`, run by run.
+    pub best: usize,
+    pub gain: Gain,
+    /// Whether it earned its place (`[shared.selection]`'s relative gain).
+    pub kept: bool,
 }
 
 /// The study's result.
@@ -117,8 +139,11 @@ pub struct Study {
     pub leave_one_out: bool,
     /// Calibration stiffnesses present in the folder.
     pub calibration_stiffnesses: Vec<f64>,
+    /// Every model evaluated, the Coulomb baseline first, in the order of the steps.
     pub candidates: Vec<CandidateResult>,
-    /// Index into `candidates` of the chosen extension, when one earns its place.
+    /// The forward selection, step by step.
+    pub steps: Vec<Step>,
+    /// Index into `candidates` of the final model, when an extension earned its place.
     pub chosen: Option<usize>,
     /// The folder's name (`campaign` of slider-diagnosis.json).
     pub folder_name: String,
@@ -170,12 +195,12 @@ fn window_s(m: &Measured, p: &StudyParams) -> f64 {
 /// regime of slips the window cannot hold, which the feature function would
 /// call steady sliding) the stretch is doubled, up to `sim_max_window_s`,
 /// so a long period is measured as such.
-pub fn predict(cand: Candidate, x: &[f64], m: &Measured, p: &StudyParams) -> Features {
+pub fn predict(model: Model, x: &[f64], m: &Measured, p: &StudyParams) -> Features {
     let mut window = window_s(m, p);
     loop {
         let f = SCRATCH.with_borrow_mut(|(run, force, time)| {
             // A law whose simulation leaves the physical range predicts nothing: no slip.
-            let Ok(skip) = simulate_window(cand, x, m, p, window, run, force) else {
+            let Ok(skip) = simulate_window(model, x, m, p, window, run, force) else {
                 return Features::default_steady();
             };
             time.clear();
@@ -196,9 +221,9 @@ thread_local! {
 }
 
 /// The simulated force of `cand` at run `m` after its warm-up, thinned to about `points` (for figures).
-pub fn predict_trace(cand: Candidate, x: &[f64], m: &Measured, p: &StudyParams, points: usize) -> (Vec<f64>, Vec<f64>) {
+pub fn predict_trace(model: Model, x: &[f64], m: &Measured, p: &StudyParams, points: usize) -> (Vec<f64>, Vec<f64>) {
     let (mut run, mut f) = (OneDofRun::default(), Vec::new());
-    let Ok(skip) = simulate_window(cand, x, m, p, window_s(m, p), &mut run, &mut f) else {
+    let Ok(skip) = simulate_window(model, x, m, p, window_s(m, p), &mut run, &mut f) else {
         return (Vec::new(), Vec::new());
     };
     let step = ((f.len() - skip) / points.max(1)).max(1);
@@ -209,7 +234,7 @@ pub fn predict_trace(cand: Candidate, x: &[f64], m: &Measured, p: &StudyParams, 
 /// Simulates `window` s of run `m` after a warm-up of `warmup_fraction` of it
 /// into `force`; returns the number of warm-up samples at its start.
 fn simulate_window(
-    cand: Candidate,
+    model: Model,
     x: &[f64],
     m: &Measured,
     p: &StudyParams,
@@ -218,12 +243,13 @@ fn simulate_window(
     force: &mut Vec<f64>,
 ) -> Result<usize, rig_model::ModelError> {
     let warmup_s = p.warmup_fraction * window;
-    let law = cand.law(x);
+    let (law, structure) = model.law(x);
     let setup = Setup {
         stiffness_n_m: m.stiffness_n_m,
         drive_speed_m_s: m.drive_speed_um_s * 1e-6,
         mass_kg: p.mass_kg,
         gravity_m_s2: p.gravity_m_s2,
+        structure,
         duration_s: warmup_s + window,
         sample_rate_hz: m.sample_rate_hz,
         steps_per_period: p.steps_per_period,
@@ -233,33 +259,48 @@ fn simulate_window(
     Ok(((warmup_s * m.sample_rate_hz).round() as usize).min(force.len()))
 }
 
-fn fit_on(cand: Candidate, runs: &[&Measured], p: &StudyParams) -> Fitted {
-    let mu = runs.iter().map(|r| r.features.mean_force).sum::<f64>() / runs.len() as f64;
+/// Fits `model` on the runs `train` (indices into `runs`): Nelder–Mead from
+/// the best-scored of its physical starts and of the starts `nested` (the
+/// model the forward step extends, fitted on the same runs) gives
+/// ([`warm_starts`]), the best result kept.
+fn fit_on(model: Model, runs: &[Measured], train: &[usize], nested: Option<&Fitted>, p: &StudyParams) -> Fitted {
+    let on: Vec<&Measured> = train.iter().map(|&i| &runs[i]).collect();
+    let mu = on.iter().map(|r| r.features.mean_force).sum::<f64>() / on.len() as f64;
     // Each stiffness's slowest run: where the stability boundary shows.
     let mut slowest: Vec<(f64, Regime)> = Vec::new();
-    for r in runs {
-        let slower = runs.iter().any(|q| q.stiffness_n_m == r.stiffness_n_m && q.drive_speed_um_s < r.drive_speed_um_s);
+    for r in &on {
+        let slower = on.iter().any(|q| q.stiffness_n_m == r.stiffness_n_m && q.drive_speed_um_s < r.drive_speed_um_s);
         if !slower {
             slowest.push((r.stiffness_n_m, r.features.regime));
         }
     }
     let kc = critical_stiffness_guess_n_m(&slowest) / (p.mass_kg * p.gravity_m_s2);
+    // The measured inertial periods over the stated natural period (where a set-up's search starts).
+    let ratios: Vec<f64> = on
+        .iter()
+        .filter(|r| r.features.regime == Regime::InertialOscillation && r.features.period_s.n > 0)
+        .map(|r| r.features.period_s.median / r.features.natural_period_s)
+        .collect();
+    let period_ratio = if ratios.is_empty() { 1.0 } else { Spread::of(&ratios).median };
+    let stiffest = on.iter().map(|r| r.stiffness_n_m).fold(0.0, f64::max);
     let cost = |x: &[f64]| {
-        let m: Vec<f64> = runs.par_iter().map(|r| run_misfit(&r.features, &predict(cand, x, r, p))).collect();
+        let m: Vec<f64> = on.par_iter().map(|r| run_misfit(&r.features, &predict(model, x, r, p))).collect();
         m.iter().sum::<f64>() / m.len() as f64
     };
+    let specs = model.params();
     // Multi-start: every start scored, Nelder–Mead from the best
     // `fit_starts`, the best result kept.
-    let mut scored: Vec<(f64, Vec<f64>)> = cand.starts(mu, kc).into_iter().map(|x| (cost(&x), x)).collect();
+    let mut starts = nested.map_or_else(Vec::new, |f| warm_starts(model, f, kc, period_ratio, stiffest));
+    starts.extend(model.starts(mu, kc, period_ratio, stiffest));
+    let mut scored: Vec<(f64, Vec<f64>)> = starts.into_iter().map(|x| (cost(&x), x)).collect();
     scored.sort_by(|a, b| a.0.total_cmp(&b.0));
     let (params, calibration_misfit) = scored
         .iter()
         .take(p.fit_starts.max(1))
-        .map(|(_, x)| fit(cand, x, p.fit_evals, cost))
+        .map(|(_, x)| fit(&specs, x, p.fit_evals, cost))
         .min_by(|a, b| a.1.total_cmp(&b.1))
-        .expect("every candidate has a start");
-    let at_bounds = cand
-        .params()
+        .expect("every model has a start");
+    let at_bounds = specs
         .iter()
         .zip(&params)
         .filter(|(s, v)| {
@@ -268,7 +309,81 @@ fn fit_on(cand: Candidate, runs: &[&Measured], p: &StudyParams) -> Fitted {
         })
         .map(|(s, _)| s.name)
         .collect();
-    Fitted { candidate: cand, params, calibration_misfit, at_bounds }
+    Fitted { model, train: train.to_vec(), params, calibration_misfit, at_bounds }
+}
+
+/// Starts from a nested fit: its law with each of `model`'s set-up starts
+/// (a set-up added: the stated-like start reproduces the nested optimum), or
+/// each of `model`'s law starts on the nested set-up (a memory law added on
+/// a set-up). None when the law changes on the stated set-up (nothing of
+/// the nested fit carries over).
+fn warm_starts(
+    model: Model,
+    nested: &Fitted,
+    kc_over_weight_per_m: f64,
+    period_ratio: f64,
+    stiffest_n_m: f64,
+) -> Vec<Vec<f64>> {
+    let nf = nested.model.friction.params().len();
+    let (law, setup) = nested.params.split_at(nf);
+    let join = |a: &[f64], b: &[f64]| a.iter().chain(b).copied().collect::<Vec<f64>>();
+    if nested.model.friction == model.friction && nested.model.setup != model.setup {
+        model.setup.starts(period_ratio, stiffest_n_m).iter().map(|s| join(law, s)).collect()
+    } else if nested.model.setup == model.setup && model.setup != SetupCandidate::Stated {
+        model.friction.starts(law[0], kc_over_weight_per_m).iter().map(|l| join(l, setup)).collect()
+    } else {
+        Vec::new()
+    }
+}
+
+/// A model on the study's runs, as the selection sees it ([`FoldCandidate`]):
+/// fitted on a fold's runs, scored by [`run_misfit`] on the held-out ones.
+struct OnRuns<'a> {
+    model: Model,
+    runs: &'a [Measured],
+    p: &'a StudyParams,
+    /// The nested model's fits (the step's starting model), one per fold, where this one's search also starts.
+    nested: &'a [Fitted],
+}
+
+impl FoldCandidate for OnRuns<'_> {
+    type Fit = Fitted;
+    fn fit(&self, train: &[usize]) -> Fitted {
+        fit_on(self.model, self.runs, train, self.nested.iter().find(|f| f.train == train), self.p)
+    }
+    fn score(&self, fit: &Fitted, test: &[usize]) -> Vec<f64> {
+        test.par_iter()
+            .map(|&i| run_misfit(&self.runs[i].features, &predict(self.model, &fit.params, &self.runs[i], self.p)))
+            .collect()
+    }
+}
+
+/// Evaluates `model` over the folds and fits it on every calibration run.
+fn evaluate_model(
+    model: Model,
+    runs: &[Measured],
+    folds: &[Fold],
+    cal: &[usize],
+    nested: &[Fitted],
+    p: &StudyParams,
+) -> CandidateResult {
+    let on = OnRuns { model, runs, p, nested };
+    let e = evaluate(&on, folds);
+    let fitted = match e.fits.iter().find(|f| f.train == cal) {
+        Some(f) => f.clone(),
+        None => on.fit(cal),
+    };
+    let predicted: Vec<Features> = runs.par_iter().map(|r| predict(model, &fitted.params, r, p)).collect();
+    // The held-out features under the fold that held each run out.
+    let heldout: Vec<(usize, f64, Features)> = e
+        .heldout
+        .par_iter()
+        .map(|&(i, misfit)| {
+            let f = folds.iter().zip(&e.fits).find(|(f, _)| f.test.contains(&i)).expect("a fold holds the run out").1;
+            (i, misfit, predict(model, &f.params, &runs[i], p))
+        })
+        .collect();
+    CandidateResult { model, fitted, predicted, fold_fits: e.fits, heldout, heldout_mean: e.mean }
 }
 
 /// Reads the folder and runs the study.
@@ -286,48 +401,80 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
     let mut calibration_stiffnesses: Vec<f64> = cal.iter().map(|&i| runs[i].stiffness_n_m).collect();
     calibration_stiffnesses.dedup();
     let leave_one_out = cal.len() == runs.len();
-    // Splits: (fitted on, held out).
-    let splits: Vec<(Vec<usize>, Vec<usize>)> = if leave_one_out {
+    let folds: Vec<Fold> = if leave_one_out {
         calibration_stiffnesses
             .iter()
             .map(|&k| {
-                let (out, inn): (Vec<usize>, Vec<usize>) = (0..runs.len()).partition(|&i| runs[i].stiffness_n_m == k);
-                (inn, out)
+                let (test, train): (Vec<usize>, Vec<usize>) =
+                    (0..runs.len()).partition(|&i| runs[i].stiffness_n_m == k);
+                Fold { train, test }
             })
-            .filter(|(inn, _)| !inn.is_empty())
+            .filter(|f| !f.train.is_empty())
             .collect()
     } else {
-        vec![(cal.clone(), (0..runs.len()).filter(|i| !cal.contains(i)).collect())]
+        vec![Fold { train: cal.clone(), test: (0..runs.len()).filter(|i| !cal.contains(i)).collect() }]
     };
-    let candidates: Vec<CandidateResult> = CANDIDATES
-        .par_iter()
-        .map(|&cand| {
-            let all: Vec<&Measured> = cal.iter().map(|&i| &runs[i]).collect();
-            let fitted = fit_on(cand, &all, p);
-            let predicted: Vec<Features> = runs.par_iter().map(|r| predict(cand, &fitted.params, r, p)).collect();
-            let mut heldout = Vec::new();
-            for (inn, out) in &splits {
-                let refs: Vec<&Measured> = inn.iter().map(|&i| &runs[i]).collect();
-                let f = if inn == &cal { fitted.clone() } else { fit_on(cand, &refs, p) };
-                let pred: Vec<(usize, f64, Features)> = out
-                    .par_iter()
-                    .map(|&i| {
-                        let s = predict(cand, &f.params, &runs[i], p);
-                        (i, run_misfit(&runs[i].features, &s), s)
-                    })
-                    .collect();
-                heldout.extend(pred);
-            }
-            heldout.sort_by_key(|h| h.0);
-            let heldout_mean = heldout.iter().map(|h| h.1).sum::<f64>() / heldout.len().max(1) as f64;
-            CandidateResult { fitted, predicted, heldout, heldout_mean }
-        })
-        .collect();
-    let base = candidates[0].heldout_mean;
-    let chosen = (1..candidates.len())
-        .filter(|&c| !candidates[c].heldout.is_empty())
-        .min_by(|&a, &b| candidates[a].heldout_mean.total_cmp(&candidates[b].heldout_mean))
-        .filter(|&c| candidates[c].heldout_mean <= (1.0 - p.selection.min_relative_gain) * base);
+    // Forward selection from the Coulomb baseline: each step tries the
+    // current model's extensions (a memory law, a set-up) and keeps the best
+    // when it lowers the mean held-out misfit by the selection rule's gain.
+    let mut candidates = vec![evaluate_model(Model::BASELINE, &runs, &folds, &cal, &[], p)];
+    let mut steps = Vec::new();
+    let mut current = 0;
+    loop {
+        let from = &candidates[current];
+        let ext = from.model.extensions();
+        if ext.is_empty() {
+            break;
+        }
+        let nested = from.fold_fits.clone();
+        let tried: Vec<CandidateResult> =
+            ext.par_iter().map(|&m| evaluate_model(m, &runs, &folds, &cal, &nested, p)).collect();
+        let means: Vec<f64> = tried.iter().map(|c| c.heldout_mean).collect();
+        let best = step(f64::INFINITY, &means, 0.0).expect("a step tries at least one model");
+        let pairs = |c: &CandidateResult| c.heldout.iter().map(|h| (h.0, h.1)).collect::<Vec<_>>();
+        let gained = gain(&pairs(from), &pairs(&tried[best]));
+        let kept = step(from.heldout_mean, &means, p.selection.min_relative_gain).is_some();
+        let base = candidates.len();
+        candidates.extend(tried);
+        steps.push(Step {
+            from: current,
+            tried: (base..candidates.len()).collect(),
+            best: base + best,
+            gain: gained,
+            kept,
+        });
+        if kept {
+            current = base + best;
+            continue;
+        }
+        // Look-ahead: a memory law and a set-up may each fail alone and gain
+        // together (the set-up moves the inertial periods, the law the
+        // regimes). The best of each, combined, is one more step of two
+        // elements under the same rule; its search starts on the set-up's fits.
+        let from = &candidates[current];
+        let best_where = |f: &dyn Fn(&CandidateResult) -> bool| {
+            (base..candidates.len())
+                .filter(|&i| f(&candidates[i]))
+                .min_by(|&a, &b| candidates[a].heldout_mean.total_cmp(&candidates[b].heldout_mean))
+        };
+        let law = best_where(&|c| c.model.friction != from.model.friction);
+        let setup = best_where(&|c| c.model.setup != from.model.setup);
+        let (Some(law), Some(setup)) = (law, setup) else { break };
+        let pair = Model { friction: candidates[law].model.friction, setup: candidates[setup].model.setup };
+        let nested = candidates[setup].fold_fits.clone();
+        let c = evaluate_model(pair, &runs, &folds, &cal, &nested, p);
+        let pairs = |c: &CandidateResult| c.heldout.iter().map(|h| (h.0, h.1)).collect::<Vec<_>>();
+        let gained = gain(&pairs(&candidates[current]), &pairs(&c));
+        let kept = step(candidates[current].heldout_mean, &[c.heldout_mean], p.selection.min_relative_gain).is_some();
+        candidates.push(c);
+        let idx = candidates.len() - 1;
+        steps.push(Step { from: current, tried: vec![idx], best: idx, gain: gained, kept });
+        if !kept {
+            break;
+        }
+        current = idx;
+    }
+    let chosen = (current != 0).then_some(current);
     let traces = raw
         .iter()
         .zip(&runs)
@@ -347,6 +494,7 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
         leave_one_out,
         calibration_stiffnesses,
         candidates,
+        steps,
         chosen,
         folder_name,
         traces,

