@@ -252,4 +252,43 @@ mod tests {
         let min = f[after_first..].iter().cloned().fold(f64::MAX, f64::min);
         assert!((min - 0.30).abs() < 3e-3, "trough {min}");
     }
+
+    #[test]
+    fn a_set_up_sets_the_inertial_period_as_its_closed_form() {
+        // Coulomb with a small drop, r = ω Δμ m g/(k V) ≈ 0.1: one cycle lasts
+        // T (1 − atan(r)/π + r/π) (a slip from rest, then a stick of 2r/ω),
+        // T = 2π √(m_eff/k_eff): 0.8 T0 for m_eff = 0.64 m or k_eff = k/0.64,
+        // √2 T0 for a series spring k_s = k. The slip is a harmonic arc of
+        // amplitude Δμ √(1 + 1/r²) about μk, so the force spans twice that.
+        let law = Law::Coulomb { mu_static: 0.36, mu_kinetic: 0.35 };
+        for (structure, ratio) in [
+            (Structure::EffectiveMass { mass_ratio: 0.64 }, 0.8),
+            (Structure::SeriesCompliance { series_stiffness_n_m: 2254.0 }, 2f64.sqrt()),
+            (Structure::SpringScale { stiffness_ratio: 1.0 / 0.64 }, 0.8),
+        ] {
+            let mut s = setup(2254.0, 4300.0, 1.0);
+            s.structure = structure;
+            s.initial_force_over_weight = 0.36;
+            let f = simulate(&law, &s).unwrap();
+            let (m, k) = structure.effective(s.mass_kg, s.stiffness_n_m);
+            let (w, weight) = ((k / m).sqrt(), s.mass_kg * s.gravity_m_s2);
+            let r = w * 0.01 * weight / (k * s.drive_speed_m_s);
+            let pi = std::f64::consts::PI;
+            let expected = 2.0 * pi / w * (1.0 - r.atan() / pi + r / pi);
+            assert!((2.0 * pi / w / s_natural(&s) - ratio).abs() < 1e-9);
+            // Maxima after the first cycle: the period is the mean spacing.
+            let peaks: Vec<usize> =
+                (1..f.len() - 1).filter(|&i| f[i] > 0.37 && f[i] >= f[i - 1] && f[i] > f[i + 1]).collect();
+            let period = (peaks[peaks.len() - 1] - peaks[1]) as f64 / (peaks.len() - 2) as f64 / s.sample_rate_hz;
+            assert!((period / expected - 1.0).abs() < 0.01, "{structure:?}: period {period} vs {expected}");
+            let (max, min) = f[peaks[1]..].iter().fold((f64::MIN, f64::MAX), |(a, b), &x| (a.max(x), b.min(x)));
+            let range = 2.0 * 0.01 * (1.0 + 1.0 / (r * r)).sqrt();
+            assert!(((max - min) / range - 1.0).abs() < 0.02, "{structure:?}: range {} vs {range}", max - min);
+        }
+    }
+
+    /// The README's natural period 2π √(m/k) of a set-up.
+    fn s_natural(s: &Setup) -> f64 {
+        2.0 * std::f64::consts::PI * (s.mass_kg / s.stiffness_n_m).sqrt()
+    }
 }
