@@ -38,7 +38,8 @@ pub struct Evaluation<F> {
 
 /// Fits `c` on every fold's training runs and scores it on its held-out ones.
 pub fn evaluate<C: FoldCandidate>(c: &C, folds: &[Fold]) -> Evaluation<C::Fit> {
-    let per: Vec<(C::Fit, Vec<(usize, f64)>)> = folds
+    type Scored<F> = (F, Vec<(usize, f64)>);
+    let per: Vec<Scored<C::Fit>> = folds
         .par_iter()
         .map(|f| {
             let fit = c.fit(&f.train);
