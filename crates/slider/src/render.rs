@@ -58,19 +58,24 @@ fn inertial_note(s: &Study) -> String {
         .iter()
         .map(|r| {
             let f = &r.features;
+            // (P/T0)² and its standard error from the median's, 1.253 sd/√n.
+            let ratio = f.period_s.median / f.natural_period_s;
+            let se = 2.0 * ratio * ratio * 1.253 * f.period_s.sd / (f.period_s.n as f64).sqrt() / f.period_s.median;
             format!(
-                "{} {:.4} ± {:.4} s = {:.2} T0",
+                "{} {:.4} ± {:.4} s = {:.2} T0, (P/T0)² = {:.3} ± {:.3}",
                 r.name,
                 f.period_s.median,
                 f.period_s.sd,
-                f.period_s.median / f.natural_period_s
+                ratio,
+                ratio * ratio,
+                se
             )
         })
         .collect();
     let _ = writeln!(
         out,
-        "Measured inertial periods (median ± sd over cycles) against T0 = 2π√(m/k) with the README's m = {} kg and the \
-         file names' k: {}. An undamped Coulomb cycle lasts T0 (1 − atan(r)/π) + 2r/ω ≥ T0 (a slip from rest, \
+        "Measured inertial periods (median ± sd over cycles; (P/T0)² ± the standard error of the median) against \
+         T0 = 2π√(m/k) with the README's m = {} kg and the file names' k: {}. An undamped Coulomb cycle lasts T0 (1 − atan(r)/π) + 2r/ω ≥ T0 (a slip from rest, \
          r = ω(μs − μk) m g/(k V), then a stick of 2r/ω), and linearised about steady sliding rate and state adds damping \
          (N a iω/V) and a negative stiffness (−N b ω² Dc/(V² + ω² Dc²); Rice & Ruina 1983, ageing law) to the spring: no \
          friction law on one mass m and one spring k oscillates faster than 1/T0. A spring's own mass (m + m_s/3, \
@@ -80,6 +85,42 @@ fn inertial_note(s: &Study) -> String {
         s.params.mass_kg,
         list.join(", ")
     );
+    // Whether the stiffnesses can tell their (P/T0)² apart: the fastest
+    // inertial run of each (the nearest the limit r → 0, where a cycle lasts
+    // the natural period: at lower V a stick phase lengthens it), the
+    // extremes against twice their combined standard error.
+    let r2: Vec<(f64, f64, &str)> = inertial
+        .iter()
+        .filter(|r| {
+            !inertial.iter().any(|q| q.stiffness_n_m == r.stiffness_n_m && q.drive_speed_um_s > r.drive_speed_um_s)
+        })
+        .map(|r| {
+            let f = &r.features;
+            let ratio = f.period_s.median / f.natural_period_s;
+            let se = 2.0 * ratio * ratio * 1.253 * f.period_s.sd / (f.period_s.n as f64).sqrt() / f.period_s.median;
+            (ratio * ratio, se, r.name.as_str())
+        })
+        .collect();
+    let lo = r2.iter().min_by(|a, b| a.0.total_cmp(&b.0)).expect("an inertial run");
+    let hi = r2.iter().max_by(|a, b| a.0.total_cmp(&b.0)).expect("an inertial run");
+    if r2.len() > 1 {
+        let z = (hi.0 - lo.0) / (lo.1 * lo.1 + hi.1 * hi.1).sqrt();
+        let _ = writeln!(
+            out,
+            "Fastest inertial run of each stiffness (the nearest the limit where a cycle lasts the natural period; at lower V a \
+             stick phase lengthens it): the extremes, {} ({:.3}) and {} ({:.3}), differ by {:.1} combined standard errors: {}.\n",
+            lo.2,
+            lo.0,
+            hi.2,
+            hi.0,
+            z,
+            if z > 2.0 {
+                "resolved within these runs, so one set-up number does not hold for every spring (or the friction shifts these periods)"
+            } else {
+                "not resolved, so one set-up number for every spring is what the data allow"
+            }
+        );
+    }
     for c in s.candidates.iter().filter(|c| c.model.setup != SetupCandidate::Stated) {
         let n = c.model.friction.params().len();
         let specs = c.model.setup.params();
@@ -91,14 +132,15 @@ fn inertial_note(s: &Study) -> String {
                 format!("{:.3} fitted on k = {:?} N/m", f.params[n], ks)
             })
             .collect();
+        let all = c.fitted.as_ref().map_or(String::new(), |f| format!("{:.3} on all calibration runs; ", f.params[n]));
         let _ = writeln!(
             out,
-            "- {}: {} = {:.3} on all calibration runs; {}{}.",
+            "- {}: {} = {}{}{}.",
             c.model.id(),
             specs[0].name,
-            c.fitted.params[n],
+            all,
             per_fold.join(", "),
-            if c.fitted.at_bounds.contains(&specs[0].name) { " (at its bound)" } else { "" }
+            if at_bounds(c).contains(&specs[0].name) { " (at its bound in a fit)" } else { "" }
         );
     }
     out
@@ -216,11 +258,11 @@ pub fn render(s: &Study) -> StudyOutput {
     for c in &s.candidates {
         ct.push([
             c.model.id(),
-            params_text(c),
-            c.fitted.at_bounds.join(" "),
-            f4(c.fitted.calibration_misfit),
+            params_text(s, c),
+            at_bounds(c).join(" "),
+            c.fitted.as_ref().map_or("NaN".into(), |f| f4(f.calibration_misfit)),
             f4(c.heldout_mean),
-            format!("{}/{}", regimes_right(s, &c.predicted), s.runs.len()),
+            regimes_fitted(s, c),
             format!(
                 "{}/{}",
                 c.heldout.iter().filter(|h| s.runs[h.0].features.regime == h.2.regime).count(),
@@ -279,13 +321,48 @@ pub fn render(s: &Study) -> StudyOutput {
     out
 }
 
-fn params_text(c: &CandidateResult) -> String {
+fn params_text(s: &Study, c: &CandidateResult) -> String {
     let specs = c.model.params();
-    specs.iter().zip(&c.fitted.params).map(|(p, v)| format!("{}={:.4e}", p.name, v)).collect::<Vec<_>>().join(" ")
+    let text =
+        |x: &[f64]| specs.iter().zip(x).map(|(p, v)| format!("{}={:.4e}", p.name, v)).collect::<Vec<_>>().join(" ");
+    match &c.fitted {
+        Some(f) => text(&f.params),
+        None => c
+            .fold_fits
+            .iter()
+            .map(|f| {
+                format!(
+                    "fitted on k = {:?} N/m: {}",
+                    distinct(f.train.iter().map(|&i| s.runs[i].stiffness_n_m)),
+                    text(&f.params)
+                )
+            })
+            .collect::<Vec<_>>()
+            .join("; "),
+    }
 }
 
-fn regimes_right(s: &Study, pred: &[Features]) -> usize {
-    s.runs.iter().zip(pred).filter(|(r, p)| r.features.regime == p.regime).count()
+/// "right/all" of the regimes under the fit on every calibration run, "—" without one.
+fn regimes_fitted(s: &Study, c: &CandidateResult) -> String {
+    if c.predicted.is_empty() {
+        return "—".into();
+    }
+    let right = s.runs.iter().zip(&c.predicted).filter(|(r, p)| r.features.regime == p.regime).count();
+    format!("{right}/{}", s.runs.len())
+}
+
+/// Parameters at a bound in any of the model's fits (every calibration run, each fold).
+fn at_bounds(c: &CandidateResult) -> Vec<&'static str> {
+    let mut v: Vec<&'static str> =
+        c.fitted.iter().chain(&c.fold_fits).flat_map(|f| f.at_bounds.iter().copied()).collect();
+    v.sort_unstable();
+    v.dedup();
+    v
+}
+
+/// The fit on every calibration run of a model the report shows in full.
+fn full_fit(c: &CandidateResult) -> &crate::study::Fitted {
+    c.fitted.as_ref().expect("the baseline and each step's best are fitted on every calibration run")
 }
 
 /// The extension: the selected model, else the best model the first step tried.
@@ -303,7 +380,7 @@ fn figures(s: &Study, out: &mut StudyOutput) {
             if style == SeriesStyle::Line && std::ptr::eq(c, base) {
                 continue; // no candidate besides the baseline
             }
-            let (ts, fs) = predict_trace(c.model, &c.fitted.params, r, &s.params, t.len());
+            let (ts, fs) = predict_trace(c.model, &full_fit(c).params, r, &s.params, t.len());
             sers.push(series(&format!("{} (fitted on the calibration runs)", c.model.id()), ts, fs, style));
         }
         out.figures.push(figure(
@@ -412,7 +489,7 @@ fn diagnosis_json(s: &Study) -> Value {
         findings.push(json!({
             "effect": added(from.model, to.model),
             "model": to.model.id(),
-            "params": added_params(from.model, to, Some(&to.fitted.params)),
+            "params": added_params(from.model, to, Some(&full_fit(to).params)),
             "params_stderr": added_params(from.model, to, None),
             "evidence": evidence(s, st),
             "heldout_runs": heldout_names(s, to),
@@ -450,19 +527,25 @@ fn diagnosis_json(s: &Study) -> Value {
         (Some(st), true) => added(s.candidates[st.from].model, s.candidates[st.best].model),
         (None, true) => "none".to_string(),
     };
+    // Every fit that pressed a parameter against its bound (on every calibration run, or on a fold: which runs it saw).
     let at_bounds: Vec<Value> = s
         .candidates
         .iter()
         .flat_map(|c| {
             let specs = c.model.params();
-            c.fitted.at_bounds.iter().map(move |p| {
-                let j = specs.iter().position(|q| q.name == *p).expect("a parameter of the model");
-                let (spec, v) = (specs[j], c.fitted.params[j]);
-                json!({
-                    "parameter": format!("{}.{}", c.model.id(), p),
-                    "bound": if (v - spec.lo).abs() < (v - spec.hi).abs() { spec.lo } else { spec.hi },
-                    "unconstrained": Value::Null,
-                    "meaning": "the fit pressed this parameter against its bound: the model cannot reach what the calibration runs want there",
+            c.fitted.iter().chain(&c.fold_fits).flat_map(move |f| {
+                let specs = specs.clone();
+                f.at_bounds.iter().map(move |p| {
+                    let j = specs.iter().position(|q| q.name == *p).expect("a parameter of the model");
+                    let (spec, v) = (specs[j], f.params[j]);
+                    let ks = distinct(f.train.iter().map(|&i| s.runs[i].stiffness_n_m));
+                    json!({
+                        "parameter": format!("{}.{}", c.model.id(), p),
+                        "fitted_on_stiffnesses_n_m": ks,
+                        "bound": if (v - spec.lo).abs() < (v - spec.hi).abs() { spec.lo } else { spec.hi },
+                        "unconstrained": Value::Null,
+                        "meaning": "the fit pressed this parameter against its bound: the model cannot reach what these runs want there",
+                    })
                 })
             })
         })
@@ -474,7 +557,7 @@ fn diagnosis_json(s: &Study) -> Value {
         "candidates": s.candidates.iter().skip(1).map(|c| json!({
             "effect": c.model.id(),
             "heldout_misfit_extended": c.heldout_mean,
-            "criterion": c.fitted.calibration_misfit,
+            "criterion": c.fitted.as_ref().map(|f| f.calibration_misfit),
         })).collect::<Vec<_>>(),
         "structure": {
             "notes": "one mass on one spring with an imposed drive speed; a model is a friction law on a set-up (the README's m and k, or an effective mass, a compliance in series, a scaled spring)",
@@ -615,47 +698,45 @@ fn markdown(s: &Study) -> String {
             );
         }
     }
-    let _ = writeln!(md, "\n## Models (fitted on all calibration runs; held-out misfit from the held-out fits)\n");
     let _ = writeln!(
         md,
-        "| model | parameters | calibration misfit | held-out misfit | regimes right (fitted) | regimes right (held out) | at bounds |"
+        "\n## Models (fitted on all calibration runs where shown, else per fold; held-out misfit from the held-out fits)\n"
+    );
+    let _ = writeln!(
+        md,
+        "| model | parameters | calibration misfit | held-out misfit | regimes right (fitted) | regimes right (held out) | at bounds (any fit) |"
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|");
     for c in &s.candidates {
         let _ = writeln!(
             md,
-            "| {} | {} | {:.3} | {:.3} | {}/{} | {}/{} | {} |",
+            "| {} | {} | {} | {:.3} | {} | {}/{} | {} |",
             c.model.id(),
-            params_text(c),
-            c.fitted.calibration_misfit,
+            params_text(s, c),
+            c.fitted.as_ref().map_or("—".into(), |f| format!("{:.3}", f.calibration_misfit)),
             c.heldout_mean,
-            regimes_right(s, &c.predicted),
-            s.runs.len(),
+            regimes_fitted(s, c),
             regimes_heldout(s, c),
             c.heldout.len(),
-            if c.fitted.at_bounds.is_empty() { "—".to_string() } else { c.fitted.at_bounds.join(", ") }
+            if at_bounds(c).is_empty() { "—".to_string() } else { at_bounds(c).join(", ") }
         );
     }
-    let ext = extension(s);
     let _ = writeln!(md, "\n## Held-out predictions against the issue's bounds\n");
-    let _ = writeln!(
-        md,
-        "The Coulomb baseline and {} ({}), each run predicted by the fit that did not see its stiffness.\n",
-        ext.model.id(),
-        if s.chosen.is_some() { "the selected model" } else { "the best extension, not selected" }
-    );
+    let _ = writeln!(md, "Every model, each run predicted by the fit that did not see its stiffness.\n");
     let _ = writeln!(
         md,
         "| model | run | regime (measured → predicted) | inertial period ±15 % | period ×2 | drop ×2 | onset ±0.05 |"
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|");
-    let (bp, ba) = bounds_rows(s, &s.candidates[0], &mut md);
-    let (ep, ea) = if std::ptr::eq(ext, &s.candidates[0]) { (bp, ba) } else { bounds_rows(s, ext, &mut md) };
-    let _ = writeln!(
-        md,
-        "\nChecks passed (regime and every bound that applies): Coulomb {bp}/{ba}, {} {ep}/{ea}.",
-        ext.model.id()
-    );
+    let passed: Vec<String> = s
+        .candidates
+        .iter()
+        .map(|c| {
+            let (ok, all) = bounds_rows(s, c, &mut md);
+            format!("{} {ok}/{all}", c.model.id())
+        })
+        .collect();
+    let _ = writeln!(md, "\nChecks passed (regime and every bound that applies): {}.", passed.join(", "));
     let _ = writeln!(md, "\n## What the Coulomb law gets wrong, held out\n");
     let base = &s.candidates[0];
     let mut any = false;
@@ -720,12 +801,11 @@ fn markdown(s: &Study) -> String {
         .collect();
     let _ = writeln!(
         md,
-        "- Final model {}: regimes right {}/{} held out, {}/{} fitted on all calibration runs{}.\n",
+        "- Final model {}: regimes right {}/{} held out, {} fitted on all calibration runs{}.\n",
         final_c.model.id(),
         regimes_heldout(s, final_c),
         final_c.heldout.len(),
-        regimes_right(s, &final_c.predicted),
-        s.runs.len(),
+        regimes_fitted(s, final_c),
         if missed.is_empty() { String::new() } else { format!("; held out it misses {}", missed.join(", ")) }
     );
     let _ = writeln!(

@@ -105,9 +105,11 @@ pub struct Fitted {
 #[derive(Debug, Clone)]
 pub struct CandidateResult {
     pub model: Model,
-    /// Fitted on every calibration run.
-    pub fitted: Fitted,
-    /// Its features at every run (fitted on all calibration runs).
+    /// Fitted on every calibration run: always with held-out stiffnesses
+    /// (it is the fold's fit); with leave one stiffness out only for the
+    /// baseline and each step's best (the selection uses the folds alone).
+    pub fitted: Option<Fitted>,
+    /// Its features at every run under `fitted` (empty without it).
     pub predicted: Vec<Features>,
     /// One fit per fold (leave one stiffness out: one per stiffness).
     pub fold_fits: Vec<Fitted>,
@@ -358,7 +360,10 @@ impl FoldCandidate for OnRuns<'_> {
     }
 }
 
-/// Evaluates `model` over the folds and fits it on every calibration run.
+/// Evaluates `model` over the folds. The fit on every calibration run comes
+/// with it when a fold is that fit (held-out stiffnesses); with leave one
+/// stiffness out it is fitted later, only for the models the report shows
+/// in full ([`complete`]).
 fn evaluate_model(
     model: Model,
     runs: &[Measured],
@@ -369,11 +374,6 @@ fn evaluate_model(
 ) -> CandidateResult {
     let on = OnRuns { model, runs, p, nested };
     let e = evaluate(&on, folds);
-    let fitted = match e.fits.iter().find(|f| f.train == cal) {
-        Some(f) => f.clone(),
-        None => on.fit(cal),
-    };
-    let predicted: Vec<Features> = runs.par_iter().map(|r| predict(model, &fitted.params, r, p)).collect();
     // The held-out features under the fold that held each run out.
     let heldout: Vec<(usize, f64, Features)> = e
         .heldout
@@ -383,7 +383,30 @@ fn evaluate_model(
             (i, misfit, predict(model, &f.params, &runs[i], p))
         })
         .collect();
-    CandidateResult { model, fitted, predicted, fold_fits: e.fits, heldout, heldout_mean: e.mean }
+    let mut c = CandidateResult {
+        model,
+        fitted: None,
+        predicted: Vec::new(),
+        fold_fits: e.fits,
+        heldout,
+        heldout_mean: e.mean,
+    };
+    if let Some(f) = c.fold_fits.iter().find(|f| f.train == cal) {
+        c.fitted = Some(f.clone());
+        c.predicted = runs.par_iter().map(|r| predict(model, &f.params, r, p)).collect();
+    }
+    c
+}
+
+/// Fits `c` on every calibration run (when not yet) and predicts every run with that fit.
+fn complete(c: &mut CandidateResult, runs: &[Measured], cal: &[usize], p: &StudyParams) {
+    if c.fitted.is_some() {
+        return;
+    }
+    let on = OnRuns { model: c.model, runs, p, nested: &c.fold_fits };
+    let f = on.fit(cal);
+    c.predicted = runs.par_iter().map(|r| predict(c.model, &f.params, r, p)).collect();
+    c.fitted = Some(f);
 }
 
 /// Reads the folder and runs the study.
@@ -475,6 +498,21 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
         current = idx;
     }
     let chosen = (current != 0).then_some(current);
+    // The models the report shows in full: the baseline and each step's best.
+    let mut full: Vec<usize> = std::iter::once(0).chain(steps.iter().map(|st| st.best)).collect();
+    full.sort_unstable();
+    full.dedup();
+    let completed: Vec<(usize, CandidateResult)> = full
+        .par_iter()
+        .map(|&i| {
+            let mut c = candidates[i].clone();
+            complete(&mut c, &runs, &cal, p);
+            (i, c)
+        })
+        .collect();
+    for (i, c) in completed {
+        candidates[i] = c;
+    }
     let traces = raw
         .iter()
         .zip(&runs)
