@@ -557,7 +557,11 @@ fn diagnosis_json(s: &Study) -> Value {
         "candidates": s.candidates.iter().skip(1).map(|c| json!({
             "effect": c.model.id(),
             "heldout_misfit_extended": c.heldout_mean,
-            "criterion": c.fitted.as_ref().map(|f| f.calibration_misfit),
+            // The calibration misfit on every calibration run, else the mean of the folds' own.
+            "criterion": c.fitted.as_ref().map_or_else(
+                || c.fold_fits.iter().map(|f| f.calibration_misfit).sum::<f64>() / c.fold_fits.len().max(1) as f64,
+                |f| f.calibration_misfit,
+            ),
         })).collect::<Vec<_>>(),
         "structure": {
             "notes": "one mass on one spring with an imposed drive speed; a model is a friction law on a set-up (the README's m and k, or an effective mass, a compliance in series, a scaled spring)",
@@ -619,6 +623,63 @@ fn bounds_rows(s: &Study, c: &CandidateResult, md: &mut String) -> (usize, usize
         );
     }
     (pass, all)
+}
+
+/// What no model reaches held out: per run, the checks every model fails,
+/// with the measured value and the range of the predictions.
+fn unreached(s: &Study) -> String {
+    let mut out = Vec::new();
+    for (i, r) in s.runs.iter().enumerate() {
+        let preds: Vec<&Features> =
+            s.candidates.iter().filter_map(|c| c.heldout.iter().find(|h| h.0 == i).map(|h| &h.2)).collect();
+        let all_fail = |check: &dyn Fn(&Bounds) -> Option<bool>| {
+            let v: Vec<Option<bool>> = preds.iter().map(|f| check(&bounds(&r.features, f))).collect();
+            !v.is_empty() && v.iter().all(|b| *b != Some(true)) && v.contains(&Some(false))
+        };
+        let range = |pick: fn(&Features) -> f64| {
+            let v: Vec<f64> = preds.iter().map(|f| pick(f)).filter(|x| x.is_finite()).collect();
+            let (lo, hi) = v.iter().fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+            format!("{lo:.3}–{hi:.3}")
+        };
+        let f = &r.features;
+        if preds.iter().all(|p| p.regime != f.regime) && !preds.is_empty() {
+            let mut got: Vec<&str> = preds.iter().map(|p| p.regime.label()).collect();
+            got.sort_unstable();
+            got.dedup();
+            out.push(format!("{}: regime {} (predicted: {})", r.name, f.regime.label(), got.join(", ")));
+        }
+        if all_fail(&|b| b.inertial_period) {
+            out.push(format!(
+                "{}: inertial period {:.4} s (predicted {} s)",
+                r.name,
+                f.period_s.median,
+                range(|f| f.period_s.median)
+            ));
+        }
+        if all_fail(&|b| b.onset) {
+            out.push(format!(
+                "{}: force at slip onset {:.3} (predicted {})",
+                r.name,
+                f.onset.median,
+                range(|f| f.onset.median)
+            ));
+        }
+        if all_fail(&|b| b.period) {
+            out.push(format!(
+                "{}: period {:.4} s (predicted {} s)",
+                r.name,
+                f.period_s.median,
+                range(|f| f.period_s.median)
+            ));
+        }
+        if all_fail(&|b| b.drop) {
+            out.push(format!("{}: drop {:.4} (predicted {})", r.name, f.drop.median, range(|f| f.drop.median)));
+        }
+    }
+    if out.is_empty() {
+        return "- Every check is met held out by at least one model.".into();
+    }
+    format!("- What no model here reaches held out: {}.", out.join("; "))
 }
 
 fn markdown(s: &Study) -> String {
@@ -790,6 +851,7 @@ fn markdown(s: &Study) -> String {
             st.gain.sd
         );
     }
+    let _ = writeln!(md, "{}", unreached(s));
     let final_c = s.chosen.map(|c| &s.candidates[c]).unwrap_or(base);
     let missed: Vec<String> = final_c
         .heldout

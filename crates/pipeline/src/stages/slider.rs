@@ -1,8 +1,9 @@
 //! Stage `slider`: the ENS Lyon paper-on-paper spring–slider (Colas et al.
 //! 2019; read from ../shared or any folder in its layout, never copied)
 //! through rig_slider: measured features, the Coulomb baseline and the
-//! candidate laws fitted on the calibration stiffnesses, held-out
-//! predictions, `slider-diagnosis.json` (schema of ../shared/spec/diagnosis.md),
+//! candidate models (a friction law on a set-up) fitted on the calibration
+//! stiffnesses and chosen by forward selection, held-out predictions,
+//! `slider-diagnosis.json` (schema of ../shared/spec/diagnosis.md),
 //! tables, figures and `slider.md`.
 //!
 //! `folder` may start with `{shared}` (the shared folder); another folder
