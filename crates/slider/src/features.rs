@@ -23,7 +23,9 @@
 //! pieces; a piece whose least-squares slope gives v < V/2 counts as stuck
 //! (stick fraction: stuck time over the cycle); creep before slip is
 //! 1 − s/L for the slope s of the last piece, the slider's mean speed over
-//! V just before it slips (0: stuck until the slip; 1: sliding at V).
+//! V just before it slips (0: stuck until the slip; 1: sliding at V); the
+//! load rate is the slope over the middle three fifths of the loading phase
+//! over L (what the spring as mounted does to a resting slider).
 //!
 //! Regime: fewer than `min_events` slips → steady sliding; slips with a
 //! median stick fraction of at least `stick_regime_fraction` → stick-slip
@@ -115,6 +117,10 @@ pub struct Features {
     pub stick_fraction: Spread,
     /// Creep before slip: the slider's mean speed over V in the last piece of the loading phase.
     pub creep: Spread,
+    /// The force's rise over the middle three fifths of each loading phase,
+    /// in units of L = k V/(m g) (stated k and m): 1 for a slider at rest on
+    /// the stated spring, r for a spring r times stiffer, below 1 while it creeps.
+    pub load_rate: Spread,
     /// Mean force over the record, F/(m g).
     pub mean_force: f64,
     /// 2π √(m/k), s.
@@ -137,6 +143,7 @@ impl Features {
             onset: none,
             stick_fraction: none,
             creep: none,
+            load_rate: none,
             mean_force: f64::NAN,
             natural_period_s: f64::NAN,
             noise_sd: f64::NAN,
@@ -167,6 +174,7 @@ pub fn features(time_s: &[f64], force: &[f64], c: &RunConstants, o: &FeatureOpti
     let hysteresis = o.min_drop.max(o.noise_multiple * noise_sd);
     let turns = turning_points(&f, hysteresis);
     let (mut period, mut drop, mut onset, mut stick, mut creep) = (vec![], vec![], vec![], vec![], vec![]);
+    let mut rise = vec![];
     // turns alternate; a slip is a maximum followed by a minimum.
     let maxima: Vec<usize> = (0..turns.len()).filter(|&j| turns[j].1 && j + 1 < turns.len()).collect();
     for (e, &j) in maxima.iter().enumerate() {
@@ -198,6 +206,8 @@ pub fn features(time_s: &[f64], force: &[f64], c: &RunConstants, o: &FeatureOpti
         }
         stick.push(stuck_s / cycle_s);
         creep.push(last_speed);
+        let (a, b) = (iload + len / 5, imax - len / 5);
+        rise.push(ls_slope(&time_s[a..=b], &f[a..=b]) / load_rate);
     }
     let events = drop.len();
     let period_s = Spread::of(&period);
@@ -219,6 +229,7 @@ pub fn features(time_s: &[f64], force: &[f64], c: &RunConstants, o: &FeatureOpti
         onset: Spread::of(&onset),
         stick_fraction,
         creep: Spread::of(&creep),
+        load_rate: Spread::of(&rise),
         mean_force: f.iter().sum::<f64>() / n as f64,
         natural_period_s,
         noise_sd,
@@ -343,6 +354,7 @@ mod tests {
         assert!((r.onset.median - 0.35).abs() < 1e-3, "{:?}", r.onset);
         assert!(r.stick_fraction.median > 0.95, "{:?}", r.stick_fraction);
         assert!(r.creep.median.abs() < 0.02, "{:?}", r.creep);
+        assert!((r.load_rate.median - 1.0).abs() < 0.02, "{:?}", r.load_rate);
     }
 
     #[test]

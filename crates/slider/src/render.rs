@@ -121,6 +121,25 @@ fn inertial_note(s: &Study) -> String {
             }
         );
     }
+    // The loading rate where the slider rests (stick-slip runs): a spring r
+    // times stiffer raises it to r L, a lighter mass leaves it at L.
+    let resting: Vec<String> = s
+        .runs
+        .iter()
+        .filter(|r| r.features.regime == Regime::StickSlip && r.features.load_rate.n > 0)
+        .map(|r| format!("{} {:.3} ± {:.3} L", r.name, r.features.load_rate.median, r.features.load_rate.sd))
+        .collect();
+    if !resting.is_empty() {
+        let want = 1.0 / (lo.0 + hi.0) * 2.0;
+        let _ = writeln!(
+            out,
+            "The force's rise where the slider rests (stick-slip runs; median ± sd over loading phases, in units of \
+             L = k V/(m g)): {}. A spring as mounted r times the stated one raises it to r L, a lighter mass leaves it at L; \
+             the inertial periods alone would want r ≈ {:.2} (1/(P/T0)², fastest runs).\n",
+            resting.join(", "),
+            want
+        );
+    }
     for c in s.candidates.iter().filter(|c| c.model.setup != SetupCandidate::Stated) {
         let n = c.model.friction.params().len();
         let specs = c.model.setup.params();
@@ -216,6 +235,8 @@ pub fn render(s: &Study) -> StudyOutput {
         "stick_fraction_sd",
         "creep",
         "creep_sd",
+        "load_rate",
+        "load_rate_sd",
         "mean_force",
         "noise_sd",
         "hysteresis",
@@ -239,6 +260,8 @@ pub fn render(s: &Study) -> StudyOutput {
             f4(f.stick_fraction.sd),
             f4(f.creep.median),
             f4(f.creep.sd),
+            f4(f.load_rate.median),
+            f4(f.load_rate.sd),
             f4(f.mean_force),
             f4(f.noise_sd),
             f4(f.hysteresis),
@@ -704,15 +727,15 @@ fn markdown(s: &Study) -> String {
     let _ = writeln!(md, "## Measured features (median ± sd over slip events)\n");
     let _ = writeln!(
         md,
-        "| run | regime | events | T0 [s] | period [s] | drop | onset | stick fraction | creep before slip |"
+        "| run | regime | events | T0 [s] | period [s] | drop | onset | stick fraction | creep before slip | load rate / L |"
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|");
     for r in &s.runs {
         let f = &r.features;
         let pm = |x: &Spread| format!("{:.4} ± {:.4}", x.median, x.sd);
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {:.4} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {:.4} | {} | {} | {} | {} | {} | {} |",
             r.name,
             f.regime.label(),
             f.events,
@@ -721,7 +744,8 @@ fn markdown(s: &Study) -> String {
             pm(&f.drop),
             pm(&f.onset),
             pm(&f.stick_fraction),
-            pm(&f.creep)
+            pm(&f.creep),
+            pm(&f.load_rate)
         );
     }
     let _ = writeln!(md, "\n{}", inertial_note(s));
