@@ -671,32 +671,17 @@ fn unreached(s: &Study) -> String {
             got.dedup();
             out.push(format!("{}: regime {} (predicted: {})", r.name, f.regime.label(), got.join(", ")));
         }
-        if all_fail(&|b| b.inertial_period) {
-            out.push(format!(
-                "{}: inertial period {:.4} s (predicted {} s)",
-                r.name,
-                f.period_s.median,
-                range(|f| f.period_s.median)
-            ));
-        }
-        if all_fail(&|b| b.onset) {
-            out.push(format!(
-                "{}: force at slip onset {:.3} (predicted {})",
-                r.name,
-                f.onset.median,
-                range(|f| f.onset.median)
-            ));
-        }
-        if all_fail(&|b| b.period) {
-            out.push(format!(
-                "{}: period {:.4} s (predicted {} s)",
-                r.name,
-                f.period_s.median,
-                range(|f| f.period_s.median)
-            ));
-        }
-        if all_fail(&|b| b.drop) {
-            out.push(format!("{}: drop {:.4} (predicted {})", r.name, f.drop.median, range(|f| f.drop.median)));
+        type Check = (&'static str, &'static str, fn(&Bounds) -> Option<bool>, fn(&Features) -> f64);
+        let checks: [Check; 4] = [
+            ("inertial period", " s", |b| b.inertial_period, |f| f.period_s.median),
+            ("force at slip onset", "", |b| b.onset, |f| f.onset.median),
+            ("period", " s", |b| b.period, |f| f.period_s.median),
+            ("drop", "", |b| b.drop, |f| f.drop.median),
+        ];
+        for (name, unit, check, pick) in checks {
+            if all_fail(&check) {
+                out.push(format!("{}: {name} {:.4}{unit} (predicted {}{unit})", r.name, pick(f), range(pick)));
+            }
         }
     }
     if out.is_empty() {
