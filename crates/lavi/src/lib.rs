@@ -34,7 +34,7 @@
 //!
 //! # Adequacy
 //!
-//! The final model is adequate when its mean held-out misfit is at most
+//! The final model is adequate when its held-out misfit (RMS over the windows) is at most
 //! `adequacy_threshold` (1: the seven features within their targets in
 //! RMS, [`score`]). Otherwise the verdict is `unexplained`, the selected
 //! effects stay as a partial explanation, and the residual signature
@@ -148,10 +148,9 @@ pub struct StudyParams {
     pub fit_evaluations: usize,
     /// Moving mean of the measured top speed that the compliant drive follows, s.
     pub drive_ref_window_s: f64,
-    /// pipeline.toml's `[shared.selection]` (the campaign diagnosis' rule too).
+    /// pipeline.toml's `[shared.selection]`: the one engine's step rule
+    /// (`rig_types::select`, the campaign diagnosis' and the slider's too).
     pub selection: rig_types::contract::SelectionRule,
-    /// One-sided level of the paired t-test (0.05 or 0.01).
-    pub significance: f64,
     pub adequacy_threshold: f64,
     /// Start of the held-out window shown in the figures, s.
     pub figure_window_start_s: f64,

@@ -32,7 +32,7 @@ fn explore() {
             t.step,
             t.candidate,
             t.fitted.calibration_misfit,
-            t.heldout_mean,
+            t.heldout_misfit,
             t.relative_gain,
             t.paired_t,
             t.wins,
