@@ -43,12 +43,12 @@ const EFFECT_IDS: [(&str, &str); 10] = [
     ),
     (
         "sensor_inertia",
-        "an inertia between the torque sensor and the contact: the sensor reads T_f + J_s Ω' (`sensor_inertia_kgm2`).",
+        "an inertia between the torque sensor and the contact (the sensor above part of the bit): the sensor reads T_f + J_s Ω'; J_s (J/10 to 10 J) and the law fitted jointly by simulation, J, k, c by least squares on T − J_s Ω' (`sensor_inertia_kgm2` and the law's keys).",
     ),
     ("friction_memory", "the slip friction follows its steady law with a first-order lag (`lag_s`)."),
     (
         "second_dof",
-        "a mid inertia on the shaft, a second torsional degree of freedom (`mid_inertia_kgm2`, `stiffness_split`).",
+        "a mid inertia on the shaft, a second torsional degree of freedom, then the law refitted by simulation (`mid_inertia_kgm2`, `stiffness_split` and the law's keys).",
     ),
     (
         "compliant_drive",
@@ -164,7 +164,7 @@ pub fn render(s: &Study, d: &Prepared, rec: &LaviRecording) -> Result<StudyOutpu
             format!("{}/{}", t.wins, t.heldout.len()),
             t.earns_place.to_string(),
             sel.chosen.contains(&i).to_string(),
-            params.join(" "),
+            t.refused.as_ref().map_or_else(|| params.join(" "), |r| format!("refused: {r}")),
         ]);
     }
     out.tables.push(("tables/lavi-candidates.csv".into(), ct));
@@ -521,7 +521,11 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
             t.paired_t,
             t.wins,
             t.heldout.len(),
-            if t.earns_place { "yes" } else { "no" }
+            match (&t.refused, t.earns_place) {
+                (Some(r), _) => format!("no, refused: {r}"),
+                (None, true) => "yes".into(),
+                (None, false) => "no".into(),
+            }
         );
     }
     let _ = writeln!(md);

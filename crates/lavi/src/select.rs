@@ -77,6 +77,9 @@ pub struct Trial {
     pub wins: usize,
     /// Admitted by the rule and no worse on the calibration window.
     pub earns_place: bool,
+    /// Why the candidate could not be fitted at this step (its `fitted` is
+    /// then the current model and its misfits infinite: never the best).
+    pub refused: Option<String>,
 }
 
 /// The selection's outcome.
@@ -117,14 +120,21 @@ pub fn forward_select(
     let mut current = base.clone();
     let mut trials = Vec::with_capacity(sel.trials.len());
     for t in &sel.trials {
-        if let Some(e) = &t.error {
-            return Err(LaviError::Input { what: "candidate fit", rule: format!("{}: {e}", t.id) });
-        }
-        let fitted = t.fitted[0].clone();
+        let fitted = match t.fitted.first() {
+            Some(f) => f.clone(),
+            None => Fitted {
+                model: current.model,
+                at_bounds: Vec::new(),
+                params: BTreeMap::new(),
+                calibration_misfit: f64::INFINITY,
+                evaluations: 0,
+            },
+        };
         trials.push(Trial {
+            refused: t.error.clone(),
             step: t.step,
             candidate: candidates[t.candidate],
-            earns_place: t.significant && worse_on_calibration(&current, &fitted).is_none(),
+            earns_place: t.significant && t.error.is_none() && worse_on_calibration(&current, &fitted).is_none(),
             fitted,
             heldout: t.misfits.clone(),
             heldout_misfit: t.comparison.after,
