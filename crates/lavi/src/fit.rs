@@ -425,6 +425,9 @@ fn law_by_simulation(current: &Model, ev: &Evaluator, max_evals: usize) -> (Mode
     (m, n, family)
 }
 
+/// One law family's fit: (calibration misfit, model, evaluations, family, extra parameters).
+type FamilyFit = (f64, Option<Model>, usize, f64, Vec<f64>);
+
 /// [`law_by_simulation`] with structure parameters fitted jointly with the
 /// law: `extra` their (start, simplex step), `apply` the model with the law
 /// set and those parameters applied (None: no valid model, scored at the cap).
@@ -439,7 +442,7 @@ fn law_by_simulation_with(
 ) -> Option<(Model, usize, f64, Vec<f64>)> {
     let cal = ev.calibration();
     let f0 = current.friction;
-    let fits: Vec<(f64, Option<Model>, usize, f64, Vec<f64>)> = [0.0, 1.0, 2.0]
+    let fits: Vec<FamilyFit> = [0.0, 1.0, 2.0]
         .par_iter()
         .map(|&family| {
             let law_of = |x: &[f64]| -> Model {
