@@ -67,6 +67,19 @@ pub fn derive(
     slip_speed_rpm: f64,
     st: Structure,
 ) -> Result<(Model, Derivation), LaviError> {
+    derive_with(d, cal, slip_speed_rpm, st, None)
+}
+
+/// [`derive`], with the law `law` when given instead of the least-squares one
+/// (not fitted then: the law's rmse in the derivation is NaN), for the fits
+/// that set the law by simulation.
+fn derive_with(
+    d: &Prepared,
+    cal: &WindowSpec,
+    slip_speed_rpm: f64,
+    st: Structure,
+    law: Option<FrictionLaw>,
+) -> Result<(Model, Derivation), LaviError> {
     let r = (cal.span.start + cal.window.start)..(cal.span.start + cal.window.end);
     let t = &d.time_s[r.clone()];
     let rad = |x: &[f64]| x.iter().map(|v| v * RPM_TO_RAD_S).collect::<Vec<f64>>();
@@ -125,26 +138,33 @@ pub fn derive(
         dof = fit(Damping::Fixed0)?;
     }
     let bit_rpm = &d.bit_rpm[r];
-    let (vs, ys): (Vec<f64>, Vec<f64>) = (0..t.len())
-        .filter(|&i| bit_rpm[i] > slip_speed_rpm)
-        .map(|i| (bit_rpm[i], if st.wob { tf[i] * w_ref / w[i] } else { tf[i] }))
-        .unzip();
-    let e = fit_weakening(&vs, &ys, 1.0, 0.5, 2000.0)?;
-    let g = fit_weakening(&vs, &ys, 2.0, 0.5, 2000.0)?;
-    let f = if g.rmse <= e.rmse { g } else { e };
+    let (friction, law_rmse_nm, law_constant_rmse_nm) = match law {
+        Some(law) => (law, f64::NAN, f64::NAN),
+        None => {
+            let (vs, ys): (Vec<f64>, Vec<f64>) = (0..t.len())
+                .filter(|&i| bit_rpm[i] > slip_speed_rpm)
+                .map(|i| (bit_rpm[i], if st.wob { tf[i] * w_ref / w[i] } else { tf[i] }))
+                .unzip();
+            let e = fit_weakening(&vs, &ys, 1.0, 0.5, 2000.0)?;
+            let g = fit_weakening(&vs, &ys, 2.0, 0.5, 2000.0)?;
+            let f = if g.rmse <= e.rmse { g } else { e };
+            let law = FrictionLaw {
+                static_nm: f.a + f.b.max(0.0),
+                kinetic_nm: f.a,
+                stribeck_speed_rad_s: f.vs * RPM_TO_RAD_S,
+                shape_exponent: f.shape_exponent,
+                viscous_nm_s_rad: 0.0,
+            };
+            (law, f.rmse, f.rmse_constant)
+        }
+    };
     let model = Model {
         inertia_kgm2: dof.inertia_kgm2,
         stiffness_nm_rad: dof.stiffness_nm_rad,
         damping_nm_s_rad: dof.damping_nm_s_rad,
         absolute_damping_nm_s_rad: dof.absolute_damping_nm_s_rad,
         torque_delay_s: shift as f64 / d.fs_hz,
-        friction: FrictionLaw {
-            static_nm: f.a + f.b.max(0.0),
-            kinetic_nm: f.a,
-            stribeck_speed_rad_s: f.vs * RPM_TO_RAD_S,
-            shape_exponent: f.shape_exponent,
-            viscous_nm_s_rad: 0.0,
-        },
+        friction,
         wob_ref_n: st.wob.then_some(w_ref),
         sensor_inertia_kgm2: st.sensor_inertia_kgm2,
         friction_lag_s: 0.0,
@@ -152,14 +172,7 @@ pub fn derive(
         drive: None,
         structure: st,
     };
-    let info = Derivation {
-        structure: st,
-        free,
-        used: dof,
-        at_bounds,
-        law_rmse_nm: f.rmse,
-        law_constant_rmse_nm: f.rmse_constant,
-    };
+    let info = Derivation { structure: st, free, used: dof, at_bounds, law_rmse_nm, law_constant_rmse_nm };
     Ok((model, info))
 }
 
@@ -502,14 +515,8 @@ fn restructure(current: &Model, ev: &Evaluator, st: Structure) -> Result<Model, 
 /// `current` re-derived by least squares under structure `st` (J, k, c, c_a),
 /// keeping `current`'s law and its other effects.
 fn restructure_with_law(current: &Model, ev: &Evaluator, st: Structure) -> Result<Model, LaviError> {
-    let (m, _) = derive(ev.data, &ev.windows[ev.calibration()], ev.slip_speed_rpm, st)?;
-    Ok(Model {
-        friction: current.friction,
-        friction_lag_s: current.friction_lag_s,
-        mid: current.mid,
-        drive: current.drive,
-        ..m
-    })
+    let (m, _) = derive_with(ev.data, &ev.windows[ev.calibration()], ev.slip_speed_rpm, st, Some(current.friction))?;
+    Ok(Model { friction_lag_s: current.friction_lag_s, mid: current.mid, drive: current.drive, ..m })
 }
 
 /// True when `current`'s law is still the least-squares one of [`derive`] (no simulation fit chose it).
