@@ -754,6 +754,55 @@ fn side_by_side(s: &Study) -> String {
         row(cand.id(), f, tr.heldout_misfit);
     }
     row(&format!("extended ({})", effects_label(s)), &s.final_features, overall(&s.selection.final_heldout));
+    // The torque level (issue 26): every step-1 candidate that meets the two torque targets on more windows
+    // than the extended model, and the motion it loses for it.
+    let count = |f: &[Features], fi: usize| held.iter().filter(|&&wi| met(&s.measured[wi], &f[wi])[fi]).count();
+    let torque = |f: &[Features]| count(f, N_FEATURES - 2) + count(f, N_FEATURES - 1);
+    let motion = |f: &[Features]| (0..N_FEATURES - 2).map(|fi| count(f, fi)).sum::<usize>();
+    let ext = &s.final_features;
+    let clauses: Vec<String> = s
+        .candidate_features
+        .iter()
+        .zip(s.selection.trials.iter().filter(|t| t.step == 1))
+        .filter(|((_, f), _)| torque(f) > torque(ext))
+        .map(|((c, f), tr)| {
+            let lost: Vec<String> = (0..N_FEATURES - 2)
+                .filter(|&fi| count(f, fi) < count(ext, fi))
+                .map(|fi| format!("`{}` {}/{nh}", FEATURES[fi], count(f, fi)))
+                .collect();
+            format!(
+                "`{}` {}/{} (slip {}/{nh}, break-away {}/{nh}; motion {}/{}, losing {}; held-out misfit {:.3})",
+                c.id(),
+                torque(f),
+                2 * nh,
+                count(f, N_FEATURES - 2),
+                count(f, N_FEATURES - 1),
+                motion(f),
+                (N_FEATURES - 2) * nh,
+                if lost.is_empty() { "nothing".into() } else { lost.join(", ") },
+                tr.heldout_misfit
+            )
+        })
+        .collect();
+    if !clauses.is_empty() {
+        let all = s.candidate_features.iter().map(|(_, f)| f).chain([ext]);
+        let _ = writeln!(
+            t,
+            "\nThe torque level side by side (window-features within the two torque targets; the extended model: {}/{}, \
+             motion {}/{}, held-out misfit {:.3}): {}.{}",
+            torque(ext),
+            2 * nh,
+            motion(ext),
+            (N_FEATURES - 2) * nh,
+            overall(&s.selection.final_heldout),
+            clauses.join("; "),
+            if all.into_iter().any(|f| torque(f) + motion(f) == N_FEATURES * nh) {
+                ""
+            } else {
+                " Neither a step-1 candidate nor the extended model meets the torque level and the motion together."
+            }
+        );
+    }
     t
 }
 
