@@ -605,6 +605,33 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
                     .count(),
                 t.heldout.len()
             );
+            // The cause against each rival by the selection's own rule (rig_types::select::compare): the
+            // rival as "before", the cause as "after", every window its own fold.
+            let n = t.heldout.len();
+            let rivals: Vec<String> = sel
+                .trials
+                .iter()
+                .filter(|o| o.step == 1 && o.candidate != t.candidate && o.refused.is_none())
+                .map(|o| {
+                    let c = rig_types::select::compare(&o.heldout, &t.heldout, &(0..n).collect::<Vec<_>>(), n);
+                    format!(
+                        "`{}` {:.3}, gain {:.2}, t {:.2}{}",
+                        o.candidate.id(),
+                        o.heldout_misfit,
+                        c.gain,
+                        c.t,
+                        if sel.rule.admits(&c) { "" } else { " (not significant)" }
+                    )
+                })
+                .collect();
+            let _ = writeln!(
+                md,
+                "Side by side by the selection's own rule (the cause against each other step-1 candidate, gain and paired t of \
+                 ln(M_rival/M_cause) over the held-out windows, admitted at gain >= {:.0} % and t >= {}): {}.\n",
+                100.0 * sel.rule.min_relative_gain,
+                sel.rule.min_t,
+                rivals.join("; ")
+            );
             let _ = writeln!(md, "{}", torque_level(s));
         }
         None => {
