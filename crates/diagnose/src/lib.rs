@@ -148,10 +148,11 @@ pub struct DiagnoseOptions {
     pub skip_start_s: f64,
     /// Steady state starts at ramp_s + settle_s.
     pub settle_s: f64,
-    /// An effect must lower the cross-validated misfit by at least this fraction …
+    /// An effect must lower the cross-validated misfit by at least
+    /// `min_relative_gain` with a paired run-level t of ln(M_before/M_after) of
+    /// at least `min_t` (`[shared.selection]`, the one rule of
+    /// `rig_types::select`, shared with the LAVI and slider studies).
     pub selection: rig_types::contract::SelectionRule,
-    /// … with a paired run-level t of ln(M_before/M_after) of at least this.
-    pub min_t: f64,
     /// The final model is adequate when its cross-validated misfit is at most
     /// this many times the noise floor (calibrated on effect-free campaigns).
     pub adequacy_ratio: f64,

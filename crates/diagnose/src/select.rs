@@ -177,9 +177,8 @@ fn combine(e_mu: Option<f64>, e_v: f64) -> f64 {
     }
 }
 
-pub(crate) fn overall(ms: &[f64]) -> f64 {
-    if ms.is_empty() { f64::NAN } else { (ms.iter().map(|m| m * m).sum::<f64>() / ms.len() as f64).sqrt() }
-}
+/// √(mean M²) of per-run misfits: the engine's ([`rig_types::select::overall`]).
+pub(crate) use rig_types::select::overall;
 
 fn noise_floor_parts(s: &RunSignals, supply_v: f64) -> (Option<f64>, f64) {
     let mean_mu = if s.mu_obs.is_empty() { 0.0 } else { s.mu_obs.iter().sum::<f64>() / s.mu_obs.len() as f64 };
@@ -191,15 +190,9 @@ fn noise_floor_parts(s: &RunSignals, supply_v: f64) -> (Option<f64>, f64) {
     }
 }
 
-/// The comparison of a model with the one before it (crate docs: the criterion).
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Comparison {
-    pub before: f64,
-    pub after: f64,
-    pub gain: f64,
-    pub gain_fold_sd: f64,
-    pub t: f64,
-}
+/// The comparison of a model with the one before it (crate docs: the
+/// criterion): the one step rule of every rig, [`rig_types::select`].
+pub(crate) use rig_types::select::Comparison;
 
 fn compare(before: &[f64], after: &[f64], runs: &[RunSignals], folds: usize) -> Comparison {
     let fold_of: Vec<usize> = runs.iter().map(|s| s.fold).collect();
@@ -209,47 +202,11 @@ fn compare(before: &[f64], after: &[f64], runs: &[RunSignals], folds: usize) -> 
 /// The comparison of per-run misfits `before` and `after` (same run order),
 /// `fold_of[r]` the fold run r is held out in: overall misfits, relative
 /// gain with its spread across folds, and the paired run-level t of
-/// ln(M_before/M_after) (crate docs: the criterion). The structural
-/// candidates' free-run misfits are compared by the same rule.
+/// ln(M_before/M_after) (crate docs: the criterion), computed by the one
+/// engine's [`rig_types::select::compare`]. The structural candidates'
+/// free-run misfits are compared by the same rule.
 pub(crate) fn compare_folds(before: &[f64], after: &[f64], fold_of: &[usize], folds: usize) -> Comparison {
-    let (b, a) = (overall(before), overall(after));
-    let gain = if b > 0.0 { 1.0 - a / b } else { 0.0 };
-    let fold_gains: Vec<f64> = (0..folds)
-        .filter_map(|f| {
-            let idx: Vec<usize> = (0..fold_of.len()).filter(|&i| fold_of[i] == f).collect();
-            let bf = overall(&idx.iter().map(|&i| before[i]).collect::<Vec<_>>());
-            let af = overall(&idx.iter().map(|&i| after[i]).collect::<Vec<_>>());
-            (bf > 0.0 && bf.is_finite() && af.is_finite()).then(|| 1.0 - af / bf)
-        })
-        .collect();
-    let mg = fold_gains.iter().sum::<f64>() / fold_gains.len().max(1) as f64;
-    let sd = if fold_gains.len() > 1 {
-        (fold_gains.iter().map(|g| (g - mg).powi(2)).sum::<f64>() / (fold_gains.len() - 1) as f64).sqrt()
-    } else {
-        f64::NAN
-    };
-    // Paired run-level test on ln(M_before/M_after).
-    let d: Vec<f64> = before
-        .iter()
-        .zip(after)
-        .filter(|(x, y)| **x > 0.0 && **y > 0.0 && x.is_finite() && y.is_finite())
-        .map(|(x, y)| (x / y).ln())
-        .collect();
-    let n = d.len() as f64;
-    let t = if d.len() > 1 {
-        let m = d.iter().sum::<f64>() / n;
-        let v = d.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
-        if v > 0.0 {
-            m / (v / n).sqrt()
-        } else if m > 0.0 {
-            f64::INFINITY
-        } else {
-            0.0
-        }
-    } else {
-        0.0
-    };
-    Comparison { before: b, after: a, gain, gain_fold_sd: sd, t }
+    rig_types::select::compare(before, after, fold_of, folds)
 }
 
 /// Measured features of one run's steady state.
@@ -479,8 +436,7 @@ pub(crate) fn select_over<'a>(
     let mut accepted: Vec<(EffectId, Comparison)> = Vec::new();
     let mut steps: Vec<StepRow> = Vec::new();
     let mut first_step: Vec<(EffectId, Comparison, Vec<f64>)> = Vec::new();
-    let significant =
-        |c: &Comparison| c.gain >= opts.selection.min_relative_gain && c.t >= opts.min_t && c.after.is_finite();
+    let significant = |c: &Comparison| opts.selection.admits(c);
     for step in 1..=registry.len() {
         let remaining: Vec<EffectId> =
             registry.iter().map(|e| EffectId(*e)).filter(|e| !accepted.iter().any(|a| a.0 == *e)).collect();
@@ -623,8 +579,7 @@ impl Selection<'_> {
         let (registry, runs, supply_v, current) = (*registry, *runs, *supply_v, *current);
         let folds = cv.folds;
         let all: Vec<&RunSignals> = runs.iter().collect();
-        let significant =
-            |c: &Comparison| c.gain >= opts.selection.min_relative_gain && c.t >= opts.min_t && c.after.is_finite();
+        let significant = |c: &Comparison| opts.selection.admits(c);
 
         // Adequacy: the final model against noise, and the other run kinds.
         let floor_parts: Vec<(Option<f64>, f64)> = runs.iter().map(|s| noise_floor_parts(s, supply_v)).collect();

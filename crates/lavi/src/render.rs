@@ -7,7 +7,7 @@ use crate::describe::describe;
 use crate::eom::Damping;
 use crate::features::{FEATURES, Features, N_FEATURES};
 use crate::score::feature_errors;
-use crate::select::{mean, std};
+use crate::select::{mean, overall, std};
 use crate::study::Study;
 use crate::{Candidate, LaviError};
 use rig_ingest::lavi::LaviRecording;
@@ -43,12 +43,12 @@ const EFFECT_IDS: [(&str, &str); 10] = [
     ),
     (
         "sensor_inertia",
-        "an inertia between the torque sensor and the contact: the sensor reads T_f + J_s Ω' (`sensor_inertia_kgm2`).",
+        "an inertia between the torque sensor and the contact (the sensor above part of the bit): the sensor reads T_f + J_s Ω'; J_s (J/10 to 10 J) and the law fitted jointly by simulation, J, k, c by least squares on T − J_s Ω' (`sensor_inertia_kgm2` and the law's keys).",
     ),
     ("friction_memory", "the slip friction follows its steady law with a first-order lag (`lag_s`)."),
     (
         "second_dof",
-        "a mid inertia on the shaft, a second torsional degree of freedom (`mid_inertia_kgm2`, `stiffness_split`).",
+        "a mid inertia on the shaft, a second torsional degree of freedom, then the law refitted by simulation (`mid_inertia_kgm2`, `stiffness_split` and the law's keys).",
     ),
     (
         "compliant_drive",
@@ -64,7 +64,7 @@ const EFFECT_IDS: [(&str, &str); 10] = [
     ),
     (
         "unexplained",
-        "a significant mismatch is left after the selected effects (mean held-out misfit above the adequacy threshold).",
+        "a significant mismatch is left after the selected effects (held-out misfit, RMS over the windows, above the adequacy threshold).",
     ),
 ];
 const DECIMALS: [usize; N_FEATURES] = [2, 2, 4, 3, 2, 3, 3];
@@ -136,10 +136,11 @@ pub fn render(s: &Study, d: &Prepared, rec: &LaviRecording) -> Result<StudyOutpu
         "step",
         "effect",
         "calibration_misfit",
-        "heldout_misfit_mean",
+        "heldout_misfit_rms",
         "heldout_misfit_min",
         "heldout_misfit_max",
         "relative_gain",
+        "gain_spread",
         "paired_t",
         "wins",
         "earns_place",
@@ -154,15 +155,16 @@ pub fn render(s: &Study, d: &Prepared, rec: &LaviRecording) -> Result<StudyOutpu
             t.step.to_string(),
             t.candidate.id().to_string(),
             fmt_fixed(t.fitted.calibration_misfit, 3),
-            fmt_fixed(t.heldout_mean, 3),
+            fmt_fixed(t.heldout_misfit, 3),
             fmt_fixed(lo, 3),
             fmt_fixed(hi, 3),
             fmt_fixed(t.relative_gain, 3),
+            fmt_fixed(t.gain_spread, 3),
             fmt_fixed(t.paired_t, 2),
             format!("{}/{}", t.wins, t.heldout.len()),
             t.earns_place.to_string(),
             sel.chosen.contains(&i).to_string(),
-            params.join(" "),
+            t.refused.as_ref().map_or_else(|| params.join(" "), |r| format!("refused: {r}")),
         ]);
     }
     out.tables.push(("tables/lavi-candidates.csv".into(), ct));
@@ -332,26 +334,31 @@ fn diagnosis_json(s: &Study) -> Value {
     let mut findings = Vec::new();
     for &i in &sel.chosen {
         let t = &sel.trials[i];
-        let before =
-            if findings.is_empty() { mean(&sel.baseline_heldout) } else { t.heldout_mean / (1.0 - t.relative_gain) };
+        let before = if findings.is_empty() {
+            overall(&sel.baseline_heldout)
+        } else {
+            t.heldout_misfit / (1.0 - t.relative_gain)
+        };
         let stderr: BTreeMap<String, Value> = t.fitted.params.keys().map(|k| (k.clone(), Value::Null)).collect();
         findings.push(json!({
             "effect": t.candidate.id(),
             "params": t.fitted.params,
             "params_stderr": stderr,
             "evidence": format!(
-                "fitted on the calibration window {} only; mean held-out misfit {:.3} -> {:.3} over {} windows, better in {} of them (paired t = {:.2} > {:.2}); spread {:.3}-{:.3}",
-                s.windows[0].label, before, t.heldout_mean, t.heldout.len(), t.wins, t.paired_t, sel.t_critical,
+                "fitted on the calibration window {} only; held-out misfit (RMS over {} windows) {:.3} -> {:.3}, better in {} of them (gain {:.1} % ± {:.1} % over the windows, paired t of the log ratio = {:.2} >= {:.2}); spread {:.3}-{:.3}",
+                s.windows[0].label, t.heldout.len(), before, t.heldout_misfit, t.wins, 100.0 * t.relative_gain, 100.0 * t.gain_spread, t.paired_t, sel.rule.min_t,
                 t.heldout.iter().cloned().fold(f64::INFINITY, f64::min), t.heldout.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
             ),
             "heldout_runs": held_labels,
             "heldout_misfit_baseline": before,
-            "heldout_misfit_extended": t.heldout_mean,
+            "heldout_misfit_extended": t.heldout_misfit,
             "relative_gain": t.relative_gain,
+            "relative_gain_fold_sd": t.gain_spread,
+            "criterion": t.paired_t,
         }));
     }
     if !s.adequate {
-        let final_mean = mean(&sel.final_heldout);
+        let final_mean = overall(&sel.final_heldout);
         let mut missed = Vec::new();
         for (fi, name) in FEATURES.iter().enumerate() {
             let n_met = (1..s.windows.len()).filter(|&wi| met(&s.measured[wi], &s.final_features[wi])[fi]).count();
@@ -364,13 +371,13 @@ fn diagnosis_json(s: &Study) -> Value {
         findings.push(json!({
             "effect": "unexplained",
             "evidence": format!(
-                "after the selected effects the mean held-out misfit is {:.3}, above the adequacy threshold {} (feature errors in units of issue 10's targets, RMS)",
+                "after the selected effects the held-out misfit (RMS over the windows) is {:.3}, above the adequacy threshold {} (feature errors in units of issue 10's targets, RMS)",
                 final_mean, s.params.adequacy_threshold
             ),
             "residual_over_noise": final_mean / s.params.adequacy_threshold,
             "where": wh,
             "signature": s.signature,
-            "heldout_misfit_baseline": mean(&sel.baseline_heldout),
+            "heldout_misfit_baseline": overall(&sel.baseline_heldout),
             "heldout_misfit_extended": final_mean,
         }));
     }
@@ -381,8 +388,9 @@ fn diagnosis_json(s: &Study) -> Value {
             json!({
                 "effect": t.candidate.id(),
                 "step": t.step,
-                "heldout_misfit_extended": t.heldout_mean,
+                "heldout_misfit_extended": t.heldout_misfit,
                 "relative_gain": t.relative_gain,
+                "relative_gain_fold_sd": t.gain_spread,
                 "criterion": t.paired_t,
                 "calibration_misfit": t.fitted.calibration_misfit,
             })
@@ -453,7 +461,7 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
         md,
         "1-DOF model J Ω' = k φ + c (Ω_top − Ω) − T(Ω) (Real et al. 2018) with J = {:.4} kg m², k = {:.3} N m/rad, c = {:.3} N m s/rad \
          (linear least squares on the equation of motion; the unconstrained c was {:.4}{}), friction T = {:.3} + {:.3} exp(−(Ω/{:.2} rad/s)^{}) N m \
-         (fitted to the slip samples). Mean held-out misfit {:.3} (calibration window {:.3}). Held-out targets met by the baseline: {}.\n",
+         (fitted to the slip samples). Held-out misfit {:.3} (RMS over the windows; calibration window {:.3}). Held-out targets met by the baseline: {}.\n",
         b.inertia_kgm2,
         b.stiffness_nm_rad,
         b.damping_nm_s_rad,
@@ -467,7 +475,7 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
         b.friction.static_nm - b.friction.kinetic_nm,
         b.friction.stribeck_speed_rad_s,
         b.friction.shape_exponent,
-        mean(&sel.baseline_heldout),
+        overall(&sel.baseline_heldout),
         sel.baseline_calibration,
         met_list(met_base, nh)
     );
@@ -475,14 +483,15 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
     let _ = writeln!(md, "## Rung 2: the cause\n");
     let _ = writeln!(
         md,
-        "Eight candidate causes, six effects and two structural candidates (rig_lavi crate docs), each fitted on the calibration window on top of the current model, scored on the held-out \
-         windows. An effect is added when it has the largest held-out gain of its step, lowers the mean held-out misfit by at least {:.0} %, passes \
-         a one-sided paired t-test over the {} held-out windows (t > {:.3}, level {}) and is no worse on the calibration window \
-         (tables/lavi-candidates.csv, tables/lavi-heldout-misfits.csv).\n",
+        "{} candidate causes (rig_lavi crate docs), each fitted on the calibration window on top of the current model and scored on the \
+         held-out windows, selected by the one forward-selection engine of every rig (rig_types::select) and its one rule \
+         (`[shared.selection]`): an effect is added when it has the largest held-out gain of its step, lowers the held-out misfit \
+         (RMS over the windows) by at least {:.0} %, has a paired t of ln(M_before/M_after) over the {} held-out windows of at least {} \
+         and is admissible: no worse on the calibration window it was fitted on (tables/lavi-candidates.csv, tables/lavi-heldout-misfits.csv).\n",
+        s.selection.trials.iter().filter(|t| t.step == 1).count(),
         100.0 * s.params.selection.min_relative_gain,
         nh,
-        sel.t_critical,
-        s.params.significance
+        s.params.selection.min_t
     );
     let _ = writeln!(md, "Effect ids of this rig (lavi-diagnosis.json; parameters as its JSON keys):\n");
     for (id, what) in EFFECT_IDS {
@@ -491,7 +500,7 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
     let _ = writeln!(md);
     let _ = writeln!(
         md,
-        "| step | effect | calibration misfit | held-out misfit (mean, min-max) | gain | paired t | wins | earns its place |"
+        "| step | effect | calibration misfit | held-out misfit (RMS, min-max) | gain (± spread) | paired t | wins | earns its place |"
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
     for (i, t) in sel.trials.iter().enumerate() {
@@ -499,19 +508,24 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
         let hi = t.heldout.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
         let _ = writeln!(
             md,
-            "| {} | {}{} | {:.3} | {:.3} ({:.3}-{:.3}) | {:.3} | {:.2} | {}/{} | {} |",
+            "| {} | {}{} | {:.3} | {:.3} ({:.3}-{:.3}) | {:.3} ± {:.3} | {:.2} | {}/{} | {} |",
             t.step,
             t.candidate.id(),
             if sel.chosen.contains(&i) { " **(added)**" } else { "" },
             t.fitted.calibration_misfit,
-            t.heldout_mean,
+            t.heldout_misfit,
             lo,
             hi,
             t.relative_gain,
+            t.gain_spread,
             t.paired_t,
             t.wins,
             t.heldout.len(),
-            if t.earns_place { "yes" } else { "no" }
+            match (&t.refused, t.earns_place) {
+                (Some(r), _) => format!("no, refused: {r}"),
+                (None, true) => "yes".into(),
+                (None, false) => "no".into(),
+            }
         );
     }
     let _ = writeln!(md);
@@ -537,9 +551,9 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
                  structure (J, k, c of the torque as recorded; `friction_law`, step {}) reaches {:.3}; on J, k, c of the torque \
                  read {:.0} ms later (`channel_delay`) {:.3}, better on {} of {} held-out windows.\n",
                 d + 1,
-                law.heldout_mean,
+                law.heldout_misfit,
                 1e3 * delay.fitted.model.torque_delay_s,
-                delay.heldout_mean,
+                delay.heldout_misfit,
                 law.heldout.iter().zip(&delay.heldout).filter(|(a, b)| b < a).count(),
                 law.heldout.len()
             );
@@ -553,7 +567,7 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
                  `channel_delay` (step {}) it gains {:.3} (paired t {:.2}) and does not earn its place: once the torque is read on \
                  the speeds' time base and the law is fitted by simulation, no memory is needed. Its frozen slip level stood in for a \
                  law that does not fall with speed, the law the free run accepts (rung 3).\n",
-                first.heldout_mean,
+                first.heldout_misfit,
                 first.fitted.params.get("lag_s").map_or("?".to_string(), |x| format!("{x:.3}")),
                 d + 2,
                 after.relative_gain,
@@ -570,7 +584,7 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
                 .trials
                 .iter()
                 .filter(|o| o.step == 1 && o.candidate != t.candidate)
-                .map(|o| o.heldout_mean)
+                .map(|o| o.heldout_misfit)
                 .fold(f64::INFINITY, f64::min);
             let _ = writeln!(
                 md,
@@ -578,8 +592,8 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
                  Window by window it beats every other step-1 candidate on {} of {} held-out windows.\n",
                 t.candidate.id(),
                 t.fitted.params.iter().map(|(k, v)| format!("{k} = {}", sig(*v))).collect::<Vec<_>>().join(", "),
-                mean(&sel.baseline_heldout),
-                t.heldout_mean,
+                overall(&sel.baseline_heldout),
+                t.heldout_misfit,
                 t.relative_gain,
                 others,
                 (0..t.heldout.len())
@@ -591,6 +605,33 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
                     .count(),
                 t.heldout.len()
             );
+            // The cause against each rival by the selection's own rule (rig_types::select::compare): the
+            // rival as "before", the cause as "after", every window its own fold.
+            let n = t.heldout.len();
+            let rivals: Vec<String> = sel
+                .trials
+                .iter()
+                .filter(|o| o.step == 1 && o.candidate != t.candidate && o.refused.is_none())
+                .map(|o| {
+                    let c = rig_types::select::compare(&o.heldout, &t.heldout, &(0..n).collect::<Vec<_>>(), n);
+                    format!(
+                        "`{}` {:.3}, gain {:.2}, t {:.2}{}",
+                        o.candidate.id(),
+                        o.heldout_misfit,
+                        c.gain,
+                        c.t,
+                        if sel.rule.admits(&c) { "" } else { " (not significant)" }
+                    )
+                })
+                .collect();
+            let _ = writeln!(
+                md,
+                "Side by side by the selection's own rule (the cause against each other step-1 candidate, gain and paired t of \
+                 ln(M_rival/M_cause) over the held-out windows, admitted at gain >= {:.0} % and t >= {}): {}.\n",
+                100.0 * sel.rule.min_relative_gain,
+                sel.rule.min_t,
+                rivals.join("; ")
+            );
             let _ = writeln!(md, "{}", torque_level(s));
         }
         None => {
@@ -600,12 +641,12 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
     let _ = writeln!(md, "## Rung 3: the extension and its gain\n");
     let _ = writeln!(
         md,
-        "Extended model: baseline + {}. Mean held-out misfit {:.3} (baseline {:.3}, relative gain {:.2}); spread over the windows {:.3}-{:.3}. \
+        "Extended model: baseline + {}. Held-out misfit (RMS over the windows) {:.3} (baseline {:.3}, relative gain {:.2}); spread over the windows {:.3}-{:.3}. \
          Held-out targets met: {} (baseline: {}). Verdict: **{}**.\n",
         effects_label(s),
-        mean(&sel.final_heldout),
-        mean(&sel.baseline_heldout),
-        1.0 - mean(&sel.final_heldout) / mean(&sel.baseline_heldout),
+        overall(&sel.final_heldout),
+        overall(&sel.baseline_heldout),
+        1.0 - overall(&sel.final_heldout) / overall(&sel.baseline_heldout),
         sel.final_heldout.iter().cloned().fold(f64::INFINITY, f64::min),
         sel.final_heldout.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
         met_list(met_ext, nh),
@@ -659,10 +700,10 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
     if !s.adequate {
         let _ = writeln!(
             md,
-            "**Adequacy.** The mean held-out misfit {:.3} is above the threshold {} (features within their targets in RMS): a significant \
+            "**Adequacy.** The held-out misfit (RMS over the windows) {:.3} is above the threshold {} (features within their targets in RMS): a significant \
              mismatch is left, so the verdict is `unexplained` with the effects above kept as a partial explanation. Residual signature \
              (STLSQ on the calibration window's leftover slip torque, each term scored alone on the held-out windows):\n",
-            mean(&sel.final_heldout),
+            overall(&sel.final_heldout),
             s.params.adequacy_threshold
         );
         for t in &s.signature {
@@ -698,7 +739,7 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
         "The thesis blamed a vibrating normal force (Eq. 4-11). This rig measures it: in the calibration window the weight on bit varies by \
          {:.1} % (std/mean). Teacher-forced, the torque WOB(t)·μ(Ω_meas(t)) with μ fitted on T/WOB draws a loop of {:.0} % of the measured \
          loop area on the held-out windows (per window: {}; a single-valued T(Ω) draws none). In free simulation, adding the measured WOB \
-         to the baseline lowers the mean held-out misfit by {:.1} %. So the normal-force variation explains {} of the torque-speed \
+         to the baseline lowers the held-out misfit by {:.1} %. So the normal-force variation explains {} of the torque-speed \
          loop but only {:.0} % of the simulation error.\n",
         100.0 * h.wob_relative_std,
         100.0 * h.loop_fraction_heldout_mean,
@@ -713,7 +754,7 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
 }
 
 /// Every step-1 candidate (and the baseline and the extended model) on every
-/// feature: held-out windows within the target, and the mean held-out misfit.
+/// feature: held-out windows within the target, and the held-out misfit (RMS over the windows).
 fn side_by_side(s: &Study) -> String {
     let held: Vec<usize> = (1..s.windows.len()).collect();
     let nh = held.len();
@@ -735,11 +776,60 @@ fn side_by_side(s: &Study) -> String {
         let cells: Vec<String> = c.iter().map(|k| format!("{k}/{nh}")).collect();
         let _ = writeln!(t, "| {name} | {} | {misfit:.3} |", cells.join(" | "));
     };
-    row("baseline", &s.baseline_features, mean(&s.selection.baseline_heldout));
+    row("baseline", &s.baseline_features, overall(&s.selection.baseline_heldout));
     for ((cand, f), tr) in s.candidate_features.iter().zip(s.selection.trials.iter().filter(|t| t.step == 1)) {
-        row(cand.id(), f, tr.heldout_mean);
+        row(cand.id(), f, tr.heldout_misfit);
     }
-    row(&format!("extended ({})", effects_label(s)), &s.final_features, mean(&s.selection.final_heldout));
+    row(&format!("extended ({})", effects_label(s)), &s.final_features, overall(&s.selection.final_heldout));
+    // The torque level (issue 26): every step-1 candidate that meets the two torque targets on more windows
+    // than the extended model, and the motion it loses for it.
+    let count = |f: &[Features], fi: usize| held.iter().filter(|&&wi| met(&s.measured[wi], &f[wi])[fi]).count();
+    let torque = |f: &[Features]| count(f, N_FEATURES - 2) + count(f, N_FEATURES - 1);
+    let motion = |f: &[Features]| (0..N_FEATURES - 2).map(|fi| count(f, fi)).sum::<usize>();
+    let ext = &s.final_features;
+    let clauses: Vec<String> = s
+        .candidate_features
+        .iter()
+        .zip(s.selection.trials.iter().filter(|t| t.step == 1))
+        .filter(|((_, f), _)| torque(f) > torque(ext))
+        .map(|((c, f), tr)| {
+            let lost: Vec<String> = (0..N_FEATURES - 2)
+                .filter(|&fi| count(f, fi) < count(ext, fi))
+                .map(|fi| format!("`{}` {}/{nh}", FEATURES[fi], count(f, fi)))
+                .collect();
+            format!(
+                "`{}` {}/{} (slip {}/{nh}, break-away {}/{nh}; motion {}/{}, losing {}; held-out misfit {:.3})",
+                c.id(),
+                torque(f),
+                2 * nh,
+                count(f, N_FEATURES - 2),
+                count(f, N_FEATURES - 1),
+                motion(f),
+                (N_FEATURES - 2) * nh,
+                if lost.is_empty() { "nothing".into() } else { lost.join(", ") },
+                tr.heldout_misfit
+            )
+        })
+        .collect();
+    if !clauses.is_empty() {
+        let all = s.candidate_features.iter().map(|(_, f)| f).chain([ext]);
+        let _ = writeln!(
+            t,
+            "\nThe torque level side by side (window-features within the two torque targets; the extended model: {}/{}, \
+             motion {}/{}, held-out misfit {:.3}): {}.{}",
+            torque(ext),
+            2 * nh,
+            motion(ext),
+            (N_FEATURES - 2) * nh,
+            overall(&s.selection.final_heldout),
+            clauses.join("; "),
+            if all.into_iter().any(|f| torque(f) + motion(f) == N_FEATURES * nh) {
+                ""
+            } else {
+                " Neither a step-1 candidate nor the extended model meets the torque level and the motion together."
+            }
+        );
+    }
     t
 }
 
@@ -798,15 +888,15 @@ fn structure_paragraph(s: &Study) -> String {
                     Candidate::AbsoluteDamping | Candidate::ChannelDelay | Candidate::SensorInertia
                 )
         })
-        .map(|tr| format!("`{}` {:.3}", tr.candidate.id(), tr.heldout_mean))
+        .map(|tr| format!("`{}` {:.3}", tr.candidate.id(), tr.heldout_misfit))
         .collect();
     let [raw, eom, narrow] = s.loop_spread;
     let _ = writeln!(
         t,
         "Run free as step-1 candidates (`channel_delay` with its law refitted by simulation, the others with the least-squares \
-         law), their mean held-out misfits are {} (baseline {:.3}).\n",
+         law), their held-out misfits (RMS over the windows) are {} (baseline {:.3}).\n",
         free_run.join(", "),
-        mean(&s.selection.baseline_heldout)
+        overall(&s.selection.baseline_heldout)
     );
     let _ = writeln!(
         t,
@@ -824,7 +914,7 @@ fn structure_paragraph(s: &Study) -> String {
         1e3 * narrow.shift_s,
         narrow.rms_bin_std_nm,
         match s.structures.iter().zip(&s.structure_heldout).find(|((_, d), _)| d.structure.torque_delay_s != 0.0) {
-            Some((_, m)) if *m > mean(&s.selection.baseline_heldout) => {
+            Some((_, m)) if *m > overall(&s.selection.baseline_heldout) => {
                 format!("runs further from the record than the baseline (held-out misfit {m:.3})")
             }
             Some((_, m)) => format!("reaches a held-out misfit of {m:.3}"),

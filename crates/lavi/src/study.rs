@@ -8,7 +8,7 @@ use crate::fit::{
 };
 use crate::render::{StudyOutput, render};
 use crate::score::Evaluator;
-use crate::select::{Selection, forward_select, mean};
+use crate::select::{Selection, forward_select, mean, overall};
 use crate::signature::{SignatureTerm, residual_signature};
 use crate::sim::{FrictionLaw, Model};
 use crate::{Candidate, FeatureOptions, Features, LaviError, StudyParams, window_features};
@@ -24,7 +24,7 @@ pub struct WobHypothesis {
     /// Per window (calibration first): loop area of W(t)·μ(Ω_meas(t)) over the measured loop area.
     pub loop_fraction: Vec<f64>,
     pub loop_fraction_heldout_mean: f64,
-    /// 1 − mean held-out misfit (baseline + WOB) / mean held-out misfit (baseline).
+    /// 1 − held-out misfit (baseline + WOB) / held-out misfit (baseline), RMS over the windows.
     pub misfit_gain: f64,
 }
 
@@ -46,7 +46,7 @@ pub struct Study {
     pub candidate_features: Vec<(Candidate, Vec<Features>)>,
     /// The equation of motion under each structure tried, unconstrained (structure lead).
     pub structures: Vec<(String, Derivation)>,
-    /// Per structure (order of `structures`): the mean held-out misfit of its
+    /// Per structure (order of `structures`): the held-out misfit (RMS over the windows) of its
     /// free run with J, k, c and the least-squares law of that structure (the
     /// law fitted to the torque as that structure reads it: T(t + τ) against Ω(t)
     /// for a delay), no simulation fit.
@@ -85,17 +85,10 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
     let (baseline, derivation) = derive(&d, &wins[0], p.slip_speed_rpm, Structure::BASELINE)?;
     let sim_features = |m: &Model| -> Vec<Features> { ev.all_features(m) };
     let baseline_features = sim_features(&baseline);
-    let selection = forward_select(
-        &ev,
-        &baseline,
-        &Candidate::ALL,
-        p.fit_evaluations,
-        p.selection.min_relative_gain,
-        p.significance,
-    )?;
+    let selection = forward_select(&ev, &baseline, &Candidate::ALL, p.fit_evaluations, &p.selection)?;
     let final_features = sim_features(&selection.final_model);
     let wob = wob_hypothesis(&ev, &selection)?;
-    let adequate = mean(&selection.final_heldout) <= p.adequacy_threshold;
+    let adequate = overall(&selection.final_heldout) <= p.adequacy_threshold;
     let signature = if adequate { Vec::new() } else { residual_signature(&ev, &selection.final_model)? };
     let candidate_features =
         selection.trials.iter().filter(|t| t.step == 1).map(|t| (t.candidate, sim_features(&t.fitted.model))).collect();
@@ -104,7 +97,7 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
         .iter()
         .map(|(_, der)| {
             let (m, _) = derive(&d, &wins[0], p.slip_speed_rpm, der.structure)?;
-            Ok((mean(&ev.heldout_misfits(&m)), m.friction))
+            Ok((overall(&ev.heldout_misfits(&m)), m.friction))
         })
         .collect::<Result<Vec<(f64, FrictionLaw)>, LaviError>>()?
         .into_iter()
@@ -201,7 +194,7 @@ fn wob_hypothesis(ev: &Evaluator, sel: &Selection) -> Result<WobHypothesis, Lavi
         .trials
         .iter()
         .find(|t| t.step == 1 && t.candidate == Candidate::WobNormalForce)
-        .map_or(f64::NAN, |t| 1.0 - t.heldout_mean / mean(&sel.baseline_heldout));
+        .map_or(f64::NAN, |t| t.relative_gain);
     Ok(WobHypothesis {
         wob_relative_std: crate::select::std(wob) / mean(wob),
         loop_fraction_heldout_mean: mean(&loop_fraction[1..]),

@@ -24,8 +24,7 @@ fn params() -> StudyParams {
         substeps: 5,
         fit_evaluations: 50,
         drive_ref_window_s: 2.0,
-        selection: rig_types::contract::SelectionRule { min_relative_gain: 0.05 },
-        significance: 0.05,
+        selection: rig_types::contract::SelectionRule { min_relative_gain: 0.05, min_t: 2.0 },
         adequacy_threshold: 1.0,
         figure_window_start_s: 2.0,
     }

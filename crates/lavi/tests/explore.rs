@@ -32,7 +32,7 @@ fn explore() {
             t.step,
             t.candidate,
             t.fitted.calibration_misfit,
-            t.heldout_mean,
+            t.heldout_misfit,
             t.relative_gain,
             t.paired_t,
             t.wins,
@@ -42,6 +42,17 @@ fn explore() {
         );
     }
     println!("wob {:?} adequate {}", s.wob, s.adequate);
+    // Step-1 candidates: held-out windows within each feature's target.
+    for (c, f) in &s.candidate_features {
+        let met: Vec<usize> = (0..rig_lavi::FEATURES.len())
+            .map(|k| {
+                (1..s.windows.len())
+                    .filter(|&w| rig_lavi::score::feature_errors(&s.measured[w], &f[w])[k].abs() <= 1.0)
+                    .count()
+            })
+            .collect();
+        println!("{:?} met {:?}", c, met);
+    }
 }
 
 /// Developer aid (ignored): prints the repair audit of run 175.

@@ -295,10 +295,13 @@ pub struct ThesisData {
 
 /// The rule that lets an effect into a model by forward selection, shared by
 /// every study that selects (pipeline.toml's `[shared.selection]`, handed to
-/// the `diagnosis` and `lavi` stages): declared once so the two cannot drift.
+/// the `diagnosis`, `lavi` and `slider` stages): declared once so they cannot
+/// drift. The rule itself is [`SelectionRule::admits`] (`crate::select`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SelectionRule {
-    /// An effect must lower the held-out misfit by at least this fraction.
+    /// An effect must lower the held-out misfit by at least this fraction …
     pub min_relative_gain: f64,
+    /// … with a paired unit-level t of ln(M_before/M_after) of at least this.
+    pub min_t: f64,
 }

@@ -1,15 +1,17 @@
 //! Plain data shared by every rig-lab crate; serde only, no behaviour beyond
 //! trivial accessors, the unit conversions ([`units`]), the sensor model
 //! ([`sensor`]: encoder quantisation and the speed differentiators, the one
-//! home every crate that reads or simulates an encoder uses) and the bracketed
-//! scalar minimiser every fitting crate shares ([`minimize`]). Units are in
-//! field names (`_rad_s`, `_nm`, `_v`).
+//! home every crate that reads or simulates an encoder uses), the bracketed
+//! scalar minimiser every fitting crate shares ([`minimize`]) and the one
+//! forward-selection engine every rig's study selects with ([`select`]).
+//! Units are in field names (`_rad_s`, `_nm`, `_v`).
 
 mod campaign;
 pub mod contract;
 mod figure;
 pub mod minimize;
 mod params;
+pub mod select;
 pub mod sensor;
 mod study;
 mod table;

@@ -160,7 +160,7 @@ pub fn extend(x: &Inputs) -> Option<ExtensionResult> {
     if folds == 0 || base.is_empty() {
         return None;
     }
-    let passes = |g: f64, t: f64| g >= opts.selection.min_relative_gain && t >= opts.min_t;
+    let passes = |g: f64, t: f64| g >= opts.selection.min_relative_gain && t >= opts.selection.min_t;
     let mut chosen: Vec<usize> = Vec::new();
     let mut steps = Vec::new();
     let mut best_single = None;

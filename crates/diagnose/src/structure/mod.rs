@@ -165,7 +165,10 @@ pub fn select_structure(
             .zip(&full.values)
             .zip(&se)
             .filter(|((p, v), se)| {
-                matches!((**v - p.lower).partial_cmp(&(opts.min_t * **se)), Some(std::cmp::Ordering::Less) | None)
+                matches!(
+                    (**v - p.lower).partial_cmp(&(opts.selection.min_t * **se)),
+                    Some(std::cmp::Ordering::Less) | None
+                )
             })
             .map(|((p, v), se)| format!("{} = {v:.2e} ± {se:.1e} {}", p.name, p.unit))
             .collect();
@@ -185,7 +188,7 @@ pub fn select_structure(
             });
         }
         let admissible = pinned.is_empty() && weak.is_empty();
-        let significant = cmp.gain >= opts.selection.min_relative_gain && cmp.t >= opts.min_t;
+        let significant = cmp.gain >= opts.selection.min_relative_gain && cmp.t >= opts.selection.min_t;
         scores.push(StructureScore {
             id: cand.id().into(),
             description: if weak.is_empty() {

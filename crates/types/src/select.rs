@@ -1,0 +1,447 @@
+//! Forward selection, one engine for every rig: candidates behind a small
+//! trait, folds given by the caller, one step rule, and a trace of every
+//! candidate at every step.
+//!
+//! # The procedure
+//!
+//! The caller names the *units* a misfit is measured on (runs of a campaign,
+//! windows of one record, stiffnesses of a slider), and the *folds*: each fold
+//! is a set of training units a candidate is fitted on and the held-out units
+//! its fit is then scored on. Every held-out unit belongs to exactly one fold
+//! (k-fold cross-validation over runs; or one calibration window and one fold
+//! per held-out window, all folds sharing the training set: a candidate is then
+//! fitted once per distinct training set, never once per fold).
+//!
+//! From the baseline, at each step every remaining candidate is fitted on top
+//! of the current model (per distinct training set) and each held-out unit is
+//! scored with the fit of its fold. The candidate with the largest gain (ties:
+//! candidate order) is added when the rule admits it ([`SelectionRule::admits`])
+//! and it is admissible ([`Candidate::inadmissible`]: the fitted candidate is
+//! the effect its name says, asked only of the step's best); otherwise
+//! selection stops. Candidates and units are fitted and scored in parallel and
+//! collected in order, so the result is the same on any number of threads.
+//!
+//! # The step rule ([`compare`], the thesis rig's since issue 19)
+//!
+//! With M_u the misfit of unit u and M = √(mean M_u²) the overall misfit, a
+//! candidate's gain is g = 1 − M_after/M_before (the overall misfits of the
+//! held-out units), its spread the standard deviation over folds of each
+//! fold's own gain, and its paired statistic the one-sample t of
+//! d_u = ln(M_u,before/M_u,after) over the units (units with a non-positive or
+//! non-finite misfit left out). It is admitted when g ≥ `min_relative_gain`,
+//! t ≥ `min_t` and M_after is finite (pipeline.toml's `[shared.selection]`).
+//!
+//! # Example: the slider's stiffnesses as folds
+//!
+//! ```
+//! use rig_types::contract::SelectionRule;
+//! use rig_types::select::{Candidate, Fold, Study, forward_select};
+//! struct Slider { measured: Vec<f64> }                     // one feature per stiffness
+//! impl Study<f64> for Slider {                             // the model: one friction level
+//!     fn score(&self, m: &f64, unit: usize) -> f64 { (m - self.measured[unit]).abs() + 0.01 }
+//! }
+//! struct Refit;                                            // a candidate: the level fitted on the training units
+//! impl Candidate<Slider, f64> for Refit {
+//!     fn id(&self) -> &str { "refit" }
+//!     fn fit(&self, s: &Slider, _: &f64, train: &[usize]) -> Result<f64, String> {
+//!         Ok(train.iter().map(|&u| s.measured[u]).sum::<f64>() / train.len() as f64)
+//!     }
+//! }
+//! let s = Slider { measured: vec![0.40, 0.42, 0.41] };
+//! let folds = Fold::leave_one_out(3);                      // hold out each stiffness in turn
+//! let rule = SelectionRule { min_relative_gain: 0.05, min_t: 2.0 };
+//! let sel = forward_select(&s, &[&Refit as &dyn Candidate<Slider, f64>], &0.0, &folds, &rule).unwrap();
+//! assert_eq!(sel.chosen_ids(), ["refit"]);
+//! assert!(sel.trials[0].comparison.gain > 0.9);
+//! ```
+
+use crate::contract::SelectionRule;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// The training units a candidate is fitted on and the units it is then scored on.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Fold {
+    pub train: Vec<usize>,
+    pub held_out: Vec<usize>,
+}
+
+impl Fold {
+    /// One fold per unit of `0..n`, fitted on all the others.
+    pub fn leave_one_out(n: usize) -> Vec<Fold> {
+        (0..n).map(|u| Fold { train: (0..n).filter(|&v| v != u).collect(), held_out: vec![u] }).collect()
+    }
+
+    /// One fold per held-out unit, every one fitted on the same `train` units
+    /// (a calibration window and held-out windows of one record).
+    pub fn shared_training(train: &[usize], held_out: &[usize]) -> Vec<Fold> {
+        held_out.iter().map(|&u| Fold { train: train.to_vec(), held_out: vec![u] }).collect()
+    }
+}
+
+/// What the engine asks of a study: the misfit of a model on one unit
+/// (finite and ≥ 0; lower is better; a failed run should score a finite cap).
+pub trait Study<M>: Sync {
+    fn score(&self, model: &M, unit: usize) -> f64;
+}
+
+/// One candidate cause: its id, its fit on top of the current model, and its
+/// admissibility rule.
+pub trait Candidate<S: ?Sized, M>: Sync {
+    /// The effect id (the `effect` field of a diagnosis).
+    fn id(&self) -> &str;
+    /// The current model extended by this candidate, fitted on the `train` units only.
+    fn fit(&self, study: &S, current: &M, train: &[usize]) -> Result<M, String>;
+    /// Why the fitted candidate is not the effect its name says (`None`:
+    /// admissible). Asked only of a step's best candidate when the rule admits
+    /// it; `fitted` holds one model per distinct training set, in the order of
+    /// [`Selection::train_sets`].
+    fn inadmissible(&self, _study: &S, _current: &[M], _fitted: &[M]) -> Option<String> {
+        None
+    }
+}
+
+/// A model compared with the one before it (module docs: the step rule).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Comparison {
+    /// Overall misfit before and after, √(mean M_u²) over the held-out units.
+    pub before: f64,
+    pub after: f64,
+    /// 1 − after/before.
+    pub gain: f64,
+    /// Standard deviation over folds of each fold's own gain (NaN with one fold).
+    pub gain_fold_sd: f64,
+    /// Paired t of ln(M_before/M_after) over the units.
+    pub t: f64,
+}
+
+impl SelectionRule {
+    /// The step rule: gain ≥ `min_relative_gain`, paired t ≥ `min_t`, a finite misfit after.
+    pub fn admits(&self, c: &Comparison) -> bool {
+        c.gain >= self.min_relative_gain && c.t >= self.min_t && c.after.is_finite()
+    }
+}
+
+/// √(mean M²) of per-unit misfits (NaN for none).
+pub fn overall(ms: &[f64]) -> f64 {
+    if ms.is_empty() { f64::NAN } else { (ms.iter().map(|m| m * m).sum::<f64>() / ms.len() as f64).sqrt() }
+}
+
+/// The comparison of per-unit misfits `before` and `after` (same unit order),
+/// `fold_of[u]` the fold unit u is held out in, `folds` the number of folds
+/// (module docs: the step rule).
+pub fn compare(before: &[f64], after: &[f64], fold_of: &[usize], folds: usize) -> Comparison {
+    let (b, a) = (overall(before), overall(after));
+    let gain = if b > 0.0 { 1.0 - a / b } else { 0.0 };
+    let fold_gains: Vec<f64> = (0..folds)
+        .filter_map(|f| {
+            let idx: Vec<usize> = (0..fold_of.len()).filter(|&i| fold_of[i] == f).collect();
+            let bf = overall(&idx.iter().map(|&i| before[i]).collect::<Vec<_>>());
+            let af = overall(&idx.iter().map(|&i| after[i]).collect::<Vec<_>>());
+            (bf > 0.0 && bf.is_finite() && af.is_finite()).then(|| 1.0 - af / bf)
+        })
+        .collect();
+    let mg = fold_gains.iter().sum::<f64>() / fold_gains.len().max(1) as f64;
+    let sd = if fold_gains.len() > 1 {
+        (fold_gains.iter().map(|g| (g - mg).powi(2)).sum::<f64>() / (fold_gains.len() - 1) as f64).sqrt()
+    } else {
+        f64::NAN
+    };
+    let d: Vec<f64> = before
+        .iter()
+        .zip(after)
+        .filter(|(x, y)| **x > 0.0 && **y > 0.0 && x.is_finite() && y.is_finite())
+        .map(|(x, y)| (x / y).ln())
+        .collect();
+    let n = d.len() as f64;
+    let t = if d.len() > 1 {
+        let m = d.iter().sum::<f64>() / n;
+        let v = d.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
+        if v > 0.0 {
+            m / (v / n).sqrt()
+        } else if m > 0.0 {
+            f64::INFINITY
+        } else {
+            0.0
+        }
+    } else {
+        0.0
+    };
+    Comparison { before: b, after: a, gain, gain_fold_sd: sd, t }
+}
+
+/// One candidate tried at one step.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Trial<M> {
+    pub step: usize,
+    /// Index into the candidates passed to [`forward_select`].
+    pub candidate: usize,
+    pub id: String,
+    /// The fitted models, one per distinct training set ([`Selection::train_sets`]);
+    /// empty when the fit failed.
+    pub fitted: Vec<M>,
+    /// Why the fit failed, if it did (the trial then scores an infinite misfit).
+    pub error: Option<String>,
+    /// Misfit of every held-out unit ([`Selection::units`] order).
+    pub misfits: Vec<f64>,
+    pub comparison: Comparison,
+    /// Units where the candidate is better than the current model.
+    pub wins: usize,
+    /// Admitted by the rule ([`SelectionRule::admits`]).
+    pub significant: bool,
+    /// The step's largest gain.
+    pub best: bool,
+    /// The best's admissibility verdict, when it was asked.
+    pub inadmissible: Option<String>,
+    pub accepted: bool,
+}
+
+/// The selection's outcome: the trace of every trial, the chosen ones, and the final model.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Selection<M> {
+    /// The held-out units, in the order of every misfit vector.
+    pub units: Vec<usize>,
+    /// Fold of each unit (index into the caller's folds).
+    pub fold_of: Vec<usize>,
+    /// The distinct training sets, in order of first appearance among the folds.
+    pub train_sets: Vec<Vec<usize>>,
+    pub baseline_misfits: Vec<f64>,
+    pub trials: Vec<Trial<M>>,
+    /// Indices into `trials` of the accepted ones, in the order added.
+    pub chosen: Vec<usize>,
+    /// The final model per training set, and its per-unit misfits.
+    pub final_models: Vec<M>,
+    pub final_misfits: Vec<f64>,
+}
+
+impl<M> Selection<M> {
+    /// Ids of the chosen candidates, in the order added.
+    pub fn chosen_ids(&self) -> Vec<&str> {
+        self.chosen.iter().map(|&i| self.trials[i].id.as_str()).collect()
+    }
+
+    /// The trials of one step.
+    pub fn step(&self, step: usize) -> impl Iterator<Item = &Trial<M>> {
+        self.trials.iter().filter(move |t| t.step == step)
+    }
+}
+
+/// Why a selection could not start.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SelectError(pub String);
+
+impl std::fmt::Display for SelectError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "forward selection: {}", self.0)
+    }
+}
+
+impl std::error::Error for SelectError {}
+
+/// Forward selection from `baseline` over `candidates` (module docs). The
+/// baseline is the same model for every training set.
+pub fn forward_select<S, M>(
+    study: &S,
+    candidates: &[&dyn Candidate<S, M>],
+    baseline: &M,
+    folds: &[Fold],
+    rule: &SelectionRule,
+) -> Result<Selection<M>, SelectError>
+where
+    S: Study<M>,
+    M: Clone + Send + Sync,
+{
+    let mut units = Vec::new();
+    let mut fold_of = Vec::new();
+    let mut train_sets: Vec<Vec<usize>> = Vec::new();
+    let mut set_of_fold = Vec::new();
+    for (f, fold) in folds.iter().enumerate() {
+        if fold.train.is_empty() || fold.held_out.is_empty() {
+            return Err(SelectError(format!("fold {f} needs training and held-out units")));
+        }
+        for &u in &fold.held_out {
+            if units.contains(&u) {
+                return Err(SelectError(format!("unit {u} is held out in two folds")));
+            }
+            if fold.train.contains(&u) {
+                return Err(SelectError(format!("unit {u} of fold {f} is both trained on and held out")));
+            }
+            units.push(u);
+            fold_of.push(f);
+        }
+        let s = train_sets.iter().position(|t| *t == fold.train).unwrap_or_else(|| {
+            train_sets.push(fold.train.clone());
+            train_sets.len() - 1
+        });
+        set_of_fold.push(s);
+    }
+    // Each held-out unit scored with the model of its fold's training set.
+    let score_all = |models: &[M]| -> Vec<f64> {
+        (0..units.len()).into_par_iter().map(|i| study.score(&models[set_of_fold[fold_of[i]]], units[i])).collect()
+    };
+    let mut current: Vec<M> = vec![baseline.clone(); train_sets.len()];
+    let baseline_misfits = score_all(&current);
+    let mut cur_ms = baseline_misfits.clone();
+    let mut trials: Vec<Trial<M>> = Vec::new();
+    let mut chosen = Vec::new();
+    let mut left: Vec<usize> = (0..candidates.len()).collect();
+    let mut step = 1;
+    while !left.is_empty() {
+        // Every (candidate, training set) fit is a task of its own, collected in order.
+        let tasks: Vec<(usize, usize)> =
+            left.iter().flat_map(|&c| (0..train_sets.len()).map(move |s| (c, s))).collect();
+        let fits: Vec<Result<M, String>> =
+            tasks.par_iter().map(|&(c, s)| candidates[c].fit(study, &current[s], &train_sets[s])).collect();
+        let first = trials.len();
+        for (k, &c) in left.iter().enumerate() {
+            let mine = &fits[k * train_sets.len()..(k + 1) * train_sets.len()];
+            let (fitted, error, misfits) = match mine.iter().cloned().collect::<Result<Vec<M>, String>>() {
+                Ok(models) => {
+                    let ms = score_all(&models);
+                    (models, None, ms)
+                }
+                Err(e) => (Vec::new(), Some(e), vec![f64::INFINITY; units.len()]),
+            };
+            let comparison = compare(&cur_ms, &misfits, &fold_of, folds.len());
+            trials.push(Trial {
+                step,
+                candidate: c,
+                id: candidates[c].id().to_string(),
+                fitted,
+                error,
+                wins: cur_ms.iter().zip(&misfits).filter(|(b, a)| a < b).count(),
+                misfits,
+                significant: rule.admits(&comparison),
+                comparison,
+                best: false,
+                inadmissible: None,
+                accepted: false,
+            });
+        }
+        // The largest gain of this step among finite misfits (ties: candidate order).
+        let best = (first..trials.len())
+            .filter(|&i| trials[i].comparison.after.is_finite())
+            .max_by(|&a, &b| trials[a].comparison.gain.total_cmp(&trials[b].comparison.gain).then(b.cmp(&a)));
+        let Some(best) = best else { break };
+        trials[best].best = true;
+        if !trials[best].significant {
+            break;
+        }
+        let why = candidates[trials[best].candidate].inadmissible(study, &current, &trials[best].fitted);
+        if why.is_some() {
+            trials[best].inadmissible = why;
+            break;
+        }
+        trials[best].accepted = true;
+        current = trials[best].fitted.clone();
+        cur_ms = trials[best].misfits.clone();
+        left.retain(|&c| c != trials[best].candidate);
+        chosen.push(best);
+        step += 1;
+    }
+    Ok(Selection {
+        units,
+        fold_of,
+        train_sets,
+        baseline_misfits,
+        trials,
+        chosen,
+        final_models: current,
+        final_misfits: cur_ms,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Units carry a measured level; the model is a level; misfit |m − x_u| + floor.
+    struct Levels(Vec<f64>);
+
+    impl Study<f64> for Levels {
+        fn score(&self, m: &f64, u: usize) -> f64 {
+            (m - self.0[u]).abs() + 0.01
+        }
+    }
+
+    /// Adds `shift` to the current level (fitted: the training units' mean offset when `shift` is NaN).
+    struct Shift(&'static str, f64);
+
+    impl Candidate<Levels, f64> for Shift {
+        fn id(&self) -> &str {
+            self.0
+        }
+        fn fit(&self, s: &Levels, cur: &f64, train: &[usize]) -> Result<f64, String> {
+            if self.1.is_nan() {
+                Ok(train.iter().map(|&u| s.0[u]).sum::<f64>() / train.len() as f64)
+            } else if self.1.is_infinite() {
+                Err("no fit".into())
+            } else {
+                Ok(cur + self.1)
+            }
+        }
+        fn inadmissible(&self, _: &Levels, _: &[f64], fitted: &[f64]) -> Option<String> {
+            (self.0 == "negative_forbidden" && fitted.iter().any(|m| *m < 0.0)).then(|| "level below 0".into())
+        }
+    }
+
+    fn rule() -> SelectionRule {
+        SelectionRule { min_relative_gain: 0.05, min_t: 2.0 }
+    }
+
+    #[test]
+    fn the_comparison_is_the_thesis_rigs_rule() {
+        // Halving every unit's misfit: gain 0.5, every log ratio ln 2, zero spread: t infinite.
+        let c = compare(&[2.0, 4.0, 6.0, 8.0], &[1.0, 2.0, 3.0, 4.0], &[0, 0, 1, 1], 2);
+        assert!((c.gain - 0.5).abs() < 1e-12 && c.t.is_infinite() && c.gain_fold_sd.abs() < 1e-12, "{c:?}");
+        // Overall misfit is the RMS: √((1 + 9)/2).
+        assert!((overall(&[1.0, 3.0]) - 5.0_f64.sqrt()).abs() < 1e-12);
+        // Mixed signs: d = ln 2, ln 0.5, ln 2 → mean ln2/3, sd 0.8004: t = 0.5.
+        let c = compare(&[2.0, 1.0, 2.0], &[1.0, 2.0, 1.0], &[0, 1, 2], 3);
+        assert!((c.t - 0.5).abs() < 1e-9, "{c:?}");
+        assert!(!rule().admits(&c));
+    }
+
+    #[test]
+    fn selection_takes_the_best_admitted_candidate_then_stops() {
+        let s = Levels(vec![1.0, 1.1, 0.9, 1.05, 0.95]);
+        let fit_level = Shift("fit_level", f64::NAN);
+        let useless = Shift("useless", 0.0);
+        let broken = Shift("broken", f64::INFINITY);
+        let cands: [&dyn Candidate<Levels, f64>; 3] = [&useless, &broken, &fit_level];
+        let sel = forward_select(&s, &cands, &0.0, &Fold::leave_one_out(5), &rule()).unwrap();
+        assert_eq!(sel.chosen_ids(), ["fit_level"]);
+        assert_eq!(sel.train_sets.len(), 5);
+        // Step 1 traces all three, step 2 the two left, and stops (no gain).
+        assert_eq!(sel.step(1).count(), 3);
+        assert_eq!(sel.step(2).count(), 2);
+        let broken1 = sel.step(1).find(|t| t.id == "broken").unwrap();
+        assert!(broken1.error.is_some() && !broken1.significant && broken1.comparison.after.is_infinite());
+        assert!(sel.step(2).all(|t| !t.accepted));
+        assert!(overall(&sel.final_misfits) < 0.1 * overall(&sel.baseline_misfits));
+    }
+
+    #[test]
+    fn a_shared_training_set_is_fitted_once_and_an_inadmissible_best_stops() {
+        let s = Levels(vec![-1.0, -1.0, -1.1, -0.9]);
+        let neg = Shift("negative_forbidden", f64::NAN);
+        let folds = Fold::shared_training(&[0], &[1, 2, 3]);
+        let sel = forward_select(&s, &[&neg as &dyn Candidate<Levels, f64>], &0.0, &folds, &rule()).unwrap();
+        assert_eq!(sel.train_sets, vec![vec![0]]);
+        let t = &sel.trials[0];
+        assert_eq!(t.fitted, vec![-1.0]);
+        assert!(t.significant && t.best && !t.accepted && t.inadmissible.as_deref() == Some("level below 0"));
+        assert!(sel.chosen.is_empty() && sel.final_models == vec![0.0]);
+    }
+
+    #[test]
+    fn bad_folds_are_refused() {
+        let s = Levels(vec![0.0; 3]);
+        let c = Shift("x", 0.0);
+        let cands: [&dyn Candidate<Levels, f64>; 1] = [&c];
+        let twice = [Fold { train: vec![0], held_out: vec![1] }, Fold { train: vec![0], held_out: vec![1] }];
+        assert!(forward_select(&s, &cands, &0.0, &twice, &rule()).is_err());
+        let both = [Fold { train: vec![0, 1], held_out: vec![1] }];
+        assert!(forward_select(&s, &cands, &0.0, &both, &rule()).is_err());
+    }
+}
