@@ -518,9 +518,11 @@ fn diagnosis_json(s: &Study) -> Value {
             "heldout_runs": heldout_names(s, to),
             "heldout_misfit_baseline": from.heldout_mean,
             "heldout_misfit_extended": to.heldout_mean,
-            "relative_gain": st.gain.relative,
-            "gain_per_run_mean": st.gain.mean,
-            "gain_per_run_sd": st.gain.sd,
+            "heldout_misfit_rms_baseline": st.gain.before,
+            "heldout_misfit_rms_extended": st.gain.after,
+            "relative_gain": st.gain.gain,
+            "relative_gain_fold_sd": st.gain.gain_fold_sd,
+            "paired_t": st.gain.t,
         }));
     }
     let final_c = s.chosen.map(|c| &s.candidates[c]).unwrap_or(base);
@@ -606,15 +608,15 @@ fn regimes_heldout(s: &Study, c: &CandidateResult) -> usize {
 fn evidence(s: &Study, st: &Step) -> String {
     let (from, to) = (&s.candidates[st.from], &s.candidates[st.best]);
     format!(
-        "held out ({}), {} lowers the mean misfit of {} from {:.2} to {:.2} (gain per run {:.2} ± {:.2} sd over {} runs) and gets {}/{} regimes right against {}/{} (tables/slider-heldout.csv)",
+        "held out ({}), {} lowers the RMS misfit of {} from {:.2} to {:.2} (gain {:.1} %, paired t {:.2} over {} runs) and gets {}/{} regimes right against {}/{} (tables/slider-heldout.csv)",
         if s.leave_one_out { "leave one stiffness out" } else { "runs at stiffnesses outside the calibration list" },
         added(from.model, to.model),
         from.model.id(),
-        from.heldout_mean,
-        to.heldout_mean,
-        st.gain.mean,
-        st.gain.sd,
-        st.gain.runs,
+        st.gain.before,
+        st.gain.after,
+        100.0 * st.gain.gain,
+        st.gain.t,
+        to.heldout.len(),
         regimes_heldout(s, to),
         to.heldout.len(),
         regimes_heldout(s, from),
@@ -742,28 +744,33 @@ fn markdown(s: &Study) -> String {
     let _ = writeln!(
         md,
         "Each step tries the current model's extensions — a friction law with memory in place of Coulomb, a set-up in place \
-         of the README's m and k — and keeps the best when it lowers the mean held-out misfit by {} % or more \
-         (`[shared.selection]`). Gain: the current model's held-out misfit minus the extension's, run by run (mean ± sd).\n",
-        100.0 * p.selection.min_relative_gain
+         of the README's m and k — and keeps the one with the largest gain when the workspace's step rule admits it \
+         (`[shared.selection]`, `rig_types::select::compare`): a gain 1 − M_after/M_before of the RMS held-out misfit of \
+         at least {} % and a paired t of ln(M_before/M_after) over the held-out runs of at least {}. The mean misfit is shown beside it.\n",
+        100.0 * p.selection.min_relative_gain,
+        p.selection.min_t
     );
-    let _ = writeln!(md, "| step | from | tried | held-out misfit | gain per run | kept |");
-    let _ = writeln!(md, "|---|---|---|---|---|---|");
+    let _ =
+        writeln!(md, "| step | from | tried | held-out misfit (mean) | RMS before → after | gain | paired t | kept |");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
     for (n, st) in s.steps.iter().enumerate() {
         let from = &s.candidates[st.from];
         for &t in &st.tried {
             let c = &s.candidates[t];
             let pairs = |c: &CandidateResult| c.heldout.iter().map(|h| (h.0, h.1)).collect::<Vec<_>>();
-            let g = crate::select::gain(&pairs(from), &pairs(c));
+            let g = crate::select::comparison(&pairs(from), &pairs(c), &s.folds);
             let _ = writeln!(
                 md,
-                "| {} | {} ({:.3}) | {} | {:.3} | {:.3} ± {:.3} | {} |",
+                "| {} | {} ({:.3}) | {} | {:.3} | {:.3} → {:.3} | {:.1} % | {:.2} | {} |",
                 n + 1,
                 from.model.id(),
                 from.heldout_mean,
                 c.model.id(),
                 c.heldout_mean,
-                g.mean,
-                g.sd,
+                g.before,
+                g.after,
+                100.0 * g.gain,
+                g.t,
                 if t == st.best && st.kept { "yes" } else { "no" }
             );
         }
@@ -850,14 +857,15 @@ fn markdown(s: &Study) -> String {
         let (from, best) = (&s.candidates[st.from], &s.candidates[st.best]);
         let _ = writeln!(
             md,
-            "- No extension of {} lowers its mean held-out misfit ({:.3}) by {} % or more; the best is {} at {:.3} (gain per run {:.3} ± {:.3}).",
+            "- No extension of {} passes the selection rule (RMS held-out misfit {:.3}; gain ≥ {} % and paired t ≥ {}); the best is {} at {:.3} (gain {:.1} %, t {:.2}).",
             from.model.id(),
-            from.heldout_mean,
+            st.gain.before,
             100.0 * p.selection.min_relative_gain,
+            p.selection.min_t,
             best.model.id(),
-            best.heldout_mean,
-            st.gain.mean,
-            st.gain.sd
+            st.gain.after,
+            100.0 * st.gain.gain,
+            st.gain.t
         );
     }
     let _ = writeln!(md, "{}", unreached(s));

@@ -1,13 +1,15 @@
 //! Forward selection over folds, behind a small trait that maps one-to-one
 //! onto "fit on a training fold, score on a held-out fold" ([`FoldCandidate`]):
-//! the folds are the caller's, a step keeps the candidate with the lowest
-//! mean held-out misfit when it lowers the current model's by the selection
-//! rule's relative gain, and the gain is reported with its spread over the
-//! held-out runs ([`Gain`]). The slider's models implement the trait in
+//! the folds are the caller's, and a step is judged by the workspace's one
+//! step rule ([`rig_types::select::compare`] and
+//! [`rig_types::contract::SelectionRule::admits`]: the relative gain of the
+//! RMS held-out misfit and the paired t of ln(M_before/M_after)). The slider's models implement the trait in
 //! `study.rs`; a workspace-wide selection engine with the same contract can
 //! take this module's place without touching them.
 
 use rayon::prelude::*;
+pub use rig_types::select::Comparison;
+use rig_types::select::compare;
 
 /// A fold: runs to fit on, runs to score (indices into the caller's runs).
 #[derive(Debug, Clone, PartialEq)]
@@ -58,43 +60,31 @@ pub fn evaluate<C: FoldCandidate>(c: &C, folds: &[Fold]) -> Evaluation<C::Fit> {
     Evaluation { fits, heldout, mean }
 }
 
-/// The gain of a candidate over the current model, run by run held out:
-/// misfit before − misfit after.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Gain {
-    pub mean: f64,
-    /// Sample standard deviation of the per-run gains (0 for one run).
-    pub sd: f64,
-    pub runs: usize,
-    /// 1 − mean after / mean before.
-    pub relative: f64,
-}
-
-/// The gain of `after` over `before` (the same held-out runs, in the same order).
-pub fn gain(before: &[(usize, f64)], after: &[(usize, f64)]) -> Gain {
+/// A candidate's held-out record compared with the current model's by the
+/// one step rule of the workspace ([`rig_types::select::compare`]: the
+/// overall misfit √(mean M²) over the held-out runs, its relative gain, the
+/// spread of each fold's own gain and the paired t of ln(M_before/M_after)),
+/// the folds being the ones both records were scored over.
+pub fn comparison(before: &[(usize, f64)], after: &[(usize, f64)], folds: &[Fold]) -> Comparison {
     assert_eq!(before.len(), after.len(), "the same held-out runs");
-    let d: Vec<f64> = before
+    let fold_of: Vec<usize> = before
         .iter()
         .zip(after)
         .map(|(b, a)| {
             assert_eq!(b.0, a.0, "the same held-out runs");
-            b.1 - a.1
+            folds.iter().position(|f| f.test.contains(&b.0)).expect("a fold holds the run out")
         })
         .collect();
-    let n = d.len();
-    let mean = d.iter().sum::<f64>() / n.max(1) as f64;
-    let sd = if n > 1 { (d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt() } else { 0.0 };
-    let m_before = before.iter().map(|h| h.1).sum::<f64>() / n.max(1) as f64;
-    Gain { mean, sd, runs: n, relative: if m_before > 0.0 { mean / m_before } else { 0.0 } }
+    let ms = |h: &[(usize, f64)]| h.iter().map(|x| x.1).collect::<Vec<f64>>();
+    compare(&ms(before), &ms(after), &fold_of, folds.len())
 }
 
-/// One forward step: the index of the candidate (of `means`) with the lowest
-/// mean held-out misfit, when it is at most (1 − `min_relative_gain`) × `current`.
-pub fn step(current: f64, means: &[f64], min_relative_gain: f64) -> Option<usize> {
-    (0..means.len())
-        .filter(|&i| means[i].is_finite())
-        .min_by(|&a, &b| means[a].total_cmp(&means[b]))
-        .filter(|&i| means[i] <= (1.0 - min_relative_gain) * current)
+/// The step's best candidate: the largest gain of a finite misfit (ties: the
+/// first), as [`rig_types::select::forward_select`] picks it.
+pub fn best(comparisons: &[Comparison]) -> Option<usize> {
+    (0..comparisons.len())
+        .filter(|&i| comparisons[i].after.is_finite())
+        .max_by(|&a, &b| comparisons[a].gain.total_cmp(&comparisons[b].gain).then(b.cmp(&a)))
 }
 
 #[cfg(test)]
@@ -122,11 +112,14 @@ mod tests {
         assert_eq!(e.fits, [4.0, 3.5, 1.5]);
         assert_eq!(e.heldout, [(0, 3.0), (1, 1.5), (2, 4.5)]);
         assert!((e.mean - 3.0).abs() < 1e-12);
-        let g = gain(&e.heldout, &[(0, 1.0), (1, 1.5), (2, 2.5)]);
-        assert!((g.mean - 4.0 / 3.0).abs() < 1e-12 && (g.relative - 4.0 / 9.0).abs() < 1e-12, "{g:?}");
-        assert!((g.sd - (4.0f64 / 3.0).sqrt()).abs() < 1e-12, "{g:?}");
-        // The rule: the best candidate, kept only with enough gain.
-        assert_eq!(step(3.0, &[2.9, 2.0, f64::NAN], 0.05), Some(1));
-        assert_eq!(step(3.0, &[2.9, 2.86], 0.05), None);
+        // The engine's rule on these records: RMS misfit √10.5 → √(8.5/3), paired t of ln(before/after).
+        let c = comparison(&e.heldout, &[(0, 1.0), (1, 1.5), (2, 2.5)], &folds);
+        assert!((c.before - ((9.0 + 2.25 + 20.25) / 3.0f64).sqrt()).abs() < 1e-12, "{c:?}");
+        assert!((c.after - ((1.0 + 2.25 + 6.25) / 3.0f64).sqrt()).abs() < 1e-12, "{c:?}");
+        let d = [3.0f64.ln(), 0.0, 1.8f64.ln()];
+        let mean = d.iter().sum::<f64>() / 3.0;
+        let sd = (d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / 2.0).sqrt();
+        assert!((c.t - mean / (sd / 3f64.sqrt())).abs() < 1e-9, "{c:?}");
+        assert_eq!(best(&[c, Comparison { after: f64::NAN, gain: 2.0, ..c }]), Some(0));
     }
 }

@@ -13,7 +13,7 @@
 use crate::SliderError;
 use crate::features::{FeatureOptions, Features, Regime, RunConstants, Spread, features};
 use crate::fit::{Model, SetupCandidate, critical_stiffness_guess_n_m, fit, run_misfit};
-use crate::select::{Fold, FoldCandidate, Gain, evaluate, gain, step};
+use crate::select::{Comparison, Fold, FoldCandidate, best, comparison, evaluate};
 use crate::sim::{Setup, simulate_into};
 use rayon::prelude::*;
 use rig_ingest::slider::{SliderRun, read_slider_folder};
@@ -45,9 +45,9 @@ pub struct StudyParams {
     pub fit_evals: usize,
     /// ...from this many starts (the best-scored of the candidate's starts), the best result kept.
     pub fit_starts: usize,
-    /// An extension must lower the mean held-out misfit by
-    /// `selection.min_relative_gain` (pipeline.toml's `[shared.selection]`,
-    /// the campaign diagnosis' and the LAVI study's rule too)...
+    /// An extension must pass the workspace's step rule (pipeline.toml's
+    /// `[shared.selection]`, `rig_types::select::compare`: the campaign
+    /// diagnosis' and the LAVI study's rule too)...
     pub selection: rig_types::contract::SelectionRule,
     /// ...and the model is adequate when its mean held-out misfit is at most
     /// this and it gets the regime of every held-out run right.
@@ -125,10 +125,11 @@ pub struct Step {
     pub from: usize,
     /// Indices of the models tried.
     pub tried: Vec<usize>,
-    /// The best of them (lowest mean held-out misfit) and its gain over `from`, run by run.
+    /// The best of them (largest gain) and its comparison with `from` by the
+    /// workspace's step rule ([`crate::select::comparison`]).
     pub best: usize,
-    pub gain: Gain,
-    /// Whether it earned its place (`[shared.selection]`'s relative gain).
+    pub gain: Comparison,
+    /// Whether it earned its place (`[shared.selection]`: relative gain and paired t).
     pub kept: bool,
 }
 
@@ -145,6 +146,8 @@ pub struct Study {
     pub candidates: Vec<CandidateResult>,
     /// The forward selection, step by step.
     pub steps: Vec<Step>,
+    /// The folds every held-out misfit was scored over.
+    pub folds: Vec<Fold>,
     /// Index into `candidates` of the final model, when an extension earned its place.
     pub chosen: Option<usize>,
     /// The folder's name (`campaign` of slider-diagnosis.json).
@@ -439,7 +442,7 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
     };
     // Forward selection from the Coulomb baseline: each step tries the
     // current model's extensions (a memory law, a set-up) and keeps the best
-    // when it lowers the mean held-out misfit by the selection rule's gain.
+    // when the workspace's step rule admits it (`[shared.selection]`).
     let mut candidates = vec![evaluate_model(Model::BASELINE, &runs, &folds, &cal, &[], p)];
     let mut steps = Vec::new();
     let mut current = 0;
@@ -452,11 +455,11 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
         let nested = from.fold_fits.clone();
         let tried: Vec<CandidateResult> =
             ext.par_iter().map(|&m| evaluate_model(m, &runs, &folds, &cal, &nested, p)).collect();
-        let means: Vec<f64> = tried.iter().map(|c| c.heldout_mean).collect();
-        let best = step(f64::INFINITY, &means, 0.0).expect("a step tries at least one model");
         let pairs = |c: &CandidateResult| c.heldout.iter().map(|h| (h.0, h.1)).collect::<Vec<_>>();
-        let gained = gain(&pairs(from), &pairs(&tried[best]));
-        let kept = step(from.heldout_mean, &means, p.selection.min_relative_gain).is_some();
+        let compared: Vec<Comparison> = tried.iter().map(|c| comparison(&pairs(from), &pairs(c), &folds)).collect();
+        let best = best(&compared).unwrap_or(0);
+        let gained = compared[best];
+        let kept = p.selection.admits(&gained);
         let base = candidates.len();
         candidates.extend(tried);
         steps.push(Step {
@@ -487,8 +490,8 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
         let nested = candidates[setup].fold_fits.clone();
         let c = evaluate_model(pair, &runs, &folds, &cal, &nested, p);
         let pairs = |c: &CandidateResult| c.heldout.iter().map(|h| (h.0, h.1)).collect::<Vec<_>>();
-        let gained = gain(&pairs(&candidates[current]), &pairs(&c));
-        let kept = step(candidates[current].heldout_mean, &[c.heldout_mean], p.selection.min_relative_gain).is_some();
+        let gained = comparison(&pairs(&candidates[current]), &pairs(&c), &folds);
+        let kept = p.selection.admits(&gained);
         candidates.push(c);
         let idx = candidates.len() - 1;
         steps.push(Step { from: current, tried: vec![idx], best: idx, gain: gained, kept });
@@ -533,6 +536,7 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
         calibration_stiffnesses,
         candidates,
         steps,
+        folds,
         chosen,
         folder_name,
         traces,

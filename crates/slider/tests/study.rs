@@ -112,12 +112,12 @@ fn study_on_the_shipped_folder() {
     assert!(setup_fits(SetupCandidate::SeriesCompliance).iter().all(|&k| k > 2e4), "series stiffnesses");
     for st in &s.steps {
         eprintln!(
-            "step from {}: best {} {:.3} (gain {:.3} ± {:.3}) kept {}",
+            "step from {}: best {} {:.3} (gain {:.3}, t {:.2}) kept {}",
             s.candidates[st.from].model.id(),
             s.candidates[st.best].model.id(),
             s.candidates[st.best].heldout_mean,
-            st.gain.mean,
-            st.gain.sd,
+            st.gain.gain,
+            st.gain.t,
             st.kept
         );
     }
@@ -137,6 +137,18 @@ fn each_shipped_stiffness_held_out() {
         p.calibration_stiffnesses_n_m = vec![cal];
         let s = run_study(&dir, &p).unwrap();
         assert!(!s.leave_one_out);
+        for st in &s.steps {
+            eprintln!(
+                "calibrated on {cal}: step from {}: best {} (RMS {:.3} -> {:.3}, gain {:.3}, t {:.2}) kept {}",
+                s.candidates[st.from].model.id(),
+                s.candidates[st.best].model.id(),
+                st.gain.before,
+                st.gain.after,
+                st.gain.gain,
+                st.gain.t,
+                st.kept
+            );
+        }
         let fin = &s.candidates[s.chosen.unwrap_or(0)];
         let held: Vec<f64> = fin.heldout.iter().map(|h| s.runs[h.0].stiffness_n_m).collect();
         assert_eq!(held, [other; 3], "every run at {other} N/m is held out");
@@ -160,16 +172,18 @@ fn each_shipped_stiffness_held_out() {
         }
     }
     eprintln!("passed: {passed:?}\nfailed: {failed:?}");
-    // What holds today (slider.md and the crate docs give the numbers). Calibrated on
-    // 168 N/m the selection keeps the effective mass, and both inertial
-    // periods at 2254 N/m fall within 15 %; calibrated on 2254 N/m it keeps
-    // nothing, and Coulomb gets 168 N/m's stick-slip runs within every bound.
+    // What holds today (slider.md and the crate docs give the numbers). The
+    // selection is the workspace's one rule (`rig_types::select::compare`):
+    // calibrated on 168 N/m the effective mass lowers the RMS held-out misfit
+    // by 18 % but wins on one of the three held-out runs only (paired t 0.35
+    // < min_t), so Coulomb on the stated m and k is kept and the inertial
+    // period at 2254 N/m, 4300 µm/s is missed; calibrated on 2254 N/m nothing
+    // gains, and Coulomb gets 168 N/m's stick-slip runs within every bound.
     for want in [
         "k2254-v1100 regime",
         "k2254-v1100 inertial period",
         "k2254-v1100 onset",
         "k2254-v4300 regime",
-        "k2254-v4300 inertial period",
         "k2254-v4300 onset",
         "k2254-v42 period",
         "k2254-v42 drop",
@@ -187,10 +201,14 @@ fn each_shipped_stiffness_held_out() {
         assert!(passed.iter().any(|p| p == want), "{want}: passed {passed:?}");
     }
     // What does not (the report names each, with its cause): the creep at
-    // k2254-v42 (no model here creeps there), and at k168-v4300 a Coulomb law
-    // on the stated m and k, which cannot oscillate faster than 2π√(m/k) and
-    // slips at μs where the record slips at 0.55.
-    assert_eq!(failed, ["k2254-v42 regime", "k168-v4300 inertial period", "k168-v4300 onset"]);
+    // k2254-v42 (no model here creeps there), and the inertial periods at
+    // 4300 µm/s with a Coulomb law on the stated m and k, which cannot
+    // oscillate faster than 2π√(m/k); at k168-v4300 it also slips at μs where
+    // the record slips at 0.55.
+    assert_eq!(
+        failed,
+        ["k2254-v42 regime", "k2254-v4300 inertial period", "k168-v4300 inertial period", "k168-v4300 onset"]
+    );
 }
 
 #[test]
