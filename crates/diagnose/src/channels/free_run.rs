@@ -688,10 +688,10 @@ pub fn free_run_checks_of(c: &Campaign, pairs: &[Pair], s: &FreeRunSettings, o: 
         1.0,
         o.regime_ratio,
         format!(
-            "{} of {} runs change regime (stick-slip ↔ pure slip) in the simulation: {}{one_note}{fail_note}",
+            "{} of {} runs change regime (stick-slip ↔ pure slip) in the simulation{}{one_note}{fail_note}",
             differ.len(),
             ok.len(),
-            differ.join(", ")
+            if differ.is_empty() { String::new() } else { format!(": {}", differ.join(", ")) }
         ),
     ));
 
