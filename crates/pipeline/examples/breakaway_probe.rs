@@ -1,6 +1,12 @@
 //! Probe (issue 25): the shipped campaign's diagnosis with the baseline's
 //! static friction coefficient replaced, to see what the free run does.
 //! `cargo run --example breakaway_probe -- <mu_static[,mu_kinetic]>...`
+//! (the shipped level is 1.4643698308330335). `TRANSIENT=1` prints each
+//! operating point's transient instead: the last time Ω1 is stuck after the
+//! ramp, record vs final model, with the regime over the free-run window and
+//! at the end of the run; `PHASES=0,0.785,…` reruns the model with the
+//! modulation's phase moved by each (rad), `RUNS=op-19,…` selects runs. The
+//! numbers of `channels::free_run::attractor_stick_slip`'s docs come from it.
 
 use anyhow::{Context, Result};
 use rig_diagnose::{DiagnoseOptions, diagnose};
@@ -200,7 +206,8 @@ fn transients(
         let input = rig_types::RunInput::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s };
         let speed = |a: &[f64]| rig_types::sensor::central_difference_rad_s(t, a, 8);
         let read = |w: &[f64]| {
-            let last = t.iter().zip(w).filter(|(x, v)| **x > ramp_s + 0.5 && v.abs() <= 0.3).map(|(x, _)| *x).last();
+            let last =
+                t.iter().zip(w).filter(|(x, v)| **x > ramp_s + 0.5 && v.abs() <= 0.3).map(|(x, _)| *x).next_back();
             let (a, b) =
                 (t.partition_point(|&x| x < ramp_s + settle), t.partition_point(|&x| x < ramp_s + settle + steady));
             let fs = (b - a - 1) as f64 / (t[b - 1] - t[a]);
