@@ -585,7 +585,15 @@ fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) 
 /// both ways: the record's op-22, op-26, op-27 all stop sticking at
 /// 8.6–10.5 s, and their decay ratios 0.63, 0.64, 0.56 made two of them
 /// stick-slip and one not. What the rig settles to is determined; how long
-/// it takes near the boundary is not, within the modulation's phase.
+/// it takes near the boundary is not, within the modulation's phase: over 8
+/// phases spread over 2π the final model ends in steady slip at every one
+/// for op-02, op-19, op-20, op-22, op-26, op-27, op-28 and sticks and slips
+/// at every one for op-03, as the record does, while its last stick ranges
+/// over 4.3–11.0 s for op-19 (record 19.5 s), 0–16.3 s for op-22 (10.0),
+/// 3.8–12.6 s for op-26 (10.5) and 4.0–10.7 s for op-27 (8.6)
+/// (`crates/pipeline/examples/breakaway_probe.rs`, `TRANSIENT=1`). So a
+/// run changes regime in the check only when the end of the run and the
+/// features' window both differ; a difference in one of them is listed.
 fn attractor_stick_slip(
     t: &[f64],
     rotor_angle_rad: &[f64],
