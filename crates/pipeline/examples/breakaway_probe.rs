@@ -118,22 +118,7 @@ pub fn blocks(
     so: &rig_model::SimOptions,
 ) {
     use rig_types::RunKind;
-    let vocab: Vec<_> = d
-        .findings
-        .iter()
-        .filter_map(|f| rig_diagnose::EffectId::from_id(&f.effect).map(|e| (e, f.params.clone())))
-        .collect();
-    let row = d.detail.runs.iter().find(|r| r.id == id).unwrap();
-    let mut p = rig_diagnose::channels::with_run_phases(&rig_diagnose::extended_params(base, &vocab), row.phases_rad);
-    if let Some(l) = &d.detail.breakaway {
-        p = rig_diagnose::breakaway::with_static_level(&p, l);
-    }
-    if std::env::var("TW").is_err() {
-        p.shaft_damping_nm_s_rad = 0.0;
-    }
-    if c_r >= 0.0 {
-        p.rotor_damping_nm_s_rad = c_r;
-    }
+    let p = final_model(d, base, id, c_r, 0.0);
     let run = c.runs.iter().find(|r| r.id == id).unwrap();
     let RunKind::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s } = run.kind else { return };
     let t = &run.data.time_s;
@@ -157,9 +142,9 @@ pub fn blocks(
     }
 }
 
-/// The final model of run `id` rebuilt by hand (findings, phases, μs, rotor
-/// damping `c_r` on Ω1 with C = 0 unless TW is set), with `dphase` added to
-/// the modulation's phase.
+/// The final model of run `id` rebuilt by hand (findings, phases, μs; C = 0
+/// unless TW is set, rotor damping `c_r` on Ω1 when ≥ 0), with `dphase`
+/// added to the modulation's phase.
 fn final_model(d: &rig_diagnose::Diagnosis, base: &RigParams, id: &str, c_r: f64, dphase: f64) -> RigParams {
     let vocab: Vec<_> = d
         .findings
@@ -174,6 +159,8 @@ fn final_model(d: &rig_diagnose::Diagnosis, base: &RigParams, id: &str, c_r: f64
     }
     if std::env::var("TW").is_err() {
         p.shaft_damping_nm_s_rad = 0.0;
+    }
+    if c_r >= 0.0 {
         p.rotor_damping_nm_s_rad = c_r;
     }
     p
