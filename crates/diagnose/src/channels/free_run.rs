@@ -300,9 +300,11 @@ struct Window<'a> {
 }
 
 /// Every stuck stretch (|Ω1| below the slip speed) that starts and ends
-/// inside the window, as [first, end) sample ranges: the stick phases that
-/// end in a break-away (one definition for the free-run features and the
-/// extension's break-away rows).
+/// inside the window, as [first, end) sample ranges: the extension's
+/// break-away rows. Not the free-run break-away feature any more: on a
+/// record most such stretches are encoder chatter of a creeping rotor
+/// ([`breakaway_peaks`] reads the estimation's stick episodes instead); the
+/// extension's rows should move to those too (open).
 pub fn stuck_stretches(w1: &[f64], slip_rad_s: f64) -> Vec<(usize, usize)> {
     let mut out = Vec::new();
     let mut start: Option<usize> = None;
