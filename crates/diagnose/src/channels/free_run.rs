@@ -816,3 +816,73 @@ fn feature_check(
         ),
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A rotor that creeps below the slip speed (encoder chatter across it
+    /// in the ±16 ms difference), then sticks while the pad force rises to
+    /// 14 N and breaks away, three times: the estimation's episodes give the
+    /// three break-aways at 14 N; the stretches below the slip speed give
+    /// many more, most of them chatter at the creep's force.
+    #[test]
+    fn creep_chatter_is_no_break_away() {
+        let (dt, tick) = (0.002, tick_rad(1000));
+        let (mut t, mut phi, mut force) = (vec![], vec![], vec![]);
+        let mut angle = 0.0;
+        for k in 0..(3 * 1500) {
+            let s = (k % 1500) as f64 * dt; // one cycle: 1 s creep, 0.5 s stuck, 1.5 s slip
+            let (speed, f) = if s < 1.0 {
+                (0.45, 11.0)
+            } else if s < 1.5 {
+                (0.0, 11.0 + 3.0 * (s - 1.0) / 0.5)
+            } else {
+                (3.0, 11.0)
+            };
+            angle += speed * dt;
+            t.push(k as f64 * dt);
+            phi.push((angle / tick).floor() * tick);
+            force.push(f);
+        }
+        let o = rig_estimate::FrictionOptions::default();
+        let peaks = breakaway_peaks(&t, &phi, &force, 0, 10.0, &o);
+        assert_eq!(peaks.len(), 3, "{peaks:?}");
+        assert!(peaks.iter().all(|p| (p - 14.0).abs() < 0.05), "{peaks:?}");
+        let w1 = centred_speed(&t, &phi, 8);
+        let stretches = stuck_stretches(&w1, 0.5);
+        assert!(stretches.len() > 10, "{} stretches below the slip speed", stretches.len());
+        assert!(breakaway_peaks(&t, &phi, &force, 0, 0.1, &o).is_empty(), "N0 below min_normal_force_n");
+    }
+
+    /// Stick-slip at 0.45 Hz (rotor speed 4(1 − cos) clipped at 0, stuck
+    /// part of each cycle) that stops at `until_s` and rings down to steady
+    /// slip at 2 rad/s; 40 s at 500 Hz. Read at the end of the run: a
+    /// transient that stops at 10 s or 19.5 s is steady slip, one that lasts
+    /// the run is stick-slip.
+    #[test]
+    fn the_regime_is_read_where_the_run_settles() {
+        let dt = 0.002;
+        let t: Vec<f64> = (0..20_000).map(|k| k as f64 * dt).collect();
+        let run = |until_s: f64| {
+            let mut angle = 0.0;
+            let phi: Vec<f64> = t
+                .iter()
+                .map(|&x| {
+                    let w = if x < until_s {
+                        (4.0 * (1.0 - (2.0 * std::f64::consts::PI * 0.45 * x).cos()) - 1.5).max(0.0)
+                    } else {
+                        2.0 + 1.5 * (-(x - until_s) / 3.0).exp() * (2.0 * std::f64::consts::PI * 0.48 * x).sin()
+                    };
+                    angle += w * dt;
+                    angle
+                })
+                .collect();
+            let from = t.partition_point(|&x| x < 40.0 - 16.0);
+            attractor_stick_slip(&t, &phi, from, 8, &rig_sweep::ClassifyOptions::default())
+        };
+        assert!(!run(10.0), "stops sticking at 10 s");
+        assert!(!run(19.5), "stops sticking at 19.5 s");
+        assert!(run(100.0), "sticks and slips to the end");
+    }
+}
