@@ -15,6 +15,7 @@ use rig_types::sensor::{
 };
 use rig_types::{Campaign, RunKind};
 use serde::{Deserialize, Serialize};
+use std::ops::Range;
 
 /// pipeline.toml's `[shared.stick_episodes]`: the estimation's μs/μk and the
 /// diagnosis' break-away level under its extended model read stick and slip
@@ -98,9 +99,30 @@ pub fn analyse_trace_normal(
     let mu_slip =
         (!slip.is_empty()).then(|| (slip.iter().map(|&i| mu[i].abs()).sum::<f64>() / slip.len() as f64, slip.len()));
 
+    let peaks = episodes_of(time_s, &omega, h, opts)
+        .into_iter()
+        .map(|r| r.map(|j| mu[j].abs()).fold(0.0_f64, f64::max))
+        .collect();
+    RunFriction { mu_slip, breakaway_peaks: peaks }
+}
+
+/// The stick episodes of one trace that end in a break-away, by the rules of
+/// [`FrictionOptions`] (`[shared.stick_episodes]`): each as the sample range
+/// over which its break-away peak is read, [first stuck sample, first moving
+/// sample + h) with h the speed difference's half window. The one definition
+/// of a break-away for the estimation's μs ([`analyse_trace_normal`]) and the
+/// diagnosis' free-run `breakaway_friction` feature (a simulated angle is read
+/// through the encoder first, so both sides pass the same rule).
+pub fn stick_episodes(time_s: &[f64], rotor_angle_rad: &[f64], opts: &FrictionOptions) -> Vec<Range<usize>> {
+    let h = half_window_samples(time_s, opts.speed_half_window_s).max(1);
+    episodes_of(time_s, &central_speed(time_s, rotor_angle_rad, h), h, opts)
+}
+
+/// [`stick_episodes`] on the centred-difference speed `omega` of half window `h`.
+fn episodes_of(time_s: &[f64], omega: &[f64], h: usize, opts: &FrictionOptions) -> Vec<Range<usize>> {
     // Stuck: the encoder did not move over ±h samples (speed estimate exactly 0).
     let stuck: Vec<bool> = omega.iter().map(|w| *w == 0.0).collect();
-    let mut peaks = Vec::new();
+    let mut out = Vec::new();
     let mut i = 0;
     let n = stuck.len();
     while i < n {
@@ -120,12 +142,10 @@ pub fn analyse_trace_normal(
         if long_enough && breaks_away {
             // The centred difference flags motion up to h samples early and
             // late; the true break-away lies in [end − h, end + h].
-            let hi = (end + h).min(n);
-            let peak = (start..hi).map(|j| mu[j].abs()).fold(0.0_f64, f64::max);
-            peaks.push(peak);
+            out.push(start..(end + h).min(n));
         }
     }
-    RunFriction { mu_slip, breakaway_peaks: peaks }
+    out
 }
 
 /// μs from break-away peaks: their median, with the standard error

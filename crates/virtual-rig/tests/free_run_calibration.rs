@@ -163,11 +163,17 @@ fn free_run_right_models() {
     let th = thesis();
     let o = opts();
     let classes = rig_virtual_rig::ids::VOCABULARY;
+    // ONLY="9312,9313": those seeds, with the detail of every flagged check.
+    let only: Option<Vec<u64>> =
+        std::env::var("ONLY").ok().map(|v| v.split(',').filter_map(|x| x.trim().parse().ok()).collect());
     let mut by_check: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let (mut right, mut flagged, mut missed) = (0usize, Vec::new(), Vec::new());
     for (ci, class) in classes.iter().enumerate() {
         for i in 0..n {
             let seed = 9300 + 10 * ci as u64 + i;
+            if only.as_ref().is_some_and(|o| !o.contains(&seed)) {
+                continue;
+            }
             let mut truth = draw_truth(class, 130.0, seed);
             truth.params.shaft_damping_nm_s_rad *= 0.3;
             let c = generate("right-ss", &truth, &stick_slip_protocol(), seed).expect("generate");
@@ -181,6 +187,12 @@ fn free_run_right_models() {
                 .map(|k| format!("{} {:.2}", k.channel, k.ratio))
                 .collect();
             println!("{class} seed {seed}: verdict {}; found {found}; flagged: {}", d.verdict, line.join(", "));
+            if only.is_some() {
+                for k in d.detail.free_run_extended.iter().filter(|k| k.flagged || k.channel.ends_with("regime")) {
+                    println!("  {}: {}", k.channel, k.detail);
+                }
+                println!("  adequacy: {:?}", d.adequacy);
+            }
             if !found {
                 missed.push((seed, class.to_string(), d.verdict.clone()));
                 continue;

@@ -11,14 +11,14 @@
 //!
 //! | check | feature | floor of run r (from the record) |
 //! |---|---|---|
-//! | `regime` | stick-slip or not ([`steady_features`]) | one run |
+//! | `regime` | stick-slip or not (the classifier of [`steady_features`]) at the end of the run and over the window ([`attractor_stick_slip`]) | one run |
 //! | `rotor_max`, `rotor_min` | extreme of Ω1, rad/s | resolution tick/(2h·dt)/√6 ⊕ spread of the extreme over cycles |
 //! | `motor_max`, `motor_min` | extreme of Ω2, rad/s | the same with Ω2's window |
 //! | `fundamental` | stick-slip frequency | Rayleigh resolution 1/(T·f) |
 //! | `voltage_mean` | mean drive voltage, V | σ_V/√n ⊕ spread of cycle means/√cycles |
 //! | `voltage_swing` | SD of the voltage, white noise removed: √(var − σ_V²), V | σ_V/√(2n) ⊕ spread of cycle SDs/√cycles |
 //! | `slip_friction` | mean friction force over slip samples (μ·N), N | σ_F/√n_slip ⊕ spread of cycle means/√cycles ⊕ N0·se(μk) of the model's fitted level |
-//! | `breakaway_friction` | mean over break-aways of the peak friction force in the stuck stretch before, N | σ_F/√(2h+1) ⊕ spread of the peaks/√events |
+//! | `breakaway_friction` | mean over break-aways (at least [`MIN_BREAKAWAYS`]) of the raw peak friction force of the stick episode before, N, by the estimation's rules ([`breakaway_peaks`]) | σ_F ⊕ spread of the peaks/√events |
 //! | `stick_fraction` | fraction of the window with \|Ω1\| below the slip speed | 2h·dt per cycle ⊕ spread of cycle fractions/√cycles |
 //!
 //! ⊕ is the root sum of squares; σ_V, σ_F the white noise of the recorded
@@ -45,22 +45,31 @@
 //! 9100–9123, 3–9 of 12 runs stick-slip), final model's largest ratios:
 //! rotor_max 1.47, rotor_min 0.19 (with the cycle-spread floors; 1.81 and
 //! 1.37 before), fundamental 0.01, regime 0 runs, motor_max 2.30, motor_min
-//! 2.01, voltage_mean 4.66, voltage_swing 2.27, slip_friction 2.18,
-//! breakaway_friction 13.63, stick_fraction 0.18. Thresholds ≈ 2× the null
+//! 2.01, voltage_mean 4.66, voltage_swing 2.27, slip_friction 1.79,
+//! breakaway_friction 1.35, stick_fraction 0.18. Thresholds ≈ 2× the null
 //! maximum, at least 4 ([`FreeRunThresholds`], pipeline.toml): 0/24 nulls
 //! flagged (95 % Clopper–Pearson 0–14.2 %; in-sample, the same campaigns set
-//! the thresholds; voltage mean and swing ≈ 2× would be 9.5 and 5). The break-away ratio of a null is 6–14, not ≈ 1: the
-//! estimate's μs (rig-estimate: the median of the raw, noisy peak forces)
-//! sits a few force-noise σ above the record's smoothed break-away level,
-//! which the break-aways of a regular null resolve; a bias of rig-estimate
-//! the check names, ≈ 0.3 % of the level. `free_run_right_models` (each
-//! vocabulary effect on the same stick-slipping rigs, diagnosed right):
-//! 0/20 flagged (95 % Clopper–Pearson 0–16.8 %; 8/20 before the extended
-//! model read its break-away level under its own normal force,
-//! [`crate::breakaway`], and before the slip-force floor carried N0·se(μk));
-//! the nulls stay 0/24 (rerun after both); the voltage mean and swing are reported, not in the
-//! adequacy test (thresholds unset: right drive-limit models give 81–116×);
-//! details in [`ChannelOptions`]' docs.
+//! the thresholds; voltage mean and swing ≈ 2× would be 9.5 and 5).
+//! `free_run_right_models` (each vocabulary effect on the same
+//! stick-slipping rigs, diagnosed right): 0/20 flagged (95 % Clopper–Pearson
+//! 0–16.8 %), break-away ratio at most 1.41, regime at most 2 runs; the
+//! voltage mean and swing are reported, not in the adequacy test
+//! (thresholds unset: right drive-limit models give 81–116×); details in
+//! [`ChannelOptions`]' docs.
+//!
+//! # One break-away reading
+//!
+//! The break-away level used to be the smoothed force's peak over every
+//! stretch with |Ω1| below the slip speed. On a record most such stretches
+//! are encoder chatter: a rotor creeping at one or two ticks per difference
+//! window crosses 0.5 rad/s back and forth (shipped op-03, 5–21 s: 50
+//! stretches of which 7 end in a break-away, at 13.5–16.6 N; the mean over
+//! all read 10.7 N, below the slip level), while a simulation crosses once.
+//! Nulls then sat at 6–14× the floor. The estimation's μs is the median of
+//! the raw peaks over its stick episodes (`[shared.stick_episodes]`,
+//! `rig_estimate::friction::stick_episodes`), so the feature is now that
+//! reading on both sides: the model's level and the record's break-aways are
+//! measured by one rule (max ratio of the nulls 1.35).
 
 use super::{ChannelCheck, ChannelOptions, rms};
 use crate::DiagnoseOptions;
@@ -94,6 +103,10 @@ pub struct FreeRunSettings {
     /// `slip_friction` floor, since the simulated slip force is only as
     /// certain as the level it was given (0: not known).
     pub mu_kinetic_stderr: f64,
+    /// `[shared.stick_episodes]`: what a stick episode and its break-away are
+    /// (the estimation's μs rules, `rig_estimate::friction::stick_episodes`),
+    /// for the `breakaway_friction` feature of record and simulation alike.
+    pub stick_episodes: rig_estimate::FrictionOptions,
 }
 
 /// Thresholds (ratio to the noise floor) of the free-run checks of every
@@ -130,6 +143,7 @@ impl FreeRunSettings {
             integrator: opts.integrator.clone(),
             force: None,
             mu_kinetic_stderr: 0.0,
+            stick_episodes: opts.stick_episodes.clone(),
         }
     }
 
@@ -165,6 +179,12 @@ pub struct Pair {
     pub channels_simulated: Option<ChannelFeatures>,
     /// Each feature's noise floor in this run, from the record (module docs).
     pub floors: ChannelFeatures,
+    /// Stick-slip over the features' window (after ramp + settle, `steady_s`
+    /// long), measured and simulated; `measured`/`simulated`'s `stick_slip`
+    /// is the attractor's, read at the end of the run
+    /// ([`attractor_stick_slip`]). The regime check counts a run whose
+    /// regimes differ in both readings.
+    pub window_stick_slip: (bool, Option<bool>),
 }
 
 /// Ω1 over a run's steady window at about [`TRACE_RATE_HZ`] (every k-th
@@ -274,12 +294,17 @@ struct Window<'a> {
     voltage_v: Option<&'a [f64]>,
     /// Friction force, N, smoothed over the rotor-speed window.
     force_n: Option<&'a [f64]>,
+    /// The window's break-away peaks, N ([`breakaway_peaks`]; empty for a
+    /// cycle's sub-window, whose floor does not use them).
+    peaks: &'a [f64],
 }
 
 /// Every stuck stretch (|Ω1| below the slip speed) that starts and ends
-/// inside the window, as [first, end) sample ranges: the stick phases that
-/// end in a break-away (one definition for the free-run features and the
-/// extension's break-away rows).
+/// inside the window, as [first, end) sample ranges: the extension's
+/// break-away rows. Not the free-run break-away feature any more: on a
+/// record most such stretches are encoder chatter of a creeping rotor
+/// ([`breakaway_peaks`] reads the estimation's stick episodes instead); the
+/// extension's rows should move to those too (open).
 pub fn stuck_stretches(w1: &[f64], slip_rad_s: f64) -> Vec<(usize, usize)> {
     let mut out = Vec::new();
     let mut start: Option<usize> = None;
@@ -297,12 +322,38 @@ pub fn stuck_stretches(w1: &[f64], slip_rad_s: f64) -> Vec<(usize, usize)> {
     out
 }
 
-/// Peak friction force in every stuck stretch ([`stuck_stretches`]): the
-/// break-away level of each slip onset.
-fn breakaway_peaks(w1: &[f64], force_n: &[f64], slip_rad_s: f64) -> Vec<f64> {
-    stuck_stretches(w1, slip_rad_s)
+/// Break-aways a window needs to define its break-away level: the floor
+/// carries their spread, which one or two do not measure (an angle-periodic
+/// normal force sets each break-away by the angle the rotor stuck at: a
+/// right model of seed 9313 broke away at 9.4 N in the record and 11.5 N in
+/// the simulation, one episode each, 219× a floor of force noise alone).
+pub const MIN_BREAKAWAYS: usize = 3;
+
+/// The break-away peaks of one side over samples `from..` of a run: the
+/// peak of the raw friction force `force_n`, N, over each stick episode that
+/// starts in the window and ends in a break-away, by the estimation's rules
+/// (`rig_estimate::friction::stick_episodes`, `[shared.stick_episodes]`: the
+/// encoder did not move over the difference window, for at least
+/// `min_stick_s`, and the rotor reaches slip right after). The estimation
+/// reads μs as the median of the same peaks over N0, so the model's static
+/// level and this feature are one reading of the record. `rotor_angle_rad`
+/// is the encoder's (a simulated angle quantised first); no episode below
+/// `min_normal_force_n`, where the estimation reads none either.
+fn breakaway_peaks(
+    time_s: &[f64],
+    rotor_angle_rad: &[f64],
+    force_n: &[f64],
+    from: usize,
+    normal_force_n: f64,
+    o: &rig_estimate::FrictionOptions,
+) -> Vec<f64> {
+    if normal_force_n < o.min_normal_force_n {
+        return Vec::new();
+    }
+    rig_estimate::friction::stick_episodes(time_s, rotor_angle_rad, o)
         .into_iter()
-        .map(|(j, k)| force_n[j..k].iter().copied().fold(f64::NEG_INFINITY, f64::max))
+        .filter(|r| r.start >= from)
+        .map(|r| force_n[r].iter().copied().fold(f64::NEG_INFINITY, f64::max))
         .collect()
 }
 
@@ -338,7 +389,8 @@ fn channel_values(w: &Window, slip_rad_s: f64, sigma_v: f64) -> [f64; ChannelFea
     let (slip, breakaway) = match w.force_n {
         Some(f) => {
             let s: Vec<f64> = w.w1.iter().zip(f).filter(|(w, _)| w.abs() >= slip_rad_s).map(|(_, f)| *f).collect();
-            (mean(&s), mean(&breakaway_peaks(w.w1, f, slip_rad_s)))
+            let level = if w.peaks.len() >= MIN_BREAKAWAYS { mean(w.peaks) } else { f64::NAN };
+            (mean(&s), level)
         }
         None => (f64::NAN, f64::NAN),
     };
@@ -368,6 +420,7 @@ fn channel_floors(w: &Window, slip_rad_s: f64, noise: &Noise, h1: usize, cycle: 
                 w2: &w.w2[r.clone()],
                 voltage_v: w.voltage_v.map(|v| &v[r.clone()]),
                 force_n: w.force_n.map(|f| &f[r.clone()]),
+                peaks: &[],
             };
             channel_values(&sub, slip_rad_s, sigma_v.max(0.0))
         })
@@ -381,8 +434,8 @@ fn channel_floors(w: &Window, slip_rad_s: f64, noise: &Noise, h1: usize, cycle: 
     let q = |a: f64, b: f64| a.hypot(b);
     let nf = n.max(1) as f64;
     let n_slip = w.w1.iter().filter(|x| x.abs() >= slip_rad_s).count().max(1) as f64;
-    let peaks = w.force_n.map(|f| breakaway_peaks(w.w1, f, slip_rad_s)).unwrap_or_default();
-    let sd_peaks = if peaks.len() >= 2 { sd(&peaks) } else { 0.0 };
+    let peaks = w.peaks;
+    let sd_peaks = if peaks.len() >= 2 { sd(peaks) } else { 0.0 };
     let mut v = [0.0; ChannelFeatures::N];
     for (i, x) in v.iter_mut().enumerate() {
         let (s, nc) = spread(i);
@@ -392,7 +445,7 @@ fn channel_floors(w: &Window, slip_rad_s: f64, noise: &Noise, h1: usize, cycle: 
             4 => q(sigma_v / nf.sqrt(), s / nc.sqrt()),
             5 => q(sigma_v / (2.0 * nf).sqrt(), s / nc.sqrt()),
             6 => q(sigma_f / n_slip.sqrt(), s / nc.sqrt()),
-            7 => q(sigma_f / ((2 * h1 + 1) as f64).sqrt(), sd_peaks / (peaks.len().max(1) as f64).sqrt()),
+            7 => q(sigma_f, sd_peaks / (peaks.len().max(1) as f64).sqrt()),
             _ => q(2.0 * h1 as f64 / cycle.max(1) as f64, s / nc.sqrt()),
         };
     }
@@ -412,7 +465,8 @@ fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) 
         return None;
     }
     let rad = tick_rad(c.rig.encoder_ticks_per_rev);
-    let phi1 = ticks_to_rad(&run.data.rotor_ticks.as_ref()?[..to], c.rig.encoder_ticks_per_rev);
+    let phi1_all = ticks_to_rad(run.data.rotor_ticks.as_ref()?, c.rig.encoder_ticks_per_rev);
+    let phi1 = &phi1_all[..to];
     let phi2 = ticks_to_rad(&run.data.motor_ticks.as_ref()?[..to], c.rig.encoder_ticks_per_rev);
     let tt = &t[..to];
     let w_set = rig_types::units::rpm_to_rad_s(motor_rpm_setpoint);
@@ -425,24 +479,37 @@ fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) 
         steady_features(&tt[from..], &w1[from..], &w2[from..], w_set, s.slip_speed_rad_s, &s.classify)
     };
     let trace_of = |w1: &[f64]| w1[from..].iter().step_by(stride).copied().collect::<Vec<f64>>();
-    let (m1, m2) = speeds(&phi1, &phi2);
-    let measured = feat(&m1, &m2);
+    let (m1, m2) = speeds(phi1, &phi2);
+    // The regime is the attractor's, read over the record's last `steady_s`
+    // ([`attractor_stick_slip`]); every other feature over the window.
+    let regime_from = t.partition_point(|&x| x < t[t.len() - 1] - s.steady_s).max(from);
+    let window_measured = feat(&m1, &m2);
+    let measured =
+        Features { stick_slip: attractor_stick_slip(t, &phi1_all, regime_from, h1, &s.classify), ..window_measured };
     let m_voltage = run.data.motor_voltage_v.as_ref().map(|v| v[from..to].to_vec());
     let m_force = match (s.force, run.data.brake_force_mv.as_ref()) {
         (Some(law), Some(mv)) if normal_force_n > 0.0 => Some(law.force_n(&mv[..to])),
         _ => None,
     };
     let m_force_smooth = m_force.as_ref().map(|f| centred_moving_average(f, h1)[from..].to_vec());
+    let m_peaks = m_force
+        .as_ref()
+        .map(|f| breakaway_peaks(tt, phi1, f, from, normal_force_n, &s.stick_episodes))
+        .unwrap_or_default();
     let m_win = Window {
         w1: &m1[from..],
         w2: &m2[from..],
         voltage_v: m_voltage.as_deref(),
         force_n: m_force_smooth.as_deref(),
+        peaks: &m_peaks,
     };
     let sigma_v = m_voltage.as_deref().map_or(f64::NAN, diff_noise);
     let channels_measured = ChannelFeatures { values: channel_values(&m_win, s.slip_speed_rad_s, sigma_v.max(0.0)) };
-    let cycle_s =
-        if measured.stick_slip() && measured.fundamental_hz > 0.0 { 1.0 / measured.fundamental_hz } else { 1.0 };
+    let cycle_s = if window_measured.stick_slip() && window_measured.fundamental_hz > 0.0 {
+        1.0 / window_measured.fundamental_hz
+    } else {
+        1.0
+    };
     let res = |h: usize| rad / (2.0 * h as f64 * dt) / 6f64.sqrt();
     let noise = Noise {
         res_rad_s: (res(h1), res(h2)),
@@ -453,20 +520,35 @@ fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) 
     let slip = &mut floors.values[6];
     *slip = slip.hypot(normal_force_n * s.mu_kinetic_stderr);
     let input = RunInput::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s };
-    let sim = rig_model::simulate(p, &input, tt, &s.integrator).ok().map(|tr| {
-        let (w1, w2) = speeds(&tr.rotor_angle_rad, &tr.motor_angle_rad);
-        let force: Vec<f64> = tr.friction_torque_nm.iter().map(|x| x / p.brake_disc_radius_m).collect();
+    // The whole record is simulated (the regime is read at its end); the
+    // window's features from its first `to` samples.
+    let sim = rig_model::simulate(p, &input, t, &s.integrator).ok().map(|tr| {
+        let (w1, w2) = speeds(&tr.rotor_angle_rad[..to], &tr.motor_angle_rad[..to]);
+        let force: Vec<f64> = tr.friction_torque_nm[..to].iter().map(|x| x / p.brake_disc_radius_m).collect();
         let force_smooth = m_force.as_ref().map(|_| centred_moving_average(&force, h1)[from..].to_vec());
+        // The simulated angle through the encoder, as the record's.
+        let ticks = rig_types::sensor::encoder_ticks(&tr.rotor_angle_rad, c.rig.encoder_ticks_per_rev);
+        let enc = ticks_to_rad(&ticks, c.rig.encoder_ticks_per_rev);
+        let peaks = m_force
+            .as_ref()
+            .map(|_| breakaway_peaks(tt, &enc[..to], &force, from, normal_force_n, &s.stick_episodes))
+            .unwrap_or_default();
         let win = Window {
             w1: &w1[from..],
             w2: &w2[from..],
-            voltage_v: m_voltage.as_ref().map(|_| &tr.voltage_v[from..]),
+            voltage_v: m_voltage.as_ref().map(|_| &tr.voltage_v[from..to]),
             force_n: force_smooth.as_deref(),
+            peaks: &peaks,
         };
-        (feat(&w1, &w2), trace_of(&w1), ChannelFeatures { values: channel_values(&win, s.slip_speed_rad_s, 0.0) })
+        let window = feat(&w1, &w2);
+        let f = Features {
+            stick_slip: attractor_stick_slip(t, &tr.rotor_angle_rad, regime_from, h1, &s.classify),
+            ..window
+        };
+        (f, trace_of(&w1), ChannelFeatures { values: channel_values(&win, s.slip_speed_rad_s, 0.0) }, window.stick_slip)
     });
-    let (simulated, simulated_rad_s, channels_simulated) =
-        sim.map_or((None, None, None), |(f, w, ch)| (Some(f), Some(w), Some(ch)));
+    let (simulated, simulated_rad_s, channels_simulated, sim_window_ss) =
+        sim.map_or((None, None, None, None), |(f, w, ch, ss)| (Some(f), Some(w), Some(ch), Some(ss)));
     let trace = Trace {
         time_s: tt[from..].iter().step_by(stride).copied().collect(),
         measured_rad_s: trace_of(&m1),
@@ -483,7 +565,51 @@ fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) 
         channels_measured,
         channels_simulated,
         floors,
+        window_stick_slip: (window_measured.stick_slip, sim_window_ss),
     })
+}
+
+/// Stick-slip of the attractor a run settles to: the regime classifier
+/// (`rig_sweep::classify`, `[shared.classify]`, the one definition of
+/// stick-slip) on Ω1 (centred difference of half window `h`) over samples
+/// `from..` of the whole run, its last `steady_s`.
+///
+/// Why not the features' window (issue 25's regime changes of op-19, op-27):
+/// at the stick-slip boundary a run from rest sticks and slips for a while
+/// and then decays to steady slip, and how long it keeps sticking is set by
+/// the phase of the normal-force modulation at each break-away, not by the
+/// model's level: the final model of the shipped campaign keeps op-26
+/// sticking until 3.8 s, 12.6 s or 10.4 s for modulation phases moved by
+/// −0.01, 0 and +0.03 rad, op-19 until 4.3 s or 17.4 s (record 19.5 s) for
+/// 0 and +0.3 rad. A window that starts after the ramp (5–21 s) cuts such a
+/// transient at an arbitrary point, and the classifier's decay rule (second
+/// half's swing below 0.6 of the first's) then reads the same behaviour
+/// both ways: the record's op-22, op-26, op-27 all stop sticking at
+/// 8.6–10.5 s, and their decay ratios 0.63, 0.64, 0.56 made two of them
+/// stick-slip and one not. What the rig settles to is determined; how long
+/// it takes near the boundary is not, within the modulation's phase: over 8
+/// phases spread over 2π the final model ends in steady slip at every one
+/// for op-02, op-19, op-20, op-22, op-26, op-27, op-28 and sticks and slips
+/// at every one for op-03, as the record does, while its last stick ranges
+/// over 4.3–11.0 s for op-19 (record 19.5 s), 0–16.3 s for op-22 (10.0),
+/// 3.8–12.6 s for op-26 (10.5) and 4.0–10.7 s for op-27 (8.6)
+/// (`crates/pipeline/examples/breakaway_probe.rs`, `TRANSIENT=1`). So a
+/// run changes regime in the check only when the end of the run and the
+/// features' window both differ; a difference in one of them is listed.
+fn attractor_stick_slip(
+    t: &[f64],
+    rotor_angle_rad: &[f64],
+    from: usize,
+    h: usize,
+    classify: &rig_sweep::ClassifyOptions,
+) -> bool {
+    let n = t.len().min(rotor_angle_rad.len());
+    if n < from + 16 {
+        return false;
+    }
+    let w1 = centred_speed(&t[..n], &rotor_angle_rad[..n], h);
+    let fs_hz = (n - from - 1) as f64 / (t[n - 1] - t[from]);
+    rig_sweep::classify(&w1[from..], fs_hz, classify).regime.stick_slip()
 }
 
 /// Each operating point's measured rotor speed with the baseline's and the
@@ -548,8 +674,23 @@ pub fn free_run_checks_of(c: &Campaign, pairs: &[Pair], s: &FreeRunSettings, o: 
     let fail_note = if failed.is_empty() { String::new() } else { format!("; not integrated: {}", failed.join(", ")) };
     let mut out = Vec::new();
 
+    // A run changes regime when record and simulation differ both at the
+    // end (the attractor) and over the features' window: a difference in one
+    // reading only is a transient of another length near the boundary
+    // ([`attractor_stick_slip`]), listed, not counted.
+    let at_end = |q: &Pair, f: &Features| q.measured.stick_slip() != f.stick_slip();
+    let in_window = |q: &Pair| Some(q.window_stick_slip.0) != q.window_stick_slip.1;
     let differ: Vec<&str> =
-        ok.iter().filter(|(q, f)| q.measured.stick_slip() != f.stick_slip()).map(|(q, _)| q.id.as_str()).collect();
+        ok.iter().filter(|(q, f)| at_end(q, f) && in_window(q)).map(|(q, _)| q.id.as_str()).collect();
+    let one: Vec<&str> = ok.iter().filter(|(q, f)| at_end(q, f) != in_window(q)).map(|(q, _)| q.id.as_str()).collect();
+    let one_note = if one.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "; in one reading only (end of run or window, a transient's length at the boundary): {}",
+            one.join(", ")
+        )
+    };
     out.push(ChannelCheck::new(
         &names[0],
         ids.clone(),
@@ -557,10 +698,10 @@ pub fn free_run_checks_of(c: &Campaign, pairs: &[Pair], s: &FreeRunSettings, o: 
         1.0,
         o.regime_ratio,
         format!(
-            "{} of {} runs change regime (stick-slip ↔ pure slip) in the simulation: {}{fail_note}",
+            "{} of {} runs change regime (stick-slip ↔ pure slip) in the simulation{}{one_note}{fail_note}",
             differ.len(),
             ok.len(),
-            differ.join(", ")
+            if differ.is_empty() { String::new() } else { format!(": {}", differ.join(", ")) }
         ),
     ));
 
@@ -674,4 +815,74 @@ fn feature_check(
             rows.len()
         ),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A rotor that creeps below the slip speed (encoder chatter across it
+    /// in the ±16 ms difference), then sticks while the pad force rises to
+    /// 14 N and breaks away, three times: the estimation's episodes give the
+    /// three break-aways at 14 N; the stretches below the slip speed give
+    /// many more, most of them chatter at the creep's force.
+    #[test]
+    fn creep_chatter_is_no_break_away() {
+        let (dt, tick) = (0.002, tick_rad(1000));
+        let (mut t, mut phi, mut force) = (vec![], vec![], vec![]);
+        let mut angle = 0.0;
+        for k in 0..(3 * 1500) {
+            let s = (k % 1500) as f64 * dt; // one cycle: 1 s creep, 0.5 s stuck, 1.5 s slip
+            let (speed, f) = if s < 1.0 {
+                (0.45, 11.0)
+            } else if s < 1.5 {
+                (0.0, 11.0 + 3.0 * (s - 1.0) / 0.5)
+            } else {
+                (3.0, 11.0)
+            };
+            angle += speed * dt;
+            t.push(k as f64 * dt);
+            phi.push((angle / tick).floor() * tick);
+            force.push(f);
+        }
+        let o = rig_estimate::FrictionOptions::default();
+        let peaks = breakaway_peaks(&t, &phi, &force, 0, 10.0, &o);
+        assert_eq!(peaks.len(), 3, "{peaks:?}");
+        assert!(peaks.iter().all(|p| (p - 14.0).abs() < 0.05), "{peaks:?}");
+        let w1 = centred_speed(&t, &phi, 8);
+        let stretches = stuck_stretches(&w1, 0.5);
+        assert!(stretches.len() > 10, "{} stretches below the slip speed", stretches.len());
+        assert!(breakaway_peaks(&t, &phi, &force, 0, 0.1, &o).is_empty(), "N0 below min_normal_force_n");
+    }
+
+    /// Stick-slip at 0.45 Hz (rotor speed 4(1 − cos) clipped at 0, stuck
+    /// part of each cycle) that stops at `until_s` and rings down to steady
+    /// slip at 2 rad/s; 40 s at 500 Hz. Read at the end of the run: a
+    /// transient that stops at 10 s or 19.5 s is steady slip, one that lasts
+    /// the run is stick-slip.
+    #[test]
+    fn the_regime_is_read_where_the_run_settles() {
+        let dt = 0.002;
+        let t: Vec<f64> = (0..20_000).map(|k| k as f64 * dt).collect();
+        let run = |until_s: f64| {
+            let mut angle = 0.0;
+            let phi: Vec<f64> = t
+                .iter()
+                .map(|&x| {
+                    let w = if x < until_s {
+                        (4.0 * (1.0 - (2.0 * std::f64::consts::PI * 0.45 * x).cos()) - 1.5).max(0.0)
+                    } else {
+                        2.0 + 1.5 * (-(x - until_s) / 3.0).exp() * (2.0 * std::f64::consts::PI * 0.48 * x).sin()
+                    };
+                    angle += w * dt;
+                    angle
+                })
+                .collect();
+            let from = t.partition_point(|&x| x < 40.0 - 16.0);
+            attractor_stick_slip(&t, &phi, from, 8, &rig_sweep::ClassifyOptions::default())
+        };
+        assert!(!run(10.0), "stops sticking at 10 s");
+        assert!(!run(19.5), "stops sticking at 19.5 s");
+        assert!(run(100.0), "sticks and slips to the end");
+    }
 }
