@@ -136,6 +136,8 @@ impl<const K: usize, const W: usize> ArrowNormal<K, W> {
     /// Adds one residual row: `shared` on the shared columns, `values` on
     /// block `block`'s, target `y`.
     #[inline]
+    // Indices, as the entries (a, b) of AᵀA they accumulate.
+    #[allow(clippy::needless_range_loop)]
     pub fn add(&mut self, shared: &[f64; K], block: usize, values: &[f64; W], y: f64) {
         for a in 0..K {
             self.shared_b[a] += shared[a] * y;
