@@ -26,7 +26,7 @@
 //! residuals (effective sample size).
 
 use crate::friction::{self, FrictionModel, SlipData};
-use rig_estimate::linear::Normal;
+use rig_estimate::linear::{ArrowNormal, Normal};
 use std::f64::consts::PI;
 
 /// A term of the composite law: what a friction effect of the vocabulary
@@ -193,7 +193,6 @@ fn refine_speed_time(
     let i_c = 1 + 2 * usize::from(stribeck);
     let i_a = i_c + usize::from(viscous);
     let (i_f, i_p) = (i_a + 1, i_a + 2);
-    let np = i_p + d.n_runs;
     let mut theta = vec![m.mu_k];
     if let Some((mu_s, vs)) = m.stribeck {
         theta.extend([mu_s - m.mu_k, vs]);
@@ -214,25 +213,26 @@ fn refine_speed_time(
         s
     };
     // Per sample at `th`: g = exp(−(Ω/vs)²) and (sin, cos) of 2π f t + θ_r; returns the RSS.
-    let mut base = Vec::with_capacity(d.len());
-    let mut eval = |th: &[f64], g: &mut Vec<f64>, sc: &mut Vec<(f64, f64)>| -> f64 {
+    // sin/cos of 2π f t by the schedule's rotations (friction::SinCosSchedule),
+    // visited in sample order in the same pass.
+    let schedule = friction::SinCosSchedule::of(d);
+    let eval = |th: &[f64], g: &mut Vec<f64>, sc: &mut Vec<(f64, f64)>| -> f64 {
         if stribeck && th[2] <= 0.0 {
             return f64::INFINITY;
         }
-        friction::time_sin_cos(d, th[i_f], &mut base);
         let trig: Vec<(f64, f64)> = th[i_p..].iter().map(|t| t.sin_cos()).collect();
-        g.clear();
-        sc.clear();
+        g.resize(d.len(), 0.0);
+        sc.resize(d.len(), (0.0, 0.0));
         let mut rss = 0.0;
-        for i in 0..d.len() {
+        schedule.visit(&d.t, th[i_f], |i, (sx, cx)| {
             let gi = if stribeck { rig_model::friction::stribeck_decay(d.omega[i], th[2]) } else { 0.0 };
-            let ((sx, cx), (st, ct)) = (base[i], trig[d.run[i]]);
+            let (st, ct) = trig[d.run[i]];
             let v = (sx * ct + cx * st, cx * ct - sx * st);
             let e = d.mu[i] - speed(th, gi, d.omega[i]) * (1.0 + th[i_a] * v.0);
             rss += d.w(i) * e * e;
-            g.push(gi);
-            sc.push(v);
-        }
+            g[i] = gi;
+            sc[i] = v;
+        });
         rss
     };
     let (mut g, mut sc) = (Vec::with_capacity(d.len()), Vec::with_capacity(d.len()));
@@ -241,19 +241,15 @@ fn refine_speed_time(
     let mut converged = false;
     let mut ne_last = None;
     for _ in 0..30 {
-        let mut ne = Normal::new(np);
-        let mut row = [(0usize, 0.0f64); 8];
-        for i in 0..d.len() {
+        // Columns 0..i_p shared, the sample's run's phase its block: an arrow
+        // (ArrowNormal: the sums add_sparse would make, bit for bit).
+        let row = |i: usize, row: &mut [f64; 6]| {
             let (w, t, gi, (s, c)) = (d.omega[i], d.t[i], g[i], sc[i]);
             let sp = speed(&theta, gi, w);
             let tf = 1.0 + theta[i_a] * s;
             let sw = d.w(i).sqrt();
             let e = d.mu[i] - sp * tf;
-            let mut k = 0;
-            let mut put = |j: usize, v: f64| {
-                row[k] = (j, sw * v);
-                k += 1;
-            };
+            let mut put = |j: usize, v: f64| row[j] = sw * v;
             put(0, tf);
             if stribeck {
                 let vs = theta[2];
@@ -266,9 +262,14 @@ fn refine_speed_time(
             put(i_a, sp * s);
             let phase_rate = sp * theta[i_a] * c;
             put(i_f, phase_rate * 2.0 * PI * t);
-            put(i_p + d.run[i], phase_rate);
-            ne.add_sparse(&row[..k], sw * e);
-        }
+            (d.run[i], sw * phase_rate, sw * e)
+        };
+        let ne = match i_p {
+            3 => arrow_rows::<3>(d, &row),
+            4 => arrow_rows::<4>(d, &row),
+            5 => arrow_rows::<5>(d, &row),
+            _ => arrow_rows::<6>(d, &row),
+        };
         let Some(step) = ne.solve() else {
             // Singular at the start: no joint step (the caller keeps the block fits).
             ne_last.as_ref()?;
@@ -315,6 +316,20 @@ fn refine_speed_time(
         angle_mod: m.angle_mod,
     };
     Some((out, phases, rss, ne_last?, converged))
+}
+
+/// The normal equations of [`refine_speed_time`]'s rows: `row(i, buf)` puts
+/// sample i's `K` shared columns in `buf` and returns (its run, its phase
+/// column, its target); an arrow with `K` a constant ([`ArrowNormal`]).
+fn arrow_rows<const K: usize>(d: &SlipData, row: &impl Fn(usize, &mut [f64; 6]) -> (usize, f64, f64)) -> Normal {
+    let mut arrow = ArrowNormal::<K, 1>::new(d.n_runs);
+    let mut buf = [0.0; 6];
+    for i in 0..d.len() {
+        let (r, phase, y) = row(i, &mut buf);
+        let shared: &[f64; K] = buf[..K].try_into().expect("K ≤ 6 shared columns");
+        arrow.add(shared, r, &[phase], y);
+    }
+    arrow.into_normal()
 }
 
 /// The parameters of [`refine_speed_time`]'s fit with their joint standard

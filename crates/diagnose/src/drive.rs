@@ -8,7 +8,7 @@
 //! one-step filter of the data, not a free-run simulation.)
 
 use crate::prepare::RunSignals;
-use rig_estimate::linear::Normal;
+use rig_estimate::linear::ArrowNormal;
 use rig_types::minimize::brent_min;
 
 /// The JSON key [`fit_limit`]'s limit is reported under (the drive term's
@@ -100,16 +100,17 @@ fn fit_gains_path(runs: &[&RunSignals], limit_v: f64, start: Option<&Pi>, mut vi
     };
     for it in 0..8 {
         visited(&pi);
-        let mut ne = Normal::new(2);
+        // Two columns, no block: the sums add_sparse would make (ArrowNormal), bit for bit.
+        let mut ne = ArrowNormal::<2, 0>::new(0);
         for s in runs {
             let w = 1.0 / s.voltage_noise_v.max(1e-6);
             visit(&pi, s, |k, e, _, integ, sat| {
                 if !(sat || s.voltage_v[k].abs() >= 0.999 * limit_v) {
-                    ne.add_sparse(&[(0, w * e), (1, w * integ)], w * s.voltage_v[k]);
+                    ne.add(&[w * e, w * integ], 0, &[], w * s.voltage_v[k]);
                 }
             });
         }
-        let p = ne.solve()?;
+        let p = ne.into_normal().solve()?;
         let next = Pi { kp_v_s_rad: p[0], ki_v_rad: p[1], limit_v };
         let done = it > 0 && (next.kp_v_s_rad - pi.kp_v_s_rad).abs() < 1e-9 * (1.0 + pi.kp_v_s_rad.abs());
         pi = next;

@@ -5,7 +5,7 @@
 //! one phase per run where the vocabulary frees it (diagnosis.md table).
 
 use crate::prepare::RunSignals;
-use rig_estimate::linear::Normal;
+use rig_estimate::linear::{ArrowNormal, Normal};
 use rig_types::minimize::brent_min;
 use std::f64::consts::PI;
 use std::ops::RangeInclusive;
@@ -353,13 +353,14 @@ pub fn fit_stribeck(d: &SlipData, with_viscous: bool) -> Option<FrictionFit> {
 /// given (sin x, cos x) per sample: (weighted RSS, solution). Linear, so the
 /// scan is exact at each x. RSS = yᵀWy − pᵀJᵀWy at the solution.
 fn sine_rss_from(d: &SlipData, sc: &[(f64, f64)], ywy: f64) -> Option<(f64, Vec<f64>)> {
-    let n = 1 + 2 * d.n_runs;
-    let mut ne = Normal::new(n);
+    // μk shared, (A_r, B_r) the sample's run's block: an arrow (ArrowNormal).
+    let mut arrow = ArrowNormal::<1, 2>::new(d.n_runs);
     for (i, &(s, c)) in sc.iter().enumerate().take(d.len()) {
         let r = d.run[i];
         let sw = d.w(i).sqrt();
-        ne.add_sparse(&[(0, sw), (1 + 2 * r, sw * s), (2 + 2 * r, sw * c)], sw * d.mu[i]);
+        arrow.add(&[sw], r, &[sw * s, sw * c], sw * d.mu[i]);
     }
+    let ne = arrow.into_normal();
     let p = ne.solve()?;
     let rss = ywy - p.iter().zip(&ne.atb).map(|(a, b)| a * b).sum::<f64>();
     Some((rss.max(0.0), p))
@@ -698,46 +699,91 @@ fn order_scan(d: &SlipData, orders: &RangeInclusive<u32>) -> Vec<(f64, f64)> {
     out
 }
 
-/// Samples between exact re-synchronisations of [`time_sin_cos`].
+/// Samples between exact re-synchronisations of [`SinCosSchedule`].
 const RESYNC_EVERY: usize = 64;
 
-/// sin and cos of 2π f t_i for every sample into `out`: exact `sin_cos` at
-/// each run's first sample, after a gap and every [`RESYNC_EVERY`] samples;
-/// between, a rotation by 2π f Δt of the step the last re-sync saw (steps
-/// that agree to 1e-12 s count as equal). The sample times are rounded (an
-/// ulp of t, 7·10⁻¹⁵ s at 60 s), so a step differs from the cached one by up
-/// to two ulps and the phase drifts by ≤ 2π f · 2 ulp(t) per step: at 10 Hz
-/// and 60 s, ≤ 6·10⁻¹¹ after 64 steps (the test derives this bound), far
-/// below any amplitude the fits resolve (~10⁻⁴). The Gauss–Newton of the time
-/// sine evaluates this once per trial; a `sin_cos` per sample instead cost 4 %
-/// of the diagnosis bench (10.2 against 9.8 s).
-///
-/// Returns how many samples took the exact `sin_cos`.
-pub(crate) fn time_sin_cos(d: &SlipData, f_hz: f64, out: &mut Vec<(f64, f64)>) -> usize {
+/// The samples of [`SinCosSchedule::visit`] in a vector (the tests' view);
+/// returns how many took the exact `sin_cos`.
+#[cfg(test)]
+fn time_sin_cos(d: &SlipData, f_hz: f64, out: &mut Vec<(f64, f64)>) -> usize {
+    let schedule = SinCosSchedule::of(d);
     out.clear();
-    let w = 2.0 * PI * f_hz;
-    let mut step = (f64::NAN, (0.0, 1.0));
-    let mut since = 0;
-    let mut exact = 0;
-    for i in 0..d.len() {
-        let dt = if i > 0 && d.run[i] == d.run[i - 1] { d.t[i] - d.t[i - 1] } else { f64::NAN };
-        let same_step = (dt - step.0).abs() <= 1e-12;
-        let v = if since + 1 < RESYNC_EVERY && same_step {
-            since += 1;
-            let (p, (sr, cr)) = (out[i - 1], step.1);
-            (p.0 * cr + p.1 * sr, p.1 * cr - p.0 * sr)
-        } else {
-            since = 0;
-            exact += 1;
-            // A new step length (the first step is one: its predecessor is NaN).
-            if dt.is_finite() && !same_step {
-                step = (dt, (w * dt).sin_cos());
+    schedule.visit(&d.t, f_hz, |_, v| out.push(v));
+    schedule.segments.len()
+}
+
+/// sin and cos of 2π f t_i for every sample: exact `sin_cos` at each run's
+/// first sample, after a gap and every [`RESYNC_EVERY`] samples; between, a
+/// rotation by 2π f Δt of the step the last re-sync saw (steps that agree to
+/// 1e-12 s count as equal). The sample times are rounded (an ulp of t,
+/// 7·10⁻¹⁵ s at 60 s), so a step differs from the cached one by up to two
+/// ulps and the phase drifts by ≤ 2π f · 2 ulp(t) per step: at 10 Hz and
+/// 60 s, ≤ 6·10⁻¹¹ after 64 steps (the test derives this bound), far below
+/// any amplitude the fits resolve (~10⁻⁴). The Gauss–Newton of the time sine
+/// evaluates this once per trial; a `sin_cos` per sample instead cost 4 % of
+/// the diagnosis bench (10.2 against 9.8 s).
+///
+/// Where the exact `sin_cos` falls and which step rotates in between depend
+/// on the sample times and runs only, not on the frequency: a fit that tries
+/// many frequencies on the same samples builds the schedule once
+/// ([`SinCosSchedule::of`]) and [`SinCosSchedule::visit`]s it per frequency,
+/// in the pass that uses the values, without the per-sample step tests or a
+/// vector of them (the same operations on the same numbers as testing each
+/// sample's step in turn).
+pub(crate) struct SinCosSchedule {
+    /// (first sample, samples, step): an exact `sin_cos` at the first
+    /// sample, then rotations by `steps_s[step]` (a segment of one sample
+    /// rotates by nothing).
+    segments: Vec<(usize, usize, usize)>,
+    /// Each step length the samples set, in order (a step equal to the last
+    /// within 1e-12 s is not a new one).
+    steps_s: Vec<f64>,
+}
+
+impl SinCosSchedule {
+    pub(crate) fn of(d: &SlipData) -> Self {
+        let (mut segments, mut steps_s) = (Vec::new(), Vec::new());
+        let mut step = f64::NAN;
+        let mut since = 0;
+        for i in 0..d.len() {
+            let dt = if i > 0 && d.run[i] == d.run[i - 1] { d.t[i] - d.t[i - 1] } else { f64::NAN };
+            let same_step = (dt - step).abs() <= 1e-12;
+            match segments.last_mut() {
+                Some((_, len, _)) if since + 1 < RESYNC_EVERY && same_step => {
+                    since += 1;
+                    *len += 1;
+                }
+                _ => {
+                    since = 0;
+                    // A new step length (the first step is one: its predecessor is NaN).
+                    if dt.is_finite() && !same_step {
+                        step = dt;
+                        steps_s.push(dt);
+                    }
+                    segments.push((i, 1, steps_s.len().saturating_sub(1)));
+                }
             }
-            (w * d.t[i]).sin_cos()
-        };
-        out.push(v);
+        }
+        SinCosSchedule { segments, steps_s }
     }
-    exact
+
+    /// Calls `f(i, (sin, cos) of 2π f t_i)` for every sample in order.
+    #[inline]
+    pub(crate) fn visit(&self, t: &[f64], f_hz: f64, mut f: impl FnMut(usize, (f64, f64))) {
+        let w = 2.0 * PI * f_hz;
+        let rot: Vec<(f64, f64)> = self.steps_s.iter().map(|dt| (w * dt).sin_cos()).collect();
+        for &(start, len, step) in &self.segments {
+            let mut v = (w * t[start]).sin_cos();
+            f(start, v);
+            if len > 1 {
+                let (sr, cr) = rot[step];
+                for i in start + 1..start + len {
+                    v = (v.0 * cr + v.1 * sr, v.1 * cr - v.0 * sr);
+                    f(i, v);
+                }
+            }
+        }
+    }
 }
 
 /// Sine models: scan the frequency (time kind, grid of `freqs_hz`) or the
@@ -766,20 +812,20 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeIn
     // not move during Gauss–Newton, so each run's phase enters by angle
     // addition, sin(x + θ) = sin x cos θ + cos x sin θ (no trigonometry per
     // sample). Time kind: sin/cos of 2πf·t by rotation along each run's
-    // uniform sample steps ([`time_sin_cos`]), recomputed for each trial f.
-    let mut base = Vec::with_capacity(d.len());
-    let sc0: Vec<(f64, f64)> = if time_kind {
-        time_sin_cos(d, psi0, &mut base);
-        Vec::new()
-    } else {
-        (0..d.len()).map(|i| xarg(psi0, i).sin_cos()).collect()
+    // uniform sample steps ([`SinCosSchedule`]), recomputed for each trial f.
+    let schedule = time_kind.then(|| SinCosSchedule::of(d));
+    let sc0: Vec<(f64, f64)> = match &schedule {
+        Some(sch) => {
+            let mut base = Vec::with_capacity(d.len());
+            sch.visit(&d.t, psi0, |_, v| base.push(v));
+            base
+        }
+        None => (0..d.len()).map(|i| xarg(psi0, i).sin_cos()).collect(),
     };
-    let (_, p) = sine_rss_from(d, if time_kind { &base } else { &sc0 }, ywy(d))?;
-    let sin_cos_at = |i: usize, trig: &[(f64, f64)], base: &[(f64, f64)]| -> (f64, f64) {
-        let (sx, cx) = if time_kind { base[i] } else { sc0[i] };
-        let (st, ct) = trig[d.run[i]];
-        (sx * ct + cx * st, cx * ct - sx * st)
-    };
+    let (_, p) = sine_rss_from(d, &sc0, ywy(d))?;
+    // Each sample's weight and its square root, once (the loops below read them every pass).
+    let w: Vec<f64> = (0..d.len()).map(|i| d.w(i)).collect();
+    let sw: Vec<f64> = w.iter().map(|w| w.sqrt()).collect();
     let run_trig = |th: &[f64]| -> Vec<(f64, f64)> { th[2 + nf..].iter().map(|t| t.sin_cos()).collect() };
     let mu_k0 = p[0];
     // Shared amplitude: weighted mean of per-run amplitudes (start of GN).
@@ -808,18 +854,22 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeIn
     // The weighted RSS at `th`, leaving sin and cos of each sample's argument
     // in `sc`: an accepted line-search candidate hands them to the next
     // iteration's normal equations, so each iteration evaluates them once.
-    let mut rss_of = |th: &[f64], sc: &mut Vec<(f64, f64)>| -> f64 {
+    // Time kind: sin/cos of 2πf·t by the schedule's rotations, visited in
+    // sample order in the same pass (the angle kind reads sc0).
+    let rss_of = |th: &[f64], sc: &mut Vec<(f64, f64)>| -> f64 {
         let trig = run_trig(th);
-        if time_kind {
-            time_sin_cos(d, th[2], &mut base);
-        }
-        sc.clear();
+        sc.resize(d.len(), (0.0, 0.0));
         let mut rss = 0.0;
-        for i in 0..d.len() {
-            let v = sin_cos_at(i, &trig, &base);
-            sc.push(v);
+        let mut at = |i: usize, (sx, cx): (f64, f64)| {
+            let (st, ct) = trig[d.run[i]];
+            let v = (sx * ct + cx * st, cx * ct - sx * st);
+            sc[i] = v;
             let e = d.mu[i] - th[0] * (1.0 + th[1] * v.0);
-            rss += d.w(i) * e * e;
+            rss += w[i] * e * e;
+        };
+        match &schedule {
+            Some(sch) => sch.visit(&d.t, th[2], at),
+            None => sc0.iter().enumerate().for_each(|(i, &v)| at(i, v)),
         }
         rss
     };
@@ -828,30 +878,37 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeIn
     let mut converged = false;
     let mut ne_last = None;
     for _ in 0..30 {
-        let mut ne = Normal::new(np);
         // Angle kind: −Σ w r ∂²f/∂p∂q of f = μk(1 + a sin(x + θ_r)) (the terms
         // Gauss–Newton drops), over (μk, a) and per run (μk, θ_r), (a, θ_r), (θ_r, θ_r).
         let (mut h_mk_a, mut h_th) = (0.0, vec![[0.0; 3]; if time_kind { 0 } else { d.n_runs }]);
-        for (i, &(s, c)) in sc.iter().enumerate() {
-            let r = d.run[i];
-            let (mk, a) = (theta[0], theta[1]);
-            let sw = d.w(i).sqrt();
-            let e = d.mu[i] - mk * (1.0 + a * s);
-            let mut row = [(0, sw * (1.0 + a * s)), (1, sw * mk * s), (2 + nf + r, sw * mk * a * c), (2, 0.0)];
-            let len = if time_kind {
-                row[3].1 = sw * mk * a * c * 2.0 * PI * d.t[i];
-                4
-            } else {
-                let we = d.w(i) * e;
+        // Rows (μk, a[, f]) shared and θ_r of the sample's run: an arrow
+        // (ArrowNormal: the sums add_sparse would make, bit for bit).
+        let (mk, a) = (theta[0], theta[1]);
+        let ne = if time_kind {
+            let mut arrow = ArrowNormal::<3, 1>::new(d.n_runs);
+            for (i, &(s, c)) in sc.iter().enumerate() {
+                let sw = sw[i];
+                let e = d.mu[i] - mk * (1.0 + a * s);
+                let shared = [sw * (1.0 + a * s), sw * mk * s, sw * mk * a * c * 2.0 * PI * d.t[i]];
+                arrow.add(&shared, d.run[i], &[sw * mk * a * c], sw * e);
+            }
+            arrow.into_normal()
+        } else {
+            let mut arrow = ArrowNormal::<2, 1>::new(d.n_runs);
+            for (i, &(s, c)) in sc.iter().enumerate() {
+                let r = d.run[i];
+                let sw = sw[i];
+                let e = d.mu[i] - mk * (1.0 + a * s);
+                let we = w[i] * e;
                 h_mk_a -= we * s;
                 let h = &mut h_th[r];
                 h[0] -= we * a * c;
                 h[1] -= we * mk * c;
                 h[2] += we * mk * a * s;
-                3
-            };
-            ne.add_sparse(&row[..len], sw * e);
-        }
+                arrow.add(&[sw * (1.0 + a * s), sw * mk * s], r, &[sw * mk * a * c], sw * e);
+            }
+            arrow.into_normal()
+        };
         let newton = (!time_kind)
             .then(|| {
                 let mut h = ne.clone();
@@ -1236,10 +1293,65 @@ pub(crate) mod tests {
                     (out[i].0 - s).abs().max((out[i].1 - c).abs())
                 })
                 .fold(0.0, f64::max);
-            // The drift bound of time_sin_cos's docs, plus the rounding of sin_cos itself.
+            // The drift bound of SinCosSchedule's docs, plus the rounding of sin_cos itself.
             let t_max = d.t.iter().copied().fold(0.0, f64::max);
             let bound = RESYNC_EVERY as f64 * 2.0 * PI * f_hz * 2.0 * t_max * f64::EPSILON + 1e-13;
             assert!(worst < bound, "f = {f_hz} Hz: worst |Δ| = {worst:e} against {bound:e}");
+        }
+    }
+
+    /// The schedule, built once, visits the very numbers of the recurrence
+    /// that tests each sample's step in turn (the loop it replaced, kept
+    /// here as the reference): runs, a gap, jittered and changing steps.
+    #[test]
+    fn the_schedule_is_the_per_sample_recurrence_bit_for_bit() {
+        let mut d = SlipData { n_runs: 3, run_weight: vec![1.0; 3], ..Default::default() };
+        let mut t = 1.0;
+        for r in 0..3 {
+            for k in 0..3000 {
+                let dt = if k > 2000 { 0.004 } else { 0.002 };
+                t += if k == 700 { 0.3 } else { dt } + if k % 3 == 0 { 4e-16 } else { 0.0 };
+                if (1200..1250).contains(&k) {
+                    continue;
+                }
+                d.run.push(r);
+                d.t.push(t);
+                d.phi.push(0.0);
+                d.omega.push(1.0);
+                d.mu.push(1.0);
+            }
+        }
+        let reference = |f_hz: f64| {
+            let w = 2.0 * PI * f_hz;
+            let (mut out, mut step, mut since) = (Vec::<(f64, f64)>::new(), (f64::NAN, (0.0, 1.0)), 0);
+            for i in 0..d.len() {
+                let dt = if i > 0 && d.run[i] == d.run[i - 1] { d.t[i] - d.t[i - 1] } else { f64::NAN };
+                let same_step = (dt - step.0).abs() <= 1e-12;
+                let v = if since + 1 < RESYNC_EVERY && same_step {
+                    since += 1;
+                    let (p, (sr, cr)) = (out[i - 1], step.1);
+                    (p.0 * cr + p.1 * sr, p.1 * cr - p.0 * sr)
+                } else {
+                    since = 0;
+                    if dt.is_finite() && !same_step {
+                        step = (dt, (w * dt).sin_cos());
+                    }
+                    (w * d.t[i]).sin_cos()
+                };
+                out.push(v);
+            }
+            out
+        };
+        let schedule = SinCosSchedule::of(&d);
+        assert!(schedule.steps_s.len() >= 2, "the steps change");
+        for f_hz in [0.05, 1.37, 9.99] {
+            let mut got = Vec::new();
+            schedule.visit(&d.t, f_hz, |i, v| {
+                assert_eq!(i, got.len(), "in sample order");
+                got.push(v);
+            });
+            let bits = |v: &[(f64, f64)]| v.iter().map(|x| (x.0.to_bits(), x.1.to_bits())).collect::<Vec<_>>();
+            assert_eq!(bits(&got), bits(&reference(f_hz)), "f = {f_hz} Hz");
         }
     }
 

@@ -54,10 +54,13 @@ impl Normal {
 
     /// Adds one residual row given by its non-zero entries `(column, value)` and target `y`.
     pub fn add_sparse(&mut self, row: &[(usize, f64)], y: f64) {
+        // Entry (i, j) lives at row i of column j's slice: the same products
+        // added in the same order as `ata[(i, j)]`, without faer's per-entry
+        // index arithmetic and checks (23 % of a battery campaign's CPU).
         for &(i, vi) in row {
             self.atb[i] += vi * y;
             for &(j, vj) in row {
-                self.ata[(i, j)] += vi * vj;
+                self.ata.col_as_slice_mut(j)[i] += vi * vj;
             }
         }
     }
@@ -95,6 +98,95 @@ impl Normal {
         }
         let inv = spd_inverse(&self.ata)?;
         Some((0..self.n * self.n).map(|k| inv[(k / self.n, k % self.n)]).collect())
+    }
+}
+
+/// The normal equations of rows that each touch the `K` shared columns
+/// (0..K) and one block of `W` columns among `blocks` (block b's columns are
+/// K + b·W .. K + (b + 1)·W), e.g. shared parameters and one phase per run:
+/// AᵀA is an arrow, dense on the shared columns, block diagonal elsewhere.
+/// [`ArrowNormal::add`] accumulates each entry's products in the same order
+/// as [`Normal::add_sparse`] of the same rows (an entry of AᵀA and its mirror
+/// are the same products, kept once), so [`ArrowNormal::into_normal`] is the
+/// same [`Normal`] to the last bit, without a dense update per row; `K` and
+/// `W` are constants, so a row's products are unrolled.
+#[derive(Debug, Clone)]
+pub struct ArrowNormal<const K: usize, const W: usize> {
+    /// Upper triangle used.
+    shared: [[f64; K]; K],
+    shared_b: [f64; K],
+    blocks: Vec<ArrowBlock<K, W>>,
+}
+
+/// One block's sums: its columns against the shared ones, against each
+/// other (upper triangle used), and against the target.
+#[derive(Debug, Clone, Copy)]
+struct ArrowBlock<const K: usize, const W: usize> {
+    cross: [[f64; K]; W],
+    inner: [[f64; W]; W],
+    b: [f64; W],
+}
+
+impl<const K: usize, const W: usize> ArrowNormal<K, W> {
+    pub fn new(blocks: usize) -> Self {
+        let empty = ArrowBlock { cross: [[0.0; K]; W], inner: [[0.0; W]; W], b: [0.0; W] };
+        ArrowNormal { shared: [[0.0; K]; K], shared_b: [0.0; K], blocks: vec![empty; blocks] }
+    }
+
+    /// Adds one residual row: `shared` on the shared columns, `values` on
+    /// block `block`'s, target `y`.
+    #[inline]
+    // Indices, as the entries (a, b) of AᵀA they accumulate.
+    #[allow(clippy::needless_range_loop)]
+    pub fn add(&mut self, shared: &[f64; K], block: usize, values: &[f64; W], y: f64) {
+        for a in 0..K {
+            self.shared_b[a] += shared[a] * y;
+            for b in a..K {
+                self.shared[a][b] += shared[a] * shared[b];
+            }
+        }
+        if W == 0 {
+            return;
+        }
+        let blk = &mut self.blocks[block];
+        for q in 0..W {
+            blk.b[q] += values[q] * y;
+            for a in 0..K {
+                blk.cross[q][a] += shared[a] * values[q];
+            }
+            for p in q..W {
+                blk.inner[q][p] += values[q] * values[p];
+            }
+        }
+    }
+
+    /// The accumulated normal equations, K + blocks·W unknowns.
+    pub fn into_normal(self) -> Normal {
+        let n = K + self.blocks.len() * W;
+        let mut ata = vec![0.0; n * n];
+        for a in 0..K {
+            for b in a..K {
+                ata[a * n + b] = self.shared[a][b];
+                ata[b * n + a] = self.shared[a][b];
+            }
+        }
+        let mut atb = self.shared_b.to_vec();
+        for (k, blk) in self.blocks.iter().enumerate() {
+            for q in 0..W {
+                let j = K + k * W + q;
+                for a in 0..K {
+                    ata[a * n + j] = blk.cross[q][a];
+                    ata[j * n + a] = blk.cross[q][a];
+                }
+                for p in q..W {
+                    let i = K + k * W + p;
+                    ata[j * n + i] = blk.inner[q][p];
+                    ata[i * n + j] = blk.inner[q][p];
+                }
+            }
+            atb.extend_from_slice(&blk.b);
+        }
+        Normal::from_row_major(n, &ata, atb)
     }
 }
 
@@ -241,6 +333,49 @@ mod tests {
         near.add_row(&[1.0, 1.0], 1.0);
         near.add_row(&[1.0, 1.0 + 1e-9], 1.0);
         assert!(near.solve().is_none(), "a pivot of 1e-18 of the scale is singular");
+    }
+
+    /// The arrow accumulator is `add_sparse` of the same rows to the last bit
+    /// (entries in any order within a row, empty blocks left zero).
+    #[test]
+    fn arrow_normal_equals_add_sparse_bit_for_bit() {
+        let (k, width, blocks) = (3, 2, 4);
+        let n = k + width * blocks;
+        let mut dense = Normal::new(n);
+        let mut arrow = ArrowNormal::<3, 2>::new(blocks);
+        let mut x = 0.37_f64;
+        let mut next = || {
+            x = (x * 3.9 * (1.0 - x)).fract();
+            x - 0.41
+        };
+        for i in 0..500 {
+            let block = [0, 2, 3][i % 3];
+            let shared: [f64; 3] = std::array::from_fn(|_| next() * 1e3);
+            let values: [f64; 2] = std::array::from_fn(|_| next() / 7.0);
+            let y = next();
+            let mut row: Vec<(usize, f64)> =
+                values.iter().enumerate().map(|(q, &v)| (k + block * width + q, v)).collect();
+            row.extend(shared.iter().copied().enumerate());
+            dense.add_sparse(&row, y);
+            arrow.add(&shared, block, &values, y);
+        }
+        let arrow = arrow.into_normal();
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&arrow.atb), bits(&dense.atb));
+        for j in 0..n {
+            assert_eq!(bits(arrow.ata.col_as_slice(j)), bits(dense.ata.col_as_slice(j)), "column {j}");
+        }
+        let mut only_shared = ArrowNormal::<2, 0>::new(0);
+        let mut d2 = Normal::new(2);
+        for i in 0..50 {
+            let r = [(0, next()), (1, next() * i as f64)];
+            let y = next();
+            only_shared.add(&[r[0].1, r[1].1], 0, &[], y);
+            d2.add_sparse(&r, y);
+        }
+        let o = only_shared.into_normal();
+        assert_eq!(bits(&o.atb), bits(&d2.atb));
+        assert_eq!(bits(o.ata.col_as_slice(1)), bits(d2.ata.col_as_slice(1)));
     }
 
     #[test]
