@@ -35,7 +35,9 @@ mod free_run;
 mod step;
 mod twist;
 
-pub use balance::{BalanceData, BalanceFit, balance_data, torque_balance_check, torque_balance_check_of};
+pub use balance::{
+    BalanceData, BalanceFit, balance_data, balance_data_aligned, torque_balance_check, torque_balance_check_of,
+};
 pub use drive_balance::drive_balance_check;
 pub use force_linearity::{force_linearity_check, force_parabola};
 pub use free_run::{

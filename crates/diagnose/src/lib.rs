@@ -31,12 +31,13 @@
 //!    place; the retained effects are then refitted jointly on every run for
 //!    the reported parameters.
 //! 4. **Structure** ([`structure`]): where the damping acts (the rig model's
-//!    twist rate, the absolute rotor speed, both), each placement fitted
-//!    teacher-forced through the rotor torque balance and selected on the
-//!    cross-validated free-run misfit on top of the extended model; reported
-//!    in `structure`, never as a finding (the verdict stays the first
-//!    vocabulary finding). Parameters a fit wants below their physical
-//!    bound go to `parameters_at_bounds`.
+//!    twist rate, the absolute rotor speed, both) and whether a recorded
+//!    channel lags the others, each candidate fitted teacher-forced through
+//!    the rotor torque balance and selected on the cross-validated balance
+//!    and free-run misfits on top of the extended model; reported in
+//!    `structure`, and a winner other than the rig model's is a finding
+//!    after the vocabulary's (the verdict when there is none). Parameters a
+//!    fit wants below their physical bound go to `parameters_at_bounds`.
 //! 5. **Adequacy**: the final model's cross-validated misfit against the noise
 //!    floor (ratio ≤ `adequacy_ratio`), no angle-locked order line left in most
 //!    runs ([`lines`]), no flagged check of the other run kinds
@@ -326,7 +327,8 @@ pub fn diagnose(
             channels::with_run_phases(m, phases.get(id).copied().unwrap_or_default())
         };
         let ext_pairs = channels::free_run_pairs_by(c, &s, |id| Some(phased(&ext, id)));
-        let sel = structure::select_structure(c, data, &ext, &ext_pairs, &d.detail.runs, &s, opts);
+        let sdata = structure::StructureData::of(c, cal, opts, o, data.clone());
+        let sel = structure::select_structure(c, &sdata, &ext, &ext_pairs, &d.detail.runs, &s, opts);
         let moved = sel.damping != structure::REGISTRY[0].id();
         let final_pairs =
             if moved { channels::free_run_pairs_by(c, &s, |id| Some(phased(&sel.model, id))) } else { ext_pairs };
@@ -359,9 +361,7 @@ pub fn diagnose(
         let model = if moved { &sel.model } else { &ext };
         let inputs = extension::Inputs { c, runs: &runs, model, before: &final_pairs, phases: &phases, s: &s, opts };
         extension::attach(&mut d, &inputs);
-        d.detail.structure_scores = sel.scores;
-        d.structure = Structure { damping: sel.damping.into(), notes: sel.notes };
-        d.parameters_at_bounds = sel.at_bounds;
+        structure::attach(&mut d, sel);
         d.parameters_at_bounds.extend(extension::vocabulary_bounds(p, &d.findings));
         d.parameters_at_bounds.extend(d.detail.breakaway.as_ref().and_then(|l| breakaway::at_bound(p, l)));
     }

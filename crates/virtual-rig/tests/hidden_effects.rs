@@ -187,3 +187,53 @@ fn thesis_data() -> rig_calibrate::ThesisData {
     let t = rig_ingest::thesis::read_thesis_tables(&dir).expect("data/thesis");
     rig_calibrate::thesis_data(&t).expect("thesis data")
 }
+
+/// The CI battery's cases (rig_virtual_rig::battery::Battery::ci_seeded with
+/// the `confusion` stage's seed from pipeline.toml, small protocol), each
+/// diagnosed blind as that stage does, with its judgement and its truth; CI_CASES=a,b keeps the cases whose id starts with a or b, and
+/// CI_OUT=DIR writes each case's diagnosis.md and diagnosis.json there (to
+/// read a wrong answer's free-run table and structure scores).
+/// `cargo nextest run --workspace -E 'test(ci_battery_cases)' --run-ignored only --no-capture`.
+#[test]
+#[ignore]
+fn ci_battery_cases() {
+    use rig_virtual_rig::battery::*;
+    let thesis = thesis_data();
+    let seed = confusion_seed();
+    let mut battery = Battery::ci_seeded(seed);
+    if let Ok(only) = std::env::var("CI_CASES") {
+        let prefixes: Vec<&str> = only.split(',').filter(|p| !p.is_empty()).collect();
+        battery.cases.retain(|c| prefixes.iter().any(|p| c.id.starts_with(p)));
+    }
+    let out_dir = std::env::var("CI_OUT").ok();
+    let out = battery.run(|case, c| {
+        let d = rig_diagnose::diagnose_campaign(c, Some(&thesis), &opts()).map_err(|e| e.to_string())?;
+        if let Some(dir) = &out_dir {
+            let dir = std::path::Path::new(dir).join(&case.id);
+            std::fs::create_dir_all(&dir).expect("CI_OUT");
+            std::fs::write(dir.join("diagnosis.md"), rig_diagnose::render::markdown(&d)).expect("write");
+            std::fs::write(dir.join("diagnosis.json"), serde_json::to_string_pretty(&d).expect("json")).expect("write");
+        }
+        serde_json::to_value(&d).and_then(serde_json::from_value::<DiagnosisResult>).map_err(|e| e.to_string())
+    });
+    for o in &out {
+        println!("{}: {} ({})", o.case.id, o.verdict(), if o.judgement.right { "right" } else { &o.judgement.reason });
+        println!(
+            "    truth {:?}; shaft C {:.2e}, rotor C_r {:.2e} N·m·s/rad; friction {:?}",
+            o.case.truth.hidden_all(),
+            o.case.truth.params.shaft_damping_nm_s_rad,
+            o.case.truth.params.rotor_damping_nm_s_rad,
+            o.case.truth.params.friction
+        );
+    }
+}
+
+/// The `confusion` stage's `seed` in pipeline.toml (its one home).
+fn confusion_seed() -> u64 {
+    let t: toml::Table = toml::from_str(include_str!("../../../pipeline.toml")).expect("pipeline.toml");
+    t["stage"]
+        .as_array()
+        .and_then(|v| v.iter().find(|s| s.get("name").and_then(|n| n.as_str()) == Some("confusion")))
+        .and_then(|s| s.get("params")?.get("seed")?.as_integer())
+        .expect("pipeline.toml: stage confusion's params.seed") as u64
+}
