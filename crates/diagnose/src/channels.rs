@@ -172,6 +172,9 @@ pub struct ChannelOptions {
     pub drive_balance_ratio: f64,
     /// Linearity of the force sensor over its calibration runs (ratio² is F-distributed, (n − 2, n) dof).
     pub force_linearity_ratio: f64,
+    /// The break-away level's dependence on the dwell within runs
+    /// ([`crate::extension::dwell`]: slope over its floor).
+    pub breakaway_dwell_ratio: f64,
     /// Window of the step residual, s (the estimate's 50 ms).
     pub window_s: f64,
     /// Window of the torque balance, s (long enough that the

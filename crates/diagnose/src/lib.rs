@@ -277,6 +277,14 @@ pub fn diagnose(
     checks.push(channels::drive_balance_check(c, opts, o));
     // So does the force sensor's linearity: the calibration runs against their own line.
     checks.push(force_check);
+    // Contact ageing shows only at break-away (issue 25, item 5): the records'
+    // break-away level against the dwell, within runs (extension::dwell).
+    checks.push(extension::dwell::breakaway_dwell_check(
+        &runs,
+        opts.slip_speed_rad_s,
+        opts.rotor_speed_half_window_s,
+        o.breakaway_dwell_ratio,
+    ));
     let flagged_of = |v: &[ChannelCheck]| v.iter().filter(|k| k.flagged).map(ChannelCheck::as_pair).collect::<Vec<_>>();
     // The findings do not depend on the flagged checks (only the adequacy
     // test does): one forward selection, concluded once per set of flags.

@@ -237,3 +237,52 @@ fn confusion_seed() -> u64 {
         .and_then(|s| s.get("params")?.get("seed")?.as_integer())
         .expect("pipeline.toml: stage confusion's params.seed") as u64
 }
+
+/// Where static friction ageing shows (issue 25, item 5), and what the
+/// diagnosis' within-run dwell statistic
+/// (rig_diagnose::extension::dwell) gives on the stick-slipping null and
+/// the ageing case of the CI battery drawn with `DWELL_SEEDS` (default 20)
+/// battery seeds: per campaign the slope b of the break-away level on the
+/// log dwell, its standard error and degrees of freedom.
+/// `cargo nextest run --workspace -E 'test(breakaway_dwell_probe)' --run-ignored only --no-capture`.
+#[test]
+#[ignore]
+fn breakaway_dwell_probe() {
+    use rig_virtual_rig::battery::*;
+    let o = opts();
+    let n: u64 = std::env::var("DWELL_SEEDS").ok().and_then(|s| s.parse().ok()).unwrap_or(20);
+    for k in 0..n {
+        // Some seeds draw no stick-slipping rig for the small protocol: skipped.
+        let Ok(battery) = std::panic::catch_unwind(|| Battery::ci_seeded(confusion_seed() + 1000 * k)) else {
+            continue;
+        };
+        for id in ["null_stick_slip-00", "outside-static_friction_aging-0"] {
+            let case = battery.cases.iter().find(|c| c.id == id).expect("case");
+            let c = case.generate(&battery.protocol).expect("generate");
+            let cal = rig_calibrate::calibrate_campaign(&c).expect("calibration");
+            let law = rig_diagnose::prepare::SensorLaw::Line(rig_diagnose::ForceCal {
+                factor_mv_per_n: cal.force_factor_mv_per_n,
+                offset_mv: cal.force_offset_mv,
+            });
+            let runs = rig_diagnose::prepare::prepare_runs(&c, law, &o).expect("signals");
+            let rows =
+                rig_diagnose::extension::dwell::dwell_rows(&runs, o.slip_speed_rad_s, o.rotor_speed_half_window_s);
+            let check = rig_diagnose::extension::dwell::breakaway_dwell_check(
+                &runs,
+                o.slip_speed_rad_s,
+                o.rotor_speed_half_window_s,
+                o.channels.breakaway_dwell_ratio,
+            );
+            let xd: Vec<String> = rows.iter().map(|r| format!("{:.2}/{:+.4}", r.1, r.2)).collect();
+            println!(
+                "seed {} {id}: b {:+.4}, ratio {:.2} (threshold {:.2}, flagged {}); x/d {}",
+                case.seed,
+                rig_diagnose::extension::dwell::slope(&rows).map_or(f64::NAN, |s| s.0),
+                check.ratio,
+                check.threshold,
+                check.flagged,
+                xd.join(" ")
+            );
+        }
+    }
+}
