@@ -22,6 +22,7 @@
 //! | `operating_point.fundamental` | operating_point | RMS relative error | frequency resolution |
 //! | `operating_point.torque_balance` | operating_point | RMS of the rotor torque balance, N·m | sensor noise |
 //! | `operating_point.drive_balance` | operating_point | RMS the motor-constant drift explains in ⟨V⟩, V | √(2σ̂²/n) of the drift fit (ratio² = F) |
+//! | `operating_point.breakaway_dwell` | operating_point | slope of the break-away level on the log dwell within runs ([`crate::extension::dwell`]) | its standard error ⊕ 0.006 |
 //! | `force_calibration.linearity` | force_calibration | residual SD of the line mV vs load through the runs' means, mV | half-run difference of the means / 2 |
 //!
 //! σ_θ, the uncertainty of a held angle's mean, is the encoder quantisation

@@ -73,7 +73,7 @@
 //! over the record's stick-slip cycles), and e_f the stick-slip fundamental's
 //! relative error over the relative Rayleigh resolution 1/(T·f) when record
 //! and simulation both stick and slip ([`channels::free_run_misfit`]; the
-//! structure is selected on it). Over runs, RMS, as M. The extension of an
+//! structure is selected on it and on the rotor balance, [`structure`]). Over runs, RMS, as M. The extension of an
 //! `unexplained` answer ([`extension`]) is selected on the same misfit over
 //! every recorded channel's feature ([`channels::free_run_misfit_channels`]:
 //! also Ω2 extremes, voltage mean and swing, slip and break-away friction,
@@ -237,8 +237,9 @@ pub enum DiagnoseError {
 /// structure it was fitted in) and the rotor torque balance enter the
 /// adequacy test; every operating point is simulated free-run with the
 /// baseline and with the extended model (the baseline plus the findings,
-/// [`extended_params`]); the damping structure is selected on those free
-/// runs ([`structure`]), and the free-run checks of the final model
+/// [`extended_params`]); the structure (damping placement, channel delay)
+/// is selected on the rotor balance and those free runs ([`structure`]),
+/// and the free-run checks of the final model
 /// (extended model in the selected structure) enter the adequacy test.
 /// Their thresholds are calibrated on stick-slipping effect-free campaigns
 /// (crates/virtual-rig/tests/free_run_calibration.rs, [`ChannelOptions`]).

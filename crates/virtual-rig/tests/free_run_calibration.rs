@@ -180,7 +180,16 @@ fn free_run_right_models() {
                 .filter(|k| k.flagged)
                 .map(|k| format!("{} {:.2}", k.channel, k.ratio))
                 .collect();
-            println!("{class} seed {seed}: verdict {}; found {found}; flagged: {}", d.verdict, line.join(", "));
+            let effects: Vec<&str> = d.findings.iter().map(|f| f.effect.as_str()).collect();
+            if let Some(u) = d.findings.iter().find(|f| f.effect == "unexplained") {
+                println!("  unexplained: {}", u.evidence);
+            }
+            println!(
+                "{class} seed {seed}: verdict {}; findings {effects:?}; structure {}; found {found}; flagged: {}",
+                d.verdict,
+                d.structure.damping,
+                line.join(", ")
+            );
             if !found {
                 missed.push((seed, class.to_string(), d.verdict.clone()));
                 continue;

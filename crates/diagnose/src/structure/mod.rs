@@ -368,6 +368,7 @@ fn score_row(
         t: free_run.t,
         balance_misfit: balance.after,
         balance_gain: balance.gain,
+        balance_gain_fold_sd: balance.gain_fold_sd,
         balance_t: balance.t,
         admissible,
         accepted: false,
@@ -430,7 +431,7 @@ pub fn finding(sel: &StructureSelection) -> Option<Finding> {
         heldout_misfit_baseline: round_sig(base.balance_misfit, 4),
         heldout_misfit_extended: round_sig(sc.balance_misfit, 4),
         relative_gain: round_sig(sc.balance_gain, 3),
-        relative_gain_fold_sd: 0.0,
+        relative_gain_fold_sd: round_sig(sc.balance_gain_fold_sd, 2),
         criterion: Some(round_sig(-sc.balance_t, 4)),
         ..Finding::default()
     })
