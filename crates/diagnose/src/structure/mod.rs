@@ -226,7 +226,8 @@ pub fn select_structure(
     let held_out = |f: usize| move |id: &str| fold_ref.get(id).is_some_and(|&g| g == f);
     let trained = |f: usize| move |id: &str| fold_ref.get(id).is_some_and(|&g| g != f);
     // Each held-out run's balance residual with a candidate fitted without its fold.
-    let balance_cv = |cand: &dyn StructureCandidate| -> Option<(Vec<Option<Fitted>>, BTreeMap<String, f64>)> {
+    type FoldFits = (Vec<Option<Fitted>>, BTreeMap<String, f64>);
+    let balance_cv = |cand: &dyn StructureCandidate| -> Option<FoldFits> {
         let fits: Vec<Option<Fitted>> = (0..folds).map(|f| cand.fit(ext, data, &trained(f))).collect();
         let mut rms = BTreeMap::new();
         for (f, fit) in fits.iter().enumerate() {
