@@ -22,6 +22,7 @@
 //! | `operating_point.fundamental` | operating_point | RMS relative error | frequency resolution |
 //! | `operating_point.torque_balance` | operating_point | RMS of the rotor torque balance, N·m | sensor noise |
 //! | `operating_point.drive_balance` | operating_point | RMS the motor-constant drift explains in ⟨V⟩, V | √(2σ̂²/n) of the drift fit (ratio² = F) |
+//! | `operating_point.breakaway_dwell` | operating_point | slope of the break-away level on the log dwell within runs ([`crate::extension::dwell`]) | its standard error ⊕ 0.006 |
 //! | `force_calibration.linearity` | force_calibration | residual SD of the line mV vs load through the runs' means, mV | half-run difference of the means / 2 |
 //!
 //! σ_θ, the uncertainty of a held angle's mean, is the encoder quantisation
@@ -35,7 +36,9 @@ mod free_run;
 mod step;
 mod twist;
 
-pub use balance::{BalanceData, BalanceFit, balance_data, torque_balance_check, torque_balance_check_of};
+pub use balance::{
+    BalanceData, BalanceFit, balance_data, balance_data_aligned, torque_balance_check, torque_balance_check_of,
+};
 pub use drive_balance::drive_balance_check;
 pub use force_linearity::{force_linearity_check, force_parabola};
 pub use free_run::{
@@ -182,6 +185,9 @@ pub struct ChannelOptions {
     pub drive_balance_ratio: f64,
     /// Linearity of the force sensor over its calibration runs (ratio² is F-distributed, (n − 2, n) dof).
     pub force_linearity_ratio: f64,
+    /// The break-away level's dependence on the dwell within runs
+    /// ([`crate::extension::dwell`]: slope over its floor).
+    pub breakaway_dwell_ratio: f64,
     /// Window of the step residual, s (the estimate's 50 ms).
     pub window_s: f64,
     /// Window of the torque balance, s (long enough that the

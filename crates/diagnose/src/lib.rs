@@ -31,12 +31,13 @@
 //!    place; the retained effects are then refitted jointly on every run for
 //!    the reported parameters.
 //! 4. **Structure** ([`structure`]): where the damping acts (the rig model's
-//!    twist rate, the absolute rotor speed, both), each placement fitted
-//!    teacher-forced through the rotor torque balance and selected on the
-//!    cross-validated free-run misfit on top of the extended model; reported
-//!    in `structure`, never as a finding (the verdict stays the first
-//!    vocabulary finding). Parameters a fit wants below their physical
-//!    bound go to `parameters_at_bounds`.
+//!    twist rate, the absolute rotor speed, both) and whether a recorded
+//!    channel lags the others, each candidate fitted teacher-forced through
+//!    the rotor torque balance and selected on the cross-validated balance
+//!    and free-run misfits on top of the extended model; reported in
+//!    `structure`, and a winner other than the rig model's is a finding
+//!    after the vocabulary's (the verdict when there is none). Parameters a
+//!    fit wants below their physical bound go to `parameters_at_bounds`.
 //! 5. **Adequacy**: the final model's cross-validated misfit against the noise
 //!    floor (ratio ≤ `adequacy_ratio`), no angle-locked order line left in most
 //!    runs ([`lines`]), no flagged check of the other run kinds
@@ -72,7 +73,7 @@
 //! over the record's stick-slip cycles), and e_f the stick-slip fundamental's
 //! relative error over the relative Rayleigh resolution 1/(T·f) when record
 //! and simulation both stick and slip ([`channels::free_run_misfit`]; the
-//! structure is selected on it). Over runs, RMS, as M. The extension of an
+//! structure is selected on it and on the rotor balance, [`structure`]). Over runs, RMS, as M. The extension of an
 //! `unexplained` answer ([`extension`]) is selected on the same misfit over
 //! every recorded channel's feature ([`channels::free_run_misfit_channels`]:
 //! also Ω2 extremes, voltage mean and swing, slip and break-away friction,
@@ -237,8 +238,9 @@ pub enum DiagnoseError {
 /// structure it was fitted in) and the rotor torque balance enter the
 /// adequacy test; every operating point is simulated free-run with the
 /// baseline and with the extended model (the baseline plus the findings,
-/// [`extended_params`]); the damping structure is selected on those free
-/// runs ([`structure`]), and the free-run checks of the final model
+/// [`extended_params`]); the structure (damping placement, channel delay)
+/// is selected on the rotor balance and those free runs ([`structure`]),
+/// and the free-run checks of the final model
 /// (extended model in the selected structure) enter the adequacy test.
 /// Their thresholds are calibrated on stick-slipping effect-free campaigns
 /// (crates/virtual-rig/tests/free_run_calibration.rs, [`ChannelOptions`]).
@@ -277,6 +279,14 @@ pub fn diagnose(
     checks.push(channels::drive_balance_check(c, opts, o));
     // So does the force sensor's linearity: the calibration runs against their own line.
     checks.push(force_check);
+    // Contact ageing shows only at break-away (issue 25, item 5): the records'
+    // break-away level against the dwell, within runs (extension::dwell).
+    checks.push(extension::dwell::breakaway_dwell_check(
+        &runs,
+        opts.slip_speed_rad_s,
+        opts.rotor_speed_half_window_s,
+        o.breakaway_dwell_ratio,
+    ));
     let flagged_of = |v: &[ChannelCheck]| v.iter().filter(|k| k.flagged).map(ChannelCheck::as_pair).collect::<Vec<_>>();
     // The findings do not depend on the flagged checks (only the adequacy
     // test does): one forward selection, concluded once per set of flags.
@@ -327,7 +337,8 @@ pub fn diagnose(
             channels::with_run_phases(m, phases.get(id).copied().unwrap_or_default())
         };
         let ext_pairs = channels::free_run_pairs_by(c, &s, |id| Some(phased(&ext, id)));
-        let sel = structure::select_structure(c, data, &ext, &ext_pairs, &d.detail.runs, &s, opts);
+        let sdata = structure::StructureData::of(c, cal, opts, o, data.clone());
+        let sel = structure::select_structure(c, &sdata, &ext, &ext_pairs, &d.detail.runs, &s, opts);
         let moved = sel.damping != structure::REGISTRY[0].id();
         let final_pairs =
             if moved { channels::free_run_pairs_by(c, &s, |id| Some(phased(&sel.model, id))) } else { ext_pairs };
@@ -360,9 +371,7 @@ pub fn diagnose(
         let model = if moved { &sel.model } else { &ext };
         let inputs = extension::Inputs { c, runs: &runs, model, before: &final_pairs, phases: &phases, s: &s, opts };
         extension::attach(&mut d, &inputs);
-        d.detail.structure_scores = sel.scores;
-        d.structure = Structure { damping: sel.damping.into(), notes: sel.notes };
-        d.parameters_at_bounds = sel.at_bounds;
+        structure::attach(&mut d, sel);
         d.parameters_at_bounds.extend(extension::vocabulary_bounds(p, &d.findings));
         d.parameters_at_bounds.extend(d.detail.breakaway.as_ref().and_then(|l| breakaway::at_bound(p, l)));
     }

@@ -144,6 +144,14 @@ pub struct StructureScore {
     pub relative_gain: f64,
     pub relative_gain_fold_sd: f64,
     pub t: f64,
+    /// Cross-validated teacher-forced misfit of the rotor torque balance with
+    /// this structure (RMS over held-out runs of each run's RMS residual, N·m).
+    pub balance_misfit: f64,
+    /// Its relative gain over the baseline structure's, the gain's spread
+    /// across folds and the paired run-level t.
+    pub balance_gain: f64,
+    pub balance_gain_fold_sd: f64,
+    pub balance_t: f64,
     pub admissible: bool,
     pub accepted: bool,
 }

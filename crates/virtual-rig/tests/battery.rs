@@ -464,8 +464,8 @@ fn damping_placements_are_the_diagnosis_structure_ids() {
     let theirs: Vec<&str> = rig_diagnose::structure::REGISTRY.iter().map(|c| c.id()).collect();
     assert_eq!(theirs.first(), Some(&ids::DAMPING_TWIST_RATE), "{theirs:?}");
     for fault in ids::STRUCTURAL {
-        if let Some(p) = ids::damping_placement(fault) {
-            assert!(theirs.contains(&p), "{fault} -> {p} not in {theirs:?}");
+        for p in ids::damping_placements(fault) {
+            assert!(theirs.contains(p), "{fault} -> {p} not in {theirs:?}");
         }
     }
     // The judge accepts the placement named in `structure`, and flags one the truth lacks.
@@ -479,4 +479,27 @@ fn damping_placements_are_the_diagnosis_structure_ids() {
     };
     assert!(judge(&null, &with(ids::DAMPING_TWIST_RATE)).right);
     assert!(!judge(&null, &with(ids::DAMPING_ROTOR_ABSOLUTE_PLACEMENT)).right);
+    assert!(!judge(&null, &with(ids::DAMPING_BOTH_PLACEMENT)).right);
+    // A drag on the rotor speed is named by either placement that carries it
+    // (its truth keeps a small twist-rate damping beside the drag), with the
+    // structural finding as the verdict; `none` with it is not right.
+    let drag = Battery::ci()
+        .cases
+        .into_iter()
+        .find(|c| c.id.starts_with("structural-damping_rotor_absolute"))
+        .expect("a damping case");
+    let answer = |verdict: &str, damping: &str| {
+        Ok(DiagnosisResult {
+            verdict: verdict.into(),
+            findings: vec![rig_virtual_rig::battery::Finding {
+                effect: ids::DAMPING_ROTOR_ABSOLUTE.into(),
+                params: Default::default(),
+            }],
+            structure: Some(rig_virtual_rig::battery::StructureAnswer { damping: damping.into() }),
+        })
+    };
+    for p in [ids::DAMPING_ROTOR_ABSOLUTE_PLACEMENT, ids::DAMPING_BOTH_PLACEMENT] {
+        assert!(judge(&drag, &answer(ids::DAMPING_ROTOR_ABSOLUTE, p)).right, "{p}");
+        assert!(!judge(&drag, &answer(ids::NONE, p)).right, "{p}");
+    }
 }

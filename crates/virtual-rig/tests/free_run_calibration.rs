@@ -186,7 +186,16 @@ fn free_run_right_models() {
                 .filter(|k| k.flagged)
                 .map(|k| format!("{} {:.2}", k.channel, k.ratio))
                 .collect();
-            println!("{class} seed {seed}: verdict {}; found {found}; flagged: {}", d.verdict, line.join(", "));
+            let effects: Vec<&str> = d.findings.iter().map(|f| f.effect.as_str()).collect();
+            if let Some(u) = d.findings.iter().find(|f| f.effect == "unexplained") {
+                println!("  unexplained: {}", u.evidence);
+            }
+            println!(
+                "{class} seed {seed}: verdict {}; findings {effects:?}; structure {}; found {found}; flagged: {}",
+                d.verdict,
+                d.structure.damping,
+                line.join(", ")
+            );
             if only.is_some() {
                 for k in d.detail.free_run_extended.iter().filter(|k| k.flagged || k.channel.ends_with("regime")) {
                     println!("  {}: {}", k.channel, k.detail);

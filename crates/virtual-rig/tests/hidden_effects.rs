@@ -187,3 +187,102 @@ fn thesis_data() -> rig_calibrate::ThesisData {
     let t = rig_ingest::thesis::read_thesis_tables(&dir).expect("data/thesis");
     rig_calibrate::thesis_data(&t).expect("thesis data")
 }
+
+/// The CI battery's cases (rig_virtual_rig::battery::Battery::ci_seeded with
+/// the `confusion` stage's seed from pipeline.toml, small protocol), each
+/// diagnosed blind as that stage does, with its judgement and its truth; CI_CASES=a,b keeps the cases whose id starts with a or b, and
+/// CI_OUT=DIR writes each case's diagnosis.md and diagnosis.json there (to
+/// read a wrong answer's free-run table and structure scores).
+/// `cargo nextest run --workspace -E 'test(ci_battery_cases)' --run-ignored only --no-capture`.
+#[test]
+#[ignore]
+fn ci_battery_cases() {
+    use rig_virtual_rig::battery::*;
+    let thesis = thesis_data();
+    let seed = confusion_seed();
+    let mut battery = Battery::ci_seeded(seed);
+    if let Ok(only) = std::env::var("CI_CASES") {
+        let prefixes: Vec<&str> = only.split(',').filter(|p| !p.is_empty()).collect();
+        battery.cases.retain(|c| prefixes.iter().any(|p| c.id.starts_with(p)));
+    }
+    let out_dir = std::env::var("CI_OUT").ok();
+    let out = battery.run(|case, c| {
+        let d = rig_diagnose::diagnose_campaign(c, Some(&thesis), &opts()).map_err(|e| e.to_string())?;
+        if let Some(dir) = &out_dir {
+            let dir = std::path::Path::new(dir).join(&case.id);
+            std::fs::create_dir_all(&dir).expect("CI_OUT");
+            std::fs::write(dir.join("diagnosis.md"), rig_diagnose::render::markdown(&d)).expect("write");
+            std::fs::write(dir.join("diagnosis.json"), serde_json::to_string_pretty(&d).expect("json")).expect("write");
+        }
+        serde_json::to_value(&d).and_then(serde_json::from_value::<DiagnosisResult>).map_err(|e| e.to_string())
+    });
+    for o in &out {
+        println!("{}: {} ({})", o.case.id, o.verdict(), if o.judgement.right { "right" } else { &o.judgement.reason });
+        println!(
+            "    truth {:?}; shaft C {:.2e}, rotor C_r {:.2e} N·m·s/rad; friction {:?}",
+            o.case.truth.hidden_all(),
+            o.case.truth.params.shaft_damping_nm_s_rad,
+            o.case.truth.params.rotor_damping_nm_s_rad,
+            o.case.truth.params.friction
+        );
+    }
+}
+
+/// The `confusion` stage's `seed` in pipeline.toml (its one home).
+fn confusion_seed() -> u64 {
+    let t: toml::Table = toml::from_str(include_str!("../../../pipeline.toml")).expect("pipeline.toml");
+    t["stage"]
+        .as_array()
+        .and_then(|v| v.iter().find(|s| s.get("name").and_then(|n| n.as_str()) == Some("confusion")))
+        .and_then(|s| s.get("params")?.get("seed")?.as_integer())
+        .expect("pipeline.toml: stage confusion's params.seed") as u64
+}
+
+/// Where static friction ageing shows (issue 25, item 5), and what the
+/// diagnosis' within-run dwell statistic
+/// (rig_diagnose::extension::dwell) gives on the stick-slipping null and
+/// the ageing case of the CI battery drawn with `DWELL_SEEDS` (default 20)
+/// battery seeds: per campaign the slope b of the break-away level on the
+/// log dwell, its standard error and degrees of freedom.
+/// `cargo nextest run --workspace -E 'test(breakaway_dwell_probe)' --run-ignored only --no-capture`.
+#[test]
+#[ignore]
+fn breakaway_dwell_probe() {
+    use rig_virtual_rig::battery::*;
+    let o = opts();
+    let n: u64 = std::env::var("DWELL_SEEDS").ok().and_then(|s| s.parse().ok()).unwrap_or(20);
+    for k in 0..n {
+        // Some seeds draw no stick-slipping rig for the small protocol: skipped.
+        let Ok(battery) = std::panic::catch_unwind(|| Battery::ci_seeded(confusion_seed() + 1000 * k)) else {
+            continue;
+        };
+        for id in ["null_stick_slip-00", "outside-static_friction_aging-0"] {
+            let case = battery.cases.iter().find(|c| c.id == id).expect("case");
+            let c = case.generate(&battery.protocol).expect("generate");
+            let cal = rig_calibrate::calibrate_campaign(&c).expect("calibration");
+            let law = rig_diagnose::prepare::SensorLaw::Line(rig_diagnose::ForceCal {
+                factor_mv_per_n: cal.force_factor_mv_per_n,
+                offset_mv: cal.force_offset_mv,
+            });
+            let runs = rig_diagnose::prepare::prepare_runs(&c, law, &o).expect("signals");
+            let rows =
+                rig_diagnose::extension::dwell::dwell_rows(&runs, o.slip_speed_rad_s, o.rotor_speed_half_window_s);
+            let check = rig_diagnose::extension::dwell::breakaway_dwell_check(
+                &runs,
+                o.slip_speed_rad_s,
+                o.rotor_speed_half_window_s,
+                o.channels.breakaway_dwell_ratio,
+            );
+            let xd: Vec<String> = rows.iter().map(|r| format!("{:.2}/{:+.4}", r.1, r.2)).collect();
+            println!(
+                "seed {} {id}: b {:+.4}, ratio {:.2} (threshold {:.2}, flagged {}); x/d {}",
+                case.seed,
+                rig_diagnose::extension::dwell::slope(&rows).map_or(f64::NAN, |s| s.0),
+                check.ratio,
+                check.threshold,
+                check.flagged,
+                xd.join(" ")
+            );
+        }
+    }
+}

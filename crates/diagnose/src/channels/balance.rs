@@ -87,6 +87,31 @@ pub fn balance_data(
     opts: &DiagnoseOptions,
     o: &ChannelOptions,
 ) -> BalanceData {
+    balance_data_aligned(c, cal, opts, o, 0, 0)
+}
+
+/// `x` advanced by `lead` samples, x'[k] = x[k + lead] (the last sample held):
+/// a channel recorded `lead` samples late, put back in time.
+fn advanced(x: Vec<f64>, lead: usize) -> Vec<f64> {
+    if lead == 0 || x.is_empty() {
+        return x;
+    }
+    let n = x.len();
+    (0..n).map(|k| x[(k + lead).min(n - 1)]).collect()
+}
+
+/// [`balance_data`] with the rotor encoder's angle advanced by `rotor_lead`
+/// samples and the force channel's by `force_lead`: the balance of a
+/// campaign whose channel is recorded that many samples late (the
+/// structural candidate `channel_delay`, [`crate::structure`]).
+pub fn balance_data_aligned(
+    c: &Campaign,
+    cal: &CampaignCalibration,
+    opts: &DiagnoseOptions,
+    o: &ChannelOptions,
+    rotor_lead: usize,
+    force_lead: usize,
+) -> BalanceData {
     let w = nominal_window_samples(o.balance_window_s, c.rig.sample_rate_hz).max(2);
     let dt = 1.0 / c.rig.sample_rate_hz;
     let r_m = c.rig.brake_disc_radius_m;
@@ -100,9 +125,12 @@ pub fn balance_data(
         let RunKind::OperatingPoint { ramp_s, .. } = run.kind else { continue };
         let d = &run.data;
         let (Some(t1), Some(t2), Some(mv)) = (&d.rotor_ticks, &d.motor_ticks, &d.brake_force_mv) else { continue };
-        let phi1 = ticks_to_rad(t1, c.rig.encoder_ticks_per_rev);
+        let phi1 = advanced(ticks_to_rad(t1, c.rig.encoder_ticks_per_rev), rotor_lead);
         let phi2 = ticks_to_rad(t2, c.rig.encoder_ticks_per_rev);
-        let f = force_n(mv, ForceCal { factor_mv_per_n: cal.force_factor_mv_per_n, offset_mv: cal.force_offset_mv });
+        let f = advanced(
+            force_n(mv, ForceCal { factor_mv_per_n: cal.force_factor_mv_per_n, offset_mv: cal.force_offset_mv }),
+            force_lead,
+        );
         let from = d.time_s.partition_point(|&x| x < ramp_s + opts.settle_s);
         runs.push(RunRows {
             id: run.id.clone(),
@@ -139,6 +167,22 @@ impl BalanceData {
             rotor_drag_nm_s_rad: -b[3],
             offset_nm: b[4],
         })
+    }
+
+    /// Each run's RMS residual of `fit`, N·m, over the runs `include`
+    /// accepts (runs without rows left out): the teacher-forced misfit a
+    /// structural candidate is compared on.
+    pub fn run_rms(&self, fit: &BalanceFit, include: impl Fn(&str) -> bool) -> Vec<(String, f64)> {
+        let beta = fit.beta(self.j1_kgm2);
+        self.runs
+            .iter()
+            .filter(|r| include(&r.id) && !r.rows.is_empty())
+            .map(|r| {
+                let e: Vec<f64> =
+                    r.rows.iter().map(|(x, y)| y - x.iter().zip(&beta).map(|(a, b)| a * b).sum::<f64>()).collect();
+                (r.id.clone(), rms(&e))
+            })
+            .collect()
     }
 }
 

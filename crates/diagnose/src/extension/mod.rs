@@ -44,6 +44,8 @@
 //! teacher-forced rows are built once. Only an `unexplained` verdict with a
 //! baseline model pays it.
 
+pub mod dwell;
+
 use crate::channels::{
     FreeRunPair, FreeRunSettings, free_run_misfit_channels, free_run_pairs_by, speed_floor_rad_s, stuck_stretches,
     with_run_phases,

@@ -6,8 +6,7 @@
 //! placements (C_r = 0, C = 0) and Eq. 4-7 as published, whose damping
 //! matrix acts on Ω1. Admissible when C ≥ 0 and C_r ≥ 0.
 
-use super::{Fitted, ParamSpec, StructureCandidate};
-use crate::channels::BalanceData;
+use super::{Fitted, ParamSpec, StructureCandidate, StructureData};
 use rig_types::RigParams;
 
 pub struct TwistRateAndRotor;
@@ -34,9 +33,13 @@ impl StructureCandidate for TwistRateAndRotor {
     fn params(&self) -> &'static [ParamSpec] {
         PARAMS
     }
-    fn fit(&self, _model: &RigParams, data: &BalanceData, include: &dyn Fn(&str) -> bool) -> Option<Fitted> {
-        let f = data.fit(include, true, true)?;
-        Some(Fitted { values: vec![f.twist_damping_nm_s_rad, f.rotor_drag_nm_s_rad] })
+    fn fit(&self, _model: &RigParams, data: &StructureData, include: &dyn Fn(&str) -> bool) -> Option<Fitted> {
+        let f = data.balance.fit(include, true, true)?;
+        Some(Fitted { values: vec![f.twist_damping_nm_s_rad, f.rotor_drag_nm_s_rad], balance: f, aligned: None })
+    }
+    /// The new term is the drag on Ω1: the finding names it.
+    fn finding_id(&self) -> Option<&'static str> {
+        Some(super::rotor_absolute::FINDING)
     }
     /// Both clamped at their bound 0 (an unconstrained negative value is reported, not simulated).
     fn apply(&self, model: &RigParams, fitted: &Fitted) -> RigParams {

@@ -10,11 +10,14 @@
 //! over the training runs' steady states. Admissible when C_r ≥ 0 (a
 //! negative drag would feed energy into the rotor).
 
-use super::{Fitted, ParamSpec, StructureCandidate};
-use crate::channels::BalanceData;
+use super::{Fitted, ParamSpec, StructureCandidate, StructureData};
 use rig_types::RigParams;
 
 pub struct RotorAbsolute;
+
+/// The finding's id when a drag on Ω1 wins (alone or beside a twist-rate
+/// damping, [`super::both`]): the structural fault it names.
+pub const FINDING: &str = "damping_rotor_absolute";
 
 const PARAMS: &[ParamSpec] = &[ParamSpec {
     name: "rotor_damping_nm_s_rad",
@@ -30,9 +33,12 @@ impl StructureCandidate for RotorAbsolute {
     fn params(&self) -> &'static [ParamSpec] {
         PARAMS
     }
-    fn fit(&self, _model: &RigParams, data: &BalanceData, include: &dyn Fn(&str) -> bool) -> Option<Fitted> {
-        let f = data.fit(include, false, true)?;
-        Some(Fitted { values: vec![f.rotor_drag_nm_s_rad] })
+    fn fit(&self, _model: &RigParams, data: &StructureData, include: &dyn Fn(&str) -> bool) -> Option<Fitted> {
+        let f = data.balance.fit(include, false, true)?;
+        Some(Fitted { values: vec![f.rotor_drag_nm_s_rad], balance: f, aligned: None })
+    }
+    fn finding_id(&self) -> Option<&'static str> {
+        Some(FINDING)
     }
     /// C = 0 on the twist rate, C_r on Ω1 (clamped at its bound 0; an
     /// unconstrained negative value is reported, not simulated).

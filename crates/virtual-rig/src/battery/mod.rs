@@ -795,7 +795,7 @@ pub fn judge(case: &Case, result: &Result<DiagnosisResult, String>) -> Judgement
         Expected::Unexplained { partial } => (partial, d.verdict == ids::UNEXPLAINED),
         Expected::Structural { id, partial } => {
             let named = d.findings.iter().any(|f| f.effect == id)
-                || ids::damping_placement(id).is_some_and(|p| d.structure.as_ref().is_some_and(|s| s.damping == p));
+                || d.structure.as_ref().is_some_and(|s| ids::damping_placements(id).contains(&s.damping.as_str()));
             let ok =
                 d.verdict == ids::UNEXPLAINED || (named && (d.verdict == id || partial.contains(&d.verdict.as_str())));
             structure = Some(id);
@@ -832,8 +832,8 @@ pub fn judge(case: &Case, result: &Result<DiagnosisResult, String>) -> Judgement
     }
     // A damping placement other than the rig model's, where the truth has none, is spurious.
     if let Some(s) = &d.structure {
-        let truth_placement = structure.and_then(ids::damping_placement);
-        if s.damping != ids::DAMPING_TWIST_RATE && Some(s.damping.as_str()) != truth_placement {
+        let truth_placements = structure.map_or(&[][..], ids::damping_placements);
+        if s.damping != ids::DAMPING_TWIST_RATE && !truth_placements.contains(&s.damping.as_str()) {
             why.push(format!("spurious structure: damping on {}", s.damping));
         }
     }

@@ -1,0 +1,158 @@
+//! Structural candidate `channel_delay`: one recorded channel of the
+//! operating points lags the others by a transport delay (a FIFO or filter
+//! latency of the acquisition chain), x_rec[k] = x[k − d]. The rig is the
+//! rig model (damping on the twist rate); only the record is late, so the
+//! candidate changes no simulated motion.
+//!
+//! # What the delay does to the rotor balance
+//!
+//! Eq. 4-7's first row with the measured r·F (J1 Ω̇1 = K tw + C tẇ − r·F,
+//! [`crate::channels::BalanceData`]) over 0.1 s windows: a rotor encoder
+//! late by d reads the twist φ2 − φ1(t − d) ≈ tw + Ω1·d, so in every steady
+//! slip the balance is off by K·Ω1·d, a torque that grows with the slip speed
+//! like a drag C_r = K·d (at K ≈ 0.27 N·m/rad, 6 ms reads as 1.6e-3
+//! N·m·s/rad); a late force channel reads r·F(t − d) ≈ r·F − r·Ḟ·d, which in a
+//! stick (r·F ≈ K·tw) is −K·tẇ·d, a twist-rate damping lowered by K·d.
+//!
+//! # Fit
+//!
+//! Over a grid of whole-sample delays of each channel (1 sample to
+//! [`MAX_DELAY_S`], counted at the campaign's sample rate), the channel is
+//! advanced by the delay ([`crate::channels::balance_data_aligned`]) and the
+//! balance refitted with the rig model's structure (C on the twist rate, no
+//! drag); the fit is the delay with the smallest sum over training runs of
+//! each run's squared RMS residual, or no delay when the records as recorded
+//! fit best. The two parameters are the delays of the rotor encoder and of
+//! the force channel, one of them 0; the fold-jackknife rule of the
+//! selection ([`super`]) then asks every fold to pick the same channel and
+//! a delay consistent across folds.
+
+use super::{Aligned, Fitted, ParamSpec, StructureCandidate, StructureData};
+use crate::DiagnoseOptions;
+use crate::channels::{BalanceData, ChannelOptions, balance_data_aligned};
+use rig_types::{Campaign, RigParams};
+
+pub struct ChannelDelay;
+
+/// The finding's id.
+pub const ID: &str = "channel_delay";
+
+/// The longest delay tried, s: 10 samples at 500 Hz, beyond the latency of a
+/// FIFO or an anti-alias filter of an acquisition chain at these rates.
+pub const MAX_DELAY_S: f64 = 0.02;
+
+/// A recorded channel that may lag the others.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DelayedChannel {
+    RotorEncoder,
+    Force,
+}
+
+impl DelayedChannel {
+    pub fn name(self) -> &'static str {
+        match self {
+            DelayedChannel::RotorEncoder => "rotor encoder",
+            DelayedChannel::Force => "force sensor",
+        }
+    }
+}
+
+const PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "rotor_encoder_delay_s",
+        unit: "s",
+        lower: 0.0,
+        meaning: "how late the rotor encoder's angle is recorded against the other channels",
+    },
+    ParamSpec {
+        name: "force_delay_s",
+        unit: "s",
+        lower: 0.0,
+        meaning: "how late the brake force is recorded against the other channels",
+    },
+];
+
+/// The balance of `c` with each channel advanced by 1 … [`MAX_DELAY_S`] samples.
+pub(super) fn grid(
+    c: &Campaign,
+    cal: &rig_calibrate::CampaignCalibration,
+    opts: &DiagnoseOptions,
+    o: &ChannelOptions,
+) -> Vec<Aligned> {
+    let rate = c.rig.sample_rate_hz;
+    let n = (MAX_DELAY_S * rate).round() as usize;
+    let mut out = Vec::new();
+    for channel in [DelayedChannel::RotorEncoder, DelayedChannel::Force] {
+        for samples in 1..=n {
+            let (r, f) = if channel == DelayedChannel::RotorEncoder { (samples, 0) } else { (0, samples) };
+            out.push(Aligned {
+                channel,
+                samples,
+                delay_s: samples as f64 / rate,
+                data: balance_data_aligned(c, cal, opts, o, r, f),
+            });
+        }
+    }
+    out
+}
+
+/// Sum over the runs `include` accepts of each run's squared RMS residual of
+/// the twist-rate balance fitted on them; `None` when singular.
+fn training_cost(data: &BalanceData, include: &dyn Fn(&str) -> bool) -> Option<(f64, crate::channels::BalanceFit)> {
+    let fit = data.fit(include, true, false)?;
+    Some((data.run_rms(&fit, include).iter().map(|(_, r)| r * r).sum(), fit))
+}
+
+impl StructureCandidate for ChannelDelay {
+    fn id(&self) -> &'static str {
+        ID
+    }
+    fn params(&self) -> &'static [ParamSpec] {
+        PARAMS
+    }
+    fn fit(&self, _model: &RigParams, data: &StructureData, include: &dyn Fn(&str) -> bool) -> Option<Fitted> {
+        let (mut best_cost, mut best_fit) = training_cost(&data.balance, include)?;
+        let mut best: Option<usize> = None;
+        for (i, a) in data.aligned.iter().enumerate() {
+            if let Some((cost, fit)) = training_cost(&a.data, include)
+                && cost < best_cost
+            {
+                (best_cost, best_fit, best) = (cost, fit, Some(i));
+            }
+        }
+        let mut values = vec![0.0; 2];
+        if let Some(a) = best.map(|i| &data.aligned[i]) {
+            values[usize::from(a.channel == DelayedChannel::Force)] = a.delay_s;
+        }
+        Some(Fitted { values, balance: best_fit, aligned: best })
+    }
+    /// The rig is the model's: only the record is late.
+    fn apply(&self, model: &RigParams, _fitted: &Fitted) -> RigParams {
+        model.clone()
+    }
+    fn describe(&self, fitted: &Fitted) -> String {
+        let (r, f) = (fitted.values[0], fitted.values[1]);
+        let b = &fitted.balance;
+        let (channel, d) = if f > 0.0 { (DelayedChannel::Force, f) } else { (DelayedChannel::RotorEncoder, r) };
+        if d > 0.0 {
+            format!(
+                "the {} recorded {:.1} ms late (the rig model's damping on the twist rate, C = {:.2e} N·m·s/rad in \
+                 the realigned balance)",
+                channel.name(),
+                1e3 * d,
+                b.twist_damping_nm_s_rad
+            )
+        } else {
+            "no channel delay (the records as recorded fit the balance best)".into()
+        }
+    }
+    fn damping(&self) -> &'static str {
+        super::twist_rate::ID
+    }
+    fn moves(&self) -> bool {
+        false
+    }
+    fn finding_id(&self) -> Option<&'static str> {
+        Some(ID)
+    }
+}
