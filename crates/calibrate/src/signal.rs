@@ -75,37 +75,17 @@ fn refine(t: &[f64], y: &[f64], i: usize, fit_half: usize, is_max: bool) -> Extr
     if hi - lo < 4 {
         return fallback;
     }
-    // Normal equations of y = a + b u + c u², u = t − t_i (centred for conditioning).
-    let mut s = [0.0f64; 5];
-    let mut r = [0.0f64; 3];
+    // Least squares y = a + b u + c u², u = t − t_i (centred for conditioning),
+    // solved by the workspace's one solver (a singular fit falls back).
+    let mut ne = rig_types::linear::Normal::new(3);
     for k in lo..=hi {
         let u = t[k] - t[i];
-        let mut p = 1.0;
-        for (j, sj) in s.iter_mut().enumerate() {
-            *sj += p;
-            if j < 3 {
-                r[j] += p * y[k];
-            }
-            p *= u;
-        }
+        ne.add_row(&[1.0, u, u * u], y[k]);
     }
-    let m = [[s[0], s[1], s[2]], [s[1], s[2], s[3]], [s[2], s[3], s[4]]];
-    let det = |m: [[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-    };
-    let d = det(m);
-    if d.abs() < 1e-300 {
+    let Some(abc) = ne.solve() else {
         return fallback;
-    }
-    let solve = |col: usize| {
-        let mut mm = m;
-        for (row, rv) in mm.iter_mut().zip(r) {
-            row[col] = rv;
-        }
-        det(mm) / d
     };
-    let (a, b, c) = (solve(0), solve(1), solve(2));
+    let (a, b, c) = (abc[0], abc[1], abc[2]);
     if c == 0.0 || (c < 0.0) != is_max {
         return fallback;
     }

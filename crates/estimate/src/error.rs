@@ -36,3 +36,14 @@ pub enum EstimateError {
     #[error("argmin: {0}")]
     Argmin(String),
 }
+
+impl From<rig_types::linear::LinearError> for EstimateError {
+    fn from(e: rig_types::linear::LinearError) -> Self {
+        match e {
+            rig_types::linear::LinearError::Singular { context, rule } => EstimateError::Singular { context, rule },
+            rig_types::linear::LinearError::TooFewRows { context, got, need, rule } => {
+                EstimateError::TooFewSamples { context, got, need, rule }
+            }
+        }
+    }
+}

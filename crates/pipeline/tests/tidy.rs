@@ -419,17 +419,10 @@ fn the_stribeck_law_has_one_home() {
     assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
 
-/// Linear least-squares solvers outside the one home still to move, with
-/// the reason: calibrate's three-point parabola of an extremum (`signal.rs`,
-/// Cramer's rule on 3 × 3 normal equations): rig-estimate depends on
-/// rig-calibrate, so the home is out of its reach. (The LAVI study's fits
-/// and residual signature solve through `rig_lavi::lsq`, which calls the home;
-/// rig-model's 1-DOF core fits nothing.)
-const SOLVERS_NOT_YET: [&str; 1] = ["crates/calibrate/src/signal.rs"];
-
-/// One linear least-squares solver: `rig_estimate::linear` (faer's Cholesky
-/// behind `spd_solve`, `spd_inverse`, `Normal`, `ols`, `ols_eiv`, `iv`).
-/// Nothing else factorises a matrix or writes its own normal-equation solver.
+/// One linear least-squares solver: `rig_types::linear` (faer's Cholesky
+/// behind `spd_solve`, `spd_inverse`, `Normal`, `ArrowNormal`, `ols`,
+/// `ols_eiv`, `iv`; `rig_estimate::linear` re-exports it). Nothing else
+/// factorises a matrix or writes its own normal-equation solver.
 #[test]
 fn linear_least_squares_has_one_home() {
     let patterns = [
@@ -447,8 +440,7 @@ fn linear_least_squares_has_one_home() {
         "fnsolve_linear",
         "fnsolve3",
     ];
-    let mut homes = vec!["crates/estimate/src/linear.rs", "crates/pipeline/tests/tidy.rs"];
-    homes.extend(SOLVERS_NOT_YET);
+    let homes = ["crates/types/src/linear.rs", "crates/pipeline/tests/tidy.rs"];
     let problems = written_outside(&patterns, &homes, "a linear solver; use rig_estimate::linear");
     assert!(problems.is_empty(), "{}", problems.join("\n"));
 }

@@ -9,6 +9,7 @@
 mod campaign;
 pub mod contract;
 mod figure;
+pub mod linear;
 pub mod minimize;
 mod params;
 pub mod select;
