@@ -201,6 +201,12 @@ fn free_run_right_models() {
                     println!("  {}: {}", k.channel, k.detail);
                 }
                 println!("  adequacy: {:?}", d.adequacy);
+                for k in &d.detail.structure_scores {
+                    println!(
+                        "  structure {}: balance gain {:.3} (t {:.2}), free-run gain {:.3} ± {:.3} (t {:.2}), accepted {}",
+                        k.id, k.balance_gain, k.balance_t, k.relative_gain, k.relative_gain_fold_sd, k.t, k.accepted
+                    );
+                }
             }
             if !found {
                 missed.push((seed, class.to_string(), d.verdict.clone()));
