@@ -9,6 +9,7 @@
 
 use rayon::prelude::*;
 pub use rig_types::select::Comparison;
+pub use rig_types::select::best_of as best;
 use rig_types::select::compare;
 
 /// A fold: runs to fit on, runs to score (indices into the caller's runs).
@@ -77,14 +78,6 @@ pub fn comparison(before: &[(usize, f64)], after: &[(usize, f64)], folds: &[Fold
         .collect();
     let ms = |h: &[(usize, f64)]| h.iter().map(|x| x.1).collect::<Vec<f64>>();
     compare(&ms(before), &ms(after), &fold_of, folds.len())
-}
-
-/// The step's best candidate: the largest gain of a finite misfit (ties: the
-/// first), as [`rig_types::select::forward_select`] picks it.
-pub fn best(comparisons: &[Comparison]) -> Option<usize> {
-    (0..comparisons.len())
-        .filter(|&i| comparisons[i].after.is_finite())
-        .max_by(|&a, &b| comparisons[a].gain.total_cmp(&comparisons[b].gain).then(b.cmp(&a)))
 }
 
 #[cfg(test)]

@@ -170,6 +170,14 @@ pub fn compare(before: &[f64], after: &[f64], fold_of: &[usize], folds: usize) -
     Comparison { before: b, after: a, gain, gain_fold_sd: sd, t }
 }
 
+/// A step's best candidate: the largest gain among finite misfits after
+/// (ties: the first), the pick [`forward_select`] makes at every step.
+pub fn best_of(comparisons: &[Comparison]) -> Option<usize> {
+    (0..comparisons.len())
+        .filter(|&i| comparisons[i].after.is_finite())
+        .max_by(|&a, &b| comparisons[a].gain.total_cmp(&comparisons[b].gain).then(b.cmp(&a)))
+}
+
 /// One candidate tried at one step.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Trial<M> {
@@ -318,10 +326,8 @@ where
                 accepted: false,
             });
         }
-        // The largest gain of this step among finite misfits (ties: candidate order).
-        let best = (first..trials.len())
-            .filter(|&i| trials[i].comparison.after.is_finite())
-            .max_by(|&a, &b| trials[a].comparison.gain.total_cmp(&trials[b].comparison.gain).then(b.cmp(&a)));
+        let step_comparisons: Vec<Comparison> = trials[first..].iter().map(|t| t.comparison).collect();
+        let best = best_of(&step_comparisons).map(|i| first + i);
         let Some(best) = best else { break };
         trials[best].best = true;
         if !trials[best].significant {
