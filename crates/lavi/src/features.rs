@@ -111,8 +111,9 @@ pub fn window_features(
     let t_all = lowpass_fft(torque_nm, o.fs_hz, o.cutoff_hz, o.transition_hz)?;
     let (v, t) = (&v_all[window.clone()], &t_all[window]);
     let stick_fraction = v.iter().filter(|x| **x < o.stick_speed_rpm).count() as f64 / v.len() as f64;
-    let slip: Vec<f64> = v.iter().zip(t).filter(|(x, _)| **x >= o.stick_speed_rpm).map(|(_, y)| *y).collect();
-    let slip_torque_nm = if slip.is_empty() { f64::NAN } else { mean(&slip) };
+    let (slip_sum, slip_n) =
+        v.iter().zip(t).filter(|(x, _)| **x >= o.stick_speed_rpm).fold((0.0, 0usize), |(s, n), (_, y)| (s + y, n + 1));
+    let slip_torque_nm = if slip_n == 0 { f64::NAN } else { slip_sum / slip_n as f64 };
     let phases = stick_phases(v, t, o.stick_speed_rpm);
     let (peaks, lengths): (Vec<f64>, Vec<f64>) = phases.iter().map(|(p, n)| (*p, *n as f64 / o.fs_hz)).unzip();
     let breakaway_torque_nm = if phases.is_empty() { f64::NAN } else { mean(&peaks) };
