@@ -73,7 +73,8 @@ pub fn fit_equation_of_motion(
     };
     // Column order: Δφ, [Ω_top − Ω], [−Ω], −T, 1.
     let row = |i: usize| -> Vec<f64> {
-        let mut r = vec![dphi[i]];
+        let mut r = Vec::with_capacity(5);
+        r.push(dphi[i]);
         if with_c {
             r.push(top_rad_s[i] - bit_rad_s[i]);
         }

@@ -111,8 +111,9 @@ pub fn window_features(
     let t_all = lowpass_fft(torque_nm, o.fs_hz, o.cutoff_hz, o.transition_hz)?;
     let (v, t) = (&v_all[window.clone()], &t_all[window]);
     let stick_fraction = v.iter().filter(|x| **x < o.stick_speed_rpm).count() as f64 / v.len() as f64;
-    let slip: Vec<f64> = v.iter().zip(t).filter(|(x, _)| **x >= o.stick_speed_rpm).map(|(_, y)| *y).collect();
-    let slip_torque_nm = if slip.is_empty() { f64::NAN } else { mean(&slip) };
+    let (slip_sum, slip_n) =
+        v.iter().zip(t).filter(|(x, _)| **x >= o.stick_speed_rpm).fold((0.0, 0usize), |(s, n), (_, y)| (s + y, n + 1));
+    let slip_torque_nm = if slip_n == 0 { f64::NAN } else { slip_sum / slip_n as f64 };
     let phases = stick_phases(v, t, o.stick_speed_rpm);
     let (peaks, lengths): (Vec<f64>, Vec<f64>) = phases.iter().map(|(p, n)| (*p, *n as f64 / o.fs_hz)).unzip();
     let breakaway_torque_nm = if phases.is_empty() { f64::NAN } else { mean(&peaks) };
@@ -142,6 +143,62 @@ pub fn window_features(
         stick_phase_s,
         stick_phases: phases.len(),
         cycles,
+    })
+}
+
+/// The torque through the complete stick phases of a window (issue 26's
+/// break-away target): a bit held by a shaft that a turning top winds up sees
+/// its holding torque k φ + c Ω_top rise through the whole stick, to the
+/// break-away level at its end. The same low-pass and stick speed as
+/// [`window_features`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StickTorque {
+    /// Complete stick phases in the window.
+    pub phases: usize,
+    /// Phases whose torque at their last sample is below the one at their first.
+    pub falling: usize,
+    /// Mean torque at the phases' first and last samples, N m (NaN: none).
+    pub entry_nm: f64,
+    pub exit_nm: f64,
+    /// Mean position of each phase's largest torque, as a fraction of its length (0 entry, 1 exit).
+    pub peak_position: f64,
+}
+
+/// [`StickTorque`] of `window` inside the span (arguments as [`window_features`]).
+pub fn stick_torque(
+    bit_rpm: &[f64],
+    torque_nm: &[f64],
+    window: Range<usize>,
+    o: &FeatureOptions,
+) -> Result<StickTorque, LaviError> {
+    let v = lowpass_fft(bit_rpm, o.fs_hz, o.cutoff_hz, o.transition_hz)?;
+    let t = lowpass_fft(torque_nm, o.fs_hz, o.cutoff_hz, o.transition_hz)?;
+    let (v, t) = (&v[window.clone()], &t[window]);
+    // Complete phases only: begun after a slip sample of the window, ended by one.
+    let (mut spans, mut start, mut armed) = (Vec::new(), None, false);
+    for (i, x) in v.iter().enumerate() {
+        match (start, *x < o.stick_speed_rpm) {
+            (None, true) if armed => start = Some(i),
+            (Some(a), false) => {
+                spans.push(a..i);
+                start = None;
+            }
+            (None, false) => armed = true,
+            _ => {}
+        }
+    }
+    let n = spans.len();
+    let nan_if_none = |x: f64| if n == 0 { f64::NAN } else { x / n as f64 };
+    let peak = |r: &Range<usize>| {
+        let k = (r.start..r.end).fold(r.start, |b, i| if t[i] > t[b] { i } else { b });
+        (k - r.start) as f64 / (r.len() - 1).max(1) as f64
+    };
+    Ok(StickTorque {
+        phases: n,
+        falling: spans.iter().filter(|r| t[r.end - 1] < t[r.start]).count(),
+        entry_nm: nan_if_none(spans.iter().map(|r| t[r.start]).sum()),
+        exit_nm: nan_if_none(spans.iter().map(|r| t[r.end - 1]).sum()),
+        peak_position: nan_if_none(spans.iter().map(peak).sum()),
     })
 }
 
@@ -273,6 +330,28 @@ mod tests {
         let exact = std::f64::consts::PI * 40.0 * 0.2;
         assert!((f.loop_area - exact).abs() < 0.01 * exact, "{f:?} vs {exact}");
         assert!((f.fundamental_hz - 1.0).abs() < 0.02 && f.stick_fraction == 0.0, "{f:?}");
+    }
+
+    #[test]
+    fn a_held_bit_wound_up_sees_its_torque_rise_through_the_stick() {
+        // The sawtooth's torque 1 + 0.002 v is flat in stick; add a ramp through each stick
+        // (a holding torque wound up at 2 N m/s): it rises from entry to exit, its peak at the exit.
+        // The stick spans about −11..161 samples of each 500-sample period: a triangle wave rising
+        // at 2 N m/s from sample −20 to 170 and falling back over the rest of the period.
+        let (v, mut t) = sawtooth();
+        for (i, y) in t.iter_mut().enumerate() {
+            let k = (i + 20) % 500;
+            *y += if k < 190 { 2.0 * k as f64 } else { 0.38e3 * (500 - k) as f64 / 310.0 } / FS;
+        }
+        let s = stick_torque(&v, &t, 2000..10_000, &opts()).unwrap();
+        assert_eq!(s.phases, 15, "{s:?}");
+        assert_eq!(s.falling, 0, "{s:?}");
+        assert!(s.exit_nm > s.entry_nm + 0.1 && s.peak_position > 0.8, "{s:?}");
+        // Reversed in time, the torque falls through every stick: the record's picture.
+        let (vr, tr): (Vec<f64>, Vec<f64>) = (v.iter().rev().cloned().collect(), t.iter().rev().cloned().collect());
+        let r = stick_torque(&vr, &tr, 2000..10_000, &opts()).unwrap();
+        assert_eq!(r.falling, r.phases, "{r:?}");
+        assert!(r.entry_nm > r.exit_nm + 0.1 && r.peak_position < 0.2, "{r:?}");
     }
 
     #[test]

@@ -59,7 +59,7 @@ pub mod signature;
 pub mod sim;
 pub mod study;
 
-pub use features::{FEATURES, FeatureOptions, Features, window_features};
+pub use features::{FEATURES, FeatureOptions, Features, StickTorque, stick_torque, window_features};
 pub use render::StudyOutput;
 pub use study::{Study, run_study};
 

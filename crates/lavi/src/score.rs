@@ -16,7 +16,7 @@
 
 use crate::LaviError;
 use crate::data::{Prepared, RPM_TO_RAD_S, WindowSpec, derivative};
-use crate::features::{FeatureOptions, Features, N_FEATURES, window_features};
+use crate::features::{FeatureOptions, Features, N_FEATURES, StickTorque, stick_torque, window_features};
 use crate::sim::{Inputs, Model, Run, Start, delay_samples, simulate};
 use rayon::prelude::*;
 
@@ -154,6 +154,24 @@ impl<'a> Evaluator<'a> {
         let r = self.simulate(m, wi)?;
         let rpm: Vec<f64> = r.bit_rad_s.iter().map(|v| v / RPM_TO_RAD_S).collect();
         window_features(&rpm, &r.torque_nm, self.windows[wi].window.clone(), &self.fopts)
+    }
+
+    /// [`StickTorque`] of window `wi`: as recorded (`m` None) or in the free run of `m`.
+    pub fn stick_torque(&self, m: Option<&Model>, wi: usize) -> Result<StickTorque, LaviError> {
+        let w = &self.windows[wi];
+        match m {
+            None => stick_torque(
+                &self.data.bit_raw_rpm[w.span.clone()],
+                &self.data.torque_raw_nm[w.span.clone()],
+                w.window.clone(),
+                &self.fopts,
+            ),
+            Some(m) => {
+                let r = self.simulate(m, wi)?;
+                let rpm: Vec<f64> = r.bit_rad_s.iter().map(|v| v / RPM_TO_RAD_S).collect();
+                stick_torque(&rpm, &r.torque_nm, w.window.clone(), &self.fopts)
+            }
+        }
     }
 
     /// Misfit of `m` on window `wi`; a run that diverges scores the cap.

@@ -11,7 +11,7 @@ use crate::score::Evaluator;
 use crate::select::{Selection, forward_select, mean, overall};
 use crate::signature::{SignatureTerm, residual_signature};
 use crate::sim::{FrictionLaw, Model};
-use crate::{Candidate, FeatureOptions, Features, LaviError, StudyParams, window_features};
+use crate::{Candidate, FeatureOptions, Features, LaviError, StickTorque, StudyParams, window_features};
 use rig_ingest::lavi::LaviRecording;
 use serde::Serialize;
 use std::path::Path;
@@ -58,6 +58,10 @@ pub struct Study {
     pub loop_spread: [LoopSpread; 3],
     /// Parameters of the final model at a bound (least squares and simulation fits).
     pub parameters_at_bounds: Vec<AtBound>,
+    /// Per window: the torque through the stick phases as recorded and in the final model's free run.
+    pub stick_torque: Vec<[StickTorque; 2]>,
+    /// Per step-1 candidate (trial order): the torque through the stick phases of its free runs, per held-out window.
+    pub candidate_stick_torque: Vec<(Candidate, Vec<StickTorque>)>,
 }
 
 impl Study {
@@ -114,6 +118,22 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
             }
         }
     }
+    let stick_torque = (0..wins.len())
+        .map(|w| Ok([ev.stick_torque(None, w)?, ev.stick_torque(Some(&selection.final_model), w)?]))
+        .collect::<Result<Vec<_>, LaviError>>()?;
+    let candidate_stick_torque = selection
+        .trials
+        .iter()
+        .filter(|t| t.step == 1)
+        .map(|t| {
+            let per: Vec<StickTorque> = ev
+                .heldout()
+                .into_iter()
+                .map(|w| ev.stick_torque(Some(&t.fitted.model), w))
+                .collect::<Result<_, _>>()?;
+            Ok((t.candidate, per))
+        })
+        .collect::<Result<Vec<_>, LaviError>>()?;
     let study = Study {
         params: p.clone(),
         windows: wins,
@@ -132,6 +152,8 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
         structure_laws,
         loop_spread,
         parameters_at_bounds,
+        stick_torque,
+        candidate_stick_torque,
     };
     Ok((study, d, rec))
 }

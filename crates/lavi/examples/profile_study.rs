@@ -1,0 +1,134 @@
+//! Developer aids on run 175 with pipeline.toml's `lavi` params.
+//!
+//! `cargo run --profile dev --example profile_study`: runs the study once and
+//! prints the CPU time (all threads), the wall time and the Nelder–Mead
+//! evaluations of every fit, trial by trial: where the study's time goes.
+//!
+//! `cargo run --profile dev --example profile_study -- torque`: the trade-off
+//! behind the missed torque targets. The final model of the study (structure
+//! and J, k, c as selected) run free with a Coulomb law at the friction
+//! levels the torque channel measures on the calibration window (break-away
+//! T_s, slip T_k), and with T_s and T_k swept: which targets hold on the
+//! held-out windows, per feature, and the torque through the stick phases.
+
+use rig_lavi::score::{Evaluator, feature_errors};
+use rig_lavi::sim::{FrictionLaw, Model};
+use rig_lavi::{FEATURES, FeatureOptions, StudyParams};
+use std::path::{Path, PathBuf};
+
+/// CPU time of this process (all threads), s: utime + stime of /proc/self/stat at 100 ticks/s.
+fn cpu_s() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").expect("/proc/self/stat");
+    let after = &stat[stat.rfind(')').expect("comm field") + 2..];
+    let f: Vec<f64> = after.split_whitespace().map(|x| x.parse().unwrap_or(0.0)).collect();
+    (f[11] + f[12]) / 100.0
+}
+
+/// Run 175's path and the `lavi` stage's params of pipeline.toml (with `[shared.selection]`).
+fn setup() -> (PathBuf, StudyParams) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let path = root.join("../../../shared/data/ufrj-lavi-2018/run-175.csv");
+    let text = std::fs::read_to_string(root.join("../../pipeline.toml")).expect("pipeline.toml");
+    let v: toml::Value = toml::from_str(&text).expect("pipeline.toml parses");
+    let st = v["stage"].as_array().expect("[[stage]]").iter().find(|s| s["name"].as_str() == Some("lavi"));
+    let mut params = st.expect("a lavi stage")["params"].clone();
+    params.as_table_mut().expect("params").insert("selection".into(), v["shared"]["selection"].clone());
+    (path, params.try_into().expect("the lavi stage's params"))
+}
+
+fn main() {
+    let (path, p) = setup();
+    if std::env::args().nth(1).as_deref() == Some("torque") {
+        torque_level(&path, &p);
+    } else {
+        profile(&path, &p);
+    }
+}
+
+fn profile(path: &Path, p: &StudyParams) {
+    let c = cpu_s();
+    let _ = rig_lavi::data::prepare(path, p).expect("run 175 reads");
+    println!("prepare (read and repairs): CPU {:.2} s", cpu_s() - c);
+    let (c0, w0) = (cpu_s(), std::time::Instant::now());
+    let (s, _, _) = rig_lavi::study::analyse(path, p).expect("the study runs");
+    let (cpu, wall) = (cpu_s() - c0, w0.elapsed().as_secs_f64());
+    let mut total = 0;
+    for t in &s.selection.trials {
+        total += t.fitted.evaluations;
+        println!(
+            "step {} {:<16} evals {:>5} cal {:.3} held {:.3} gain {:.3} t {:.2}",
+            t.step,
+            t.candidate.id(),
+            t.fitted.evaluations,
+            t.fitted.calibration_misfit,
+            t.heldout_misfit,
+            t.relative_gain,
+            t.paired_t
+        );
+    }
+    println!("verdict {} chosen {:?}", s.verdict(), s.selection.chosen);
+    println!("evaluations {total}, analyse: CPU {cpu:.2} s, wall {wall:.2} s");
+    let (c, w) = (cpu_s(), std::time::Instant::now());
+    let _ = rig_lavi::run_study(path, p).expect("the study runs");
+    println!("run_study (analyse and render): CPU {:.2} s, wall {:.2} s", cpu_s() - c, w.elapsed().as_secs_f64());
+}
+
+fn torque_level(path: &Path, p: &StudyParams) {
+    let (s, d, _) = rig_lavi::study::analyse(path, p).expect("the study runs");
+    let fopts = FeatureOptions {
+        fs_hz: d.fs_hz,
+        cutoff_hz: p.cutoff_hz,
+        transition_hz: p.transition_hz,
+        stick_speed_rpm: p.stick_speed_rpm,
+    };
+    let ev = Evaluator::new(&d, s.windows.clone(), fopts, p.substeps, p.slip_speed_rpm, p.drive_ref_window_s)
+        .expect("evaluator");
+    let cal = &ev.measured[0];
+    println!(
+        "calibration window measured: break-away {:.3} N m, slip {:.3} N m",
+        cal.breakaway_torque_nm, cal.slip_torque_nm
+    );
+    for (w, st) in s.windows.iter().zip(&s.stick_torque) {
+        println!("{} stick torque: record {:?}\n       final model {:?}", w.label, st[0], st[1]);
+    }
+    let report = |name: &str, m: &Model| {
+        let f = ev.all_features(m);
+        let st: Vec<rig_lavi::StickTorque> = (1..f.len()).map(|w| ev.stick_torque(Some(m), w).expect("runs")).collect();
+        let (n, falling): (usize, usize) = (st.iter().map(|x| x.phases).sum(), st.iter().map(|x| x.falling).sum());
+        println!("{name:<44} held-out stick phases {n}, ending lower {falling}");
+        let met: Vec<usize> = (0..FEATURES.len())
+            .map(|k| (1..f.len()).filter(|&w| feature_errors(&ev.measured[w], &f[w])[k].abs() <= 1.0).count())
+            .collect();
+        let mean = |g: &dyn Fn(&rig_lavi::Features) -> f64| (1..f.len()).map(|w| g(&f[w])).sum::<f64>() / 7.0;
+        println!(
+            "{name:<44} met {met:?}  held-out means: max {:.0} rpm, min {:.1} rpm, stick {:.3}, slip {:.3} N m, break-away {:.3} N m, misfit {:.3}",
+            mean(&|x| x.bit_speed_max_rpm),
+            mean(&|x| x.bit_speed_min_rpm),
+            mean(&|x| x.stick_fraction),
+            mean(&|x| x.slip_torque_nm),
+            mean(&|x| x.breakaway_torque_nm),
+            rig_lavi::select::overall(&ev.heldout_misfits(m)),
+        );
+    };
+    let fin = s.selection.final_model;
+    report("final model (as selected)", &fin);
+    let coulomb = |ts: f64, tk: f64, m: &Model| Model {
+        friction: FrictionLaw {
+            static_nm: ts,
+            kinetic_nm: tk,
+            stribeck_speed_rad_s: 0.01,
+            shape_exponent: 1.0,
+            viscous_nm_s_rad: 0.0,
+        },
+        ..*m
+    };
+    let (ts, tk) = (cal.breakaway_torque_nm, cal.slip_torque_nm);
+    report("final structure, Coulomb at the measured levels", &coulomb(ts, tk, &fin));
+    report("baseline structure, Coulomb at the measured levels", &coulomb(ts, tk, &s.baseline));
+    for ts in [2.2, 2.4, 2.6, 2.8, 3.0] {
+        report(&format!("final structure, Coulomb T_s {ts:.1}, T_k {tk:.2}"), &coulomb(ts, tk, &fin));
+    }
+    for tk in [1.6, 1.8, 2.0, 2.2] {
+        report(&format!("final structure, Coulomb T_s {ts:.2}, T_k {tk:.1}"), &coulomb(ts, tk, &fin));
+    }
+}
