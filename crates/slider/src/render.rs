@@ -692,7 +692,7 @@ fn heldout_names(s: &Study, c: &CandidateResult) -> Vec<String> {
 }
 
 /// The elements a forward step added: the memory law or the set-up that
-/// differs, both (`law+set-up`) after a look-ahead step.
+/// differs, both (`law+set-up`) after the engine's pair step.
 fn added(from: Model, to: Model) -> String {
     match (from.friction != to.friction, from.setup != to.setup) {
         (true, true) => format!("{}+{}", to.friction.id(), to.setup.id()),
@@ -963,7 +963,10 @@ fn markdown(s: &Study) -> String {
         "Each step tries the current model's extensions — a friction law with memory in place of Coulomb, a set-up in place \
          of the README's m and k — and keeps the one with the largest gain when the workspace's step rule admits it \
          (`[shared.selection]`, `rig_types::select::compare`): a gain 1 − M_after/M_before of the RMS held-out misfit of \
-         at least {} % and a paired t of ln(M_before/M_after) over the held-out runs of at least {}. The mean misfit is shown beside it.\n",
+         at least {} % and a paired t of ln(M_before/M_after) over the held-out runs of at least {}. When none is admitted, \
+         the engine's pair step (`rig_types::select::forward_select_from`) fits the best of the other kind (a law on the \
+         step's best set-up, or a set-up under its best law) on top of the step's best and judges the pair once more by \
+         the same rule, in a step of its own. The mean misfit is shown beside it.\n",
         100.0 * p.selection.min_relative_gain,
         p.selection.min_t
     );
