@@ -166,6 +166,45 @@ pub struct Study {
     /// Per run: the measured force after the running median over the figure's
     /// stretch (time from its start, s; thinned to at most [`TRACE_POINTS`]).
     pub traces: Vec<(Vec<f64>, Vec<f64>)>,
+    /// Per creeping run, whether rate and state creeps across its stability
+    /// boundary ([`boundary_scan`]).
+    pub boundary_scans: Vec<BoundaryScan>,
+}
+
+/// The rate-and-state law (ageing law) simulated at one run while its
+/// quasi-static critical stiffness k_c = m g (b − a)/Dc crosses the run's
+/// stiffness, read by the one feature function: the regime at each k_c.
+#[derive(Debug, Clone)]
+pub struct BoundaryScan {
+    /// Index into `Study::runs`.
+    pub run: usize,
+    /// (a, Dc in m, [(k_c/k, regime)]), k_c/k from 0.85 to 1.15 in steps of 0.025.
+    pub scans: Vec<(f64, f64, Vec<(f64, Regime)>)>,
+}
+
+/// [`BoundaryScan`] of run `i`, at a = 0.003 and 0.01 and Dc = 0.3 and 1 µm
+/// (the literature's range for paper: Heslot et al. 1994, Baumberger &
+/// Caroli 2006; where the scan sits, not a fitted value), μ0 at the run's
+/// mean force: whether the law has a creep regime at that (k, V) at all.
+pub fn boundary_scan(runs: &[Measured], i: usize, p: &StudyParams) -> BoundaryScan {
+    let m = &runs[i];
+    let rs = Model { friction: Candidate::RateState, setup: SetupCandidate::Stated };
+    let weight_n = p.mass_kg * p.gravity_m_s2;
+    let cases: Vec<(f64, f64)> = [0.003, 0.01].iter().flat_map(|&a| [0.3e-6, 1e-6].map(|dc| (a, dc))).collect();
+    let scans = cases
+        .par_iter()
+        .map(|&(a, dc)| {
+            let regimes = (0..13)
+                .map(|j| {
+                    let ratio = 0.85 + 0.025 * j as f64;
+                    let b_minus_a = ratio * m.stiffness_n_m * dc / weight_n;
+                    (ratio, predict(rs, &[m.features.mean_force, a, b_minus_a, dc], m, p).regime)
+                })
+                .collect();
+            (a, dc, regimes)
+        })
+        .collect();
+    BoundaryScan { run: i, scans }
 }
 
 /// Points of a figure's trace at most.
@@ -561,7 +600,10 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
         })
         .collect();
     let folder_name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let creeping: Vec<usize> = (0..runs.len()).filter(|&i| runs[i].features.regime == Regime::Creep).collect();
+    let boundary_scans = creeping.iter().map(|&i| boundary_scan(&runs, i, p)).collect();
     Ok(Study {
+        boundary_scans,
         params: p.clone(),
         runs,
         leave_one_out,
