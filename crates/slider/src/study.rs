@@ -178,9 +178,12 @@ pub struct Study {
 pub struct BoundaryScan {
     /// Index into `Study::runs`.
     pub run: usize,
-    /// (a, Dc in m, [(k_c/k, regime)]), k_c/k from 0.85 to 1.15 in steps of 0.025.
-    pub scans: Vec<(f64, f64, Vec<(f64, Regime)>)>,
+    /// One [`ScanCase`] per (a, Dc).
+    pub scans: Vec<ScanCase>,
 }
+
+/// (a, Dc in m, [(k_c/k, regime)]), k_c/k from 0.85 to 1.15 in steps of 0.025.
+pub type ScanCase = (f64, f64, Vec<(f64, Regime)>);
 
 /// [`BoundaryScan`] of run `i`, at a = 0.003 and 0.01 and Dc = 0.3 and 1 µm
 /// (the literature's range for paper: Heslot et al. 1994, Baumberger &
