@@ -237,6 +237,22 @@ pub fn features(time_s: &[f64], force: &[f64], c: &RunConstants, o: &FeatureOpti
     }
 }
 
+/// An independent reading of an oscillation's period, blind to the turning
+/// points: the amplitude spectrum of the whole filtered record (Hann window,
+/// linear trend removed; `rig_spectra::amplitude_spectrum`), its largest bin
+/// between half and twice the natural frequency 1/T0, refined by Gaussian
+/// interpolation (`rig_spectra::interpolate_gaussian`); s. NaN when the
+/// record is too short for a bin in that band.
+pub fn spectral_period_s(filtered: &[f64], fs_hz: f64, natural_period_s: f64) -> f64 {
+    use rig_spectra::{Detrend, Window, amplitude_spectrum, interpolate_gaussian};
+    let Ok(s) = amplitude_spectrum(filtered, fs_hz, Window::Hann, Detrend::Linear) else { return f64::NAN };
+    let (lo, hi) = (0.5 / natural_period_s, 2.0 / natural_period_s);
+    let band = (1..s.freq_hz.len().saturating_sub(1)).filter(|&i| s.freq_hz[i] >= lo && s.freq_hz[i] <= hi);
+    let Some(k) = band.max_by(|&a, &b| s.amplitude[a].total_cmp(&s.amplitude[b])) else { return f64::NAN };
+    let (delta, _) = interpolate_gaussian(s.amplitude[k - 1], s.amplitude[k], s.amplitude[k + 1]);
+    1.0 / (s.freq_hz[k] + delta * s.resolution_hz)
+}
+
 /// 1.4826 × the median absolute deviation of the raw record from its running
 /// median: the noise's standard deviation, blind to the spikes and to the
 /// slips (both are rare), 0 for a noiseless simulation.
@@ -367,6 +383,9 @@ mod tests {
         let r = features(&t, &f, &c, &opts());
         assert_eq!(r.regime, Regime::InertialOscillation);
         assert!((r.period_s.median / (1.1 * t0) - 1.0).abs() < 0.03, "{:?}", r.period_s);
+        // The spectrum reads the same period without the turning points (bins of 0.5 Hz at 39 Hz).
+        let ps = spectral_period_s(&f, 2000.0, t0);
+        assert!((ps / (1.1 * t0) - 1.0).abs() < 0.003, "spectral period {ps} vs {}", 1.1 * t0);
         let quiet: Vec<f64> =
             t.iter().enumerate().map(|(i, _)| 0.33 + 0.005 * ((i * 7919) % 13) as f64 / 13.0).collect();
         assert_eq!(features(&t, &quiet, &c, &opts()).regime, Regime::SteadySliding);

@@ -31,7 +31,6 @@
 pub mod features;
 pub mod fit;
 pub mod render;
-pub mod select;
 pub mod sim;
 pub mod study;
 
@@ -48,4 +47,7 @@ pub enum SliderError {
     /// No run at any stiffness of `calibration_stiffnesses_n_m`.
     #[error("{}: calibration_stiffnesses_n_m = {listed:?}: no run of the folder has one of these stiffnesses", folder.display())]
     NoCalibration { listed: Vec<f64>, folder: std::path::PathBuf },
+    /// The folds could not start a selection (`rig_types::select::SelectError`).
+    #[error("slider: forward selection: {0}")]
+    Selection(String),
 }

@@ -1,9 +1,12 @@
 //! The study ([`run_study`]): measure every run, fit the Coulomb baseline on
 //! the calibration stiffnesses, predict the held-out runs, then forward
-//! selection ([`crate::select`]): each step fits the current model's
-//! extensions (a memory law in place of Coulomb, a set-up in place of the
-//! README's m and k) fold by fold and keeps the best when its held-out gain
-//! passes `[shared.selection]`.
+//! selection on the workspace's one engine
+//! ([`rig_types::select::forward_select_from`]: the Coulomb baseline fitted
+//! on each training set, the pair step on): each step fits the current
+//! model's extensions (a memory law in place of Coulomb, a set-up in place of
+//! the README's m and k) fold by fold and keeps the best when its held-out
+//! gain passes `[shared.selection]`; when none does, the best law and the
+//! best set-up are tried together once.
 //!
 //! Held-out runs are the runs at a stiffness not in
 //! `calibration_stiffnesses_n_m`. When there is none (the shipped folder with
@@ -11,13 +14,13 @@
 //! fitted on the others (leave one stiffness out); the study says which.
 
 use crate::SliderError;
-use crate::features::{FeatureOptions, Features, Regime, RunConstants, Spread, features};
-use crate::fit::{Model, SetupCandidate, critical_stiffness_guess_n_m, fit, run_misfit};
-use crate::select::{Comparison, Fold, FoldCandidate, best, comparison, evaluate};
+use crate::features::{FeatureOptions, Features, Regime, RunConstants, Spread, features, spectral_period_s};
+use crate::fit::{CANDIDATES, Candidate, Model, SETUPS, SetupCandidate, critical_stiffness_guess_n_m, fit, run_misfit};
 use crate::sim::{Setup, simulate_into};
 use rayon::prelude::*;
 use rig_ingest::slider::{SliderRun, read_slider_folder};
 use rig_model::one_dof::OneDofRun;
+use rig_types::select::{self as engine, Comparison, Fold};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -86,6 +89,10 @@ pub struct Measured {
     pub duration_s: f64,
     pub sample_rate_hz: f64,
     pub features: Features,
+    /// An inertial oscillation's period read from the force's spectrum
+    /// ([`spectral_period_s`]: the check of the turning points' median), s;
+    /// NaN for the other regimes.
+    pub spectral_period_s: f64,
 }
 
 /// A model fitted on some runs.
@@ -121,12 +128,16 @@ pub struct CandidateResult {
 /// One forward step: from a model, the extensions tried and the one kept.
 #[derive(Debug, Clone)]
 pub struct Step {
+    /// The engine's step number (from 1; a pair step is a step of its own).
+    pub step: usize,
     /// Index into `Study::candidates` of the model the step starts from.
     pub from: usize,
     /// Indices of the models tried.
     pub tried: Vec<usize>,
-    /// The best of them (largest gain) and its comparison with `from` by the
-    /// workspace's step rule ([`crate::select::comparison`]).
+    /// Each one's comparison with `from` by the workspace's step rule
+    /// ([`rig_types::select::compare`]), in the order of `tried`.
+    pub compared: Vec<Comparison>,
+    /// The best of them (largest gain) and its comparison.
     pub best: usize,
     pub gain: Comparison,
     /// Whether it earned its place (`[shared.selection]`: relative gain and paired t).
@@ -155,6 +166,48 @@ pub struct Study {
     /// Per run: the measured force after the running median over the figure's
     /// stretch (time from its start, s; thinned to at most [`TRACE_POINTS`]).
     pub traces: Vec<(Vec<f64>, Vec<f64>)>,
+    /// Per creeping run, whether rate and state creeps across its stability
+    /// boundary ([`boundary_scan`]).
+    pub boundary_scans: Vec<BoundaryScan>,
+}
+
+/// The rate-and-state law (ageing law) simulated at one run while its
+/// quasi-static critical stiffness k_c = m g (b − a)/Dc crosses the run's
+/// stiffness, read by the one feature function: the regime at each k_c.
+#[derive(Debug, Clone)]
+pub struct BoundaryScan {
+    /// Index into `Study::runs`.
+    pub run: usize,
+    /// One [`ScanCase`] per (a, Dc).
+    pub scans: Vec<ScanCase>,
+}
+
+/// (a, Dc in m, [(k_c/k, regime)]), k_c/k from 0.85 to 1.15 in steps of 0.025.
+pub type ScanCase = (f64, f64, Vec<(f64, Regime)>);
+
+/// [`BoundaryScan`] of run `i`, at a = 0.003 and 0.01 and Dc = 0.3 and 1 µm
+/// (the literature's range for paper: Heslot et al. 1994, Baumberger &
+/// Caroli 2006; where the scan sits, not a fitted value), μ0 at the run's
+/// mean force: whether the law has a creep regime at that (k, V) at all.
+pub fn boundary_scan(runs: &[Measured], i: usize, p: &StudyParams) -> BoundaryScan {
+    let m = &runs[i];
+    let rs = Model { friction: Candidate::RateState, setup: SetupCandidate::Stated };
+    let weight_n = p.mass_kg * p.gravity_m_s2;
+    let cases: Vec<(f64, f64)> = [0.003, 0.01].iter().flat_map(|&a| [0.3e-6, 1e-6].map(|dc| (a, dc))).collect();
+    let scans = cases
+        .par_iter()
+        .map(|&(a, dc)| {
+            let regimes = (0..13)
+                .map(|j| {
+                    let ratio = 0.85 + 0.025 * j as f64;
+                    let b_minus_a = ratio * m.stiffness_n_m * dc / weight_n;
+                    (ratio, predict(rs, &[m.features.mean_force, a, b_minus_a, dc], m, p).regime)
+                })
+                .collect();
+            (a, dc, regimes)
+        })
+        .collect();
+    BoundaryScan { run: i, scans }
 }
 
 /// Points of a figure's trace at most.
@@ -182,8 +235,14 @@ pub fn measure(r: &SliderRun, p: &StudyParams) -> Measured {
         duration_s,
         sample_rate_hz: (n - 1) as f64 / duration_s,
         features: Features::default_steady(),
+        spectral_period_s: f64::NAN,
     };
     m.features = features(&r.time_s, &r.force_over_weight, &m.constants(p), &p.features);
+    if m.features.regime == Regime::InertialOscillation {
+        let half = (p.features.median_window_s * m.sample_rate_hz / 2.0).round() as usize;
+        let filtered = crate::features::running_median(&r.force_over_weight, half);
+        m.spectral_period_s = spectral_period_s(&filtered, m.sample_rate_hz, m.features.natural_period_s);
+    }
     m
 }
 
@@ -341,59 +400,90 @@ fn warm_starts(
     }
 }
 
-/// A model on the study's runs, as the selection sees it ([`FoldCandidate`]):
-/// fitted on a fold's runs, scored by [`run_misfit`] on the held-out ones.
+/// The study's runs as the engine sees them ([`engine::Study`]): a unit is a
+/// run, its misfit [`run_misfit`] of the model's simulated features.
 struct OnRuns<'a> {
-    model: Model,
     runs: &'a [Measured],
     p: &'a StudyParams,
-    /// The nested model's fits (the step's starting model), one per fold, where this one's search also starts.
-    nested: &'a [Fitted],
 }
 
-impl FoldCandidate for OnRuns<'_> {
-    type Fit = Fitted;
-    fn fit(&self, train: &[usize]) -> Fitted {
-        fit_on(self.model, self.runs, train, self.nested.iter().find(|f| f.train == train), self.p)
-    }
-    fn score(&self, fit: &Fitted, test: &[usize]) -> Vec<f64> {
-        test.par_iter()
-            .map(|&i| run_misfit(&self.runs[i].features, &predict(self.model, &fit.params, &self.runs[i], self.p)))
-            .collect()
+impl engine::Study<Fitted> for OnRuns<'_> {
+    fn score(&self, m: &Fitted, run: usize) -> f64 {
+        let r = &self.runs[run];
+        run_misfit(&r.features, &predict(m.model, &m.params, r, self.p))
     }
 }
 
-/// Evaluates `model` over the folds. The fit on every calibration run comes
-/// with it when a fold is that fit (held-out stiffnesses); with leave one
-/// stiffness out it is fitted later, only for the models the report shows
-/// in full ([`complete`]).
-fn evaluate_model(
-    model: Model,
-    runs: &[Measured],
+/// One extension of a model ([`engine::Candidate`]): a memory law in place of
+/// Coulomb, or a set-up in place of the README's m and k. Laws are one group
+/// and set-ups another (alternatives: a model has one of each), so the engine
+/// tries a law and a set-up together in its pair step.
+#[derive(Debug, Clone, Copy)]
+enum Extension {
+    Law(Candidate),
+    Setup(SetupCandidate),
+}
+
+impl Extension {
+    /// Every extension of the Coulomb baseline on the stated set-up, in the report's order.
+    fn all() -> Vec<Extension> {
+        CANDIDATES[1..].iter().map(|&c| Extension::Law(c)).chain(SETUPS.iter().map(|&s| Extension::Setup(s))).collect()
+    }
+}
+
+impl engine::Candidate<OnRuns<'_>, Fitted> for Extension {
+    fn id(&self) -> &str {
+        match self {
+            Extension::Law(c) => c.id(),
+            Extension::Setup(s) => s.id(),
+        }
+    }
+    fn group(&self) -> Option<&str> {
+        Some(match self {
+            Extension::Law(_) => "friction_law",
+            Extension::Setup(_) => "set_up",
+        })
+    }
+    /// `current`'s model with this law or set-up, fitted on `train` from its
+    /// physical starts and from `current`'s fit ([`warm_starts`]).
+    fn fit(&self, s: &OnRuns<'_>, current: &Fitted, train: &[usize]) -> Result<Fitted, String> {
+        let model = match *self {
+            Extension::Law(friction) => Model { friction, ..current.model },
+            Extension::Setup(setup) => Model { setup, ..current.model },
+        };
+        Ok(fit_on(model, s.runs, train, Some(current), s.p))
+    }
+}
+
+/// A trial of the selection as the report's record: its fits (one per
+/// training set, in the engine's order), its held-out misfits and the
+/// held-out features under the fit of the fold that held each run out; with
+/// held-out stiffnesses, the fit on every calibration run (the one fold's).
+fn record(
+    fits: &[Fitted],
+    misfits: &[f64],
+    sel: &engine::Selection<Fitted>,
     folds: &[Fold],
+    runs: &[Measured],
     cal: &[usize],
-    nested: &[Fitted],
     p: &StudyParams,
 ) -> CandidateResult {
-    let on = OnRuns { model, runs, p, nested };
-    let e = evaluate(&on, folds);
-    // The held-out features under the fold that held each run out.
-    let heldout: Vec<(usize, f64, Features)> = e
-        .heldout
-        .par_iter()
-        .map(|&(i, misfit)| {
-            let f = folds.iter().zip(&e.fits).find(|(f, _)| f.test.contains(&i)).expect("a fold holds the run out").1;
-            (i, misfit, predict(model, &f.params, &runs[i], p))
+    let model = fits[0].model;
+    let fit_of = |i: usize| {
+        let set = &folds[sel.fold_of[i]].train;
+        fits.iter().find(|f| f.train == *set).expect("a fit per training set")
+    };
+    let mut heldout: Vec<(usize, f64, Features)> = (0..sel.units.len())
+        .into_par_iter()
+        .map(|i| {
+            let f = fit_of(i);
+            (sel.units[i], misfits[i], predict(model, &f.params, &runs[sel.units[i]], p))
         })
         .collect();
-    let mut c = CandidateResult {
-        model,
-        fitted: None,
-        predicted: Vec::new(),
-        fold_fits: e.fits,
-        heldout,
-        heldout_mean: e.mean,
-    };
+    heldout.sort_by_key(|h| h.0);
+    let heldout_mean = heldout.iter().map(|h| h.1).sum::<f64>() / heldout.len().max(1) as f64;
+    let mut c =
+        CandidateResult { model, fitted: None, predicted: Vec::new(), fold_fits: fits.to_vec(), heldout, heldout_mean };
     if let Some(f) = c.fold_fits.iter().find(|f| f.train == cal) {
         c.fitted = Some(f.clone());
         c.predicted = runs.par_iter().map(|r| predict(model, &f.params, r, p)).collect();
@@ -406,8 +496,7 @@ fn complete(c: &mut CandidateResult, runs: &[Measured], cal: &[usize], p: &Study
     if c.fitted.is_some() {
         return;
     }
-    let on = OnRuns { model: c.model, runs, p, nested: &c.fold_fits };
-    let f = on.fit(cal);
+    let f = fit_on(c.model, runs, cal, None, p);
     c.predicted = runs.par_iter().map(|r| predict(c.model, &f.params, r, p)).collect();
     c.fitted = Some(f);
 }
@@ -433,72 +522,57 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
             .map(|&k| {
                 let (test, train): (Vec<usize>, Vec<usize>) =
                     (0..runs.len()).partition(|&i| runs[i].stiffness_n_m == k);
-                Fold { train, test }
+                Fold { train, held_out: test }
             })
             .filter(|f| !f.train.is_empty())
             .collect()
     } else {
-        vec![Fold { train: cal.clone(), test: (0..runs.len()).filter(|i| !cal.contains(i)).collect() }]
+        vec![Fold { train: cal.clone(), held_out: (0..runs.len()).filter(|i| !cal.contains(i)).collect() }]
     };
-    // Forward selection from the Coulomb baseline: each step tries the
-    // current model's extensions (a memory law, a set-up) and keeps the best
-    // when the workspace's step rule admits it (`[shared.selection]`).
-    let mut candidates = vec![evaluate_model(Model::BASELINE, &runs, &folds, &cal, &[], p)];
-    let mut steps = Vec::new();
+    // Forward selection on the workspace's one engine from the Coulomb
+    // baseline fitted on each training set: each step tries the current
+    // model's extensions (a memory law, a set-up) and keeps the best when the
+    // step rule admits it (`[shared.selection]`); when none is admitted, the
+    // pair step tries the best with the best of the other group (a law and a
+    // set-up may each fail alone and gain together: the set-up moves the
+    // inertial periods, the law the regimes).
+    let sets = engine::train_sets(&folds);
+    let baselines: Vec<Fitted> = sets.par_iter().map(|t| fit_on(Model::BASELINE, &runs, t, None, p)).collect();
+    let extensions = Extension::all();
+    let cands: Vec<&dyn engine::Candidate<OnRuns, Fitted>> =
+        extensions.iter().map(|e| e as &dyn engine::Candidate<OnRuns, Fitted>).collect();
+    let on = OnRuns { runs: &runs, p };
+    let search = engine::Search { pair_step: true };
+    let sel = engine::forward_select_from(&on, &cands, &baselines, &folds, &p.selection, &search)
+        .map_err(|e| SliderError::Selection(e.0))?;
+    let mut candidates = vec![record(&baselines, &sel.baseline_misfits, &sel, &folds, &runs, &cal, p)];
+    let mut steps: Vec<Step> = Vec::new();
     let mut current = 0;
-    loop {
-        let from = &candidates[current];
-        let ext = from.model.extensions();
-        if ext.is_empty() {
-            break;
-        }
-        let nested = from.fold_fits.clone();
-        let tried: Vec<CandidateResult> =
-            ext.par_iter().map(|&m| evaluate_model(m, &runs, &folds, &cal, &nested, p)).collect();
-        let pairs = |c: &CandidateResult| c.heldout.iter().map(|h| (h.0, h.1)).collect::<Vec<_>>();
-        let compared: Vec<Comparison> = tried.iter().map(|c| comparison(&pairs(from), &pairs(c), &folds)).collect();
-        let best = best(&compared).unwrap_or(0);
-        let gained = compared[best];
-        let kept = p.selection.admits(&gained);
-        let base = candidates.len();
-        candidates.extend(tried);
-        steps.push(Step {
-            from: current,
-            tried: (base..candidates.len()).collect(),
-            best: base + best,
-            gain: gained,
-            kept,
-        });
-        if kept {
-            current = base + best;
-            continue;
-        }
-        // Look-ahead: a memory law and a set-up may each fail alone and gain
-        // together (the set-up moves the inertial periods, the law the
-        // regimes). The best of each, combined, is one more step of two
-        // elements under the same rule; its search starts on the set-up's fits.
-        let from = &candidates[current];
-        let best_where = |f: &dyn Fn(&CandidateResult) -> bool| {
-            (base..candidates.len())
-                .filter(|&i| f(&candidates[i]))
-                .min_by(|&a, &b| candidates[a].heldout_mean.total_cmp(&candidates[b].heldout_mean))
-        };
-        let law = best_where(&|c| c.model.friction != from.model.friction);
-        let setup = best_where(&|c| c.model.setup != from.model.setup);
-        let (Some(law), Some(setup)) = (law, setup) else { break };
-        let pair = Model { friction: candidates[law].model.friction, setup: candidates[setup].model.setup };
-        let nested = candidates[setup].fold_fits.clone();
-        let c = evaluate_model(pair, &runs, &folds, &cal, &nested, p);
-        let pairs = |c: &CandidateResult| c.heldout.iter().map(|h| (h.0, h.1)).collect::<Vec<_>>();
-        let gained = comparison(&pairs(&candidates[current]), &pairs(&c), &folds);
-        let kept = p.selection.admits(&gained);
-        candidates.push(c);
+    for (k, t) in sel.trials.iter().enumerate() {
+        candidates.push(record(&t.fitted, &t.misfits, &sel, &folds, &runs, &cal, p));
         let idx = candidates.len() - 1;
-        steps.push(Step { from: current, tried: vec![idx], best: idx, gain: gained, kept });
-        if !kept {
-            break;
+        if steps.last().is_none_or(|st| st.step != t.step) {
+            steps.push(Step {
+                step: t.step,
+                from: current,
+                tried: Vec::new(),
+                compared: Vec::new(),
+                best: idx,
+                gain: t.comparison,
+                kept: false,
+            });
         }
-        current = idx;
+        let st = steps.last_mut().expect("a step");
+        st.tried.push(idx);
+        st.compared.push(t.comparison);
+        if t.best {
+            (st.best, st.gain) = (idx, t.comparison);
+        }
+        if t.accepted {
+            st.kept = true;
+            current = idx;
+        }
+        debug_assert!(sel.chosen.contains(&k) == t.accepted);
     }
     let chosen = (current != 0).then_some(current);
     // The models the report shows in full: the baseline and each step's best.
@@ -529,7 +603,10 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
         })
         .collect();
     let folder_name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let creeping: Vec<usize> = (0..runs.len()).filter(|&i| runs[i].features.regime == Regime::Creep).collect();
+    let boundary_scans = creeping.iter().map(|&i| boundary_scan(&runs, i, p)).collect();
     Ok(Study {
+        boundary_scans,
         params: p.clone(),
         runs,
         leave_one_out,

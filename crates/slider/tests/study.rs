@@ -32,6 +32,7 @@ fn synthetic(k: f64, v_um_s: f64, duration_s: f64, f: rig_slider::Features) -> M
         duration_s,
         sample_rate_hz: 2000.0,
         features: f,
+        spectral_period_s: f64::NAN,
     }
 }
 
@@ -156,13 +157,28 @@ fn each_shipped_stiffness_held_out() {
             let b = rig_slider::render::bounds(&s.runs[*i].features, f);
             eprintln!("calibrated on {cal}: {} {} misfit {m:.2}: {b:?}", fin.model.id(), s.runs[*i].name);
             let name = &s.runs[*i].name;
-            for (check, ok) in [
-                ("regime", Some(b.regime)),
-                ("inertial period", b.inertial_period),
-                ("period", b.period),
-                ("drop", b.drop),
-                ("onset", b.onset),
+            let mg = rig_slider::render::margins(&s.runs[*i].features, f);
+            for (check, ok, margin) in [
+                ("regime", Some(b.regime), None),
+                ("inertial period", b.inertial_period, mg[0]),
+                ("period", b.period, mg[1]),
+                ("drop", b.drop, mg[2]),
+                ("onset", b.onset, mg[3]),
             ] {
+                // Each check's margin (> 0 inside its bound, in the check's units) and
+                // whether the run's events resolve the verdict (margin > 2 se).
+                if let (Some(ok), Some(m)) = (ok, margin) {
+                    eprintln!(
+                        "calibrated on {cal}: {name} {check}: {} error {:+.4} of ±{:.4}, margin {:+.4}, se {:.4}{}",
+                        if ok { "pass" } else { "FAIL" },
+                        m.error,
+                        m.limit,
+                        m.margin,
+                        m.se,
+                        if m.resolved() { "" } else { " (unresolved by the events)" }
+                    );
+                    assert_eq!(ok, m.margin >= 0.0, "{name} {check}: the margin and the verdict agree");
+                }
                 match ok {
                     Some(true) => passed.push(format!("{name} {check}")),
                     Some(false) => failed.push(format!("{name} {check}")),
@@ -173,12 +189,17 @@ fn each_shipped_stiffness_held_out() {
     }
     eprintln!("passed: {passed:?}\nfailed: {failed:?}");
     // What holds today (slider.md and the crate docs give the numbers). The
-    // selection is the workspace's one rule (`rig_types::select::compare`):
-    // calibrated on 168 N/m the effective mass lowers the RMS held-out misfit
-    // by 18 % but wins on one of the three held-out runs only (paired t 0.35
-    // < min_t), so Coulomb on the stated m and k is kept and the inertial
-    // period at 2254 N/m, 4300 µm/s is missed; calibrated on 2254 N/m nothing
-    // gains, and Coulomb gets 168 N/m's stick-slip runs within every bound.
+    // selection is the workspace's one engine (`rig_types::select::
+    // forward_select_from`, its pair step on): calibrated on 168 N/m the
+    // effective mass lowers the RMS held-out misfit by 18 % but wins on one
+    // of the three held-out runs only (paired t 0.35 < min_t: it mends
+    // k2254-v4300's period and loses k2254-v1100's,
+    // whose cycles spread over 0.7–1.5 T0), and the pair step's
+    // static_ageing+effective_mass gains 17 % at t 0.27; so Coulomb on the
+    // stated m and k is kept and the inertial period at 2254 N/m, 4300 µm/s
+    // is missed; calibrated on 2254 N/m nothing gains (the pair
+    // rate_state_ageing+spring_scale loses 23 %), and Coulomb gets 168 N/m's
+    // stick-slip runs within every bound.
     for want in [
         "k2254-v1100 regime",
         "k2254-v1100 inertial period",
@@ -200,11 +221,14 @@ fn each_shipped_stiffness_held_out() {
     ] {
         assert!(passed.iter().any(|p| p == want), "{want}: passed {passed:?}");
     }
-    // What does not (the report names each, with its cause): the creep at
-    // k2254-v42 (no model here creeps there), and the inertial periods at
+    // What does not (slider.md's "The causes, from the records" gives the
+    // numbers): the creep at k2254-v42 (a rate-and-state fit on 168 N/m,
+    // where every run stick-slips, puts k_c at 565 N/m and slides steadily
+    // at 2254; nothing at 168 N/m places k_c), and the inertial periods at
     // 4300 µm/s with a Coulomb law on the stated m and k, which cannot
-    // oscillate faster than 2π√(m/k); at k168-v4300 it also slips at μs where
-    // the record slips at 0.55.
+    // oscillate faster than 2π√(m/k) (the force's spectrum confirms 0.76 T0
+    // at both stiffnesses); at k168-v4300 it also slips at μs where the
+    // record slips at 0.55 (its mean force 0.50, every other run's 0.30–0.37).
     assert_eq!(
         failed,
         ["k2254-v42 regime", "k2254-v4300 inertial period", "k168-v4300 inertial period", "k168-v4300 onset"]
@@ -274,4 +298,35 @@ fn a_description_that_does_not_fit_the_files_names_the_field() {
     std::fs::write(tmp.path().join("runs/slider-3.csv"), "time_s,force_over_weight\n0,0.3\n0.1,0.3\n").unwrap();
     let e = run_study(tmp.path(), &params()).unwrap_err().to_string();
     assert!(e.contains("slider-3.csv") && e.contains("k<k>-v<V>.csv"), "{e}");
+}
+
+#[test]
+fn rate_and_state_jumps_from_steady_sliding_to_stick_slip_at_the_creeping_run() {
+    // Why no model gets k2254-v42's regime (creep: the slider moves through
+    // the loading phase, stick fraction 0.21, drop 0.042): across its
+    // stability boundary the Dieterich–Ruina law with the ageing law, as
+    // simulated and read by the one feature function, goes from steady
+    // sliding to stick-slip with no creep between (`study::boundary_scan`:
+    // b − a putting the quasi-static critical stiffness k_c = m g (b − a)/Dc
+    // from 0.85 to 1.15 × 2254 N/m in steps of 2.5 %, inertia moving the
+    // boundary by a few per cent, Rice & Ruina 1983; two a and two Dc in the
+    // literature's range for paper). A creep band, if the law has one
+    // here, is narrower than a 2.5 % step of k_c: the selection cannot be
+    // expected to find it, and the regime at k2254-v42 stays unexplained by
+    // this law family (a finding, not a tuning target).
+    let Some(dir) = shipped() else { return };
+    let p = params();
+    let raw = rig_ingest::slider::read_slider_folder(&dir).unwrap();
+    let runs: Vec<Measured> = raw.iter().map(|r| rig_slider::study::measure(r, &p)).collect();
+    let i = runs.iter().position(|r| r.name == "k2254-v42").expect("the creeping run");
+    assert_eq!(runs[i].features.regime, Regime::Creep);
+    // The study's own scan (slider.md prints it).
+    let scan = rig_slider::study::boundary_scan(&runs, i, &p);
+    assert_eq!(scan.scans.len(), 4);
+    for (a, dc, regimes) in &scan.scans {
+        eprintln!("a {a} Dc {dc:e}: {regimes:?}");
+        assert!(regimes.iter().all(|r| r.1 != Regime::Creep), "a {a} Dc {dc}: {regimes:?}");
+        assert_eq!(regimes[0].1, Regime::SteadySliding, "a {a} Dc {dc}: steady below the boundary");
+        assert_eq!(regimes[12].1, Regime::StickSlip, "a {a} Dc {dc}: stick-slip above it");
+    }
 }

@@ -21,6 +21,14 @@
 //! selection stops. Candidates and units are fitted and scored in parallel and
 //! collected in order, so the result is the same on any number of threads.
 //!
+//! Two options ([`forward_select_from`]; [`forward_select`] uses neither): a
+//! baseline fitted on each training set (a baseline with parameters of its
+//! own, like the slider's Coulomb law), and a *pair step* ([`Search`]): when
+//! a step's best is not admitted, the best candidate of another group
+//! ([`Candidate::group`]: candidates of one group are alternatives, one per
+//! model) is fitted on top of it and judged once more by the same rule
+//! against the model the step started from; admitted, both are added.
+//!
 //! # The step rule ([`compare`], the thesis rig's since issue 19)
 //!
 //! With M_u the misfit of unit u and M = √(mean M_u²) the overall misfit, a
@@ -97,6 +105,13 @@ pub trait Candidate<S: ?Sized, M>: Sync {
     /// it; `fitted` holds one model per distinct training set, in the order of
     /// [`Selection::train_sets`].
     fn inadmissible(&self, _study: &S, _current: &[M], _fitted: &[M]) -> Option<String> {
+        None
+    }
+    /// The group of alternatives this candidate belongs to (`None`: a group
+    /// of its own). Candidates of one group replace each other (two
+    /// friction laws, two set-ups): once one is chosen the others of its
+    /// group are no longer tried, and a pair step pairs two groups.
+    fn group(&self) -> Option<&str> {
         None
     }
 }
@@ -184,6 +199,9 @@ pub struct Trial<M> {
     pub step: usize,
     /// Index into the candidates passed to [`forward_select`].
     pub candidate: usize,
+    /// In a pair step ([`Search::pair_step`]), the candidate this one was
+    /// fitted on top of (the id is then `on+candidate`).
+    pub on: Option<usize>,
     pub id: String,
     /// The fitted models, one per distinct training set ([`Selection::train_sets`]);
     /// empty when the fit failed.
@@ -246,6 +264,31 @@ impl std::fmt::Display for SelectError {
 
 impl std::error::Error for SelectError {}
 
+/// How far a selection searches beyond one candidate per step.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct Search {
+    /// When a step's best is not admitted, try once more a pair: the second
+    /// best of another group ([`Candidate::group`]) fitted on top of the
+    /// step's best (each fit on its training set), judged by the same rule
+    /// against the model the step started from. Two causes may each fail
+    /// alone and gain together (a set-up that moves one feature and a law
+    /// that moves another); the pair is one more trial in the trace, in a
+    /// step of its own, never a way round the rule.
+    pub pair_step: bool,
+}
+
+/// The training sets of `folds`, distinct, in order of first appearance: the
+/// order of [`Selection::train_sets`] and of the baselines [`forward_select_from`] takes.
+pub fn train_sets(folds: &[Fold]) -> Vec<Vec<usize>> {
+    let mut sets: Vec<Vec<usize>> = Vec::new();
+    for f in folds {
+        if !sets.contains(&f.train) {
+            sets.push(f.train.clone());
+        }
+    }
+    sets
+}
+
 /// Forward selection from `baseline` over `candidates` (module docs). The
 /// baseline is the same model for every training set.
 pub fn forward_select<S, M>(
@@ -259,9 +302,30 @@ where
     S: Study<M>,
     M: Clone + Send + Sync,
 {
+    let baselines = vec![baseline.clone(); train_sets(folds).len()];
+    forward_select_from(study, candidates, &baselines, folds, rule, &Search::default())
+}
+
+/// Forward selection from a baseline fitted on each training set
+/// (`baselines[s]` on [`train_sets`]`(folds)[s]`: a baseline with parameters
+/// of its own, fitted like any model on the training units only), with the
+/// search `search` (module docs; [`forward_select`] is this with one baseline
+/// for every set and no pair step).
+pub fn forward_select_from<S, M>(
+    study: &S,
+    candidates: &[&dyn Candidate<S, M>],
+    baselines: &[M],
+    folds: &[Fold],
+    rule: &SelectionRule,
+    search: &Search,
+) -> Result<Selection<M>, SelectError>
+where
+    S: Study<M>,
+    M: Clone + Send + Sync,
+{
     let mut units = Vec::new();
     let mut fold_of = Vec::new();
-    let mut train_sets: Vec<Vec<usize>> = Vec::new();
+    let train_sets = train_sets(folds);
     let mut set_of_fold = Vec::new();
     for (f, fold) in folds.iter().enumerate() {
         if fold.train.is_empty() || fold.held_out.is_empty() {
@@ -277,23 +341,56 @@ where
             units.push(u);
             fold_of.push(f);
         }
-        let s = train_sets.iter().position(|t| *t == fold.train).unwrap_or_else(|| {
-            train_sets.push(fold.train.clone());
-            train_sets.len() - 1
-        });
-        set_of_fold.push(s);
+        set_of_fold.push(train_sets.iter().position(|t| *t == fold.train).expect("every fold's set is listed"));
+    }
+    if baselines.len() != train_sets.len() {
+        return Err(SelectError(format!(
+            "{} baselines for {} distinct training sets",
+            baselines.len(),
+            train_sets.len()
+        )));
     }
     // Each held-out unit scored with the model of its fold's training set.
     let score_all = |models: &[M]| -> Vec<f64> {
         (0..units.len()).into_par_iter().map(|i| study.score(&models[set_of_fold[fold_of[i]]], units[i])).collect()
     };
-    let mut current: Vec<M> = vec![baseline.clone(); train_sets.len()];
+    let group = |c: usize| candidates[c].group();
+    let mut current: Vec<M> = baselines.to_vec();
     let baseline_misfits = score_all(&current);
     let mut cur_ms = baseline_misfits.clone();
     let mut trials: Vec<Trial<M>> = Vec::new();
     let mut chosen = Vec::new();
     let mut left: Vec<usize> = (0..candidates.len()).collect();
     let mut step = 1;
+    // A trial from its fits (one per training set, or the first error) against the current model.
+    let trial = |step: usize, c: usize, on: Option<usize>, fits: &[Result<M, String>], cur_ms: &[f64]| {
+        let (fitted, error, misfits) = match fits.iter().cloned().collect::<Result<Vec<M>, String>>() {
+            Ok(models) => {
+                let ms = score_all(&models);
+                (models, None, ms)
+            }
+            Err(e) => (Vec::new(), Some(e), vec![f64::INFINITY; units.len()]),
+        };
+        let comparison = compare(cur_ms, &misfits, &fold_of, folds.len());
+        Trial {
+            step,
+            candidate: c,
+            on,
+            id: on.map_or_else(
+                || candidates[c].id().to_string(),
+                |b| format!("{}+{}", candidates[b].id(), candidates[c].id()),
+            ),
+            fitted,
+            error,
+            wins: cur_ms.iter().zip(&misfits).filter(|(b, a)| a < b).count(),
+            misfits,
+            significant: rule.admits(&comparison),
+            comparison,
+            best: false,
+            inadmissible: None,
+            accepted: false,
+        }
+    };
     while !left.is_empty() {
         // Every (candidate, training set) fit is a task of its own, collected in order.
         let tasks: Vec<(usize, usize)> =
@@ -302,36 +399,45 @@ where
             tasks.par_iter().map(|&(c, s)| candidates[c].fit(study, &current[s], &train_sets[s])).collect();
         let first = trials.len();
         for (k, &c) in left.iter().enumerate() {
-            let mine = &fits[k * train_sets.len()..(k + 1) * train_sets.len()];
-            let (fitted, error, misfits) = match mine.iter().cloned().collect::<Result<Vec<M>, String>>() {
-                Ok(models) => {
-                    let ms = score_all(&models);
-                    (models, None, ms)
-                }
-                Err(e) => (Vec::new(), Some(e), vec![f64::INFINITY; units.len()]),
-            };
-            let comparison = compare(&cur_ms, &misfits, &fold_of, folds.len());
-            trials.push(Trial {
-                step,
-                candidate: c,
-                id: candidates[c].id().to_string(),
-                fitted,
-                error,
-                wins: cur_ms.iter().zip(&misfits).filter(|(b, a)| a < b).count(),
-                misfits,
-                significant: rule.admits(&comparison),
-                comparison,
-                best: false,
-                inadmissible: None,
-                accepted: false,
-            });
+            let t = trial(step, c, None, &fits[k * train_sets.len()..(k + 1) * train_sets.len()], &cur_ms);
+            trials.push(t);
         }
         let step_comparisons: Vec<Comparison> = trials[first..].iter().map(|t| t.comparison).collect();
         let best = best_of(&step_comparisons).map(|i| first + i);
-        let Some(best) = best else { break };
+        let Some(mut best) = best else { break };
         trials[best].best = true;
         if !trials[best].significant {
-            break;
+            if !search.pair_step {
+                break;
+            }
+            // The pair step: the best of another group fitted on top of the step's best.
+            let other: Vec<Comparison> = trials[first..]
+                .iter()
+                .map(|t| {
+                    let apart = t.candidate != trials[best].candidate
+                        && (group(t.candidate).is_none() || group(t.candidate) != group(trials[best].candidate));
+                    if apart && t.error.is_none() {
+                        t.comparison
+                    } else {
+                        Comparison { after: f64::NAN, ..t.comparison }
+                    }
+                })
+                .collect();
+            let Some(second) = best_of(&other).map(|i| first + i) else { break };
+            let (b, a) = (trials[best].candidate, trials[second].candidate);
+            let on = trials[best].fitted.clone();
+            let fits: Vec<Result<M, String>> = (0..train_sets.len())
+                .into_par_iter()
+                .map(|s| candidates[a].fit(study, &on[s], &train_sets[s]))
+                .collect();
+            step += 1;
+            let mut t = trial(step, a, Some(b), &fits, &cur_ms);
+            t.best = true;
+            trials.push(t);
+            best = trials.len() - 1;
+            if !trials[best].significant {
+                break;
+            }
         }
         let why = candidates[trials[best].candidate].inadmissible(study, &current, &trials[best].fitted);
         if why.is_some() {
@@ -341,7 +447,10 @@ where
         trials[best].accepted = true;
         current = trials[best].fitted.clone();
         cur_ms = trials[best].misfits.clone();
-        left.retain(|&c| c != trials[best].candidate);
+        // The chosen candidates and the alternatives of their groups leave.
+        for c in std::iter::once(trials[best].candidate).chain(trials[best].on) {
+            left.retain(|&l| l != c && (group(c).is_none() || group(l) != group(c)));
+        }
         chosen.push(best);
         step += 1;
     }
@@ -438,6 +547,81 @@ mod tests {
         assert_eq!(t.fitted, vec![-1.0]);
         assert!(t.significant && t.best && !t.accepted && t.inadmissible.as_deref() == Some("level below 0"));
         assert!(sel.chosen.is_empty() && sel.final_models == vec![0.0]);
+    }
+
+    /// A model of two switches and a level: it predicts the level only when both are on.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    struct Gate {
+        a: bool,
+        b: bool,
+        level: f64,
+    }
+
+    struct Gated(Vec<f64>);
+
+    impl Study<Gate> for Gated {
+        fn score(&self, m: &Gate, u: usize) -> f64 {
+            let pred = if m.a && m.b { m.level } else { 0.0 };
+            (pred - self.0[u]).abs() + 0.01
+        }
+    }
+
+    /// Switches `a` (group "law") or `b` (group "setup") on and fits the level on the training units.
+    struct Switch(&'static str, &'static str);
+
+    impl Candidate<Gated, Gate> for Switch {
+        fn id(&self) -> &str {
+            self.0
+        }
+        fn group(&self) -> Option<&str> {
+            Some(self.1)
+        }
+        fn fit(&self, s: &Gated, cur: &Gate, train: &[usize]) -> Result<Gate, String> {
+            let level = train.iter().map(|&u| s.0[u]).sum::<f64>() / train.len() as f64;
+            Ok(match self.1 {
+                "law" => Gate { a: true, level, ..*cur },
+                _ => Gate { b: true, level, ..*cur },
+            })
+        }
+    }
+
+    #[test]
+    fn a_pair_step_adds_two_causes_that_gain_only_together() {
+        let s = Gated(vec![1.0, 1.1, 0.9, 1.05, 0.95]);
+        let (law, law2, setup) = (Switch("law", "law"), Switch("law2", "law"), Switch("setup", "setup"));
+        let cands: [&dyn Candidate<Gated, Gate>; 3] = [&law, &law2, &setup];
+        let folds = Fold::leave_one_out(5);
+        let base = Gate { a: false, b: false, level: 0.0 };
+        // Alone, each switch changes no prediction: no gain, nothing chosen (the plain engine).
+        let plain = forward_select(&s, &cands, &base, &folds, &rule()).unwrap();
+        assert!(plain.chosen.is_empty() && plain.trials.len() == 3, "{:?}", plain.chosen_ids());
+        // With the pair step: the step's best (ties: the first, `law`) with the best
+        // of another group (`setup`, not its alternative `law2`), fitted on top of it.
+        let search = Search { pair_step: true };
+        let bases = vec![base; train_sets(&folds).len()];
+        let sel = forward_select_from(&s, &cands, &bases, &folds, &rule(), &search).unwrap();
+        assert_eq!(sel.chosen_ids(), ["law+setup"]);
+        let pair = &sel.trials[sel.chosen[0]];
+        assert_eq!((pair.step, pair.candidate, pair.on), (2, 2, Some(0)));
+        assert!(pair.best && pair.accepted && pair.comparison.gain > 0.9 && pair.fitted.iter().all(|m| m.a && m.b));
+        // Both groups are used up: no step after it.
+        assert_eq!(sel.trials.len(), 4);
+        assert!(overall(&sel.final_misfits) < 0.1 * overall(&sel.baseline_misfits));
+        // A baseline per training set: one per distinct set, or refused.
+        assert!(forward_select_from(&s, &cands, &bases[..2], &folds, &rule(), &search).is_err());
+    }
+
+    #[test]
+    fn a_chosen_candidate_retires_its_group() {
+        // The level is the only thing to fit: `law` alone now predicts it (b already on).
+        let s = Gated(vec![1.0, 1.1, 0.9, 1.05, 0.95]);
+        let (law, law2, setup) = (Switch("law", "law"), Switch("law2", "law"), Switch("setup", "setup"));
+        let cands: [&dyn Candidate<Gated, Gate>; 3] = [&law, &law2, &setup];
+        let base = Gate { a: false, b: true, level: 0.0 };
+        let sel = forward_select(&s, &cands, &base, &Fold::leave_one_out(5), &rule()).unwrap();
+        assert_eq!(sel.chosen_ids(), ["law"]);
+        // Step 2 tries `setup` only: `law2` left with its group.
+        assert_eq!(sel.step(2).map(|t| t.id.as_str()).collect::<Vec<_>>(), ["setup"]);
     }
 
     #[test]
