@@ -606,7 +606,7 @@ impl Selection<'_> {
         let floor_parts: Vec<(Option<f64>, f64)> = runs.iter().map(|s| noise_floor_parts(s, supply_v)).collect();
         let floor_ms: Vec<f64> = floor_parts.iter().map(|(a, b)| combine(*a, *b)).collect();
         let floor_m = overall(&floor_ms);
-        let final_m = overall(&cur_ms);
+        let final_m = overall(cur_ms);
         let ratio = final_m / floor_m;
         let fr_final = fr_cache.get(&current.friction).expect("evaluated").clone();
         let dr_final = dr_cache.get(&current.limit).expect("evaluated").clone();
@@ -693,7 +693,7 @@ impl Selection<'_> {
         let mut verdict = accepted.first().map(|a| a.0.id().to_string()).unwrap_or_else(|| NONE.into());
         let mut ext_ms = cur_ms.clone();
         if !adequate {
-            let (mu_s, v_s) = residual_samples(&cv, &fr_final, &dr_final, disc_radius_m);
+            let (mu_s, v_s) = residual_samples(cv, &fr_final, &dr_final, disc_radius_m);
             let sig_mu = signature::channel_signature(&mu_s, "friction", folds, runs.len(), opts.signature_threshold);
             let sig_v = signature::channel_signature(&v_s, "drive", folds, runs.len(), opts.signature_threshold);
             // Best data-driven extension: each channel corrected by its sparse model, per run.
@@ -787,7 +787,7 @@ impl Selection<'_> {
                 heldout_misfit_baseline: round_sig(final_m, 4),
                 heldout_misfit_extended: round_sig(overall(&ext_ms), 4),
                 relative_gain: round_sig(1.0 - overall(&ext_ms) / final_m, 4),
-                relative_gain_fold_sd: round_sig(compare(&cur_ms, &ext_ms, runs, folds).gain_fold_sd, 2),
+                relative_gain_fold_sd: round_sig(compare(cur_ms, &ext_ms, runs, folds).gain_fold_sd, 2),
                 criterion: None,
                 ..Default::default()
             });
@@ -795,7 +795,7 @@ impl Selection<'_> {
             verdict = UNEXPLAINED.into();
         }
 
-        let base_m = overall(&base_ms);
+        let base_m = overall(base_ms);
         let mut candidates = Vec::new();
         for (e, c, _) in first_step {
             candidates.push(CandidateScore {
@@ -824,7 +824,7 @@ impl Selection<'_> {
         if let Some(c) = full.scan.first().map(|_| &full.scan) {
             let worst = c.iter().map(|x| x.1).fold(f64::NEG_INFINITY, f64::max);
             detail.freq_scan = c.iter().map(|&(f, r)| (f, 1.0 - r / worst)).collect();
-        } else if let Some(scan) = composite::coulomb_time_scan(&d_all, &cv.freqs) {
+        } else if let Some(scan) = composite::coulomb_time_scan(d_all, &cv.freqs) {
             // The scan of the set {normal_force_modulation} alone, without its
             // fit at the best frequency (only the scan is drawn).
             let worst = scan.iter().map(|x| x.1).fold(f64::NEG_INFINITY, f64::max);
@@ -848,7 +848,7 @@ impl Selection<'_> {
                 phases_rad: full.phases.get(r).copied().unwrap_or((0.0, 0.0)),
             });
         }
-        detail.mu_vs_speed = mu_vs_speed(&d_all, &coulomb.model, &full.model, &full.phases);
+        detail.mu_vs_speed = mu_vs_speed(d_all, &coulomb.model, &full.model, &full.phases);
         detail.residual_vs_angle = residual_vs_angle(&all, coulomb.model.mu_k);
         if let Some(mu_dyn) = thesis_mu_dynamic {
             let thesis = Composite::coulomb(mu_dyn);
