@@ -275,6 +275,7 @@ fn refine_speed_time(
             ne_last.as_ref()?;
             break;
         };
+        let near = friction::near_stationary(&step, &ne, rss, d.len());
         ne_last = Some(ne);
         let mut improved = false;
         let mut lambda = 1.0;
@@ -293,7 +294,7 @@ fn refine_speed_time(
             }
             lambda *= 0.5;
         }
-        if !improved {
+        if !improved || near {
             converged = true;
         }
         if converged {
@@ -367,6 +368,39 @@ fn joint_params(m: &Composite, ne: &Normal, rss: f64, n: usize) -> Vec<(Term, &'
 /// Fits the composite of `set` on `d` (the frequency grid and the highest
 /// order are the scans of the modulations). `None` when a block is singular.
 pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order: u32) -> Option<CompositeFit> {
+    fit_composite_with(d, set, freqs_hz, max_order, true)
+}
+
+/// The model of [`fit_composite`] alone, as a cross-validation fold uses it
+/// (its held-out runs are predicted by the model; the parameters' standard
+/// errors are never read): the same fit without the residuals' autocorrelation
+/// pass that inflates the errors (6.6 % of a full-protocol ladder rung's CPU
+/// in `perf`), so the same model to the bit.
+pub fn fit_composite_model(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order: u32) -> Option<Composite> {
+    fit_composite_with(d, set, freqs_hz, max_order, false).map(|f| f.model)
+}
+
+/// The time modulation's frequency scan of [`fit_composite`] for the set
+/// `{TimeSine}` alone (the report's evidence figure), without the fit at the
+/// scan's best frequency: the same numbers to the bit (the first pass's
+/// Coulomb level, the target divided by it, [`friction::time_scan`]).
+pub fn coulomb_time_scan(d: &SlipData, freqs_hz: &[f64]) -> Option<Vec<(f64, f64)>> {
+    if d.is_empty() {
+        return None;
+    }
+    let mu_k = friction::fit_coulomb(d).params[0].1;
+    let m = Composite::coulomb(mu_k);
+    let dt = with_mu(d, |i| d.mu[i] / m.speed_mu(d.omega[i]));
+    Some(friction::time_scan(&dt, freqs_hz))
+}
+
+fn fit_composite_with(
+    d: &SlipData,
+    set: FrictionSet,
+    freqs_hz: &[f64],
+    max_order: u32,
+    errors: bool,
+) -> Option<CompositeFit> {
     if d.is_empty() {
         return None;
     }
@@ -421,7 +455,12 @@ pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order
             set_mu(&mut work, |i| d.mu[i] / (tf[i] * af[i]));
             let ds = &work;
             if set.stribeck {
-                let f = friction::fit_stribeck(ds, set.viscous)?;
+                // From the second pass on, Brent's search starts in the basin the
+                // first pass's grid found (friction::fit_stribeck_near).
+                let f = match m.stribeck {
+                    Some((_, vs)) if pass > 0 => friction::fit_stribeck_near(ds, set.viscous, vs)?,
+                    _ => friction::fit_stribeck(ds, set.viscous)?,
+                };
                 let FrictionModel::Stribeck { mu_k, mu_s, vs, c } = f.model else { unreachable!() };
                 m.mu_k = mu_k;
                 m.stribeck = Some((mu_s, vs));
@@ -524,10 +563,12 @@ pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order
         }
     }
     // Correlated residuals: standard errors × √τ (effective sample size).
-    let tau = autocorr_inflation(d, &m, &phases).sqrt();
-    for p in params.iter_mut() {
-        if p.1 != "order" {
-            p.3 *= tau;
+    if errors {
+        let tau = autocorr_inflation(d, &m, &phases).sqrt();
+        for p in params.iter_mut() {
+            if p.1 != "order" {
+                p.3 *= tau;
+            }
         }
     }
     Some(CompositeFit { model: m, phases, params, rss_w: rss, converged, scan })

@@ -60,6 +60,11 @@ struct Cv<'a> {
     supply_v: f64,
     freqs: Vec<f64>,
     max_order: u32,
+    /// Per fold, its training runs' slip samples and each held-out run's
+    /// (run index, slip samples): built once and read by every friction set
+    /// of every selection step (each fit built them anew: 4–5 % of a
+    /// full-protocol diagnosis's CPU in `perf`, with their page faults).
+    fold_data: Vec<(SlipData, Vec<(usize, SlipData)>)>,
 }
 
 /// One fold's friction fit: the model fitted on its training runs and, per
@@ -93,22 +98,37 @@ impl Cv<'_> {
     /// Fold `f`'s friction fit: the model of `set` fitted on the other folds,
     /// and each held-out run's μ error and phases under it.
     fn fold_friction(&self, set: FrictionSet, f: usize) -> FoldFriction {
-        let train = self.train(f);
-        let d = SlipData::from_runs(&train);
-        let model = composite::fit_composite(&d, set, &self.freqs, self.max_order).map(|x| x.model);
+        let (d, held_data) = &self.fold_data[f];
+        let model = composite::fit_composite_model(d, set, &self.freqs, self.max_order);
         let mut held = Vec::new();
-        for (i, s) in self.runs.iter().enumerate().filter(|(_, s)| s.fold == f) {
-            let dr = SlipData::from_runs(&[s]);
+        for (i, dr) in held_data {
             let (e, ph) = match &model {
                 Some(m) => {
-                    let ph = composite::heldout_phases(m, &dr);
-                    (composite::relative_mu_error(m, &dr, ph), ph)
+                    let ph = composite::heldout_phases(m, dr);
+                    (composite::relative_mu_error(m, dr, ph), ph)
                 }
                 None => (None, (0.0, 0.0)),
             };
-            held.push((i, e, ph));
+            held.push((*i, e, ph));
         }
         (model, held)
+    }
+
+    /// [`Cv::fold_data`] of `runs` split into `folds`.
+    fn fold_data(runs: &[RunSignals], folds: usize) -> Vec<(SlipData, Vec<(usize, SlipData)>)> {
+        (0..folds)
+            .into_par_iter()
+            .map(|f| {
+                let train: Vec<&RunSignals> = runs.iter().filter(|r| r.fold != f).collect();
+                let held = runs
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, s)| s.fold == f)
+                    .map(|(i, s)| (i, SlipData::from_runs(&[s])))
+                    .collect();
+                (SlipData::from_runs(&train), held)
+            })
+            .collect()
     }
 
     fn assemble(&self, per_fold: Vec<FoldFriction>) -> FrictionCv {
@@ -404,7 +424,8 @@ pub(crate) fn select_over<'a>(
         let n = ((opts.freq_max_hz - opts.freq_min_hz) / opts.freq_step_hz).floor() as usize;
         (0..=n).map(|j| opts.freq_min_hz + opts.freq_step_hz * j as f64).collect()
     };
-    let cv = Cv { runs, folds, supply_v, freqs, max_order: opts.max_order };
+    let fold_data = Cv::fold_data(runs, folds);
+    let cv = Cv { runs, folds, supply_v, freqs, max_order: opts.max_order, fold_data };
 
     // Channel caches: the friction channel depends only on the friction set,
     // the drive channel only on the limit.
@@ -585,7 +606,7 @@ impl Selection<'_> {
         let floor_parts: Vec<(Option<f64>, f64)> = runs.iter().map(|s| noise_floor_parts(s, supply_v)).collect();
         let floor_ms: Vec<f64> = floor_parts.iter().map(|(a, b)| combine(*a, *b)).collect();
         let floor_m = overall(&floor_ms);
-        let final_m = overall(&cur_ms);
+        let final_m = overall(cur_ms);
         let ratio = final_m / floor_m;
         let fr_final = fr_cache.get(&current.friction).expect("evaluated").clone();
         let dr_final = dr_cache.get(&current.limit).expect("evaluated").clone();
@@ -672,7 +693,7 @@ impl Selection<'_> {
         let mut verdict = accepted.first().map(|a| a.0.id().to_string()).unwrap_or_else(|| NONE.into());
         let mut ext_ms = cur_ms.clone();
         if !adequate {
-            let (mu_s, v_s) = residual_samples(&cv, &fr_final, &dr_final, disc_radius_m);
+            let (mu_s, v_s) = residual_samples(cv, &fr_final, &dr_final, disc_radius_m);
             let sig_mu = signature::channel_signature(&mu_s, "friction", folds, runs.len(), opts.signature_threshold);
             let sig_v = signature::channel_signature(&v_s, "drive", folds, runs.len(), opts.signature_threshold);
             // Best data-driven extension: each channel corrected by its sparse model, per run.
@@ -766,7 +787,7 @@ impl Selection<'_> {
                 heldout_misfit_baseline: round_sig(final_m, 4),
                 heldout_misfit_extended: round_sig(overall(&ext_ms), 4),
                 relative_gain: round_sig(1.0 - overall(&ext_ms) / final_m, 4),
-                relative_gain_fold_sd: round_sig(compare(&cur_ms, &ext_ms, runs, folds).gain_fold_sd, 2),
+                relative_gain_fold_sd: round_sig(compare(cur_ms, &ext_ms, runs, folds).gain_fold_sd, 2),
                 criterion: None,
                 ..Default::default()
             });
@@ -774,7 +795,7 @@ impl Selection<'_> {
             verdict = UNEXPLAINED.into();
         }
 
-        let base_m = overall(&base_ms);
+        let base_m = overall(base_ms);
         let mut candidates = Vec::new();
         for (e, c, _) in first_step {
             candidates.push(CandidateScore {
@@ -803,14 +824,11 @@ impl Selection<'_> {
         if let Some(c) = full.scan.first().map(|_| &full.scan) {
             let worst = c.iter().map(|x| x.1).fold(f64::NEG_INFINITY, f64::max);
             detail.freq_scan = c.iter().map(|&(f, r)| (f, 1.0 - r / worst)).collect();
-        } else if let Some(fr) = composite::fit_composite(
-            &d_all,
-            FrictionSet::default().with(composite::Term::TimeSine),
-            &cv.freqs,
-            opts.max_order,
-        ) {
-            let worst = fr.scan.iter().map(|x| x.1).fold(f64::NEG_INFINITY, f64::max);
-            detail.freq_scan = fr.scan.iter().map(|&(f, r)| (f, 1.0 - r / worst)).collect();
+        } else if let Some(scan) = composite::coulomb_time_scan(d_all, &cv.freqs) {
+            // The scan of the set {normal_force_modulation} alone, without its
+            // fit at the best frequency (only the scan is drawn).
+            let worst = scan.iter().map(|x| x.1).fold(f64::NEG_INFINITY, f64::max);
+            detail.freq_scan = scan.iter().map(|&(f, r)| (f, 1.0 - r / worst)).collect();
         }
         for (r, s) in runs.iter().enumerate() {
             detail.runs.push(RunRow {
@@ -830,7 +848,7 @@ impl Selection<'_> {
                 phases_rad: full.phases.get(r).copied().unwrap_or((0.0, 0.0)),
             });
         }
-        detail.mu_vs_speed = mu_vs_speed(&d_all, &coulomb.model, &full.model, &full.phases);
+        detail.mu_vs_speed = mu_vs_speed(d_all, &coulomb.model, &full.model, &full.phases);
         detail.residual_vs_angle = residual_vs_angle(&all, coulomb.model.mu_k);
         if let Some(mu_dyn) = thesis_mu_dynamic {
             let thesis = Composite::coulomb(mu_dyn);

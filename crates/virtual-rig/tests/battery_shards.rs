@@ -48,8 +48,7 @@ fn sharded_and_merged_battery_equals_the_unsharded_run() {
     let n = 3;
     let slices: Vec<BatterySlice> = (1..=n)
         .map(|i| {
-            let range = (i - 1) * b.cases.len() / n..i * b.cases.len() / n;
-            let s = b.run_slice(i, n, range, |c, _| oracle(c));
+            let s = b.run_slice(i, n, |c, _| oracle(c));
             serde_json::from_str(&serde_json::to_string_pretty(&s).unwrap()).unwrap()
         })
         .collect();
@@ -65,4 +64,20 @@ fn sharded_and_merged_battery_equals_the_unsharded_run() {
     let mut other = slices.clone();
     other[1].seed += 1;
     assert!(merge_slices(other).unwrap_err().contains("different batteries"));
+}
+
+#[test]
+fn shards_are_interleaved_and_cover_every_case_once() {
+    let b = Battery::named("ci", 7000).unwrap();
+    let n = 4;
+    let shards: Vec<Vec<usize>> = (1..=n).map(|i| b.shard_indices(i, n)).collect();
+    // Case k in shard k mod n + 1: every shard samples the whole battery.
+    for (i, s) in shards.iter().enumerate() {
+        assert!(s.iter().all(|&k| k % n == i), "shard {}: {s:?}", i + 1);
+    }
+    let sizes: Vec<usize> = shards.iter().map(Vec::len).collect();
+    assert!(sizes.iter().max().unwrap() - sizes.iter().min().unwrap() <= 1, "{sizes:?}");
+    let mut all: Vec<usize> = shards.concat();
+    all.sort_unstable();
+    assert_eq!(all, (0..b.cases.len()).collect::<Vec<_>>());
 }

@@ -22,7 +22,7 @@ pub struct ConfusionParams {
     pub battery: String,
     /// First case seed.
     pub seed: u64,
-    /// `"i/n"`: only shard i of n (contiguous cases), written as a slice to merge.
+    /// `"i/n"`: only shard i of n (interleaved: case k in shard k mod n + 1), written as a slice to merge.
     pub shard: String,
 }
 
@@ -41,8 +41,7 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
         serde_json::to_value(&d).and_then(serde_json::from_value::<DiagnosisResult>).map_err(|e| e.to_string())
     };
     if shard != Shard::WHOLE {
-        let range = shard.range(battery.cases.len());
-        let slice = battery.run_slice(shard.index, shard.count, range, diagnose);
+        let slice = battery.run_slice(shard.index, shard.count, diagnose);
         return ctx
             .write_json(&format!("tables/confusion-slice.shard-{}-of-{}.json", shard.index, shard.count), &slice);
     }
