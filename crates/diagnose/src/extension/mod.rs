@@ -451,7 +451,8 @@ pub fn attach(d: &mut crate::Diagnosis, inputs: &Inputs) {
 
 /// Parameters of the vocabulary findings that the extended model
 /// ([`crate::channels::extended_params`]) or the simulator can only use at a
-/// bound (issue 25, item 4: reported, never silently fixed): the break-away
+/// bound (issue 25, item 4: reported, never silently fixed): the extension's
+/// ageing slope at an end of its bracket, the break-away
 /// coefficient of a slip law that fits μk but not μs (the viscous law), held
 /// at max(μs of the baseline, μk), and a
 /// modulation depth outside [0, 1] (N would change sign; rig-model refuses it).
@@ -474,6 +475,26 @@ pub fn vocabulary_bounds(baseline: &RigParams, findings: &[crate::Finding]) -> V
                      extended model holds μs at μk (no break-away below the slip level): the break-away level is \
                      not measured by the slip channel, see the free-run breakaway_friction check"
                 ),
+            });
+        }
+        // The ageing law's slope where its free-run fit stopped at an end of
+        // its bracket [0, DWELL_SLOPE_MAX] (module docs, "The ageing law").
+        let dwell = f.extension.iter().flat_map(|x| &x.terms).find(|t| t.signal == SIGNALS[DWELL]);
+        if let Some(t) = dwell.filter(|t| {
+            t.coefficient <= 2.0 * DWELL_SLOPE_TOL || t.coefficient >= DWELL_SLOPE_MAX - 2.0 * DWELL_SLOPE_TOL
+        }) {
+            let at_upper = t.coefficient > 0.5 * DWELL_SLOPE_MAX;
+            out.push(crate::ParamAtBound {
+                parameter: "extension.log_dwell".into(),
+                bound: if at_upper { DWELL_SLOPE_MAX } else { 0.0 },
+                unconstrained: t.coefficient,
+                meaning: if at_upper {
+                    "the ageing law's free-run fit wants a static level that grows faster with the dwell than any \
+                     dry contact ages (bracket end): the break-aways follow something else than contact ageing"
+                } else {
+                    "the ageing law's free-run fit puts its slope at 0: the free run wants no contact ageing"
+                }
+                .into(),
             });
         }
         if let Some(a) = g("amplitude_ratio").filter(|a| !(0.0..=1.0).contains(a)) {
