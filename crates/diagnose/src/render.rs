@@ -507,6 +507,22 @@ fn extension_markdown(s: &mut String, x: &crate::Extension, det: &crate::result:
             r.step, r.effect, r.misfit_before, r.misfit_after, r.gain, r.gain_fold_sd, r.t, r.accepted
         );
     }
+    if !det.extension_free_run.is_empty() {
+        let verdict = if x.free_run_flagged.is_empty() {
+            "every check passes".to_string()
+        } else {
+            format!("still flagged: {}", x.free_run_flagged.join("; "))
+        };
+        let _ = writeln!(
+            s,
+            "\nThe extended model's free run (held-out runs, each simulated with the coefficients fitted without \
+             its fold) against the record, on the adequacy test's checks: {verdict}.\n\n\
+             | check | ratio | threshold | flagged |\n|---|---|---|---|"
+        );
+        for k in &det.extension_free_run {
+            let _ = writeln!(s, "| {} | {:.2} | {:.1} | {} |", k.channel, k.ratio, k.threshold, k.flagged);
+        }
+    }
     s.push('\n');
 }
 

@@ -86,6 +86,9 @@ pub struct Extension {
     pub relative_gain: f64,
     /// Standard deviation of the relative gain across the folds.
     pub relative_gain_sd: f64,
+    /// The free-run checks the extended model (held-out free runs) still
+    /// flags, `check ratio× (threshold t)`; empty when its free run matches.
+    pub free_run_flagged: Vec<String>,
 }
 
 /// One term of an [`Extension`]: a library signal, its coefficient fitted
@@ -325,6 +328,8 @@ pub struct Detail {
     /// Rotor speed per operating point: measured, the final model's free run
     /// (`baseline_rad_s`) and the extension's held-out free run (`extended_rad_s`).
     pub extension_traces: Vec<SpeedTraces>,
+    /// The free-run checks of the extended model (held-out free runs).
+    pub extension_free_run: Vec<crate::ChannelCheck>,
 }
 
 /// One operating point's rotor speed over the steady window (about 20 Hz).

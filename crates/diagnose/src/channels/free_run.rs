@@ -57,6 +57,29 @@
 //! (thresholds unset: right drive-limit models give 81–116×); details in
 //! [`ChannelOptions`]' docs.
 //!
+//! # Why the features are not read on the attractor (measured, 2026-11)
+//!
+//! Reading every feature over the run's last `free_run_steady_s` (where the
+//! regime is read), the break-aways over the whole run (the first from rest
+//! included) and a run whose regime differs in either reading in no other
+//! check was tried: the 24 stick-slipping nulls stay 0/24 flagged with every
+//! maximum under half its threshold (rotor_max 1.68, motor_max 2.08,
+//! motor_min 2.20, slip 1.71, break-away 1.33, stick fraction 0.18), and
+//! the shipped campaign keeps its answer, but (1) the stick fraction on the
+//! attractor flags 2/20 right models (normal-force modulation seed 9300,
+//! op-04: record 0.267, model 0.054, 7.2× its floor: the model's sticking
+//! decays toward the end of the run, the record's does not, a length the
+//! modulation's phase sets; angle-periodic seed 9312, op-02: 0.803 against
+//! 0.730, 11× a floor of 0.007 left by settled cycles); read after ramp +
+//! settle, 0/20; (2) with that, the right drive-limit model of
+//! `channel_calibration.rs` (`free_run_sees_a_drive_limit_and_not_its_fix`,
+//! seed 16) fails motor_max at 5.20 (threshold 5; floor the encoder's 0.043
+//! rad/s in steady slip) and the rotor-drag campaign of
+//! `free_run_calibration.rs` loses its free-run significance (gain 76 % ±
+//! 64 %, t = −0.003, where it needs 2). So the window stays; moving it
+//! needs floors that carry the fitted model's uncertainty (as
+//! `slip_friction` carries N0·se(μk)) first.
+//!
 //! # One break-away reading
 //!
 //! The break-away level used to be the smoothed force's peak over every

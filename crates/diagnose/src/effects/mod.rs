@@ -133,6 +133,9 @@ pub trait VocabularyEffect: Sync {
     /// A fit in free run, for an effect only the motion can show (none of the
     /// vocabulary's five: each is seen teacher-forced). Defaulted: `None`
     /// means the teacher-forced fit of [`VocabularyEffect::term`] is the fit.
+    /// The one law the diagnosis fits in free run, contact ageing, is outside
+    /// the spec's vocabulary: its fit is the extension's ([`crate::extension`],
+    /// "The ageing law").
     fn fit_free_run(&self, _c: &Campaign, _model: &RigParams) -> Option<BTreeMap<String, f64>> {
         None
     }
