@@ -16,12 +16,9 @@ use rig_lavi::sim::{FrictionLaw, Model};
 use rig_lavi::{FEATURES, FeatureOptions, StudyParams};
 use std::path::{Path, PathBuf};
 
-/// CPU time of this process (all threads), s: utime + stime of /proc/self/stat at 100 ticks/s.
+/// CPU time (user + system) of this process so far, s (`rig_types::cpu`).
 fn cpu_s() -> f64 {
-    let stat = std::fs::read_to_string("/proc/self/stat").expect("/proc/self/stat");
-    let after = &stat[stat.rfind(')').expect("comm field") + 2..];
-    let f: Vec<f64> = after.split_whitespace().map(|x| x.parse().unwrap_or(0.0)).collect();
-    (f[11] + f[12]) / 100.0
+    rig_types::cpu::process_cpu_s().expect("/proc/self/stat")
 }
 
 /// Run 175's path and the `lavi` stage's params of pipeline.toml (with `[shared.selection]`).

@@ -9,10 +9,9 @@
 mod common;
 use rig_model::{ANTI_WINDUP_TRACKING_S, MOTOR_FRICTION_SPEED_RAD_S, SimOptions, simulate_into, simulate_with_stats};
 use rig_types::{FrictionLaw, RunInput};
+/// CPU time (user + system) of this process so far, s (`rig_types::cpu`).
 fn cpu_s() -> f64 {
-    let s = std::fs::read_to_string("/proc/self/stat").unwrap();
-    let f: Vec<&str> = s.rsplit(')').next().unwrap().split_whitespace().collect();
-    (f[11].parse::<f64>().unwrap() + f[12].parse::<f64>().unwrap()) / 100.0
+    rig_types::cpu::process_cpu_s().expect("/proc/self/stat")
 }
 /// Minor page faults of this process so far (/proc/self/stat field 10).
 fn minor_faults() -> f64 {

@@ -21,15 +21,7 @@ pub struct Timing {
     pub cpu_s: Option<f64>,
 }
 
-/// CPU time (user + system) of this process so far, s, from /proc/self/stat
-/// (Linux; clock ticks of 10 ms). `None` elsewhere.
-pub fn process_cpu_s() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // Fields after the parenthesised command name: state is field 3, utime 14, stime 15.
-    let fields: Vec<&str> = stat.rsplit(')').next()?.split_whitespace().collect();
-    let ticks = fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
-    Some(ticks / 100.0)
-}
+pub use rig_types::cpu::process_cpu_s;
 
 /// Starts a stopwatch; [`Stopwatch::stop`] gives the [`Timing`] since.
 pub struct Stopwatch {

@@ -8,6 +8,7 @@
 
 mod campaign;
 pub mod contract;
+pub mod cpu;
 mod figure;
 pub mod linear;
 pub mod minimize;

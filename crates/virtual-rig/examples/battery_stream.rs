@@ -12,11 +12,9 @@
 
 use rig_virtual_rig::battery::{Battery, DiagnosisResult, judge};
 
-/// CPU time (user + system) of this process so far, s (/proc/self/stat, 10 ms ticks).
+/// CPU time (user + system) of this process so far, s (`rig_types::cpu`).
 fn cpu_s() -> f64 {
-    let s = std::fs::read_to_string("/proc/self/stat").expect("/proc/self/stat");
-    let f: Vec<&str> = s.rsplit(')').next().expect("stat").split_whitespace().collect();
-    (f[11].parse::<f64>().expect("utime") + f[12].parse::<f64>().expect("stime")) / 100.0
+    rig_types::cpu::process_cpu_s().expect("/proc/self/stat")
 }
 
 fn main() {
