@@ -32,7 +32,7 @@ def main(paths):
     rows = [json.loads(line) for p in paths for line in open(p) if line.strip()]
     rows.sort(key=lambda r: r["k"])
     groups = defaultdict(lambda: [0, 0])
-    rungs = defaultdict(lambda: [0, 0])
+    rungs = defaultdict(lambda: [0, 0, 0])
     for r in rows:
         groups[r["group"]][0] += r["right"]
         groups[r["group"]][1] += 1
@@ -40,6 +40,7 @@ def main(paths):
             _, effect, step, _ = r["case"].split("-")
             rungs[(effect, int(step))][0] += r["right"]
             rungs[(effect, int(step))][1] += 1
+            rungs[(effect, int(step))][2] += r["verdict"] == "none" and not r["right"]
     cpu = sum(r["cpu_s"] for r in rows)
     right = sum(r["right"] for r in rows)
     print(f"{len(rows)} campaigns, {right} right; CPU {cpu:.0f} s ({cpu / len(rows):.2f} s per campaign)\n")
@@ -48,10 +49,11 @@ def main(paths):
         print(f"| {g} | {n} | {k} |")
     print(f"| all | {len(rows)} | {right} |\n")
     if rungs:
-        print("| ladder effect | rung (0 largest) | draws | right | P(right) | 95 % CP |\n|---|---|---|---|---|---|")
-        for (effect, step), (k, n) in sorted(rungs.items()):
+        print("| ladder effect | rung (0 largest) | draws | right | P(right) | 95 % CP | missed (`none`) | other wrong |")
+        print("|---|---|---|---|---|---|---|---|")
+        for (effect, step), (k, n, miss) in sorted(rungs.items()):
             lo, hi = clopper_pearson(k, n)
-            print(f"| {effect} | {step} | {n} | {k} | {k / n:.2f} | {lo:.2f}–{hi:.2f} |")
+            print(f"| {effect} | {step} | {n} | {k} | {k / n:.2f} | {lo:.2f}–{hi:.2f} | {miss} | {n - k - miss} |")
         print()
     print("Wrong answers (ladder rungs: a miss is the ladder's measure, listed for completeness):\n")
     for r in rows:
