@@ -440,6 +440,34 @@ pub fn markdown(d: &Diagnosis) -> String {
             );
         }
     }
+    if !det.second_look.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n## Second look in free run\n\nThe final model's free run was flagged, so every effect the last \
+             selection step refused with a significant paired t (gain below the minimum) was added with its \
+             parameters fitted without each fold and every run simulated free (rig-diagnose `second_look`): an \
+             effect is admitted when its free-run gain passes the selection's rule and no free-run check is left \
+             flagged with it.\n\n\
+             | effect | teacher-forced gain | t | free-run misfit before | after | gain | gain sd (folds) | paired t | still flagged | admitted |\n\
+             |---|---|---|---|---|---|---|---|---|---|"
+        );
+        for r in &det.second_look {
+            let _ = writeln!(
+                s,
+                "| {} | {:.3} | {:.1} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {} | {} |",
+                r.effect,
+                r.teacher_forced_gain,
+                r.teacher_forced_t,
+                r.free_run_before,
+                r.free_run_after,
+                r.free_run_gain,
+                r.free_run_gain_fold_sd,
+                r.free_run_t,
+                if r.still_flagged.is_empty() { "none".to_string() } else { r.still_flagged.join(", ") },
+                r.admitted
+            );
+        }
+    }
     let _ = writeln!(
         s,
         "\n## The ladder (tables/diagnosis-rungs.csv)\n\n| rung | cross-validated misfit | cause |\n|---|---|---|"

@@ -322,6 +322,8 @@ pub struct Detail {
     /// The extended model's static level when a finding modulates the
     /// normal force ([`crate::breakaway`]); `None`: the baseline's stands.
     pub breakaway: Option<crate::breakaway::BreakAwayLevel>,
+    /// The free-run second look at the effects teacher-forcing refused (`second_look` module).
+    pub second_look: Vec<crate::second_look::SecondLookRow>,
     /// The extension's forward selection, one row per library signal tried
     /// per step (`effect` is the signal; `unexplained` with a baseline only).
     pub extension_steps: Vec<StepRow>,

@@ -189,6 +189,18 @@ fn inadmissible(
     e.inadmissible(&mut || fit_all(current.with(e).friction).map(|f| f.model))
 }
 
+/// The parameters of effect `e` among a fit's (term, JSON key, value,
+/// standard error), each key once, in the fit's order.
+fn params_of(fitted: &[(Term, &'static str, f64, f64)], e: EffectId) -> Vec<(&'static str, f64, f64)> {
+    let mut out: Vec<(&'static str, f64, f64)> = Vec::new();
+    for &(term, k, v, s) in fitted {
+        if term == e.term() && !out.iter().any(|p| p.0 == k) {
+            out.push((k, v, s));
+        }
+    }
+    out
+}
+
 /// M_r = sqrt((e_μ² + e_V²)/2), or e_V without slip samples (crate docs).
 fn combine(e_mu: Option<f64>, e_v: f64) -> f64 {
     match e_mu {
@@ -566,6 +578,106 @@ pub struct Selection<'a> {
     d_all: SlipData,
 }
 
+/// An effect the teacher-forced rule saw but did not admit, with what a
+/// free run needs to judge it (the second look, [`crate::second_look`]):
+/// the step's teacher-forced comparison, per fold every effect of the model
+/// with it and their parameters fitted without that fold, and per run
+/// (campaign order) its fold and its nuisance phases under that fold's model.
+pub struct NearMiss {
+    pub effect: EffectId,
+    pub teacher_forced: Comparison,
+    pub per_fold: Vec<Option<Vec<(EffectId, BTreeMap<String, f64>)>>>,
+    pub per_run: Vec<Option<(usize, Phases)>>,
+}
+
+impl Selection<'_> {
+    /// The effects the last selection step tried and refused although its
+    /// paired run-level t passed `min_t` with a positive gain (below the
+    /// minimum gain) and whose fit on every run is admissible: the
+    /// candidates of the free-run second look (crate docs). Each with its
+    /// fold fits (the model with it, fitted without each fold).
+    pub fn near_misses(&self, opts: &DiagnoseOptions) -> Vec<NearMiss> {
+        let last = self.steps.iter().map(|r| r.step).max().unwrap_or(0);
+        let mut out = Vec::new();
+        for row in self.steps.iter().filter(|r| r.step == last && !r.accepted) {
+            let Some(e) = EffectId::from_id(&row.effect) else { continue };
+            if !(row.t >= opts.selection.min_t && row.gain > 0.0 && row.misfit_after.is_finite()) {
+                continue;
+            }
+            let set = self.current.with(e);
+            let fit_all = || composite::fit_composite(&self.d_all, set.friction, &self.cv.freqs, self.cv.max_order);
+            if e.inadmissible(&mut || fit_all().map(|f| f.model)).is_some() {
+                continue;
+            }
+            let effects: Vec<EffectId> = self.accepted.iter().map(|a| a.0).chain([e]).collect();
+            let mut per_run: Vec<Option<(usize, Phases)>> = vec![None; self.runs.len()];
+            let mut per_fold = vec![None; self.cv.folds];
+            let fits: Vec<_> = (0..self.cv.folds)
+                .into_par_iter()
+                .map(|f| {
+                    let fit = composite::fit_composite(
+                        &self.cv.fold_data[f].0,
+                        set.friction,
+                        &self.cv.freqs,
+                        self.cv.max_order,
+                    )?;
+                    let limit = match set.limit {
+                        true => Some(self.dr_cache.get(&true)?.pis.get(f).copied().flatten()?),
+                        false => None,
+                    };
+                    Some((fit, limit))
+                })
+                .collect();
+            for (f, fit) in fits.iter().enumerate() {
+                let Some((fit, limit)) = fit else { continue };
+                let fitted: Vec<(Term, &'static str, f64, f64)> = fit
+                    .params
+                    .iter()
+                    .map(|&(t, k, v, s)| (Term::Friction(t), k, v, s))
+                    .chain(limit.map(|pi| (Term::DriveLimit, drive::LIMIT_PARAM, pi.limit_v, 0.0)))
+                    .collect();
+                per_fold[f] = Some(
+                    effects
+                        .iter()
+                        .map(|&x| (x, params_of(&fitted, x).into_iter().map(|(k, v, _)| (k.to_string(), v)).collect()))
+                        .collect(),
+                );
+                for (i, d) in &self.cv.fold_data[f].1 {
+                    per_run[*i] = Some((f, composite::heldout_phases(&fit.model, d)));
+                }
+            }
+            let teacher_forced = Comparison {
+                before: row.misfit_before,
+                after: row.misfit_after,
+                gain: row.gain,
+                gain_fold_sd: row.gain_fold_sd,
+                t: row.t,
+            };
+            out.push(NearMiss { effect: e, teacher_forced, per_fold, per_run });
+        }
+        out
+    }
+
+    /// Admits `e` (a [`NearMiss`] the free run passed, lib.rs) with its
+    /// teacher-forced comparison: the selection as if its step had accepted
+    /// it, the final joint fit refitted on every run.
+    pub fn admit(&mut self, e: EffectId, teacher_forced: Comparison, opts: &DiagnoseOptions) {
+        let set = self.current.with(e);
+        let (Some(fr), Some(dr)) = (self.fr_cache.get(&set.friction), self.dr_cache.get(&set.limit)) else { return };
+        let Some(full) = composite::fit_composite(&self.d_all, set.friction, &self.cv.freqs, opts.max_order) else {
+            return;
+        };
+        self.cur_ms = fr.e_mu.iter().zip(&dr.e_v).map(|(a, b)| combine(*a, *b)).collect();
+        if set.limit && !self.current.limit {
+            let all: Vec<&RunSignals> = self.runs.iter().collect();
+            self.limit_fit = drive::fit_limit(&all, self.supply_v);
+        }
+        self.current = set;
+        self.full = full;
+        self.accepted.push((e, teacher_forced));
+    }
+}
+
 impl Selection<'_> {
     /// The diagnosis of this selection given the significant checks of the
     /// other run kinds (`channel_checks`: (run kind, text)): adequacy, the
@@ -666,12 +778,10 @@ impl Selection<'_> {
             let mut params = BTreeMap::new();
             let mut se = BTreeMap::new();
             let mut ptext = Vec::new();
-            for (term, k, v, s) in &fitted {
-                if *term == e.term() && !params.contains_key(*k) {
-                    params.insert(k.to_string(), round_sig(*v, 4));
-                    se.insert(k.to_string(), round_sig(*s, 2));
-                    ptext.push((*k, *v));
-                }
+            for (k, v, s) in params_of(&fitted, *e) {
+                params.insert(k.to_string(), round_sig(v, 4));
+                se.insert(k.to_string(), round_sig(s, 2));
+                ptext.push((k, v));
             }
             findings.push(Finding {
                 effect: e.id().into(),
