@@ -13,8 +13,10 @@
 //!
 //! # The rule
 //!
-//! Only when a free-run check of the final model (teacher-forced, twist-rate
-//! structure) is flagged, each effect of the last selection step with
+//! Only when a free-run check of the final model (twist-rate structure) is
+//! flagged while the model is otherwise adequate — the teacher-forced misfit
+//! within its threshold, no order line, no other check flagged: the mismatch
+//! shows only in the motion —, each effect of the last selection step with
 //! - a paired run-level t ≥ `min_t` and a positive gain teacher-forced
 //!   ([`crate::select::Selection::near_misses`]),
 //! - an admissible fit on every run (its sign defines it),
@@ -40,7 +42,10 @@
 //! only when the final model's free run is already flagged (the nulls' free
 //! runs are calibrated to 0 flags in 40, `free_run_calibration.rs`), and it
 //! can only replace an `unexplained` answer by a vocabulary effect that
-//! leaves no free-run check flagged.
+//! leaves no free-run check flagged. Where another check fails too (a force
+//! sensor's bend, say), it does not run: on the full battery's
+//! `outside-force_sensor_nonlinearity-1` an angle-periodic friction cleared
+//! the free run while compensating the sensor's bend, a spurious finding.
 
 use crate::channels::{
     ChannelCheck, FreeRunPair, FreeRunSettings, free_run_checks_of, free_run_misfit_channels, free_run_pairs_by,
