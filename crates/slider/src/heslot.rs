@@ -32,7 +32,7 @@
 //! (`one_dof::ageing_law_step`; at rest dθ/dt = 1).
 
 use crate::fit::ParamSpec;
-use rig_model::one_dof::{MAX_FRICTION_STATES, ageing_law_step};
+use rig_model::one_dof::{ImplicitFriction, MAX_FRICTION_STATES, ageing_law_step};
 
 /// The law's id in slider-diagnosis.json.
 pub const ID: &str = "heslot_creep";
@@ -100,27 +100,31 @@ impl Heslot {
     }
 }
 
-impl Heslot {
-    /// θ = D0/V, the steady state at the drive speed
-    /// (`one_dof::ImplicitFriction::initial_state`).
-    pub fn initial_state(&self, drive_m_s: f64) -> [f64; MAX_FRICTION_STATES] {
+/// [`Heslot`] as one_dof's implicit contact under the normal load
+/// `weight_n` (N): speeds in m/s, forces in N.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contact {
+    pub law: Heslot,
+    pub weight_n: f64,
+}
+
+impl ImplicitFriction for Contact {
+    /// θ = D0/V, the steady state at the drive speed.
+    fn initial_state(&self, drive_m_s: f64) -> [f64; MAX_FRICTION_STATES] {
         let mut s = [0.0; MAX_FRICTION_STATES];
-        s[0] = self.d0_m / drive_m_s.abs().max(1e-300);
+        s[0] = self.law.d0_m / drive_m_s.abs().max(1e-300);
         s
     }
 
-    /// `one_dof::ImplicitFriction::implicit_step` under the normal load
-    /// `weight_n` (N); `p` and the returned speed in m/s, the force in N.
-    pub fn implicit_step(
+    fn implicit_step(
         &self,
-        weight_n: f64,
         state: &mut [f64; MAX_FRICTION_STATES],
         stuck: &mut bool,
         p: f64,
         h_over_mass: f64,
         h_s: f64,
     ) -> (f64, f64) {
-        let law = *self;
+        let (law, weight_n) = (self.law, self.weight_n);
         let theta0 = law.d0_m / law.v0_m_s;
         let hn = h_over_mass * weight_n;
         let held = law.mu0 + law.b * (1.0 + state[0] / theta0).ln();
@@ -159,16 +163,17 @@ mod tests {
     fn the_implicit_step_solves_its_equation_and_holds_below_the_threshold() {
         let law = Heslot::of(&[0.35, 0.01, 0.005, 1e-6, 1e-4]);
         let (h_over_mass, w) = (1e-4 / 0.0307, 0.301);
-        let mut s = law.initial_state(42e-6);
+        let c = Contact { law, weight_n: w };
+        let mut s = c.initial_state(42e-6);
         let mut stuck = false;
         // Below the static threshold μ0 + B ln(1 + θ/θ0): held.
         let hold = law.mu0 + law.b * (1.0 + s[0] * law.v0_m_s / law.d0_m).ln();
-        let (v, f) = law.implicit_step(w, &mut s.clone(), &mut stuck, 0.99 * h_over_mass * w * hold, h_over_mass, 1e-4);
+        let (v, f) = c.implicit_step(&mut s.clone(), &mut stuck, 0.99 * h_over_mass * w * hold, h_over_mass, 1e-4);
         assert!(stuck && v == 0.0 && (f / w - 0.99 * hold).abs() < 1e-12);
         // Above it: v + (h/m) m g μ(v, θ) = p.
         let p = 1.3 * h_over_mass * w * hold;
         let theta = s[0];
-        let (v, f) = law.implicit_step(w, &mut s, &mut stuck, p, h_over_mass, 1e-4);
+        let (v, f) = c.implicit_step(&mut s, &mut stuck, p, h_over_mass, 1e-4);
         assert!(!stuck && v > 0.0);
         let mu = law.mu0 + law.a * (1.0 + v / law.v0_m_s).ln() + law.b * (1.0 + theta * law.v0_m_s / law.d0_m).ln();
         assert!((v + h_over_mass * w * mu - p).abs() < 1e-12 * p, "{v} {mu}");

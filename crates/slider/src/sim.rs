@@ -192,8 +192,8 @@ impl Contact {
 impl ImplicitFriction for Contact {
     /// Coulomb: none; static ageing: the time stuck (0); rate and state: θ = Dc/V.
     fn initial_state(&self, drive_m_s: f64) -> [f64; MAX_FRICTION_STATES] {
-        if let Law::Heslot(h) = self.law {
-            return h.initial_state(drive_m_s);
+        if let Law::Heslot(law) = self.law {
+            return crate::heslot::Contact { law, weight_n: self.weight_n }.initial_state(drive_m_s);
         }
         self.rate_state().map_or([0.0; MAX_FRICTION_STATES], |r| r.initial_state(drive_m_s))
     }
@@ -225,7 +225,9 @@ impl ImplicitFriction for Contact {
             Law::RateState { .. } => {
                 self.rate_state().expect("a rate-and-state law").implicit_step(state, stuck, p, h_over_mass, h_s)
             }
-            Law::Heslot(h) => h.implicit_step(w, state, stuck, p, h_over_mass, h_s),
+            Law::Heslot(law) => {
+                crate::heslot::Contact { law, weight_n: w }.implicit_step(state, stuck, p, h_over_mass, h_s)
+            }
         }
     }
 }

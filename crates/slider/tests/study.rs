@@ -24,6 +24,15 @@ fn shipped() -> Option<PathBuf> {
     }
 }
 
+/// pipeline.toml's settings and the shipped runs measured with them.
+fn shipped_runs() -> Option<(StudyParams, Vec<Measured>)> {
+    let dir = shipped()?;
+    let p = params();
+    let raw = rig_ingest::slider::read_slider_folder(&dir).unwrap();
+    let runs = raw.iter().map(|r| rig_slider::study::measure(r, &p)).collect();
+    Some((p, runs))
+}
+
 fn synthetic(k: f64, v_um_s: f64, duration_s: f64, f: rig_slider::Features) -> Measured {
     Measured {
         name: format!("k{k}-v{v_um_s}"),
@@ -322,10 +331,7 @@ fn rate_and_state_creeps_at_the_creeping_run_only_on_its_hopf_point() {
     // 10 % — and the same law stick-slips at k2254-v1100, which oscillates
     // inertially: creep at 42 µm/s and an inertial oscillation at 1100 µm/s
     // on one spring is what this law cannot give at once.
-    let Some(dir) = shipped() else { return };
-    let p = params();
-    let raw = rig_ingest::slider::read_slider_folder(&dir).unwrap();
-    let runs: Vec<Measured> = raw.iter().map(|r| rig_slider::study::measure(r, &p)).collect();
+    let Some((p, runs)) = shipped_runs() else { return };
     let i = runs.iter().position(|r| r.name == "k2254-v42").expect("the creeping run");
     assert_eq!(runs[i].features.regime, Regime::Creep);
     // The study's own scan (slider.md prints it).
@@ -359,10 +365,7 @@ fn heslots_law_rests_through_every_loading_phase() {
     // vanishes at v = 0 gives a static threshold, so whenever it slips the
     // slider rests while the spring loads (load rate within 10 % of
     // k V/(m g)): it never creeps, whatever the start.
-    let Some(dir) = shipped() else { return };
-    let p = params();
-    let raw = rig_ingest::slider::read_slider_folder(&dir).unwrap();
-    let runs: Vec<Measured> = raw.iter().map(|r| rig_slider::study::measure(r, &p)).collect();
+    let Some((p, runs)) = shipped_runs() else { return };
     let m = runs.iter().find(|r| r.name == "k2254-v42").unwrap();
     let kc = 1.2 * m.stiffness_n_m / (p.mass_kg * p.gravity_m_s2);
     let model = Model { friction: Candidate::Heslot, setup: SetupCandidate::Stated };
