@@ -28,9 +28,12 @@ pub enum Candidate {
     StaticAgeing,
     /// Dieterich–Ruina rate-and-state friction with the ageing law.
     RateState,
+    /// Heslot et al. 1994's law: rate and state cut off at small speeds and ages ([`crate::heslot`]).
+    Heslot,
 }
 
-pub const CANDIDATES: [Candidate; 3] = [Candidate::Coulomb, Candidate::StaticAgeing, Candidate::RateState];
+pub const CANDIDATES: [Candidate; 4] =
+    [Candidate::Coulomb, Candidate::StaticAgeing, Candidate::RateState, Candidate::Heslot];
 
 /// A fitted parameter's name (with unit), bounds and whether it is searched in log.
 #[derive(Debug, Clone, Copy)]
@@ -56,6 +59,7 @@ impl Candidate {
             Candidate::Coulomb => "coulomb",
             Candidate::StaticAgeing => "static_ageing",
             Candidate::RateState => "rate_state_ageing",
+            Candidate::Heslot => crate::heslot::ID,
         }
     }
 
@@ -79,6 +83,7 @@ impl Candidate {
             Candidate::Coulomb => COULOMB,
             Candidate::StaticAgeing => AGEING,
             Candidate::RateState => RATE_STATE,
+            Candidate::Heslot => crate::heslot::PARAMS,
         }
     }
     /// The law of parameter vector `x`.
@@ -96,19 +101,22 @@ impl Candidate {
             Candidate::RateState => {
                 Law::RateState { mu0: x[0], a: x[1], b: x[1] + x[2], dc_m: x[3], v_ref_m_s: V_REF_M_S }
             }
+            Candidate::Heslot => Law::Heslot(crate::heslot::Heslot::of(x)),
         }
     }
 
     /// Starting points inside the bounds (around the measured mean force
-    /// `mu`); the fit starts from the ones with the lowest calibration misfit.
+    /// `h.mu`); the fit starts from the ones with the lowest calibration misfit.
     /// For the memory laws they span the literature's range for paper on
     /// paper (Heslot et al. 1994, Baumberger & Caroli 2006: a and b − a of
     /// 0.003–0.02, Dc of 0.3–3 µm, ageing over 0.01–1 s): where the search
     /// starts, not a value it keeps. The rate-and-state starts also sit on
-    /// the stability boundary the data show: `kc_over_weight_per_m` is
+    /// the stability boundary the data show: `h.kc_over_weight_per_m` is
     /// k_c/(m g) = (b − a)/Dc ([`critical_stiffness_guess_n_m`] over the
-    /// weight), so each Dc gets the b − a that puts k_c there.
-    pub fn starts(self, mu: f64, kc_over_weight_per_m: f64) -> Vec<Vec<f64>> {
+    /// weight), so each Dc gets the b − a that puts k_c there; and, when a
+    /// calibration run creeps, on its Hopf oscillation ([`hopf_starts`]).
+    pub fn starts(self, h: &StartHints) -> Vec<Vec<f64>> {
+        let (mu, kc_over_weight_per_m) = (h.mu, h.kc_over_weight_per_m);
         match self {
             Candidate::Coulomb => vec![vec![mu + 0.02, 0.04], vec![mu + 0.01, 0.01], vec![mu + 0.05, 0.1]],
             Candidate::StaticAgeing => [(0.002, 0.01), (0.002, 1.0), (0.01, 0.01), (0.01, 1.0)]
@@ -125,8 +133,10 @@ impl Candidate {
                         v.push(vec![mu, a, (kc_over_weight_per_m * dc).clamp(1e-4, 0.1), dc]);
                     }
                 }
+                v.extend(hopf_starts(h));
                 v
             }
+            Candidate::Heslot => crate::heslot::Heslot::starts(mu, kc_over_weight_per_m),
         }
     }
 }
@@ -196,7 +206,8 @@ impl SetupCandidate {
     /// so m_eff/m or k/k_eff = ratio² (a Coulomb cycle near the inertial
     /// limit lasts about one natural period). Where the search starts, not a
     /// value it keeps.
-    pub fn starts(self, period_ratio: f64, stiffest_n_m: f64) -> Vec<Vec<f64>> {
+    pub fn starts(self, h: &StartHints) -> Vec<Vec<f64>> {
+        let (period_ratio, stiffest_n_m) = (h.period_ratio, h.stiffest_n_m);
         let r2 = period_ratio * period_ratio;
         match self {
             SetupCandidate::Stated => vec![vec![]],
@@ -244,9 +255,9 @@ impl Model {
     /// The law's starts, each with the set-up's first start, then the first
     /// law start with the set-up's others ([`Candidate::starts`],
     /// [`SetupCandidate::starts`]).
-    pub fn starts(self, mu: f64, kc_over_weight_per_m: f64, period_ratio: f64, stiffest_n_m: f64) -> Vec<Vec<f64>> {
-        let laws = self.friction.starts(mu, kc_over_weight_per_m);
-        let setups = self.setup.starts(period_ratio, stiffest_n_m);
+    pub fn starts(self, h: &StartHints) -> Vec<Vec<f64>> {
+        let laws = self.friction.starts(h);
+        let setups = self.setup.starts(h);
         let join = |a: &[f64], b: &[f64]| a.iter().chain(b).copied().collect::<Vec<f64>>();
         let mut v: Vec<Vec<f64>> = laws.iter().map(|l| join(l, &setups[0])).collect();
         v.extend(setups[1..].iter().map(|s| join(&laws[0], s)));
@@ -266,6 +277,47 @@ impl Model {
         }
         v
     }
+}
+
+/// What the calibration runs say about where a fit should start (never a
+/// value it keeps).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StartHints {
+    /// Mean force over weight of the training runs.
+    pub mu: f64,
+    /// [`critical_stiffness_guess_n_m`] over the weight, 1/m.
+    pub kc_over_weight_per_m: f64,
+    /// Median P/T0 of the training runs' inertial oscillations (1 when none).
+    pub period_ratio: f64,
+    /// The stiffest training spring, N/m.
+    pub stiffest_n_m: f64,
+    /// A creeping training run: (its stiffness over the weight, 1/m; its drive
+    /// speed, m/s; its median period, s).
+    pub creep: Option<(f64, f64, f64)>,
+}
+
+/// Rate-and-state starts on a creeping run's oscillation: near its
+/// stability boundary the ageing law's steady sliding loses stability in a
+/// Hopf bifurcation at k_c = m g (b − a)/Dc with the angular frequency
+/// ω_c = (V/Dc) √((b − a)/a) (linearised Dieterich–Ruina law, quasi-static:
+/// m V²/(m g a Dc) ≈ 10⁻⁴ here; Rice & Ruina 1983; Heslot et al. 1994's
+/// creep regime, period of order D0/V). With k_c at the run's stiffness
+/// (× 1 and × 1.1, the creep band sitting just past the boundary) and its
+/// period P: b − a = k_c Dc/(m g), a = (b − a) (P V/(2π Dc))², for Dc = 1
+/// and 3 µm (a micrometre on paper). Each clamped into the law's bounds.
+pub fn hopf_starts(h: &StartHints) -> Vec<Vec<f64>> {
+    let Some((k_over_weight, v, period)) = h.creep else { return Vec::new() };
+    let specs = Candidate::RateState.params();
+    let mut out = Vec::new();
+    for dc in [1e-6, 3e-6] {
+        for over in [1.0, 1.1] {
+            let b_minus_a = over * k_over_weight * dc;
+            let a = b_minus_a * (period * v / (2.0 * std::f64::consts::PI * dc)).powi(2);
+            let x = [h.mu, a, b_minus_a, dc];
+            out.push(x.iter().zip(specs).map(|(v, s)| v.clamp(s.lo, s.hi)).collect());
+        }
+    }
+    out
 }
 
 /// The critical stiffness the calibration runs show, N/m: rate and state

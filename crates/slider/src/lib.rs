@@ -19,6 +19,7 @@
 //! | `coulomb` | the baseline: one static and one kinetic coefficient | stick below μs, slip at μk | `mu_static`, `mu_drop` (μs − μk) |
 //! | `static_ageing` | the static threshold grows with the time stuck (contacts age), the kinetic friction grows with speed | μs(t) = μs0 + β ln(1 + t/τ); μk(v) = μk0 + α ln(1 + v/v1), v1 = 100 µm/s | `mu_static0`, `ageing_beta`, `ageing_time_s`, `mu_drop`, `alpha` |
 //! | `rate_state_ageing` | friction with a memory of the contact's age θ (Dieterich–Ruina) | μ = μ0 + a ln(v/v*) + b ln(v*θ/Dc), dθ/dt = 1 − vθ/Dc, v* = 100 µm/s | `mu0`, `a`, `b_minus_a`, `dc_m` |
+//! | `heslot_creep` | rate and state with the speed and the age cut off at small values (Heslot et al. 1994): a static threshold that ages, a steady friction weakening below B V0/A and strengthening above ([`heslot`]) | μ = μ0 + A ln(1 + v/V0) + B ln(1 + θ/θ0), dθ/dt = 1 − vθ/D0, θ0 = D0/V0 | `mu0`, `a`, `b_minus_a`, `d0_m`, `v0_m_s` |
 //! | `effective_mass` | the mass that oscillates is not the slider's weighed mass (a spring's own mass adds m_s/3) | m_eff = r m in m_eff ẍ = k (V t − x) − m g μ | `mass_ratio` |
 //! | `series_compliance` | a compliance in series with the spring (force sensor, loading stage) | 1/k_eff = 1/k + 1/k_s | `series_stiffness_n_m` |
 //! | `spring_scale` | the springs as mounted are stiffer or softer than stated, by one factor | k_eff = r k | `stiffness_ratio` |
@@ -30,6 +31,7 @@
 
 pub mod features;
 pub mod fit;
+pub mod heslot;
 pub mod render;
 pub mod sim;
 pub mod study;

@@ -24,8 +24,10 @@ unstable (stick-slip; creep-dominated near k_c), above it the slider slides stea
 bifurcation into nearly harmonic oscillations near 2π√(m/k) (the inertial regime). Heslot et al. 1994 measured the memory \
 length D0 at about a micrometre on paper and the logarithmic ageing of the static threshold; their heuristic model is the \
 rate-and-state law with an inertia term, whose Hopf frequency Ω² = k/(m + N a D0/V²) gives the creep regime at low V (the \
-interface term dominates) and the inertial one at high V (m dominates). The candidates here are two forms of that \
-memory (static ageing with a rate-strengthening kinetic law; rate-and-state with the ageing law) and three set-ups (an \
+interface term dominates) and the inertial one at high V (m dominates). The candidates here are three forms of that \
+memory (static ageing with a rate-strengthening kinetic law; rate-and-state with the ageing law, started also on a \
+creeping calibration run's Hopf point; Heslot et al.'s law with the speed and the age cut off at small values, \
+`heslot_creep`, whose speed term vanishing at rest gives a static threshold) and three set-ups (an \
 effective mass, a compliance in series, a scaled spring), fitted by simulation on the calibration runs and chosen by \
 forward selection on the held-out runs.";
 
@@ -171,6 +173,44 @@ fn inertial_note(s: &Study) -> String {
             resting.join(", "),
             want
         );
+        // Which of the set-up's elements the numbers leave: a spring r times
+        // stiffer (refuted when the resting load rate's median sits many
+        // standard errors below r), a contact stiffness in parallel with the
+        // spring (k_p = k (T0²/P² − 1), one number only if it comes out the
+        // same at every spring), a lighter mass (m (P/T0)², the same factor).
+        let z_scale: Vec<String> = s
+            .runs
+            .iter()
+            .filter(|r| r.features.regime == Regime::StickSlip && r.features.load_rate.n > 0)
+            .map(|r| {
+                let l = &r.features.load_rate;
+                let se = 1.253 * l.sd / (l.n as f64).sqrt();
+                format!("{:.1} ({})", (want - l.median) / se, r.name)
+            })
+            .collect();
+        let parallel: Vec<String> = r2
+            .iter()
+            .filter_map(|(ratio2, _, name)| {
+                let r = s.runs.iter().find(|r| r.name == *name)?;
+                Some(format!("{:.0} N/m at k = {} N/m", r.stiffness_n_m * (1.0 / ratio2 - 1.0), r.stiffness_n_m))
+            })
+            .collect();
+        let mean_r2 = r2.iter().map(|x| x.0).sum::<f64>() / r2.len() as f64;
+        let _ = writeln!(
+            out,
+            "Which element, by the numbers: a spring {want:.2} × stiffer would raise the resting load rate to {want:.2} L, \
+             which sits {} standard errors of the median above the measured ones (refuted); a contact stiffness in parallel \
+             with the spring (the pinned micro-contacts' elasticity acting on the slider beside the spring) would need \
+             {} — not one interface; a velocity-strengthening term or the state's relaxation adds damping or a negative \
+             stiffness (above), so the law's stiffness at high speed shortens nothing. What is left is a mass: {:.1} g \
+             oscillating ({:.2} m, the mean (P/T0)² of the fastest runs), lighter than the weighed slider — an element \
+             the README's set-up (slider, spring, drive) does not have (a spring's own mass adds to m), so it stays a \
+             set-up finding for the data's authors, one number for both springs.\n",
+            z_scale.join(", "),
+            parallel.join(" and "),
+            1e3 * mean_r2 * s.params.mass_kg,
+            mean_r2
+        );
     }
     for c in s.candidates.iter().filter(|c| c.model.setup != SetupCandidate::Stated) {
         let n = c.model.friction.params().len();
@@ -213,7 +253,12 @@ fn causes(s: &Study) -> String {
             out,
             "- {} creeps: through the loading phase the force rises at {:.2} ± {:.2} L (the slider moving at about {:.0} % of V \
              on the stated spring), stick fraction {:.2}, against {} where the slider rests. A Coulomb slider rests until it \
-             slips at any stiffness; rate and state creeps near its critical stiffness.",
+             slips at any stiffness; rate and state creeps near its critical stiffness. Its period, {:.4} s, is {:.1} T0 \
+             (the mass does not set it) and P V = {:.1} µm, of order ten times the memory length D0 ≈ 1 µm of paper (the \
+             interface sets it: near the boundary rate and state oscillates at ω = (V/Dc) √((b − a)/a), so \
+             Dc √(a/(b − a)) = P V/2π = {:.2} µm); a slip gives back {:.1} µm (drop × m g/k), the rest of the drive's \
+             travel is crept; the cycles spread (period sd {:.0} % of its median): a relaxation past the Hopf point, \
+             not the harmonic oscillation at it.",
             r.name,
             f.load_rate.median,
             f.load_rate.sd,
@@ -224,7 +269,13 @@ fn causes(s: &Study) -> String {
                 .filter(|q| q.features.regime == Regime::StickSlip)
                 .map(|q| format!("{} ({:.2} L)", q.name, q.features.load_rate.median))
                 .collect::<Vec<_>>()
-                .join(", ")
+                .join(", "),
+            f.period_s.median,
+            f.period_s.median / f.natural_period_s,
+            1e6 * f.period_s.median * r.drive_speed_um_s * 1e-6,
+            f.period_s.median * r.drive_speed_um_s / (2.0 * std::f64::consts::PI),
+            1e6 * f.drop.median * weight_n / r.stiffness_n_m,
+            100.0 * f.period_s.sd / f.period_s.median
         );
     }
     for c in s.candidates.iter().filter(|c| c.model.friction == Candidate::RateState) {
@@ -309,9 +360,44 @@ fn causes(s: &Study) -> String {
                  step: a fit of this law has no creep to find there, calibrated or held out — within the scanned range what \
                  it misses is in the law as simulated, not in the fit."
             } else {
-                "It creeps in a band of the scan: the law can give this regime, and a fit that does not has missed the band."
+                "It creeps in a band of the scan: the law can give this regime (the last case: a direct effect a several \
+                 times b − a, which the Hopf period asks for)."
             }
         );
+        if let Some((x, at)) = &b.creeping_law {
+            let others: Vec<String> = at
+                .iter()
+                .map(|(j, f, m)| {
+                    format!(
+                        "{} measured {} → {} (period {:.4} s against {:.4} s, drop {:.3} against {:.3}; misfit {:.2})",
+                        s.runs[*j].name,
+                        s.runs[*j].features.regime.label(),
+                        f.regime.label(),
+                        f.period_s.median,
+                        s.runs[*j].features.period_s.median,
+                        f.drop.median,
+                        s.runs[*j].features.drop.median,
+                        m
+                    )
+                })
+                .collect();
+            let mean = at.iter().map(|a| a.2).sum::<f64>() / at.len().max(1) as f64;
+            let _ = writeln!(
+                out,
+                "- What creeping at {} costs on the same spring: the first law of the scan that creeps there (μ0 = {:.3}, \
+                 a = {:.4}, b − a = {:.4}, Dc = {:.1} µm), simulated at every run of k = {} N/m: {}; mean misfit {:.2}. \
+                 The fit of `rate_state_ageing` on these runs (it starts from this Hopf point too, \
+                 `rig_slider::fit::hopf_starts`) keeps the lower misfit elsewhere.",
+                r.name,
+                x[0],
+                x[1],
+                x[2],
+                1e6 * x[3],
+                r.stiffness_n_m,
+                others.join("; "),
+                mean
+            );
+        }
     }
     let base = &s.candidates[0];
     let light = Model { friction: Candidate::Coulomb, setup: SetupCandidate::EffectiveMass };
@@ -1170,10 +1256,11 @@ fn markdown(s: &Study) -> String {
     );
     let _ = writeln!(
         md,
-        "Ids (crate docs of `rig_slider`): friction laws `{}`, `{}`, `{}`; set-ups `{}`, `{}`, `{}`, `{}`; a model is `law+set-up`.",
+        "Ids (crate docs of `rig_slider`): friction laws `{}`, `{}`, `{}`, `{}`; set-ups `{}`, `{}`, `{}`, `{}`; a model is `law+set-up`.",
         Candidate::Coulomb.id(),
         Candidate::StaticAgeing.id(),
         Candidate::RateState.id(),
+        Candidate::Heslot.id(),
         SetupCandidate::Stated.id(),
         SetupCandidate::EffectiveMass.id(),
         SetupCandidate::SeriesCompliance.id(),

@@ -40,6 +40,9 @@ pub enum Law {
     StaticAgeing { mu_static0: f64, ageing_beta: f64, ageing_time_s: f64, mu_kinetic0: f64, alpha: f64, v1_m_s: f64 },
     /// Dieterich–Ruina with the ageing law; μ0 at the reference speed v*.
     RateState { mu0: f64, a: f64, b: f64, dc_m: f64, v_ref_m_s: f64 },
+    /// Heslot et al. 1994's law, the velocity and the age cut off at small
+    /// values ([`crate::heslot`]).
+    Heslot(crate::heslot::Heslot),
 }
 
 /// The set-up as the simulation sees it, beside the friction law: the mass
@@ -117,6 +120,7 @@ impl Law {
             Law::Coulomb { mu_kinetic, .. } => mu_kinetic,
             Law::StaticAgeing { mu_kinetic0, .. } => mu_kinetic0,
             Law::RateState { mu0, .. } => mu0,
+            Law::Heslot(h) => h.mu0,
         }
     }
 }
@@ -188,6 +192,9 @@ impl Contact {
 impl ImplicitFriction for Contact {
     /// Coulomb: none; static ageing: the time stuck (0); rate and state: θ = Dc/V.
     fn initial_state(&self, drive_m_s: f64) -> [f64; MAX_FRICTION_STATES] {
+        if let Law::Heslot(law) = self.law {
+            return crate::heslot::Contact { law, weight_n: self.weight_n }.initial_state(drive_m_s);
+        }
         self.rate_state().map_or([0.0; MAX_FRICTION_STATES], |r| r.initial_state(drive_m_s))
     }
     fn implicit_step(
@@ -217,6 +224,9 @@ impl ImplicitFriction for Contact {
             }
             Law::RateState { .. } => {
                 self.rate_state().expect("a rate-and-state law").implicit_step(state, stuck, p, h_over_mass, h_s)
+            }
+            Law::Heslot(law) => {
+                crate::heslot::Contact { law, weight_n: w }.implicit_step(state, stuck, p, h_over_mass, h_s)
             }
         }
     }

@@ -15,7 +15,9 @@
 
 use crate::SliderError;
 use crate::features::{FeatureOptions, Features, Regime, RunConstants, Spread, features, spectral_period_s};
-use crate::fit::{CANDIDATES, Candidate, Model, SETUPS, SetupCandidate, critical_stiffness_guess_n_m, fit, run_misfit};
+use crate::fit::{
+    CANDIDATES, Candidate, Model, SETUPS, SetupCandidate, StartHints, critical_stiffness_guess_n_m, fit, run_misfit,
+};
 use crate::sim::{Setup, simulate_into};
 use rayon::prelude::*;
 use rig_ingest::slider::{SliderRun, read_slider_folder};
@@ -180,21 +182,42 @@ pub struct BoundaryScan {
     pub run: usize,
     /// One [`ScanCase`] per (a, Dc).
     pub scans: Vec<ScanCase>,
+    /// The first law of the scans that creeps at the run (μ0, a, b − a, Dc:
+    /// `rate_state_ageing`'s vector), with its features and misfit at every
+    /// run of the same stiffness: what creeping there costs elsewhere.
+    pub creeping_law: Option<CreepingLaw>,
 }
+
+/// A law's parameter vector and, per run, (run index, features, misfit).
+pub type CreepingLaw = (Vec<f64>, Vec<(usize, Features, f64)>);
 
 /// (a, Dc in m, [(k_c/k, regime)]), k_c/k from 0.85 to 1.15 in steps of 0.025.
 pub type ScanCase = (f64, f64, Vec<(f64, Regime)>);
 
 /// [`BoundaryScan`] of run `i`, at a = 0.003 and 0.01 and Dc = 0.3 and 1 µm
 /// (the literature's range for paper: Heslot et al. 1994, Baumberger &
-/// Caroli 2006; where the scan sits, not a fitted value), μ0 at the run's
-/// mean force: whether the law has a creep regime at that (k, V) at all.
+/// Caroli 2006; where the scan sits, not a fitted value), and at Dc = 1 µm
+/// with the a of the run's own Hopf oscillation (`fit::hopf_starts`: the
+/// a that puts the linearised law's period at the measured one when k_c is
+/// the run's stiffness), μ0 at the run's mean force: whether the law has a
+/// creep regime at that (k, V) at all, and where.
 pub fn boundary_scan(runs: &[Measured], i: usize, p: &StudyParams) -> BoundaryScan {
     let m = &runs[i];
     let rs = Model { friction: Candidate::RateState, setup: SetupCandidate::Stated };
     let weight_n = p.mass_kg * p.gravity_m_s2;
-    let cases: Vec<(f64, f64)> = [0.003, 0.01].iter().flat_map(|&a| [0.3e-6, 1e-6].map(|dc| (a, dc))).collect();
-    let scans = cases
+    let mut cases: Vec<(f64, f64)> = [0.003, 0.01].iter().flat_map(|&a| [0.3e-6, 1e-6].map(|dc| (a, dc))).collect();
+    let hints = StartHints {
+        mu: m.features.mean_force,
+        kc_over_weight_per_m: m.stiffness_n_m / weight_n,
+        period_ratio: 1.0,
+        stiffest_n_m: m.stiffness_n_m,
+        creep: Some((m.stiffness_n_m / weight_n, m.drive_speed_um_s * 1e-6, m.features.period_s.median)),
+    };
+    // The first Hopf start: Dc = 1 µm, k_c at the run's stiffness.
+    if let Some(x) = crate::fit::hopf_starts(&hints).first() {
+        cases.push(((1e3 * x[1]).round() / 1e3, x[3]));
+    }
+    let scans: Vec<ScanCase> = cases
         .par_iter()
         .map(|&(a, dc)| {
             let regimes = (0..13)
@@ -207,7 +230,20 @@ pub fn boundary_scan(runs: &[Measured], i: usize, p: &StudyParams) -> BoundarySc
             (a, dc, regimes)
         })
         .collect();
-    BoundaryScan { run: i, scans }
+    let creeping_law = scans.iter().find_map(|(a, dc, regimes)| {
+        let ratio = regimes.iter().find(|x| x.1 == Regime::Creep)?.0;
+        let x = vec![m.features.mean_force, *a, ratio * m.stiffness_n_m * dc / weight_n, *dc];
+        let same_k: Vec<usize> = (0..runs.len()).filter(|&j| runs[j].stiffness_n_m == m.stiffness_n_m).collect();
+        let at = same_k
+            .par_iter()
+            .map(|&j| {
+                let f = predict(rs, &x, &runs[j], p);
+                (j, f, run_misfit(&runs[j].features, &f))
+            })
+            .collect();
+        Some((x, at))
+    });
+    BoundaryScan { run: i, scans, creeping_law }
 }
 
 /// Points of a figure's trace at most.
@@ -347,6 +383,14 @@ fn fit_on(model: Model, runs: &[Measured], train: &[usize], nested: Option<&Fitt
         .collect();
     let period_ratio = if ratios.is_empty() { 1.0 } else { Spread::of(&ratios).median };
     let stiffest = on.iter().map(|r| r.stiffness_n_m).fold(0.0, f64::max);
+    // The slowest creeping run (where the boundary's Hopf oscillation shows).
+    let weight_n = p.mass_kg * p.gravity_m_s2;
+    let creep = on
+        .iter()
+        .filter(|r| r.features.regime == Regime::Creep && r.features.period_s.n > 0)
+        .min_by(|a, b| a.drive_speed_um_s.total_cmp(&b.drive_speed_um_s))
+        .map(|r| (r.stiffness_n_m / weight_n, r.drive_speed_um_s * 1e-6, r.features.period_s.median));
+    let hints = StartHints { mu, kc_over_weight_per_m: kc, period_ratio, stiffest_n_m: stiffest, creep };
     let cost = |x: &[f64]| {
         let m: Vec<f64> = on.par_iter().map(|r| run_misfit(&r.features, &predict(model, x, r, p))).collect();
         m.iter().sum::<f64>() / m.len() as f64
@@ -354,8 +398,8 @@ fn fit_on(model: Model, runs: &[Measured], train: &[usize], nested: Option<&Fitt
     let specs = model.params();
     // Multi-start: every start scored, Nelder–Mead from the best
     // `fit_starts`, the best result kept.
-    let mut starts = nested.map_or_else(Vec::new, |f| warm_starts(model, f, kc, period_ratio, stiffest));
-    starts.extend(model.starts(mu, kc, period_ratio, stiffest));
+    let mut starts = nested.map_or_else(Vec::new, |f| warm_starts(model, f, &hints));
+    starts.extend(model.starts(&hints));
     let mut scored: Vec<(f64, Vec<f64>)> = starts.into_iter().map(|x| (cost(&x), x)).collect();
     scored.sort_by(|a, b| a.0.total_cmp(&b.0));
     let (params, calibration_misfit) = scored
@@ -381,20 +425,14 @@ fn fit_on(model: Model, runs: &[Measured], train: &[usize], nested: Option<&Fitt
 /// each of `model`'s law starts on the nested set-up (a memory law added on
 /// a set-up). None when the law changes on the stated set-up (nothing of
 /// the nested fit carries over).
-fn warm_starts(
-    model: Model,
-    nested: &Fitted,
-    kc_over_weight_per_m: f64,
-    period_ratio: f64,
-    stiffest_n_m: f64,
-) -> Vec<Vec<f64>> {
+fn warm_starts(model: Model, nested: &Fitted, hints: &StartHints) -> Vec<Vec<f64>> {
     let nf = nested.model.friction.params().len();
     let (law, setup) = nested.params.split_at(nf);
     let join = |a: &[f64], b: &[f64]| a.iter().chain(b).copied().collect::<Vec<f64>>();
     if nested.model.friction == model.friction && nested.model.setup != model.setup {
-        model.setup.starts(period_ratio, stiffest_n_m).iter().map(|s| join(law, s)).collect()
+        model.setup.starts(hints).iter().map(|s| join(law, s)).collect()
     } else if nested.model.setup == model.setup && model.setup != SetupCandidate::Stated {
-        model.friction.starts(law[0], kc_over_weight_per_m).iter().map(|l| join(l, setup)).collect()
+        model.friction.starts(&StartHints { mu: law[0], ..*hints }).iter().map(|l| join(l, setup)).collect()
     } else {
         Vec::new()
     }

@@ -24,6 +24,15 @@ fn shipped() -> Option<PathBuf> {
     }
 }
 
+/// pipeline.toml's settings and the shipped runs measured with them.
+fn shipped_runs() -> Option<(StudyParams, Vec<Measured>)> {
+    let dir = shipped()?;
+    let p = params();
+    let raw = rig_ingest::slider::read_slider_folder(&dir).unwrap();
+    let runs = raw.iter().map(|r| rig_slider::study::measure(r, &p)).collect();
+    Some((p, runs))
+}
+
 fn synthetic(k: f64, v_um_s: f64, duration_s: f64, f: rig_slider::Features) -> Measured {
     Measured {
         name: format!("k{k}-v{v_um_s}"),
@@ -84,7 +93,7 @@ fn study_on_the_shipped_folder() {
     // The forward selection starts from Coulomb on the stated set-up and tries every memory law and every set-up.
     assert_eq!(s.candidates[0].model, Model::BASELINE);
     let first: Vec<Model> = s.steps[0].tried.iter().map(|&i| s.candidates[i].model).collect();
-    assert_eq!(first.len(), 5, "{first:?}");
+    assert_eq!(first.len(), 6, "{first:?}");
     let out = render(&s);
     let verdict = out.diagnosis["verdict"].as_str().unwrap();
     let ids = [
@@ -92,6 +101,7 @@ fn study_on_the_shipped_folder() {
         "unexplained",
         "static_ageing",
         "rate_state_ageing",
+        "heslot_creep",
         "effective_mass",
         "series_compliance",
         "spring_scale",
@@ -224,11 +234,17 @@ fn each_shipped_stiffness_held_out() {
     // What does not (slider.md's "The causes, from the records" gives the
     // numbers): the creep at k2254-v42 (a rate-and-state fit on 168 N/m,
     // where every run stick-slips, puts k_c at 565 N/m and slides steadily
-    // at 2254; nothing at 168 N/m places k_c), and the inertial periods at
+    // at 2254; nothing at 168 N/m places k_c; the law creeps there only on
+    // its Hopf point, where it stick-slips at k2254-v1100:
+    // `rate_state_creeps_at_the_creeping_run_only_on_its_hopf_point`;
+    // `heslot_creep` never creeps: `heslots_law_rests_through_every_loading_phase`;
+    // the selection keeps neither), and the inertial periods at
     // 4300 µm/s with a Coulomb law on the stated m and k, which cannot
     // oscillate faster than 2π√(m/k) (the force's spectrum confirms 0.76 T0
-    // at both stiffnesses); at k168-v4300 it also slips at μs where the
-    // record slips at 0.55 (its mean force 0.50, every other run's 0.30–0.37).
+    // at both stiffnesses; a lighter mass, 0.62 m, is the one element the
+    // numbers leave, and held out it mends one run of three, t 0.35); at
+    // k168-v4300 it also slips at μs where the record slips at 0.55 (its mean
+    // force 0.50, every other run's 0.30–0.37).
     assert_eq!(
         failed,
         ["k2254-v42 regime", "k2254-v4300 inertial period", "k168-v4300 inertial period", "k168-v4300 onset"]
@@ -301,32 +317,66 @@ fn a_description_that_does_not_fit_the_files_names_the_field() {
 }
 
 #[test]
-fn rate_and_state_jumps_from_steady_sliding_to_stick_slip_at_the_creeping_run() {
-    // Why no model gets k2254-v42's regime (creep: the slider moves through
-    // the loading phase, stick fraction 0.21, drop 0.042): across its
-    // stability boundary the Dieterich–Ruina law with the ageing law, as
-    // simulated and read by the one feature function, goes from steady
-    // sliding to stick-slip with no creep between (`study::boundary_scan`:
-    // b − a putting the quasi-static critical stiffness k_c = m g (b − a)/Dc
-    // from 0.85 to 1.15 × 2254 N/m in steps of 2.5 %, inertia moving the
-    // boundary by a few per cent, Rice & Ruina 1983; two a and two Dc in the
-    // literature's range for paper). A creep band, if the law has one
-    // here, is narrower than a 2.5 % step of k_c: the selection cannot be
-    // expected to find it, and the regime at k2254-v42 stays unexplained by
-    // this law family (a finding, not a tuning target).
-    let Some(dir) = shipped() else { return };
-    let p = params();
-    let raw = rig_ingest::slider::read_slider_folder(&dir).unwrap();
-    let runs: Vec<Measured> = raw.iter().map(|r| rig_slider::study::measure(r, &p)).collect();
+fn rate_and_state_creeps_at_the_creeping_run_only_on_its_hopf_point() {
+    // Why no fitted model gets k2254-v42's regime (creep: the slider moves
+    // through the loading phase at 0.67 V, stick fraction 0.21, drop 0.042,
+    // period 0.323 s = 13.9 T0, P V = 13.6 µm). `study::boundary_scan`: the
+    // Dieterich–Ruina law with the ageing law, b − a putting the quasi-static
+    // critical stiffness k_c = m g (b − a)/Dc from 0.85 to 1.15 × 2254 N/m.
+    // With a = 0.003 or 0.01 and Dc = 0.3 or 1 µm (the literature's range for
+    // paper) it goes from steady sliding to stick-slip with no creep between.
+    // On the run's own Hopf point (`fit::hopf_starts`: ω_c = (V/Dc)
+    // √((b − a)/a) at the measured period, a = 0.035 at Dc = 1 µm, a direct
+    // effect four to five times b − a) it creeps, with the period within
+    // 10 % — and the same law stick-slips at k2254-v1100, which oscillates
+    // inertially: creep at 42 µm/s and an inertial oscillation at 1100 µm/s
+    // on one spring is what this law cannot give at once.
+    let Some((p, runs)) = shipped_runs() else { return };
     let i = runs.iter().position(|r| r.name == "k2254-v42").expect("the creeping run");
     assert_eq!(runs[i].features.regime, Regime::Creep);
     // The study's own scan (slider.md prints it).
     let scan = rig_slider::study::boundary_scan(&runs, i, &p);
-    assert_eq!(scan.scans.len(), 4);
-    for (a, dc, regimes) in &scan.scans {
+    assert_eq!(scan.scans.len(), 5);
+    for (a, dc, regimes) in &scan.scans[..4] {
         eprintln!("a {a} Dc {dc:e}: {regimes:?}");
         assert!(regimes.iter().all(|r| r.1 != Regime::Creep), "a {a} Dc {dc}: {regimes:?}");
         assert_eq!(regimes[0].1, Regime::SteadySliding, "a {a} Dc {dc}: steady below the boundary");
         assert_eq!(regimes[12].1, Regime::StickSlip, "a {a} Dc {dc}: stick-slip above it");
     }
+    let (a, dc, regimes) = &scan.scans[4];
+    eprintln!("Hopf point a {a} Dc {dc:e}: {regimes:?}");
+    assert!((a / 0.035 - 1.0).abs() < 0.05 && *dc == 1e-6, "the Hopf start at Dc = 1 µm: a {a}");
+    assert!(regimes.iter().any(|r| r.1 == Regime::Creep), "{regimes:?}");
+    let (x, at) = scan.creeping_law.as_ref().expect("a law of the scan creeps");
+    let here = at.iter().find(|(j, ..)| *j == i).unwrap();
+    assert_eq!(here.1.regime, Regime::Creep, "{x:?}");
+    let ratio = here.1.period_s.median / runs[i].features.period_s.median;
+    assert!((ratio - 1.0).abs() < 0.1, "Hopf period {:?} against the measured", here.1.period_s);
+    let j = runs.iter().position(|r| r.name == "k2254-v1100").unwrap();
+    let v1100 = at.iter().find(|(k, ..)| *k == j).unwrap();
+    assert_eq!(runs[j].features.regime, Regime::InertialOscillation);
+    assert_eq!(v1100.1.regime, Regime::StickSlip, "{x:?}");
+}
+
+#[test]
+fn heslots_law_rests_through_every_loading_phase() {
+    // `heslot_creep` (Heslot et al. 1994's cut-offs, rig_slider::heslot) at
+    // k2254-v42 from each of its starts on that spring: a speed term that
+    // vanishes at v = 0 gives a static threshold, so whenever it slips the
+    // slider rests while the spring loads (load rate within 10 % of
+    // k V/(m g)): it never creeps, whatever the start.
+    let Some((p, runs)) = shipped_runs() else { return };
+    let m = runs.iter().find(|r| r.name == "k2254-v42").unwrap();
+    let kc = 1.2 * m.stiffness_n_m / (p.mass_kg * p.gravity_m_s2);
+    let model = Model { friction: Candidate::Heslot, setup: SetupCandidate::Stated };
+    let mut slipping = 0;
+    for x in rig_slider::heslot::Heslot::starts(m.features.mean_force, kc) {
+        let f = predict(model, &x, m, &p);
+        assert_ne!(f.regime, Regime::Creep, "{x:?}: {f:?}");
+        if f.load_rate.n > 0 {
+            slipping += 1;
+            assert!(f.load_rate.median > 0.9, "{x:?}: load rate {:?}", f.load_rate);
+        }
+    }
+    assert!(slipping >= 2, "starts that slip: {slipping}");
 }
