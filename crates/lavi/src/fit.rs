@@ -575,6 +575,25 @@ pub use rig_types::minimize::nelder_mead;
 mod tests {
     use super::*;
 
+    /// A record at 1 kHz of these channels (the raw ones equal to them, no dips, no repairs).
+    fn prepared(time_s: Vec<f64>, top_rpm: Vec<f64>, bit_rpm: Vec<f64>, torque_nm: Vec<f64>) -> Prepared {
+        let n = time_s.len();
+        Prepared {
+            fs_hz: 1000.0,
+            time_s,
+            top_rpm,
+            wob_n: vec![500.0; n],
+            bit_raw_rpm: bit_rpm.clone(),
+            torque_raw_nm: torque_nm.clone(),
+            bit_rpm,
+            torque_nm,
+            glitches: rig_spectra::stickslip::GlitchReport { runs: 0, samples: 0, longest_run: 0 },
+            top_noise_rad_s: 0.0,
+            twist_excursion_rad: (0.0, 0.0),
+            repairs: Vec::new(),
+        }
+    }
+
     /// 10 s at 1 kHz: bit speed 80 + 60 sin(2π 2 t) rpm, and a torque channel that
     /// reads the single-valued law 3 − 0.01 Ω(t − 0.025 s) (late by 25 ms).
     fn late_channel() -> (Prepared, WindowSpec) {
@@ -583,20 +602,7 @@ mod tests {
         let speed = |t: f64| 80.0 + 60.0 * (std::f64::consts::TAU * 2.0 * t).sin();
         let bit_rpm: Vec<f64> = time_s.iter().map(|t| speed(*t)).collect();
         let torque_nm: Vec<f64> = time_s.iter().map(|t| 3.0 - 0.01 * speed(t - 0.025)).collect();
-        let d = Prepared {
-            fs_hz: 1000.0,
-            top_rpm: vec![80.0; n],
-            wob_n: vec![500.0; n],
-            bit_raw_rpm: bit_rpm.clone(),
-            torque_raw_nm: torque_nm.clone(),
-            time_s,
-            bit_rpm,
-            torque_nm,
-            glitches: rig_spectra::stickslip::GlitchReport { runs: 0, samples: 0, longest_run: 0 },
-            top_noise_rad_s: 0.0,
-            twist_excursion_rad: (0.0, 0.0),
-            repairs: Vec::new(),
-        };
+        let d = prepared(time_s, vec![80.0; n], bit_rpm, torque_nm);
         let cal = WindowSpec {
             label: "3-7".into(),
             split: crate::data::Split::Train,
@@ -629,20 +635,7 @@ mod tests {
             .collect();
         let rpm = |x: &[f64]| x.iter().map(|v| v / RPM_TO_RAD_S).collect::<Vec<f64>>();
         let (top_rpm, bit_rpm) = (rpm(&top), rpm(&r.bit_rad_s));
-        let d = Prepared {
-            fs_hz: fs,
-            time_s: (0..n).map(|i| i as f64 / fs).collect(),
-            top_rpm,
-            wob_n: vec![500.0; n],
-            bit_raw_rpm: bit_rpm.clone(),
-            torque_raw_nm: torque_nm.clone(),
-            bit_rpm,
-            torque_nm,
-            glitches: rig_spectra::stickslip::GlitchReport { runs: 0, samples: 0, longest_run: 0 },
-            top_noise_rad_s: 0.0,
-            twist_excursion_rad: (0.0, 0.0),
-            repairs: Vec::new(),
-        };
+        let d = prepared((0..n).map(|i| i as f64 / fs).collect(), top_rpm, bit_rpm, torque_nm);
         let w = WindowSpec {
             label: "4-8".into(),
             split: crate::data::Split::Train,
@@ -662,15 +655,9 @@ mod tests {
             inertia_kgm2: 0.01,
             stiffness_nm_rad: 4.0,
             damping_nm_s_rad: 0.01,
-            absolute_damping_nm_s_rad: 0.0,
             torque_delay_s: late as f64 / fs,
             friction: law,
-            wob_ref_n: None,
-            sensor_inertia_kgm2: 0.0,
-            friction_lag_s: 0.0,
-            mid: None,
-            drive: None,
-            structure: Structure::BASELINE,
+            ..crate::sim::tests::base()
         };
         (d, w, m)
     }
