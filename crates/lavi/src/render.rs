@@ -725,9 +725,10 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
                 md,
                 "\nWhat would reach the missed targets ({missed}): the leftover torque follows the bit speed most, i.e. the recorded \
                  torque falls with speed more steeply than the law the free run accepts (the torque-level hypothesis above). A steeper \
-                 law inside the contact is what runs away in free run, so the next rung is not a law term but a dissipation outside the \
-                 contact (at the drive or along the shaft) that keeps a falling law's free run bounded, fitted on the calibration window \
-                 like the candidates above.\n"
+                 law inside the contact is what runs away in free run, and the bit's balance leaves no room for a drag along the shaft \
+                 (What the torque channel reads), so the next rung is not a law term but the drive as a state that answers the bit (the \
+                 top speed's feedback, which keeps a falling law's free run bounded), fitted jointly with the falling law on the \
+                 calibration window, with a fit budget that reaches it (the `compliant_drive` fit with the law, tried, did not).\n"
             );
         } else {
             let _ = writeln!(
