@@ -427,9 +427,36 @@ fn diagnosis_json(s: &Study) -> Value {
             ),
         },
         "parameters_at_bounds": at_bounds,
+        "torque_channel": torque_channel_json(s),
         "findings": findings,
         "candidates": candidates,
         "misfit": "phase-insensitive and joint: errors (simulated - measured) / target tolerance of seven window features, the five motion features and the two torque-level features weighing half each, sqrt(mean_motion e^2 / 2 + mean_torque e^2 / 2) (rig_lavi::score); criterion = paired t over the held-out windows",
+    })
+}
+
+/// What the torque channel reads per window (rig_lavi::fit::channel_balance): R² and
+/// residual of the bit's balance as recorded (baseline) and read at the delay.
+fn torque_channel_json(s: &Study) -> Value {
+    let delay_s =
+        s.structures.iter().find(|(_, d)| d.structure.torque_delay_s != 0.0).map(|(_, d)| d.structure.torque_delay_s);
+    let windows: Vec<Value> = s
+        .windows
+        .iter()
+        .zip(&s.channel_balance)
+        .map(|(w, [raw, late])| {
+            json!({
+                "window": w.label,
+                "r_squared_as_recorded": raw.r_squared,
+                "residual_rms_nm_as_recorded": raw.residual_rms_nm,
+                "r_squared_read_late": late.r_squared,
+                "residual_rms_nm_read_late": late.residual_rms_nm,
+            })
+        })
+        .collect();
+    json!({
+        "reads": "the bit's Newton balance k dphi + c (top - bit speed) - J dOmega/dt with the calibration window's J, k, c, read late by delay_s (one constant per window)",
+        "delay_s": delay_s,
+        "windows": windows,
     })
 }
 
