@@ -199,6 +199,49 @@ pub fn best_delay_s(d: &Prepared, cal: &WindowSpec, st: Structure, max_s: f64) -
     best.1
 }
 
+/// What the torque channel reads, tested teacher-forced on one window: the
+/// bit's Newton balance (Real et al. 2018's 1-DOF equation, the one of
+/// [`crate::eom`]) with a model's J, k, c, c_a, the torque predicted as
+/// T̂ = k Δφ + c (Ω_top − Ω) − c_a Ω − J Ω̇ + T_0 and compared with the channel
+/// read `torque_delay_s` later (T_0, the shaft's torque at the window's first
+/// sample, the one constant fitted per window: the twist's offset). A term
+/// the balance lacks (a drag outside the contact the model's dampings do not
+/// carry, a torque that is no function of the bit's state) stays in the
+/// residual. An inertia J_s between sensor and contact stays there only when
+/// J is known: fitted on the same torque it lowers J by J_s instead.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ChannelBalance {
+    /// 1 − Σ(T − T̂)² / Σ(T − mean T)² over the window.
+    pub r_squared: f64,
+    /// RMS of T − T̂, N m.
+    pub residual_rms_nm: f64,
+}
+
+/// [`ChannelBalance`] of window `w` (its `window` samples) under `m`'s J, k, c, c_a and torque delay.
+pub fn channel_balance(d: &Prepared, w: &WindowSpec, m: &Model) -> ChannelBalance {
+    let r = (w.span.start + w.window.start)..(w.span.start + w.window.end);
+    let rad = |x: &[f64]| x.iter().map(|v| v * RPM_TO_RAD_S).collect::<Vec<f64>>();
+    let (top, bit) = (rad(&d.top_rpm[r.clone()]), rad(&d.bit_rpm[r.clone()]));
+    let acc = derivative(&bit, d.fs_hz);
+    let dphi = rig_model::one_dof::integrated_twist_rad(&d.time_s[r.clone()], &top, &bit);
+    let shift = crate::sim::delay_samples(m.torque_delay_s, d.fs_hz);
+    let measured: Vec<f64> =
+        r.map(|i| d.torque_nm[(i as isize + shift).clamp(0, d.len() as isize - 1) as usize]).collect();
+    let shaft: Vec<f64> = (0..bit.len())
+        .map(|i| {
+            m.stiffness_nm_rad * dphi[i] + m.damping_nm_s_rad * (top[i] - bit[i])
+                - m.absolute_damping_nm_s_rad * bit[i]
+                - m.inertia_kgm2 * acc[i]
+        })
+        .collect();
+    let n = measured.len() as f64;
+    let t0 = measured.iter().zip(&shaft).map(|(t, p)| t - p).sum::<f64>() / n;
+    let mean = measured.iter().sum::<f64>() / n;
+    let sse: f64 = measured.iter().zip(&shaft).map(|(t, p)| (t - p - t0).powi(2)).sum();
+    let sst: f64 = measured.iter().map(|t| (t - mean).powi(2)).sum();
+    ChannelBalance { r_squared: 1.0 - sse / sst, residual_rms_nm: (sse / n).sqrt() }
+}
+
 /// How far the torque–bit-speed cloud of the calibration window's slip
 /// samples is from a curve when the torque is read `shift_s` later: the
 /// standard deviation of the torque in each of `bins` equal bit-speed bins
@@ -532,6 +575,25 @@ pub use rig_types::minimize::nelder_mead;
 mod tests {
     use super::*;
 
+    /// A record at 1 kHz of these channels (the raw ones equal to them, no dips, no repairs).
+    fn prepared(time_s: Vec<f64>, top_rpm: Vec<f64>, bit_rpm: Vec<f64>, torque_nm: Vec<f64>) -> Prepared {
+        let n = time_s.len();
+        Prepared {
+            fs_hz: 1000.0,
+            time_s,
+            top_rpm,
+            wob_n: vec![500.0; n],
+            bit_raw_rpm: bit_rpm.clone(),
+            torque_raw_nm: torque_nm.clone(),
+            bit_rpm,
+            torque_nm,
+            glitches: rig_spectra::stickslip::GlitchReport { runs: 0, samples: 0, longest_run: 0 },
+            top_noise_rad_s: 0.0,
+            twist_excursion_rad: (0.0, 0.0),
+            repairs: Vec::new(),
+        }
+    }
+
     /// 10 s at 1 kHz: bit speed 80 + 60 sin(2π 2 t) rpm, and a torque channel that
     /// reads the single-valued law 3 − 0.01 Ω(t − 0.025 s) (late by 25 ms).
     fn late_channel() -> (Prepared, WindowSpec) {
@@ -540,20 +602,7 @@ mod tests {
         let speed = |t: f64| 80.0 + 60.0 * (std::f64::consts::TAU * 2.0 * t).sin();
         let bit_rpm: Vec<f64> = time_s.iter().map(|t| speed(*t)).collect();
         let torque_nm: Vec<f64> = time_s.iter().map(|t| 3.0 - 0.01 * speed(t - 0.025)).collect();
-        let d = Prepared {
-            fs_hz: 1000.0,
-            top_rpm: vec![80.0; n],
-            wob_n: vec![500.0; n],
-            bit_raw_rpm: bit_rpm.clone(),
-            torque_raw_nm: torque_nm.clone(),
-            time_s,
-            bit_rpm,
-            torque_nm,
-            glitches: rig_spectra::stickslip::GlitchReport { runs: 0, samples: 0, longest_run: 0 },
-            top_noise_rad_s: 0.0,
-            twist_excursion_rad: (0.0, 0.0),
-            repairs: Vec::new(),
-        };
+        let d = prepared(time_s, vec![80.0; n], bit_rpm, torque_nm);
         let cal = WindowSpec {
             label: "3-7".into(),
             split: crate::data::Split::Train,
@@ -563,6 +612,69 @@ mod tests {
             window: 1000..5000,
         };
         (d, cal)
+    }
+
+    /// 12 s of stick-slip simulated by the one core (J 0.01 kg m2, k 4 N m/rad, c 0.01 N m s/rad, Coulomb
+    /// 2.5/1.5 N m, top 2 + sin(2π 0.5 t) rad/s), its contact torque recorded `late` samples late
+    /// plus `js` times the bit's acceleration; the calibration-like window 4-8 s.
+    fn simulated_record(late: usize, js: f64) -> (Prepared, WindowSpec, Model) {
+        use rig_model::one_dof::{Coulomb, Drive, OneDofState, Shaft, simulate};
+        let (n, fs) = (12_000, 1000.0);
+        let top: Vec<f64> = (0..n).map(|i| 2.0 + (std::f64::consts::TAU * 0.5 * i as f64 / fs).sin()).collect();
+        let shaft = Shaft {
+            inertia_kgm2: 0.01,
+            stiffness_nm_rad: 4.0,
+            twist_damping_nm_s_rad: 0.01,
+            absolute_damping_nm_s_rad: 0.0,
+            mid: None,
+        };
+        let law = Coulomb { static_nm: 2.5, kinetic_nm: 1.5 };
+        let r = simulate(&shaft, &law, Drive::Speed(&top), None, OneDofState::default(), fs, n, 10).unwrap();
+        let torque_nm: Vec<f64> = (0..n)
+            .map(|i| r.friction_nm[i.saturating_sub(late)] + js * r.accel_rad_s2[i.saturating_sub(late)])
+            .collect();
+        let rpm = |x: &[f64]| x.iter().map(|v| v / RPM_TO_RAD_S).collect::<Vec<f64>>();
+        let (top_rpm, bit_rpm) = (rpm(&top), rpm(&r.bit_rad_s));
+        let d = prepared((0..n).map(|i| i as f64 / fs).collect(), top_rpm, bit_rpm, torque_nm);
+        let w = WindowSpec {
+            label: "4-8".into(),
+            split: crate::data::Split::Train,
+            start_s: 4.0,
+            end_s: 8.0,
+            span: 1000..8000,
+            window: 3000..7000,
+        };
+        let law = FrictionLaw {
+            static_nm: 2.5,
+            kinetic_nm: 1.5,
+            stribeck_speed_rad_s: 0.01,
+            shape_exponent: 1.0,
+            viscous_nm_s_rad: 0.0,
+        };
+        let m = Model {
+            inertia_kgm2: 0.01,
+            stiffness_nm_rad: 4.0,
+            damping_nm_s_rad: 0.01,
+            torque_delay_s: late as f64 / fs,
+            friction: law,
+            ..crate::sim::tests::base()
+        };
+        (d, w, m)
+    }
+
+    #[test]
+    fn the_balance_reads_a_late_channel_and_sees_what_lies_between() {
+        // Read with its delay, the channel is the balance (differences across a stick/slip kink only).
+        let (d, w, m) = simulated_record(30, 0.0);
+        let on = channel_balance(&d, &w, &m);
+        assert!(on.r_squared > 0.99, "{on:?}");
+        // Read as recorded (no delay), the same channel is not.
+        let off = channel_balance(&d, &w, &Model { torque_delay_s: 0.0, ..m });
+        assert!(off.r_squared < on.r_squared - 0.05, "{off:?} {on:?}");
+        // With the bit's J known, an inertia of a tenth of it between sensor and contact is left in the residual.
+        let (d, w, m) = simulated_record(30, 0.001);
+        let js = channel_balance(&d, &w, &m);
+        assert!(js.residual_rms_nm > 2.0 * on.residual_rms_nm, "{js:?} {on:?}");
     }
 
     #[test]

@@ -41,8 +41,9 @@
 //! # Adequacy
 //!
 //! The final model is adequate when its held-out misfit (RMS over the windows) is at most
-//! `adequacy_threshold` (1: the seven features within their targets in
-//! RMS, [`score`]). Otherwise the verdict is `unexplained`, the selected
+//! `adequacy_threshold` (1: motion and torque level within their targets in
+//! the joint RMS of [`score`], the five motion and the two torque features
+//! weighing half each). Otherwise the verdict is `unexplained`, the selected
 //! effects stay as a partial explanation, and the residual signature
 //! ([`signature`]) says what the leftover torque follows.
 

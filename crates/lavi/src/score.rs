@@ -11,8 +11,19 @@
 //! (`breakaway_torque_nm`: issue 26). A feature the measurement lacks (no stick
 //! phase ends in the window) scores 0 when the run lacks it too, the cap
 //! otherwise. Each |e| is capped at 10 so that one
-//! diverging feature cannot hide the others; M = √(mean e²). M ≤ 1 means the
-//! features are, in RMS, within their targets; a feature meets its target when |e| ≤ 1.
+//! diverging feature cannot hide the others.
+//!
+//! The misfit is joint in motion and torque (issue 26: "a friction law that
+//! reproduces the motion with a friction level off the measured one by more
+//! than its uncertainty is not an explanation"): the five motion features
+//! ([`MOTION`]: bit-speed maximum and minimum, stick fraction, fundamental,
+//! loop area) and the two torque-level features ([`TORQUE`]) weigh half each,
+//! M = √(½ mean_motion e² + ½ mean_torque e²). A plain RMS over the seven
+//! would let five motion features outvote the two torque ones (a model with
+//! its motion on target and its torque level three tolerances off scored
+//! √(18/7) = 1.60; jointly √(9/2) = 2.12). M ≤ 1 means motion and torque
+//! level are, in this weighted RMS, within their targets; a feature meets its
+//! target when |e| ≤ 1.
 
 use crate::LaviError;
 use crate::data::{Prepared, RPM_TO_RAD_S, WindowSpec, derivative};
@@ -48,10 +59,27 @@ pub fn feature_errors(meas: &Features, sim: &Features) -> [f64; N_FEATURES] {
     e
 }
 
-/// M = √(mean e²) of [`feature_errors`].
-pub fn misfit_of(meas: &Features, sim: &Features) -> f64 {
+/// The motion features (indices into [`crate::features::FEATURES`]).
+pub const MOTION: std::ops::Range<usize> = 0..5;
+/// The torque-level features: mean slip torque, break-away torque.
+pub const TORQUE: std::ops::Range<usize> = 5..N_FEATURES;
+
+/// Mean square of the errors `e[r]`.
+fn mean_square(e: &[f64], r: std::ops::Range<usize>) -> f64 {
+    let n = r.len() as f64;
+    e[r].iter().map(|x| x * x).sum::<f64>() / n
+}
+
+/// RMS over the motion features and over the torque features of [`feature_errors`].
+pub fn group_misfits(meas: &Features, sim: &Features) -> (f64, f64) {
     let e = feature_errors(meas, sim);
-    (e.iter().map(|x| x * x).sum::<f64>() / e.len() as f64).sqrt()
+    (mean_square(&e, MOTION).sqrt(), mean_square(&e, TORQUE).sqrt())
+}
+
+/// The joint misfit M = √(½ mean_motion e² + ½ mean_torque e²) (module docs).
+pub fn misfit_of(meas: &Features, sim: &Features) -> f64 {
+    let (motion, torque) = group_misfits(meas, sim);
+    (0.5 * (motion * motion + torque * torque)).sqrt()
 }
 
 /// Everything a free run and its score need, per window.
@@ -192,5 +220,39 @@ impl<'a> Evaluator<'a> {
     /// parallel and in window order; a run that fails has NaN features.
     pub fn all_features(&self, m: &Model) -> Vec<Features> {
         (0..self.windows.len()).into_par_iter().map(|w| self.features(m, w).unwrap_or(Features::NAN)).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn features(v: [f64; N_FEATURES]) -> Features {
+        Features {
+            bit_speed_max_rpm: v[0],
+            bit_speed_min_rpm: v[1],
+            stick_fraction: v[2],
+            fundamental_hz: v[3],
+            loop_area: v[4],
+            slip_torque_nm: v[5],
+            breakaway_torque_nm: v[6],
+            stick_phase_s: 0.05,
+            stick_phases: 10,
+            cycles: 10,
+        }
+    }
+
+    #[test]
+    fn motion_cannot_outvote_the_torque_level() {
+        let meas = features([170.0, 5.0, 0.12, 2.7, 60.0, 2.0, 3.0]);
+        // Motion exact, both torque levels three tolerances (30 %) low.
+        let sim = features([170.0, 5.0, 0.12, 2.7, 60.0, 1.4, 2.1]);
+        let (motion, torque) = group_misfits(&meas, &sim);
+        assert!(motion.abs() < 1e-12 && (torque - 3.0).abs() < 1e-9, "{motion} {torque}");
+        // Jointly √(9/2), where a plain RMS over the seven features gave √(18/7).
+        assert!((misfit_of(&meas, &sim) - (4.5f64).sqrt()).abs() < 1e-9);
+        // Torque exact, every motion feature one tolerance off: √(1/2).
+        let sim = features([187.0, 15.0, 0.15, 2.781, 78.0, 2.0, 3.0]);
+        assert!((misfit_of(&meas, &sim) - (0.5f64).sqrt()).abs() < 1e-9, "{}", misfit_of(&meas, &sim));
     }
 }

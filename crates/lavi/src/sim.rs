@@ -235,10 +235,11 @@ pub fn simulate(m: &Model, u: &Inputs, start: Start, substeps: usize) -> Result<
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn base() -> Model {
+    /// A model every extension off (tests of this crate build on it).
+    pub(crate) fn base() -> Model {
         Model {
             inertia_kgm2: 0.05,
             stiffness_nm_rad: 2.0,

@@ -4,7 +4,8 @@
 use crate::data::{Prepared, RPM_TO_RAD_S, WindowSpec, prepare, windows};
 use crate::eom::Damping;
 use crate::fit::{
-    AtBound, Derivation, LoopSpread, MAX_DELAY_S, Structure, best_delay_s, derive, loop_spread, narrowest_loop,
+    AtBound, ChannelBalance, Derivation, LoopSpread, MAX_DELAY_S, Structure, best_delay_s, channel_balance, derive,
+    loop_spread, narrowest_loop,
 };
 use crate::render::{StudyOutput, render};
 use crate::score::Evaluator;
@@ -58,6 +59,10 @@ pub struct Study {
     pub loop_spread: [LoopSpread; 3],
     /// Parameters of the final model at a bound (least squares and simulation fits).
     pub parameters_at_bounds: Vec<AtBound>,
+    /// Per window (calibration first): what the torque channel reads, teacher-forced
+    /// ([`channel_balance`]): as recorded under the baseline's J, k, c, and read at the
+    /// equation of motion's delay under that structure's J, k, c (calibration window).
+    pub channel_balance: Vec<[ChannelBalance; 2]>,
     /// Per window: the torque through the stick phases as recorded and in the final model's free run.
     pub stick_torque: Vec<[StickTorque; 2]>,
     /// Per step-1 candidate (trial order): the torque through the stick phases of its free runs, per held-out window.
@@ -109,6 +114,10 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
     let tau = best_delay_s(&d, &wins[0], Structure::BASELINE, MAX_DELAY_S);
     let spread = |shift_s| loop_spread(&d, &wins[0], p.slip_speed_rpm, p.bins, shift_s);
     let loop_spread = [spread(0.0), spread(tau), narrowest_loop(&d, &wins[0], p.slip_speed_rpm, p.bins, MAX_DELAY_S)];
+    let (aligned, _) =
+        derive(&d, &wins[0], p.slip_speed_rpm, Structure { torque_delay_s: tau, ..Structure::BASELINE })?;
+    let channel_balance =
+        wins.iter().map(|w| [channel_balance(&d, w, &baseline), channel_balance(&d, w, &aligned)]).collect();
     let (_, final_der) = derive(&d, &wins[0], p.slip_speed_rpm, selection.final_model.structure)?;
     let mut parameters_at_bounds = final_der.at_bounds;
     for &i in &selection.chosen {
@@ -151,6 +160,7 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
         structure_heldout,
         structure_laws,
         loop_spread,
+        channel_balance,
         parameters_at_bounds,
         stick_torque,
         candidate_stick_torque,
@@ -187,6 +197,10 @@ fn structure_lead(
         ("damping on the absolute bit speed".to_string(), Structure { damping: Damping::Absolute, ..b }),
         ("damping on both".to_string(), Structure { damping: Damping::Both, ..b }),
         (format!("torque channel late by {:.0} ms", 1e3 * tau), Structure { torque_delay_s: tau, ..b }),
+        (
+            format!("torque channel late by {:.0} ms, damping on both", 1e3 * tau),
+            Structure { torque_delay_s: tau, damping: Damping::Both, ..b },
+        ),
         (format!("sensor inertia {js:.4} kg m2"), Structure { sensor_inertia_kgm2: js, ..b }),
     ];
     list.into_iter().map(|(name, st)| Ok((name, derive(d, cal, slip_speed_rpm, st)?.1))).collect()
