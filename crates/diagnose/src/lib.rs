@@ -368,10 +368,10 @@ pub fn diagnose(
             flagged
                 .extend(free_run_final.iter().filter(|k| k.flagged).map(|k| ("free_run".to_string(), k.as_pair().1)));
             // Only a mismatch the motion alone shows (every other check and the
-        // teacher-forced adequacy pass: `d` is concluded without the free-run
-        // flags): where another check fails, an effect that clears the free
-        // run may be compensating that failure (second_look docs).
-        if !looked && flagged != flagged1 && !moved && d.adequacy.adequate {
+            // teacher-forced adequacy pass: `d` is concluded without the free-run
+            // flags): where another check fails, an effect that clears the free
+            // run may be compensating that failure (second_look docs).
+            if !looked && flagged != flagged1 && !moved && d.adequacy.adequate {
                 looked = true;
                 let near = found.near_misses(opts);
                 if !near.is_empty() {

@@ -176,16 +176,9 @@ pub fn png_pixels_blake3(png: &[u8]) -> Result<String, String> {
 /// re-checking upstream stages, and writes what it staged to `out/dev-<name>/`.
 pub fn dev_run_only(name: &str, out: &Path) -> anyhow::Result<()> {
     let root = workspace_root();
-    let text = std::fs::read_to_string(root.join("pipeline.toml"))?;
-    let cfg: toml::Table = toml::from_str(&text)?;
-    let params = cfg
-        .get("stage")
-        .and_then(|s| s.as_array())
-        .and_then(|stages| stages.iter().find(|s| s.get("name").and_then(|n| n.as_str()) == Some(name)))
-        .and_then(|decl| decl.get("params"))
-        .and_then(|p| p.as_table())
-        .cloned()
-        .unwrap_or_default();
+    // The stage's params as the runner hands them over, `[shared.*]` tables included.
+    let config = crate::PipelineConfig::load(&root.join("pipeline.toml"), crate::stages::lookup)?;
+    let params = config.stage(name).map(|d| d.params.clone()).unwrap_or_default();
     let body = crate::stages::lookup(name).with_context(|| format!("no stage {name}"))?;
     let shared = root.join("../shared");
     let mut ctx = crate::StageCtx::new(
