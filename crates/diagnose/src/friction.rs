@@ -42,11 +42,28 @@ pub struct SlipData {
 
 impl SlipData {
     pub fn from_runs(runs: &[&RunSignals]) -> Self {
+        Self::from_runs_spaced(runs, 0.0)
+    }
+
+    /// The slip samples of `runs` on a grid `spacing_s` apart: of each run,
+    /// the slip samples whose index in the record is a multiple of
+    /// `spacing_s` counted in samples ([`rig_types::sensor::window_samples`]
+    /// of the run's time column); 0 keeps every sample ([`SlipData::from_runs`]).
+    /// The kept samples stay on a uniform time grid, so the frequency scan's
+    /// FFT still applies. What a cross-validation fold fits its model on
+    /// (`fold_fit_spacing_s`, [`crate::DiagnoseOptions`]: the residuals are
+    /// correlated over more than the spacing, so the thinned fit keeps
+    /// almost all of the information).
+    pub fn from_runs_spaced(runs: &[&RunSignals], spacing_s: f64) -> Self {
         let mut d = SlipData { n_runs: runs.len(), ..Default::default() };
         for (r, s) in runs.iter().enumerate() {
             let sd = (s.force_noise_n / s.normal_force_n.max(1e-9)).max(1e-6);
             d.run_weight.push(1.0 / (sd * sd));
+            let every = if spacing_s > 0.0 { rig_types::sensor::window_samples(&s.time_s, spacing_s).max(1) } else { 1 };
             for (j, &k) in s.slip_idx.iter().enumerate() {
+                if k % every != 0 {
+                    continue;
+                }
                 d.run.push(r);
                 d.t.push(s.time_s[k]);
                 d.phi.push(s.rotor_angle_rad[k]);

@@ -60,8 +60,9 @@ struct Cv<'a> {
     supply_v: f64,
     freqs: Vec<f64>,
     max_order: u32,
-    /// Per fold, its training runs' slip samples and each held-out run's
-    /// (run index, slip samples): built once and read by every friction set
+    /// Per fold, its training runs' slip samples (`fold_fit_spacing_s`
+    /// apart, [`SlipData::from_runs_spaced`]) and each held-out run's
+    /// (run index, every slip sample): built once and read by every friction set
     /// of every selection step (each fit built them anew: 4–5 % of a
     /// full-protocol diagnosis's CPU in `perf`, with their page faults).
     fold_data: Vec<(SlipData, Vec<(usize, SlipData)>)>,
@@ -115,7 +116,7 @@ impl Cv<'_> {
     }
 
     /// [`Cv::fold_data`] of `runs` split into `folds`.
-    fn fold_data(runs: &[RunSignals], folds: usize) -> Vec<(SlipData, Vec<(usize, SlipData)>)> {
+    fn fold_data(runs: &[RunSignals], folds: usize, spacing_s: f64) -> Vec<(SlipData, Vec<(usize, SlipData)>)> {
         (0..folds)
             .into_par_iter()
             .map(|f| {
@@ -126,7 +127,7 @@ impl Cv<'_> {
                     .filter(|(_, s)| s.fold == f)
                     .map(|(i, s)| (i, SlipData::from_runs(&[s])))
                     .collect();
-                (SlipData::from_runs(&train), held)
+                (SlipData::from_runs_spaced(&train, spacing_s), held)
             })
             .collect()
     }
@@ -424,7 +425,7 @@ pub(crate) fn select_over<'a>(
         let n = ((opts.freq_max_hz - opts.freq_min_hz) / opts.freq_step_hz).floor() as usize;
         (0..=n).map(|j| opts.freq_min_hz + opts.freq_step_hz * j as f64).collect()
     };
-    let fold_data = Cv::fold_data(runs, folds);
+    let fold_data = Cv::fold_data(runs, folds, opts.fold_fit_spacing_s);
     let cv = Cv { runs, folds, supply_v, freqs, max_order: opts.max_order, fold_data };
 
     // Channel caches: the friction channel depends only on the friction set,
