@@ -59,7 +59,8 @@ impl SlipData {
         for (r, s) in runs.iter().enumerate() {
             let sd = (s.force_noise_n / s.normal_force_n.max(1e-9)).max(1e-6);
             d.run_weight.push(1.0 / (sd * sd));
-            let every = if spacing_s > 0.0 { rig_types::sensor::window_samples(&s.time_s, spacing_s).max(1) } else { 1 };
+            let every =
+                if spacing_s > 0.0 { rig_types::sensor::window_samples(&s.time_s, spacing_s).max(1) } else { 1 };
             for (j, &k) in s.slip_idx.iter().enumerate() {
                 if k % every != 0 {
                     continue;
