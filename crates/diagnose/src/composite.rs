@@ -368,7 +368,7 @@ fn joint_params(m: &Composite, ne: &Normal, rss: f64, n: usize) -> Vec<(Term, &'
 /// Fits the composite of `set` on `d` (the frequency grid and the highest
 /// order are the scans of the modulations). `None` when a block is singular.
 pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order: u32) -> Option<CompositeFit> {
-    fit_composite_with(d, set, freqs_hz, max_order, true)
+    fit_composite_with(d, set, freqs_hz, max_order, true, None)
 }
 
 /// The model of [`fit_composite`] alone, as a cross-validation fold uses it
@@ -377,7 +377,28 @@ pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order
 /// pass that inflates the errors (6.6 % of a full-protocol ladder rung's CPU
 /// in `perf`), so the same model to the bit.
 pub fn fit_composite_model(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order: u32) -> Option<Composite> {
-    fit_composite_with(d, set, freqs_hz, max_order, false).map(|f| f.model)
+    fit_composite_model_from(d, set, freqs_hz, max_order, None)
+}
+
+/// [`fit_composite_model`] warm-started from `start`, a model fitted on the
+/// same data with a subset of `set`'s terms (the previous selection step's
+/// model of the same fold: same training runs, so nothing of a held-out run
+/// enters). The first pass then searches only the basin `start` found for
+/// each term it has — the time modulation's frequency (Gauss–Newton from
+/// it, no frequency scan), the angle modulation's order, the Stribeck
+/// speed's bracket ([`friction::fit_stribeck_near`]) — as the cold fit's
+/// later passes do; a term `start` lacks is searched cold. The stop rules
+/// are the cold fit's: Gauss–Newton until the step is within a tenth of a
+/// standard error ([`friction::near_stationary`]), the passes until the
+/// weighted RSS moves by less than 10⁻⁷ of itself.
+pub fn fit_composite_model_from(
+    d: &SlipData,
+    set: FrictionSet,
+    freqs_hz: &[f64],
+    max_order: u32,
+    start: Option<&Composite>,
+) -> Option<Composite> {
+    fit_composite_with(d, set, freqs_hz, max_order, false, start).map(|f| f.model)
 }
 
 /// The time modulation's frequency scan of [`fit_composite`] for the set
@@ -400,10 +421,15 @@ fn fit_composite_with(
     freqs_hz: &[f64],
     max_order: u32,
     errors: bool,
+    start: Option<&Composite>,
 ) -> Option<CompositeFit> {
     if d.is_empty() {
         return None;
     }
+    // The basins a warm start hands the first pass (fit_composite_model_from).
+    let start_vs = start.and_then(|s| s.stribeck).map(|s| s.1).filter(|_| set.stribeck);
+    let start_f = start.and_then(|s| s.time_mod).map(|s| s.1).filter(|_| set.time_mod);
+    let start_order = start.and_then(|s| s.angle_mod).map(|s| s.1).filter(|_| set.angle_mod);
     let base = friction::fit_coulomb(d);
     let mut m = Composite::coulomb(base.params[0].1);
     let mut phases = vec![(0.0, 0.0); d.n_runs];
@@ -457,8 +483,9 @@ fn fit_composite_with(
             if set.stribeck {
                 // From the second pass on, Brent's search starts in the basin the
                 // first pass's grid found (friction::fit_stribeck_near).
-                let f = match m.stribeck {
-                    Some((_, vs)) if pass > 0 => friction::fit_stribeck_near(ds, set.viscous, vs)?,
+                let f = match (m.stribeck, start_vs) {
+                    (Some((_, vs)), _) if pass > 0 => friction::fit_stribeck_near(ds, set.viscous, vs)?,
+                    (_, Some(vs)) if pass == 0 => friction::fit_stribeck_near(ds, set.viscous, vs)?,
                     _ => friction::fit_stribeck(ds, set.viscous)?,
                 };
                 let FrictionModel::Stribeck { mu_k, mu_s, vs, c } = f.model else { unreachable!() };
@@ -488,9 +515,10 @@ fn fit_composite_with(
             if set.time_mod {
                 set_mu(&mut work, |i| d.mu[i] / (m.speed_mu(d.omega[i]) * af[i]));
                 let dt = &work;
-                let grid: Vec<f64> = match (pass, m.time_mod) {
-                    (0, _) | (_, None) => freqs_hz.to_vec(),
-                    (_, Some((_, f))) => vec![f],
+                let grid: Vec<f64> = match (pass, m.time_mod, start_f) {
+                    (0, _, Some(f)) => vec![f],
+                    (0, _, None) | (_, None, _) => freqs_hz.to_vec(),
+                    (_, Some((_, f)), _) => vec![f],
                 };
                 let f = friction::fit_sine(dt, true, &grid, 1..=max_order)?;
                 let FrictionModel::TimeSine { mu_k: s, a, f_hz } = f.model else { unreachable!() };
@@ -513,8 +541,9 @@ fn fit_composite_with(
             set_mu(&mut work, |i| d.mu[i] / (m.speed_mu(d.omega[i]) * tf[i]));
             let da = &work;
             // Later passes refine the order the first chose (as the time block keeps its frequency).
-            let orders = match m.angle_mod {
-                Some((_, n)) if pass > 0 => n..=n,
+            let orders = match (m.angle_mod, start_order) {
+                (Some((_, n)), _) if pass > 0 => n..=n,
+                (_, Some(n)) if pass == 0 => n..=n,
                 _ => 1..=max_order,
             };
             let f = friction::fit_sine(da, false, &[], orders)?;

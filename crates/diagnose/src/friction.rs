@@ -42,11 +42,29 @@ pub struct SlipData {
 
 impl SlipData {
     pub fn from_runs(runs: &[&RunSignals]) -> Self {
+        Self::from_runs_spaced(runs, 0.0)
+    }
+
+    /// The slip samples of `runs` on a grid `spacing_s` apart: of each run,
+    /// the slip samples whose index in the record is a multiple of
+    /// `spacing_s` counted in samples ([`rig_types::sensor::window_samples`]
+    /// of the run's time column); 0 keeps every sample ([`SlipData::from_runs`]).
+    /// The kept samples stay on a uniform time grid, so the frequency scan's
+    /// FFT still applies. What a cross-validation fold fits its model on
+    /// (`fold_fit_spacing_s`, [`crate::DiagnoseOptions`]: the residuals are
+    /// correlated over more than the spacing, so the thinned fit keeps
+    /// almost all of the information).
+    pub fn from_runs_spaced(runs: &[&RunSignals], spacing_s: f64) -> Self {
         let mut d = SlipData { n_runs: runs.len(), ..Default::default() };
         for (r, s) in runs.iter().enumerate() {
             let sd = (s.force_noise_n / s.normal_force_n.max(1e-9)).max(1e-6);
             d.run_weight.push(1.0 / (sd * sd));
+            let every =
+                if spacing_s > 0.0 { rig_types::sensor::window_samples(&s.time_s, spacing_s).max(1) } else { 1 };
             for (j, &k) in s.slip_idx.iter().enumerate() {
+                if k % every != 0 {
+                    continue;
+                }
                 d.run.push(r);
                 d.t.push(s.time_s[k]);
                 d.phi.push(s.rotor_angle_rad[k]);
@@ -1229,6 +1247,51 @@ pub(crate) mod tests {
             }
         }
         d
+    }
+
+    /// The folds' thinned slip samples (`fold_fit_spacing_s`): of each run
+    /// the slip samples whose record index is a multiple of the spacing in
+    /// samples, so they stay on a uniform grid and the frequency scan's FFT
+    /// still takes them (the campaign's 0.05–10 Hz grid by 0.01 Hz at
+    /// 16 ms); spacing 0 keeps every sample.
+    #[test]
+    fn thinned_slip_samples_stay_on_a_grid_the_fft_scan_takes() {
+        let run = |r: usize| {
+            let time_s: Vec<f64> = (0..20000).map(|k| k as f64 * 0.002).collect();
+            // Slip 60 % of every second, starting at a different sample per run.
+            let slip_idx: Vec<usize> = (0..time_s.len()).filter(|&k| ((k + 37 * r) % 500) < 300).collect();
+            let mu_obs = slip_idx.iter().map(|&k| 0.4 + 0.01 * (k as f64 * 0.01).sin()).collect();
+            RunSignals {
+                id: format!("r{r}"),
+                fold: r,
+                setpoint_rad_s: 5.0,
+                normal_force_n: 10.0,
+                ramp_s: 2.0,
+                rotor_angle_rad: time_s.clone(),
+                rotor_speed_rad_s: vec![1.0; time_s.len()],
+                motor_angle_rad: vec![],
+                motor_speed_rad_s: vec![],
+                voltage_v: vec![],
+                friction_force_n: vec![],
+                time_s,
+                slip_idx,
+                mu_obs,
+                force_noise_n: 0.1,
+                voltage_noise_v: 0.01,
+                steady_from: 0,
+            }
+        };
+        let runs: Vec<RunSignals> = (0..3).map(run).collect();
+        let refs: Vec<&RunSignals> = runs.iter().collect();
+        let all = SlipData::from_runs(&refs);
+        let none_dropped = SlipData::from_runs_spaced(&refs, 0.0);
+        assert_eq!((all.t.clone(), all.mu.clone()), (none_dropped.t, none_dropped.mu));
+        let thin = SlipData::from_runs_spaced(&refs, 0.016);
+        let expected: usize = runs.iter().map(|s| s.slip_idx.iter().filter(|&&k| k % 8 == 0).count()).sum();
+        assert_eq!(thin.len(), expected);
+        assert!(thin.t.iter().all(|t| ((t / 0.016) - (t / 0.016).round()).abs() < 1e-9));
+        let freqs: Vec<f64> = (0..=995).map(|j| 0.05 + 0.01 * j as f64).collect();
+        assert!(time_scan_fft(&thin, &freqs).is_some(), "the thinned samples left the FFT's grid");
     }
 
     #[test]

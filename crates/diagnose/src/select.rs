@@ -60,8 +60,9 @@ struct Cv<'a> {
     supply_v: f64,
     freqs: Vec<f64>,
     max_order: u32,
-    /// Per fold, its training runs' slip samples and each held-out run's
-    /// (run index, slip samples): built once and read by every friction set
+    /// Per fold, its training runs' slip samples (`fold_fit_spacing_s`
+    /// apart, [`SlipData::from_runs_spaced`]) and each held-out run's
+    /// (run index, every slip sample): built once and read by every friction set
     /// of every selection step (each fit built them anew: 4–5 % of a
     /// full-protocol diagnosis's CPU in `perf`, with their page faults).
     fold_data: Vec<(SlipData, Vec<(usize, SlipData)>)>,
@@ -77,16 +78,20 @@ impl Cv<'_> {
     }
 
     fn friction(&self, set: FrictionSet) -> FrictionCv {
-        self.friction_many(&[set]).pop().expect("one set")
+        self.friction_many(&[set], None).pop().expect("one set")
     }
 
     /// The cross-validated friction channel of each set, every (set, fold) fit
     /// a task of its own: a forward-selection step fits 3–4 sets × 5 folds,
     /// which two cores share evenly, where 5 folds alone leave one idle a
-    /// third of the time. Each fit is the one [`Cv::fold_friction`] makes.
-    fn friction_many(&self, sets: &[FrictionSet]) -> Vec<FrictionCv> {
+    /// third of the time. Each fit is the one [`Cv::fold_friction`] makes,
+    /// warm-started from `start`'s model of the same fold (the previous
+    /// step's model, whose terms every set of the step extends).
+    fn friction_many(&self, sets: &[FrictionSet], start: Option<&FrictionCv>) -> Vec<FrictionCv> {
         let tasks: Vec<(usize, usize)> = (0..sets.len()).flat_map(|k| (0..self.folds).map(move |f| (k, f))).collect();
-        let mut fits: Vec<FoldFriction> = tasks.par_iter().map(|&(k, f)| self.fold_friction(sets[k], f)).collect();
+        let start_of = |f: usize| start.and_then(|s| s.models.get(f)).and_then(Option::as_ref);
+        let mut fits: Vec<FoldFriction> =
+            tasks.par_iter().map(|&(k, f)| self.fold_friction(sets[k], f, start_of(f))).collect();
         let mut out = Vec::with_capacity(sets.len());
         for _ in sets {
             let rest = fits.split_off(self.folds);
@@ -95,11 +100,12 @@ impl Cv<'_> {
         out
     }
 
-    /// Fold `f`'s friction fit: the model of `set` fitted on the other folds,
+    /// Fold `f`'s friction fit: the model of `set` fitted on the other folds
+    /// (warm-started from `start`, [`composite::fit_composite_model_from`]),
     /// and each held-out run's μ error and phases under it.
-    fn fold_friction(&self, set: FrictionSet, f: usize) -> FoldFriction {
+    fn fold_friction(&self, set: FrictionSet, f: usize, start: Option<&Composite>) -> FoldFriction {
         let (d, held_data) = &self.fold_data[f];
-        let model = composite::fit_composite_model(d, set, &self.freqs, self.max_order);
+        let model = composite::fit_composite_model_from(d, set, &self.freqs, self.max_order, start);
         let mut held = Vec::new();
         for (i, dr) in held_data {
             let (e, ph) = match &model {
@@ -115,7 +121,7 @@ impl Cv<'_> {
     }
 
     /// [`Cv::fold_data`] of `runs` split into `folds`.
-    fn fold_data(runs: &[RunSignals], folds: usize) -> Vec<(SlipData, Vec<(usize, SlipData)>)> {
+    fn fold_data(runs: &[RunSignals], folds: usize, spacing_s: f64) -> Vec<(SlipData, Vec<(usize, SlipData)>)> {
         (0..folds)
             .into_par_iter()
             .map(|f| {
@@ -126,7 +132,7 @@ impl Cv<'_> {
                     .filter(|(_, s)| s.fold == f)
                     .map(|(i, s)| (i, SlipData::from_runs(&[s])))
                     .collect();
-                (SlipData::from_runs(&train), held)
+                (SlipData::from_runs_spaced(&train, spacing_s), held)
             })
             .collect()
     }
@@ -436,7 +442,7 @@ pub(crate) fn select_over<'a>(
         let n = ((opts.freq_max_hz - opts.freq_min_hz) / opts.freq_step_hz).floor() as usize;
         (0..=n).map(|j| opts.freq_min_hz + opts.freq_step_hz * j as f64).collect()
     };
-    let fold_data = Cv::fold_data(runs, folds);
+    let fold_data = Cv::fold_data(runs, folds, opts.fold_fit_spacing_s);
     let cv = Cv { runs, folds, supply_v, freqs, max_order: opts.max_order, fold_data };
 
     // Channel caches: the friction channel depends only on the friction set,
@@ -482,7 +488,10 @@ pub(crate) fn select_over<'a>(
             v
         };
         let limit_needed = remaining.iter().map(|&e| current.with(e).limit).find(|l| !dr_cache.contains_key(l));
-        let (fr_new, dr_new) = rayon::join(|| cv.friction_many(&needed), || limit_needed.map(|l| (l, cv.drive(l))));
+        // Each fold's fit starts from the current model's fit of the same fold.
+        let start = fr_cache.get(&current.friction);
+        let (fr_new, dr_new) =
+            rayon::join(|| cv.friction_many(&needed, start), || limit_needed.map(|l| (l, cv.drive(l))));
         fr_cache.extend(needed.into_iter().zip(fr_new));
         dr_cache.extend(dr_new);
         let mut tried: Vec<(EffectId, Comparison, Vec<f64>)> = Vec::new();
