@@ -8,6 +8,7 @@
 //! campaign is the one `battery_stream` and the `confusion` stage diagnose.
 
 use rig_virtual_rig::battery::Battery;
+use rig_virtual_rig::ids;
 use std::path::Path;
 
 fn diagnose(id: &str) -> rig_diagnose::Diagnosis {
@@ -33,12 +34,12 @@ fn a_velocity_weakening_too_small_teacher_forced_is_named_by_its_free_run() {
     let d = diagnose("ladder-velocity_weakening_friction-5-4");
     assert_eq!(
         d.verdict,
-        "velocity_weakening_friction",
+        ids::VELOCITY_WEAKENING_FRICTION,
         "{:?}",
         d.findings.iter().map(|f| &f.evidence).collect::<Vec<_>>()
     );
     let row = d.detail.second_look.iter().find(|r| r.admitted).expect("an effect admitted in free run");
-    assert_eq!(row.effect, "velocity_weakening_friction");
+    assert_eq!(row.effect, ids::VELOCITY_WEAKENING_FRICTION);
     assert!(row.teacher_forced_gain < 0.05, "{row:?}");
     assert!(row.free_run_gain >= 0.05 && row.free_run_t >= 2.0 && row.still_flagged.is_empty(), "{row:?}");
     assert!(d.detail.free_run_extended.iter().all(|k| !k.flagged));
