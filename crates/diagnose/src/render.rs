@@ -380,7 +380,7 @@ pub fn markdown(d: &Diagnosis) -> String {
         let _ = writeln!(
             s,
             "\n## Structure: where the damping acts, and the channels' alignment\n\n**`{}`.** {}\n\nEach candidate \
-             (a damping placement, a delay between recorded channels) is fitted teacher-forced through the rotor \
+             (a damping placement, a delay between recorded channels, a sensor's resonance) is fitted teacher-forced through the rotor \
              torque balance on the training folds and scored on the held-out runs by that balance's misfit and by \
              the free-run misfit of the extended model, and by the balance at the stick↔slip transitions alone \
              (event-locked rows; rig-diagnose `structure` docs).\n\n| structure | fitted (every run) | balance \

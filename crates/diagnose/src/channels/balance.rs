@@ -15,7 +15,6 @@ type Row = ([f64; 5], f64);
 /// the kernel for which (mean speed of the next window − of the previous) / T
 /// is exactly the weighted mean of the acceleration, so no derivative of a
 /// quantised angle is taken. `None` when the kernel leaves the record.
-#[allow(clippy::too_many_arguments)]
 fn row_at(phi1: &[f64], phi2: &[f64], force_n: &[f64], dt: f64, w: usize, r_m: f64, b: usize) -> Option<Row> {
     let n = phi1.len().min(phi2.len()).min(force_n.len());
     if b < w || b + w >= n {

@@ -228,8 +228,8 @@ pub static REGISTRY: &[&dyn StructureCandidate] = &[
     &rotor_absolute::RotorAbsolute,
     &both::TwistRateAndRotor,
     &channel_delay::ChannelDelay,
-    &sensor_dynamics::ForceSensorDynamics,
-    &sensor_dynamics::EncoderCouplingCompliance,
+    &sensor_dynamics::FORCE_SENSOR,
+    &sensor_dynamics::ENCODER_COUPLING,
 ];
 
 /// What the structure selection found.

@@ -180,13 +180,33 @@ const COUPLING_LAG: ParamSpec = ParamSpec {
     meaning: "the encoder disc's lag per unit of the rotor's acceleration, 1/ω²",
 };
 
-/// ω = 2π f_n, rad/s (0 without a resonance).
-fn omega(fitted: &Fitted) -> f64 {
-    2.0 * std::f64::consts::PI * fitted.values[0]
+/// A sensor candidate: which sensor, its id, parameters, the lag the
+/// records must support, and its name in a sentence.
+pub struct SensorCandidate {
+    sensor: Sensor,
+    id: &'static str,
+    params: &'static [ParamSpec],
+    lag: &'static ParamSpec,
+    what: &'static str,
 }
 
-pub struct ForceSensorDynamics;
-pub struct EncoderCouplingCompliance;
+/// `force_sensor_dynamics`.
+pub static FORCE_SENSOR: SensorCandidate = SensorCandidate {
+    sensor: Sensor::Force,
+    id: FORCE_SENSOR_ID,
+    params: FORCE_PARAMS,
+    lag: &FORCE_LAG,
+    what: "the force sensor as a second-order system",
+};
+
+/// `encoder_coupling_compliance`.
+pub static ENCODER_COUPLING: SensorCandidate = SensorCandidate {
+    sensor: Sensor::EncoderCoupling,
+    id: ENCODER_COUPLING_ID,
+    params: COUPLING_PARAMS,
+    lag: &COUPLING_LAG,
+    what: "the rotor encoder on a compliant coupling",
+};
 
 /// The grid point of `sensor` with the smallest training cost, if it beats
 /// the records as recorded.
@@ -205,71 +225,31 @@ fn fit_sensor(sensor: Sensor, data: &StructureData, include: &dyn Fn(&str) -> bo
     Some(Fitted { values, balance: best_fit, aligned: None, sensor: best })
 }
 
-fn describe_sensor(what: &str, fitted: &Fitted) -> String {
-    let (f_n, zeta) = (fitted.values[0], fitted.values[1]);
-    if f_n > 0.0 {
-        format!(
-            "{what} with a resonance at {f_n:.1} Hz, ζ = {zeta:.2} (the rig model's damping on the twist rate, C = \
-             {:.2e} N·m·s/rad in the balance through it)",
-            fitted.balance.twist_damping_nm_s_rad
-        )
-    } else {
-        format!("{what}: no resonance fits the balance better than the records as recorded")
-    }
-}
-
-impl StructureCandidate for ForceSensorDynamics {
+impl StructureCandidate for SensorCandidate {
     fn id(&self) -> &'static str {
-        FORCE_SENSOR_ID
+        self.id
     }
     fn params(&self) -> &'static [ParamSpec] {
-        FORCE_PARAMS
+        self.params
     }
     fn fit(&self, _model: &RigParams, data: &StructureData, include: &dyn Fn(&str) -> bool) -> Option<Fitted> {
-        fit_sensor(Sensor::Force, data, include)
+        fit_sensor(self.sensor, data, include)
     }
     /// The rig is the model's: only the record rings.
     fn apply(&self, model: &RigParams, _fitted: &Fitted) -> RigParams {
         model.clone()
     }
     fn describe(&self, fitted: &Fitted) -> String {
-        describe_sensor("the force sensor as a second-order system", fitted)
-    }
-    fn support(&self, fitted: &Fitted) -> Vec<(&'static str, f64, &'static ParamSpec)> {
-        let w = omega(fitted);
-        vec![(FORCE_LAG.name, if w > 0.0 { 2.0 * fitted.values[1] / w } else { 0.0 }, &FORCE_LAG)]
-    }
-    fn damping(&self) -> &'static str {
-        super::twist_rate::ID
-    }
-    fn moves(&self) -> bool {
-        false
-    }
-    fn finding_id(&self) -> Option<&'static str> {
-        Some(FORCE_SENSOR_ID)
-    }
-}
-
-impl StructureCandidate for EncoderCouplingCompliance {
-    fn id(&self) -> &'static str {
-        ENCODER_COUPLING_ID
-    }
-    fn params(&self) -> &'static [ParamSpec] {
-        COUPLING_PARAMS
-    }
-    fn fit(&self, _model: &RigParams, data: &StructureData, include: &dyn Fn(&str) -> bool) -> Option<Fitted> {
-        fit_sensor(Sensor::EncoderCoupling, data, include)
-    }
-    /// The rig is the model's: only the encoder's disc lags.
-    fn apply(&self, model: &RigParams, _fitted: &Fitted) -> RigParams {
-        model.clone()
-    }
-    fn describe(&self, fitted: &Fitted) -> String {
-        describe_sensor("the rotor encoder on a compliant coupling", fitted)
-    }
-    fn support(&self, fitted: &Fitted) -> Vec<(&'static str, f64, &'static ParamSpec)> {
-        let w = omega(fitted);
-        vec![(COUPLING_LAG.name, if w > 0.0 { 1.0 / (w * w) } else { 0.0 }, &COUPLING_LAG)]
+        let (f_n, zeta) = (fitted.values[0], fitted.values[1]);
+        if f_n > 0.0 {
+            format!(
+                "{} with a resonance at {f_n:.1} Hz, ζ = {zeta:.2} (the rig model's damping on the twist rate, C = \
+                 {:.2e} N·m·s/rad in the balance through it)",
+                self.what, fitted.balance.twist_damping_nm_s_rad
+            )
+        } else {
+            format!("{}: no resonance fits the balance better than the records as recorded", self.what)
+        }
     }
     fn damping(&self) -> &'static str {
         super::twist_rate::ID
@@ -278,7 +258,18 @@ impl StructureCandidate for EncoderCouplingCompliance {
         false
     }
     fn finding_id(&self) -> Option<&'static str> {
-        Some(ENCODER_COUPLING_ID)
+        Some(self.id)
+    }
+    /// The lag (0 without a resonance): 2ζ/ω for the force sensor, 1/ω²
+    /// for the encoder's coupling.
+    fn support(&self, fitted: &Fitted) -> Vec<(&'static str, f64, &'static ParamSpec)> {
+        let w = 2.0 * std::f64::consts::PI * fitted.values[0];
+        let lag = match (w > 0.0, self.sensor) {
+            (false, _) => 0.0,
+            (true, Sensor::Force) => 2.0 * fitted.values[1] / w,
+            (true, Sensor::EncoderCoupling) => 1.0 / (w * w),
+        };
+        vec![(self.lag.name, lag, self.lag)]
     }
 }
 
