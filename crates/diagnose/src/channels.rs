@@ -37,7 +37,8 @@ mod step;
 mod twist;
 
 pub use balance::{
-    BalanceData, BalanceFit, balance_data, balance_data_aligned, torque_balance_check, torque_balance_check_of,
+    BalanceData, BalanceFit, TICK_LOSS_CHECK, balance_data, balance_data_aligned, balance_data_with,
+    tick_loss_check_of, torque_balance_check, torque_balance_check_of,
 };
 pub use drive_balance::drive_balance_check;
 pub use force_linearity::{force_linearity_check, force_parabola};
@@ -188,6 +189,10 @@ pub struct ChannelOptions {
     /// The break-away level's dependence on the dwell within runs
     /// ([`crate::extension::dwell`]: slope over its floor).
     pub breakaway_dwell_ratio: f64,
+    /// Does an encoder lose ticks? The twist's drift with the angle travelled
+    /// ([`tick_loss_check_of`]: mean over runs over its standard error ⊕
+    /// a minimum).
+    pub tick_loss_ratio: f64,
     /// Window of the step residual, s (the estimate's 50 ms).
     pub window_s: f64,
     /// Window of the torque balance, s (long enough that the

@@ -299,6 +299,7 @@ pub fn diagnose(
     if let (Some(p), Some(data)) = (baseline, &balance) {
         checks.extend(channels::static_twist_checks(c, cal, o));
         checks.push(channels::torque_balance_check_of(c, data, p, o));
+        checks.push(channels::tick_loss_check_of(data, o));
     }
     // The drive balance needs no baseline: it fits its coefficients to the records.
     checks.push(channels::drive_balance_check(c, opts, o));

@@ -155,6 +155,15 @@ pub struct StructureScore {
     pub balance_gain: f64,
     pub balance_gain_fold_sd: f64,
     pub balance_t: f64,
+    /// The same balance on the event-locked rows only (the balance window at
+    /// every stick↔slip transition and the next,
+    /// [`crate::channels::BalanceData::run_event_rms`]): cross-validated
+    /// misfit, N·m, its gain over the baseline structure's, the gain's
+    /// spread across folds and the paired run-level t.
+    pub event_misfit: f64,
+    pub event_gain: f64,
+    pub event_gain_fold_sd: f64,
+    pub event_t: f64,
     pub admissible: bool,
     pub accepted: bool,
 }

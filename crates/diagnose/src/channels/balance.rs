@@ -1,7 +1,7 @@
 //! Torque balance of rotor 1 in the measured channels of the operating
 //! points: encoders and force sensor must satisfy the rotor equation.
 
-use super::{ChannelCheck, ChannelOptions, rms};
+use super::{ChannelCheck, ChannelOptions, rms, stuck_stretches};
 use crate::DiagnoseOptions;
 use crate::prepare::diff_noise;
 use rig_calibrate::CampaignCalibration;
@@ -11,35 +11,52 @@ use rig_types::{Campaign, RigParams, RunKind};
 /// Regressors of one window boundary: [⟨Ω̇1⟩, ⟨φ2−φ1⟩, ⟨Ω2−Ω1⟩, ⟨Ω1⟩, 1] and r⟨F⟩.
 type Row = ([f64; 5], f64);
 
-/// Triangle-weighted means around every boundary b = jw (weights w − |k − b|),
+/// Triangle-weighted means around the boundary b (weights w − |k − b|),
 /// the kernel for which (mean speed of the next window − of the previous) / T
 /// is exactly the weighted mean of the acceleration, so no derivative of a
-/// quantised angle is taken.
-fn rows(phi1: &[f64], phi2: &[f64], force_n: &[f64], dt: f64, w: usize, r_m: f64, from: usize) -> Vec<Row> {
-    let n = phi1.len();
+/// quantised angle is taken. `None` when the kernel leaves the record.
+fn row_at(phi1: &[f64], phi2: &[f64], force_n: &[f64], dt: f64, w: usize, r_m: f64, b: usize) -> Option<Row> {
+    let n = phi1.len().min(phi2.len()).min(force_n.len());
+    if b < w || b + w >= n {
+        return None;
+    }
     let tw = |k: usize| phi2[k] - phi1[k];
     let big_t = w as f64 * dt;
-    let mut out = Vec::new();
-    let mut b = from.max(w);
-    while b + w < n {
-        let (mut s_tw, mut s_f, mut s_k) = (0.0, 0.0, 0.0);
-        for (k, &f) in force_n.iter().enumerate().take(b + w + 1).skip(b - w) {
-            let wt = (w - k.abs_diff(b)) as f64;
-            s_tw += wt * tw(k);
-            s_f += wt * f;
-            s_k += wt;
-        }
-        let w1_prev = (phi1[b] - phi1[b - w]) / big_t;
-        let w1_next = (phi1[b + w] - phi1[b]) / big_t;
-        let tw_prev = (tw(b) - tw(b - w)) / big_t;
-        let tw_next = (tw(b + w) - tw(b)) / big_t;
-        out.push((
-            [(w1_next - w1_prev) / big_t, s_tw / s_k, 0.5 * (tw_prev + tw_next), 0.5 * (w1_prev + w1_next), 1.0],
-            r_m * s_f / s_k,
-        ));
-        b += w;
+    let (mut s_tw, mut s_f, mut s_k) = (0.0, 0.0, 0.0);
+    for (k, &f) in force_n.iter().enumerate().take(b + w + 1).skip(b - w) {
+        let wt = (w - k.abs_diff(b)) as f64;
+        s_tw += wt * tw(k);
+        s_f += wt * f;
+        s_k += wt;
     }
-    out
+    let w1_prev = (phi1[b] - phi1[b - w]) / big_t;
+    let w1_next = (phi1[b + w] - phi1[b]) / big_t;
+    let tw_prev = (tw(b) - tw(b - w)) / big_t;
+    let tw_next = (tw(b + w) - tw(b)) / big_t;
+    Some((
+        [(w1_next - w1_prev) / big_t, s_tw / s_k, 0.5 * (tw_prev + tw_next), 0.5 * (w1_prev + w1_next), 1.0],
+        r_m * s_f / s_k,
+    ))
+}
+
+/// [`row_at`] every `w` samples from `from` on (the steady state's grid).
+fn rows(phi1: &[f64], phi2: &[f64], force_n: &[f64], dt: f64, w: usize, r_m: f64, from: usize) -> Vec<Row> {
+    (from.max(w)..phi1.len()).step_by(w).map_while(|b| row_at(phi1, phi2, force_n, dt, w, r_m, b)).collect()
+}
+
+/// The stick↔slip transitions of a recorded rotor encoder from sample
+/// `from` on, as (kind: 0 slip→stick, 1 stick→slip; sample): both ends of every stuck stretch (|Ω1| below
+/// `slip_rad_s` on the documented differentiator, `rig_types::sensor`) that
+/// lasts at least [`crate::extension::dwell::MIN_DWELL_S`] (shorter ones are
+/// the speed's chatter around the threshold, not a stick).
+fn transitions(time_s: &[f64], ticks: &[i64], per_rev: u32, slip_rad_s: f64, from: usize) -> Vec<(usize, usize)> {
+    let w1 = rig_types::sensor::encoder_speed_rad_s(time_s, ticks, per_rev);
+    stuck_stretches(&w1, slip_rad_s)
+        .into_iter()
+        .filter(|&(j, k)| time_s[k] - time_s[j] >= crate::extension::dwell::MIN_DWELL_S)
+        .flat_map(|(j, k)| [(0, j), (1, k)])
+        .filter(|&(_, e)| e >= from)
+        .collect()
 }
 
 /// One operating point's balance rows and what its noise floor needs.
@@ -47,6 +64,13 @@ fn rows(phi1: &[f64], phi2: &[f64], force_n: &[f64], dt: f64, w: usize, r_m: f64
 struct RunRows {
     id: String,
     rows: Vec<Row>,
+    /// The recorded rotor angle at each row's boundary, rad (the tick-loss
+    /// check's regressor, [`tick_loss_check_of`]).
+    angle_rad: Vec<f64>,
+    /// Event-locked rows, per transition: its kind (0 slip→stick, 1
+    /// stick→slip) and [`EVENT_ROWS`] rows, one centred on it and one a
+    /// window after it.
+    events: Vec<(usize, Vec<Row>)>,
     force_noise_n: f64,
     kernel_gain: f64,
 }
@@ -80,6 +104,13 @@ impl BalanceFit {
     }
 }
 
+/// Event-locked rows per transition: the balance window centred on the
+/// transition and the next one (the transition, then what rings after it).
+pub const EVENT_ROWS: usize = 2;
+
+/// Transitions of one kind a run needs for its event-triggered average.
+pub const MIN_EVENTS: usize = 3;
+
 /// The rows of every operating point of `c` ([`rows`], steady state only).
 pub fn balance_data(
     c: &Campaign,
@@ -112,6 +143,24 @@ pub fn balance_data_aligned(
     rotor_lead: usize,
     force_lead: usize,
 ) -> BalanceData {
+    balance_data_with(c, cal, opts, o, |phi1, _, f| {
+        *phi1 = advanced(std::mem::take(phi1), rotor_lead);
+        *f = advanced(std::mem::take(f), force_lead);
+    })
+}
+
+/// [`balance_data`] of the channels as `transform` leaves them (the
+/// realignments and sensor models of [`crate::structure`]): it is handed
+/// each run's rotor angle (rad), motor angle (rad) and force (N), whole
+/// records. The transitions of the event-locked rows are located on the
+/// encoder as recorded.
+pub fn balance_data_with(
+    c: &Campaign,
+    cal: &CampaignCalibration,
+    opts: &DiagnoseOptions,
+    o: &ChannelOptions,
+    transform: impl Fn(&mut Vec<f64>, &mut Vec<f64>, &mut Vec<f64>),
+) -> BalanceData {
     let w = nominal_window_samples(o.balance_window_s, c.rig.sample_rate_hz).max(2);
     let dt = 1.0 / c.rig.sample_rate_hz;
     let r_m = c.rig.brake_disc_radius_m;
@@ -125,16 +174,29 @@ pub fn balance_data_aligned(
         let RunKind::OperatingPoint { ramp_s, .. } = run.kind else { continue };
         let d = &run.data;
         let (Some(t1), Some(t2), Some(mv)) = (&d.rotor_ticks, &d.motor_ticks, &d.brake_force_mv) else { continue };
-        let phi1 = advanced(ticks_to_rad(t1, c.rig.encoder_ticks_per_rev), rotor_lead);
-        let phi2 = ticks_to_rad(t2, c.rig.encoder_ticks_per_rev);
-        let f = advanced(
-            force_n(mv, ForceCal { factor_mv_per_n: cal.force_factor_mv_per_n, offset_mv: cal.force_offset_mv }),
-            force_lead,
-        );
+        let mut phi1 = ticks_to_rad(t1, c.rig.encoder_ticks_per_rev);
+        let mut phi2 = ticks_to_rad(t2, c.rig.encoder_ticks_per_rev);
+        let mut f =
+            force_n(mv, ForceCal { factor_mv_per_n: cal.force_factor_mv_per_n, offset_mv: cal.force_offset_mv });
+        transform(&mut phi1, &mut phi2, &mut f);
         let from = d.time_s.partition_point(|&x| x < ramp_s + opts.settle_s);
+        let grid = rows(&phi1, &phi2, &f, dt, w, r_m, from);
+        let angle_rad = (0..grid.len()).map(|j| phi1[from.max(w) + j * w]).collect();
+        // Located on the encoder as recorded, so every realignment of the
+        // delay grid is scored on the same transitions.
+        let events = transitions(&d.time_s, t1, c.rig.encoder_ticks_per_rev, opts.slip_speed_rad_s, from.max(w))
+            .into_iter()
+            .filter_map(|(kind, e)| {
+                let rows: Option<Vec<Row>> =
+                    (0..EVENT_ROWS).map(|j| row_at(&phi1, &phi2, &f, dt, w, r_m, e + j * w)).collect();
+                rows.map(|r| (kind, r))
+            })
+            .collect();
         runs.push(RunRows {
             id: run.id.clone(),
-            rows: rows(&phi1, &phi2, &f, dt, w, r_m, from),
+            rows: grid,
+            angle_rad,
+            events,
             force_noise_n: diff_noise(&f),
             kernel_gain,
         });
@@ -177,13 +239,45 @@ impl BalanceData {
         self.runs
             .iter()
             .filter(|r| include(&r.id) && !r.rows.is_empty())
-            .map(|r| {
-                let e: Vec<f64> =
-                    r.rows.iter().map(|(x, y)| y - x.iter().zip(&beta).map(|(a, b)| a * b).sum::<f64>()).collect();
-                (r.id.clone(), rms(&e))
-            })
+            .map(|r| (r.id.clone(), rms(&residuals(&r.rows, &beta))))
             .collect()
     }
+
+    /// Each run's event-locked misfit of `fit`, N·m, over the runs `include`
+    /// accepts that have one: the residual averaged over the run's
+    /// transitions of one kind (slip→stick, stick→slip) at one row of the
+    /// event-locked window ([`EVENT_ROWS`]), an event-triggered average, and
+    /// the RMS of those averages over the (kind, row) cells with at least
+    /// [`MIN_EVENTS`] transitions. Averaging over a run's transitions keeps
+    /// what every transition shares (a late or ringing sensor) and divides
+    /// the sensor noise by √(transitions): the structural candidates'
+    /// event-locked statistic ([`crate::structure`]).
+    pub fn run_event_rms(&self, fit: &BalanceFit, include: impl Fn(&str) -> bool) -> Vec<(String, f64)> {
+        let beta = fit.beta(self.j1_kgm2);
+        let mut out = Vec::new();
+        for r in self.runs.iter().filter(|r| include(&r.id)) {
+            let mut cells = Vec::new();
+            for kind in 0..2 {
+                let of_kind: Vec<Vec<f64>> =
+                    r.events.iter().filter(|e| e.0 == kind).map(|e| residuals(&e.1, &beta)).collect();
+                if of_kind.len() < MIN_EVENTS {
+                    continue;
+                }
+                for j in 0..EVENT_ROWS {
+                    cells.push(of_kind.iter().map(|e| e[j]).sum::<f64>() / of_kind.len() as f64);
+                }
+            }
+            if !cells.is_empty() {
+                out.push((r.id.clone(), rms(&cells)));
+            }
+        }
+        out
+    }
+}
+
+/// The residuals r·F − (−J1 Ω̇1 + K tw + C tẇ − C_r Ω1 + c0) of `rows`, N·m.
+fn residuals(rows: &[Row], beta: &[f64; 5]) -> Vec<f64> {
+    rows.iter().map(|(x, y)| y - x.iter().zip(beta).map(|(a, b)| a * b).sum::<f64>()).collect()
 }
 
 /// Rotor-1 torque balance over the steady state of every operating point.
@@ -279,6 +373,87 @@ pub fn torque_balance_check_of(
         format!(
             "rotor balance fitted on the records (J1 held): J1 {j1:.4} kg·m² (calibration; baseline {:.4}), K {k:.4} N·m/rad ({:.4}), C {cc:.2e} N·m·s/rad ({:.2e}), drag d {drag:.2e} N·m·s/rad, offset {:.2e} N·m; RMS residual {stat:.2e} N·m; worst run {worst}",
             baseline.rotor_inertia_kgm2, baseline.shaft_stiffness_nm_rad, baseline.shaft_damping_nm_s_rad, beta[4]
+        ),
+    )
+}
+
+/// The tick-loss check's name (run kind `operating_point`).
+pub const TICK_LOSS_CHECK: &str = "operating_point.tick_loss";
+
+/// The floor of the tick-loss fraction: a drift of the twist below 2·10⁻⁴
+/// rad per rad travelled (0.2 ticks in 1000 of a 1000-tick encoder) is
+/// within what the balance's slow wander gives (stated in
+/// [`tick_loss_check_of`]'s calibration).
+pub const MIN_TICK_LOSS: f64 = 2e-4;
+
+/// A run's drift needs this many balance rows (10 s at 0.1 s).
+const MIN_DRIFT_ROWS: usize = 100;
+
+/// Does an encoder lose ticks? A lost tick is a step of one tick in the
+/// recorded angle that is never given back, so the recorded twist φ2 − φ1
+/// grows with the angle travelled: by p·φ1 when the rotor encoder loses a
+/// fraction p of its ticks (by −p·φ2 for the motor's). A transport delay of
+/// the encoder is a *shift*, φ1(t − d) ≈ φ1 − Ω1·d: bounded, the same at the
+/// start and the end of a steady slip, zero in every stick. The balance
+/// fitted on the records ([`BalanceData::fit`], C and C_r free) leaves both
+/// faults in its residual: a delay as K·Ω1·d, constant within a steady run
+/// (it is what the `channel_delay` candidate fits), a tick loss as
+/// −K·p·(φ1 − φ̄1), a ramp on the travelled angle.
+///
+/// Statistic: per run with at least [`MIN_DRIFT_ROWS`] steady rows, the
+/// least-squares slope of the balance residual on the recorded rotor angle,
+/// divided by −K: p_r, the twist gained per radian travelled
+/// (dimensionless; ticks lost per tick). Over runs, the mean p̄ (a tick loss
+/// is the same fraction in every run; a model error that drifts does not
+/// keep its sign across 30 runs of different set-points). Floor: p̄'s
+/// standard error over runs ⊕ [`MIN_TICK_LOSS`]. Flagged above
+/// `tick_loss_ratio` (pipeline.toml); when flagged the `channel_delay`
+/// candidate refuses the rotor encoder ([`crate::structure`]).
+pub fn tick_loss_check_of(data: &BalanceData, o: &ChannelOptions) -> ChannelCheck {
+    let ids: Vec<String> = data.runs.iter().map(|r| r.id.clone()).collect();
+    let Some(fit) = data.fit(|_| true, true, true) else {
+        return ChannelCheck::not_testable(TICK_LOSS_CHECK, ids, "the rotor balance regression is singular".into());
+    };
+    let beta = fit.beta(data.j1_kgm2);
+    let k = fit.stiffness_nm_rad;
+    let mut p = Vec::new();
+    for r in data.runs.iter().filter(|r| r.rows.len() >= MIN_DRIFT_ROWS) {
+        let e = residuals(&r.rows, &beta);
+        let n = e.len() as f64;
+        let (ma, me) = (r.angle_rad.iter().sum::<f64>() / n, e.iter().sum::<f64>() / n);
+        let sxx: f64 = r.angle_rad.iter().map(|a| (a - ma).powi(2)).sum();
+        let sxy: f64 = r.angle_rad.iter().zip(&e).map(|(a, y)| (a - ma) * (y - me)).sum();
+        if sxx > 0.0 && k > 0.0 {
+            p.push((r.id.as_str(), -sxy / sxx / k));
+        }
+    }
+    if p.len() < 3 || k <= 0.0 {
+        return ChannelCheck::not_testable(
+            TICK_LOSS_CHECK,
+            ids,
+            format!("{} runs with {MIN_DRIFT_ROWS} steady balance rows (3 needed)", p.len()),
+        );
+    }
+    let n = p.len() as f64;
+    let mean = p.iter().map(|x| x.1).sum::<f64>() / n;
+    let sd = (p.iter().map(|x| (x.1 - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    let se = sd / n.sqrt();
+    let same_sign = p.iter().filter(|x| x.1 * mean > 0.0).count();
+    ChannelCheck::new(
+        TICK_LOSS_CHECK,
+        p.iter().map(|x| x.0.to_string()).collect(),
+        mean.abs(),
+        se.hypot(MIN_TICK_LOSS),
+        o.tick_loss_ratio,
+        format!(
+            "the recorded twist drifts by {:.2e} rad per rad the rotor travels (mean over {} runs ± {:.1e}, {} of \
+             them of that sign; {}): {}",
+            mean,
+            p.len(),
+            se,
+            same_sign,
+            if mean > 0.0 { "the rotor encoder falls behind" } else { "the motor encoder falls behind" },
+            "a lost tick is a step in the angle never given back; a delay is a shift"
         ),
     )
 }

@@ -35,7 +35,12 @@ impl StructureCandidate for TwistRateAndRotor {
     }
     fn fit(&self, _model: &RigParams, data: &StructureData, include: &dyn Fn(&str) -> bool) -> Option<Fitted> {
         let f = data.balance.fit(include, true, true)?;
-        Some(Fitted { values: vec![f.twist_damping_nm_s_rad, f.rotor_drag_nm_s_rad], balance: f, aligned: None })
+        Some(Fitted {
+            values: vec![f.twist_damping_nm_s_rad, f.rotor_drag_nm_s_rad],
+            balance: f,
+            aligned: None,
+            sensor: None,
+        })
     }
     /// The new term is the drag on Ω1: the finding names it.
     fn finding_id(&self) -> Option<&'static str> {

@@ -25,7 +25,10 @@
 //! fit best. The two parameters are the delays of the rotor encoder and of
 //! the force channel, one of them 0; the fold-jackknife rule of the
 //! selection ([`super`]) then asks every fold to pick the same channel and
-//! a delay consistent across folds.
+//! a delay consistent across folds. When the tick-loss check flags the
+//! records ([`crate::channels::tick_loss_check_of`]: the twist grows with
+//! the angle travelled, a lost tick is never given back) the rotor encoder's
+//! delays are not tried: its count falls behind, it is not late.
 
 use super::{Aligned, Fitted, ParamSpec, StructureCandidate, StructureData};
 use crate::DiagnoseOptions;
@@ -97,10 +100,16 @@ pub(super) fn grid(
 }
 
 /// Sum over the runs `include` accepts of each run's squared RMS residual of
-/// the twist-rate balance fitted on them; `None` when singular.
-fn training_cost(data: &BalanceData, include: &dyn Fn(&str) -> bool) -> Option<(f64, crate::channels::BalanceFit)> {
+/// the twist-rate balance fitted on them and of its squared event-locked
+/// misfit ([`BalanceData::run_event_rms`]: where a sensor's lag shows);
+/// `None` when singular.
+pub(super) fn training_cost(
+    data: &BalanceData,
+    include: &dyn Fn(&str) -> bool,
+) -> Option<(f64, crate::channels::BalanceFit)> {
     let fit = data.fit(include, true, false)?;
-    Some((data.run_rms(&fit, include).iter().map(|(_, r)| r * r).sum(), fit))
+    let sq = |v: Vec<(String, f64)>| v.iter().map(|(_, r)| r * r).sum::<f64>();
+    Some((sq(data.run_rms(&fit, include)) + sq(data.run_event_rms(&fit, include)), fit))
 }
 
 impl StructureCandidate for ChannelDelay {
@@ -113,7 +122,15 @@ impl StructureCandidate for ChannelDelay {
     fn fit(&self, _model: &RigParams, data: &StructureData, include: &dyn Fn(&str) -> bool) -> Option<Fitted> {
         let (mut best_cost, mut best_fit) = training_cost(&data.balance, include)?;
         let mut best: Option<usize> = None;
-        for (i, a) in data.aligned.iter().enumerate() {
+        // A rotor encoder that loses ticks falls behind for good; a delay of it
+        // would be fitted to the lost ticks' growing twist (the tick-loss
+        // check, `crate::channels::tick_loss_check_of`, names that fault).
+        let tried = data
+            .aligned
+            .iter()
+            .enumerate()
+            .filter(|(_, a)| !(data.tick_loss && a.channel == DelayedChannel::RotorEncoder));
+        for (i, a) in tried {
             if let Some((cost, fit)) = training_cost(&a.data, include)
                 && cost < best_cost
             {
@@ -124,7 +141,7 @@ impl StructureCandidate for ChannelDelay {
         if let Some(a) = best.map(|i| &data.aligned[i]) {
             values[usize::from(a.channel == DelayedChannel::Force)] = a.delay_s;
         }
-        Some(Fitted { values, balance: best_fit, aligned: best })
+        Some(Fitted { values, balance: best_fit, aligned: best, sensor: None })
     }
     /// The rig is the model's: only the record is late.
     fn apply(&self, model: &RigParams, _fitted: &Fitted) -> RigParams {

@@ -1,0 +1,307 @@
+//! Structural candidates `force_sensor_dynamics` and
+//! `encoder_coupling_compliance`: a sensor with its own resonance between
+//! the rig and the record. Like a delay, it changes no simulated motion
+//! (the rig is the rig model); unlike a delay it rings, and its footprint
+//! is at the stick↔slip transitions, where the force and the rotor's
+//! acceleration jump (the event-locked rows of the balance,
+//! [`crate::channels::BalanceData::run_event_rms`]).
+//!
+//! # The two sensors
+//!
+//! - **Force sensor as a second-order system** (a load cell and caliper arm,
+//!   mass–spring–damper, pulled by the pad force): the record is
+//!   F_m = H[F], H(s) = ω²/(s² + 2ζωs + ω²), ω = 2π f_n. At low frequency
+//!   H ≈ 1 − (2ζ/ω)s: a lag of 2ζ/ω (a delay's alias), and a step of the
+//!   force (break-away, arrest) rings at f_n.
+//! - **Rotor encoder on a compliant coupling** (the disc's inertia on a
+//!   coupling of stiffness k_c and damping c_c, ω² = k_c/J_e, 2ζω = c_c/J_e):
+//!   the recorded angle is φe = G[φ1], G(s) = (ω² + 2ζωs)/(s² + 2ζωs + ω²).
+//!   At low frequency G ≈ 1 − s²/ω²: the disc lags by Ω̇1/ω², which the
+//!   balance reads as an inertia K/ω² too small — only where Ω1 accelerates,
+//!   at the transitions.
+//!
+//! # Fit
+//!
+//! Both filters are linear and time-invariant, so the balance of the true
+//! channels is the balance of the recorded ones with the same filter on the
+//! other side: for the force sensor, r·F_m = H[−J1 Ω̇1 + K tw + C tẇ] with
+//! every term linear in (φ1, φ2), i.e. the balance's rows built from H[φ1],
+//! H[φ2] and the recorded force; for the encoder, the rows from the recorded
+//! φe, G[φ2] and G[F]. No recorded channel is differentiated or inverted.
+//! The filter is applied as a correction, x + (F − 1)[x̃], with x̃ the
+//! channel smoothed over ±[`SMOOTH_HALF_S`] (a centred moving average, zero
+//! phase): the recorded sample noise stays in the rows as it is. Filtering
+//! the recorded angles themselves would low-pass their quantisation, which
+//! dominates the balance's Ω̇1 term, and every null campaign would "gain"
+//! 50–70 % from a 12 Hz force sensor (measured on the full battery's nulls
+//! before this correction: 5 of the first 7 named one).
+//! The filters are discretised by the bilinear transform at the record's
+//! rate (warping below 0.4 % at 20 Hz and 500 Hz), started at rest on the
+//! first sample. The fit is the grid point (f_n on [`FREQUENCIES_HZ`], ζ on
+//! [`DAMPING_RATIOS`]) with the smallest sum over training runs of each run's
+//! squared RMS residual of the twist-rate balance, or none when the records
+//! as recorded fit best (as `channel_delay`'s grid).
+
+use super::{Fitted, ParamSpec, StructureCandidate, StructureData};
+use crate::DiagnoseOptions;
+use crate::channels::{BalanceData, ChannelOptions, balance_data_with};
+use rig_types::sensor::{centred_moving_average, nominal_window_samples};
+use rig_types::{Campaign, RigParams};
+
+/// The force sensor's finding id.
+pub const FORCE_SENSOR_ID: &str = "force_sensor_dynamics";
+/// The encoder coupling's finding id.
+pub const ENCODER_COUPLING_ID: &str = "encoder_coupling_compliance";
+
+/// Half-width of the smoothing the sensor's correction is computed from, s
+/// (module docs: ±10 ms, a zero-phase box whose first zero, 48 Hz at 500 Hz,
+/// is far above every resonance tried).
+pub const SMOOTH_HALF_S: f64 = 0.01;
+
+/// Natural frequencies tried, Hz: from 2 Hz (a soft elastomer coupling, a
+/// few times the stick-slip fundamental) to 20 Hz, above which neither
+/// sensor is resolved by this rig (an encoder lag Ω̇1/ω² below a tick at
+/// the transitions' 20–50 rad/s²; a force lag 2ζ/ω below a sample).
+pub const FREQUENCIES_HZ: [f64; 11] = [2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 15.0, 20.0];
+/// Damping ratios tried (light to near-critical).
+pub const DAMPING_RATIOS: [f64; 4] = [0.05, 0.1, 0.2, 0.4];
+
+/// Which sensor rings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Sensor {
+    Force,
+    EncoderCoupling,
+}
+
+/// One point of the grid: the sensor's f_n and ζ and the balance it gives.
+#[derive(Debug, Clone)]
+pub struct SensorPoint {
+    pub sensor: Sensor,
+    pub natural_frequency_hz: f64,
+    pub damping_ratio: f64,
+    pub data: BalanceData,
+}
+
+/// y = F[u] with F(s) = (b1 s + ω²)/(s² + 2ζωs + ω²), b1 = 2ζω when
+/// `rate_term` (the coupling's damper) else 0 (the load cell); bilinear
+/// transform at `rate_hz`, from rest at u[0] (unit DC gain).
+pub fn second_order(u: &[f64], rate_hz: f64, f_n_hz: f64, zeta: f64, rate_term: bool) -> Vec<f64> {
+    let Some(&u0) = u.first() else { return Vec::new() };
+    let w = 2.0 * std::f64::consts::PI * f_n_hz;
+    let a = 2.0 * rate_hz;
+    let b1 = if rate_term { 2.0 * zeta * w } else { 0.0 };
+    let (w2, a2, zwa) = (w * w, a * a, 2.0 * zeta * w * a);
+    let (d0, d1, d2) = (a2 + zwa + w2, 2.0 * (w2 - a2), a2 - zwa + w2);
+    let (n0, n1, n2) = (b1 * a + w2, 2.0 * w2, w2 - b1 * a);
+    let (mut u1, mut u2, mut y1, mut y2) = (u0, u0, u0, u0);
+    u.iter()
+        .map(|&x| {
+            let y = (n0 * x + n1 * u1 + n2 * u2 - d1 * y1 - d2 * y2) / d0;
+            (u2, u1, y2, y1) = (u1, x, y1, y);
+            y
+        })
+        .collect()
+}
+
+/// The balance of `c` at every point of the grid, for both sensors.
+pub(super) fn grid(
+    c: &Campaign,
+    cal: &rig_calibrate::CampaignCalibration,
+    opts: &DiagnoseOptions,
+    o: &ChannelOptions,
+) -> Vec<SensorPoint> {
+    let rate = c.rig.sample_rate_hz;
+    let half = nominal_window_samples(SMOOTH_HALF_S, rate);
+    let mut out = Vec::new();
+    for sensor in [Sensor::Force, Sensor::EncoderCoupling] {
+        for &f_n in &FREQUENCIES_HZ {
+            for &zeta in &DAMPING_RATIOS {
+                let through = |x: &mut Vec<f64>, rate_term: bool| {
+                    let smooth = centred_moving_average(x, half);
+                    let y = second_order(&smooth, rate, f_n, zeta, rate_term);
+                    x.iter_mut().zip(y.iter().zip(&smooth)).for_each(|(x, (y, s))| *x += y - s);
+                };
+                let data = balance_data_with(c, cal, opts, o, |phi1, phi2, f| match sensor {
+                    Sensor::Force => {
+                        through(phi1, false);
+                        through(phi2, false);
+                    }
+                    Sensor::EncoderCoupling => {
+                        through(phi2, true);
+                        through(f, true);
+                    }
+                });
+                out.push(SensorPoint { sensor, natural_frequency_hz: f_n, damping_ratio: zeta, data });
+            }
+        }
+    }
+    out
+}
+
+const FORCE_PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "force_sensor_natural_frequency_hz",
+        unit: "Hz",
+        lower: 0.0,
+        meaning: "the force sensor's natural frequency (load cell and caliper arm)",
+    },
+    ParamSpec {
+        name: "force_sensor_damping_ratio",
+        unit: "1",
+        lower: 0.0,
+        meaning: "the force sensor's damping ratio",
+    },
+];
+
+const COUPLING_PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "encoder_coupling_natural_frequency_hz",
+        unit: "Hz",
+        lower: 0.0,
+        meaning: "the rotor encoder disc's natural frequency on its coupling",
+    },
+    ParamSpec {
+        name: "encoder_coupling_damping_ratio",
+        unit: "1",
+        lower: 0.0,
+        meaning: "the rotor encoder coupling's damping ratio",
+    },
+];
+
+/// The force sensor's low-frequency lag 2ζ/ω, s (H ≈ 1 − (2ζ/ω)s): the
+/// term the records must support (0 without a resonance).
+const FORCE_LAG: ParamSpec =
+    ParamSpec { name: "force_sensor_lag_s", unit: "s", lower: 0.0, meaning: "the force sensor's lag 2ζ/ω" };
+/// The encoder disc's lag per unit acceleration 1/ω², s² (G ≈ 1 − s²/ω²).
+const COUPLING_LAG: ParamSpec = ParamSpec {
+    name: "encoder_coupling_lag_s2",
+    unit: "s²",
+    lower: 0.0,
+    meaning: "the encoder disc's lag per unit of the rotor's acceleration, 1/ω²",
+};
+
+/// A sensor candidate: which sensor, its id, parameters, the lag the
+/// records must support, and its name in a sentence.
+pub struct SensorCandidate {
+    sensor: Sensor,
+    id: &'static str,
+    params: &'static [ParamSpec],
+    lag: &'static ParamSpec,
+    what: &'static str,
+}
+
+/// `force_sensor_dynamics`.
+pub static FORCE_SENSOR: SensorCandidate = SensorCandidate {
+    sensor: Sensor::Force,
+    id: FORCE_SENSOR_ID,
+    params: FORCE_PARAMS,
+    lag: &FORCE_LAG,
+    what: "the force sensor as a second-order system",
+};
+
+/// `encoder_coupling_compliance`.
+pub static ENCODER_COUPLING: SensorCandidate = SensorCandidate {
+    sensor: Sensor::EncoderCoupling,
+    id: ENCODER_COUPLING_ID,
+    params: COUPLING_PARAMS,
+    lag: &COUPLING_LAG,
+    what: "the rotor encoder on a compliant coupling",
+};
+
+/// The grid point of `sensor` with the smallest training cost, if it beats
+/// the records as recorded.
+fn fit_sensor(sensor: Sensor, data: &StructureData, include: &dyn Fn(&str) -> bool) -> Option<Fitted> {
+    let (mut best_cost, mut best_fit) = super::channel_delay::training_cost(&data.balance, include)?;
+    let mut best: Option<usize> = None;
+    for (i, p) in data.sensors.iter().enumerate().filter(|(_, p)| p.sensor == sensor) {
+        if let Some((cost, fit)) = super::channel_delay::training_cost(&p.data, include)
+            && cost < best_cost
+        {
+            (best_cost, best_fit, best) = (cost, fit, Some(i));
+        }
+    }
+    let values =
+        best.map_or(vec![0.0, 0.0], |i| vec![data.sensors[i].natural_frequency_hz, data.sensors[i].damping_ratio]);
+    Some(Fitted { values, balance: best_fit, aligned: None, sensor: best })
+}
+
+impl StructureCandidate for SensorCandidate {
+    fn id(&self) -> &'static str {
+        self.id
+    }
+    fn params(&self) -> &'static [ParamSpec] {
+        self.params
+    }
+    fn fit(&self, _model: &RigParams, data: &StructureData, include: &dyn Fn(&str) -> bool) -> Option<Fitted> {
+        fit_sensor(self.sensor, data, include)
+    }
+    /// The rig is the model's: only the record rings.
+    fn apply(&self, model: &RigParams, _fitted: &Fitted) -> RigParams {
+        model.clone()
+    }
+    fn describe(&self, fitted: &Fitted) -> String {
+        let (f_n, zeta) = (fitted.values[0], fitted.values[1]);
+        if f_n > 0.0 {
+            format!(
+                "{} with a resonance at {f_n:.1} Hz, ζ = {zeta:.2} (the rig model's damping on the twist rate, C = \
+                 {:.2e} N·m·s/rad in the balance through it)",
+                self.what, fitted.balance.twist_damping_nm_s_rad
+            )
+        } else {
+            format!("{}: no resonance fits the balance better than the records as recorded", self.what)
+        }
+    }
+    fn damping(&self) -> &'static str {
+        super::twist_rate::ID
+    }
+    fn moves(&self) -> bool {
+        false
+    }
+    fn finding_id(&self) -> Option<&'static str> {
+        Some(self.id)
+    }
+    /// The lag (0 without a resonance): 2ζ/ω for the force sensor, 1/ω²
+    /// for the encoder's coupling.
+    fn support(&self, fitted: &Fitted) -> Vec<(&'static str, f64, &'static ParamSpec)> {
+        let w = 2.0 * std::f64::consts::PI * fitted.values[0];
+        let lag = match (w > 0.0, self.sensor) {
+            (false, _) => 0.0,
+            (true, Sensor::Force) => 2.0 * fitted.values[1] / w,
+            (true, Sensor::EncoderCoupling) => 1.0 / (w * w),
+        };
+        vec![(self.lag.name, lag, self.lag)]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::second_order;
+    use std::f64::consts::PI;
+
+    /// A sine through the filter, after its transient: the amplitude of the
+    /// frequency response |F(iΩ)| (an independent, analytic reference).
+    #[test]
+    fn sine_amplitude_is_the_frequency_response() {
+        let (rate, f_n, zeta) = (500.0, 6.0, 0.15);
+        let w = 2.0 * PI * f_n;
+        for f_in in [1.0, 5.0, 12.0] {
+            let wi = 2.0 * PI * f_in;
+            let u: Vec<f64> = (0..10_000).map(|k| (wi * k as f64 / rate).sin()).collect();
+            let den = ((w * w - wi * wi).powi(2) + (2.0 * zeta * w * wi).powi(2)).sqrt();
+            for (rate_term, num) in [(false, w * w), (true, (w.powi(4) + (2.0 * zeta * w * wi).powi(2)).sqrt())] {
+                let y = second_order(&u, rate, f_n, zeta, rate_term);
+                let amp = y[8000..].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                let expect = num / den;
+                assert!((amp - expect).abs() < 5e-3 * expect, "{f_in} Hz {rate_term}: {amp} vs {expect}");
+            }
+        }
+    }
+
+    /// A constant input stays where it is (unit DC gain, started at rest).
+    #[test]
+    fn rest_stays_at_rest() {
+        for rate_term in [false, true] {
+            assert!(second_order(&[3.5; 200], 500.0, 4.0, 0.1, rate_term).iter().all(|y| (y - 3.5).abs() < 1e-12));
+        }
+    }
+}
