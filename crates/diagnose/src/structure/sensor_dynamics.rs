@@ -45,6 +45,7 @@
 use super::{Fitted, ParamSpec, StructureCandidate, StructureData};
 use crate::DiagnoseOptions;
 use crate::channels::{BalanceData, ChannelOptions, balance_data_with};
+use rayon::prelude::*;
 use rig_types::sensor::{centred_moving_average, nominal_window_samples};
 use rig_types::{Campaign, RigParams};
 
@@ -112,30 +113,34 @@ pub(super) fn grid(
 ) -> Vec<SensorPoint> {
     let rate = c.rig.sample_rate_hz;
     let half = nominal_window_samples(SMOOTH_HALF_S, rate);
-    let mut out = Vec::new();
-    for sensor in [Sensor::Force, Sensor::EncoderCoupling] {
-        for &f_n in &FREQUENCIES_HZ {
-            for &zeta in &DAMPING_RATIOS {
-                let through = |x: &mut Vec<f64>, rate_term: bool| {
-                    let smooth = centred_moving_average(x, half);
-                    let y = second_order(&smooth, rate, f_n, zeta, rate_term);
-                    x.iter_mut().zip(y.iter().zip(&smooth)).for_each(|(x, (y, s))| *x += y - s);
-                };
-                let data = balance_data_with(c, cal, opts, o, |phi1, phi2, f| match sensor {
-                    Sensor::Force => {
-                        through(phi1, false);
-                        through(phi2, false);
-                    }
-                    Sensor::EncoderCoupling => {
-                        through(phi2, true);
-                        through(f, true);
-                    }
-                });
-                out.push(SensorPoint { sensor, natural_frequency_hz: f_n, damping_ratio: zeta, data });
-            }
-        }
-    }
-    out
+    // Every grid point's balance is independent: built in parallel, in grid order.
+    let points: Vec<(Sensor, f64, f64)> = [Sensor::Force, Sensor::EncoderCoupling]
+        .into_iter()
+        .flat_map(|sensor| {
+            FREQUENCIES_HZ.iter().flat_map(move |&f_n| DAMPING_RATIOS.iter().map(move |&zeta| (sensor, f_n, zeta)))
+        })
+        .collect();
+    points
+        .into_par_iter()
+        .map(|(sensor, f_n, zeta)| {
+            let through = |x: &mut Vec<f64>, rate_term: bool| {
+                let smooth = centred_moving_average(x, half);
+                let y = second_order(&smooth, rate, f_n, zeta, rate_term);
+                x.iter_mut().zip(y.iter().zip(&smooth)).for_each(|(x, (y, s))| *x += y - s);
+            };
+            let data = balance_data_with(c, cal, opts, o, |phi1, phi2, f| match sensor {
+                Sensor::Force => {
+                    through(phi1, false);
+                    through(phi2, false);
+                }
+                Sensor::EncoderCoupling => {
+                    through(phi2, true);
+                    through(f, true);
+                }
+            });
+            SensorPoint { sensor, natural_frequency_hz: f_n, damping_ratio: zeta, data }
+        })
+        .collect()
 }
 
 const FORCE_PARAMS: &[ParamSpec] = &[
