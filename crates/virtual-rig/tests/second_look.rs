@@ -43,6 +43,12 @@ fn a_velocity_weakening_too_small_teacher_forced_is_named_by_its_free_run() {
     assert!(row.teacher_forced_gain < 0.05, "{row:?}");
     assert!(row.free_run_gain >= 0.05 && row.free_run_t >= 2.0 && row.still_flagged.is_empty(), "{row:?}");
     assert!(d.detail.free_run_extended.iter().all(|k| !k.flagged));
+    // It says no in the same campaign: the modulations the step also saw
+    // with t ≥ 2 (gains 0.1 % and 0.0 % teacher-forced) gain < 1 % in free
+    // run, and are refused.
+    let refused: Vec<_> = d.detail.second_look.iter().filter(|r| !r.admitted).collect();
+    assert!(!refused.is_empty(), "{:?}", d.detail.second_look);
+    assert!(refused.iter().all(|r| r.free_run_gain < 0.05), "{refused:?}");
     // Its parameters are the truth's (μs 0.3208, μk 0.3169, v_s 3.22 rad/s)
     // within a few of their standard errors' worth of the rung's size.
     let p = &d.findings[0].params;
