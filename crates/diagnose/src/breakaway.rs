@@ -106,6 +106,20 @@ pub fn with_static_level(model: &RigParams, level: &BreakAwayLevel) -> RigParams
     p
 }
 
+/// `model` at the static level it breaks away at under its own normal force
+/// ([`breakaway_level`], then [`with_static_level`]), and that level (`None`:
+/// the model as given).
+pub fn at_own_level(
+    c: &Campaign,
+    law: &SensorLaw,
+    model: &RigParams,
+    phases_rad: &BTreeMap<String, (f64, f64)>,
+    o: &FrictionOptions,
+) -> (RigParams, Option<BreakAwayLevel>) {
+    let level = breakaway_level(c, law, model, phases_rad, o);
+    (level.as_ref().map_or_else(|| model.clone(), |l| with_static_level(model, l)), level)
+}
+
 /// The level as a parameter at its bound when it reads below the model's μk
 /// (issue 25, item 4: reported, never silently fixed).
 pub fn at_bound(model: &RigParams, level: &BreakAwayLevel) -> Option<crate::ParamAtBound> {

@@ -51,7 +51,8 @@
 //!    sequentially thresholded least squares fitted on training folds and
 //!    scored on held-out folds.
 //! 6. **Second look in free run** ([`second_look`]): when the final model's
-//!    free run is flagged (and the structure is the rig model's), each effect
+//!    free run is flagged while the model is otherwise adequate (the
+//!    mismatch shows only in the motion; the structure the rig model's), each effect
 //!    the last step refused with a significant paired t but a gain below the
 //!    minimum is added with its parameters fitted without each fold, every
 //!    run is simulated free, and the effect is admitted when its free-run
@@ -364,8 +365,7 @@ pub fn diagnose(
             // The static level the extended model breaks away at, read under its
             // own normal force (breakaway module docs).
             let ext = extended_params(p, &vocab);
-            let level = breakaway::breakaway_level(c, &law, &ext, &phases, &opts.stick_episodes);
-            let ext = level.as_ref().map_or(ext.clone(), |l| breakaway::with_static_level(&ext, l));
+            let (ext, level) = breakaway::at_own_level(c, &law, &ext, &phases, &opts.stick_episodes);
             let phased = |m: &rig_types::RigParams, id: &str| {
                 channels::with_run_phases(m, phases.get(id).copied().unwrap_or_default())
             };

@@ -145,8 +145,7 @@ fn judge(
         .iter()
         .map(|v| {
             let p = extended_params(x.baseline, v.as_ref()?);
-            let level = breakaway::breakaway_level(x.c, x.law, &p, &phases, &x.opts.stick_episodes);
-            Some(level.as_ref().map_or(p.clone(), |l| breakaway::with_static_level(&p, l)))
+            Some(breakaway::at_own_level(x.c, x.law, &p, &phases, &x.opts.stick_episodes).0)
         })
         .collect();
     let run_of: BTreeMap<&str, (usize, (f64, f64))> =
