@@ -156,6 +156,38 @@ fn inertial_note(s: &Study) -> String {
             }
         );
     }
+    // The drive: a ripple of the stage at the screw's pitch (V/pitch) or any
+    // line of the drive is one frequency at one V whatever the spring; the
+    // mass on its spring oscillates at a frequency ∝ √k. Inertial runs at one
+    // V on two springs tell them apart (the spectrum's reading).
+    let pairs: Vec<String> = inertial
+        .iter()
+        .flat_map(|a| inertial.iter().map(move |b| (a, b)))
+        .filter(|(a, b)| a.drive_speed_um_s == b.drive_speed_um_s && a.stiffness_n_m < b.stiffness_n_m)
+        .filter(|(a, b)| a.spectral_period_s.is_finite() && b.spectral_period_s.is_finite())
+        .map(|(a, b)| {
+            format!(
+                "at {} µm/s, {:.1} Hz at {} N/m and {:.1} Hz at {} N/m, a ratio of {:.2} against √(k ratio) = {:.2}",
+                a.drive_speed_um_s,
+                1.0 / a.spectral_period_s,
+                a.stiffness_n_m,
+                1.0 / b.spectral_period_s,
+                b.stiffness_n_m,
+                a.spectral_period_s / b.spectral_period_s,
+                (b.stiffness_n_m / a.stiffness_n_m).sqrt()
+            )
+        })
+        .collect();
+    if !pairs.is_empty() {
+        let _ = writeln!(
+            out,
+            "The drive (the README names neither motor, screw nor stage, and the drive speed is not recorded): a speed ripple \
+             of the stage (at V/pitch of a screw) or any line of the drive has one frequency at one V whatever the spring, \
+             and a drive compliance in series slows the oscillation (above). The spectrum's inertial lines: {}. The spring \
+             sets them, not the drive.\n",
+            pairs.join("; ")
+        );
+    }
     // The loading rate where the slider rests (stick-slip runs): a spring r
     // times stiffer raises it to r L, a lighter mass leaves it at L.
     let resting: Vec<String> = s
