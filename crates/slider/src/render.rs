@@ -27,7 +27,10 @@ rate-and-state law with an inertia term, whose Hopf frequency Ω² = k/(m + N a 
 interface term dominates) and the inertial one at high V (m dominates). The candidates here are three forms of that \
 memory (static ageing with a rate-strengthening kinetic law; rate-and-state with the ageing law, started also on a \
 creeping calibration run's Hopf point; Heslot et al.'s law with the speed and the age cut off at small values, \
-`heslot_creep`, whose speed term vanishing at rest gives a static threshold) and three set-ups (an \
+`heslot_creep`, whose speed term vanishing at rest gives a static threshold), one of the interface's heterogeneity \
+(`track_threshold`: Coulomb whose threshold varies along the paper, σ over a correlation length ℓ — a stiff spring \
+follows the track, creeping, and slips only where the threshold falls faster than k/(m g) per metre; a soft one \
+stick-slips over it) and three set-ups (an \
 effective mass, a compliance in series, a scaled spring), fitted by simulation on the calibration runs and chosen by \
 forward selection on the held-out runs.";
 
@@ -1391,11 +1394,12 @@ fn markdown(s: &Study) -> String {
     );
     let _ = writeln!(
         md,
-        "Ids (crate docs of `rig_slider`): friction laws `{}`, `{}`, `{}`, `{}`; set-ups `{}`, `{}`, `{}`, `{}`; a model is `law+set-up`.",
+        "Ids (crate docs of `rig_slider`): friction laws `{}`, `{}`, `{}`, `{}`, `{}`; set-ups `{}`, `{}`, `{}`, `{}`; a model is `law+set-up`.",
         Candidate::Coulomb.id(),
         Candidate::StaticAgeing.id(),
         Candidate::RateState.id(),
         Candidate::Heslot.id(),
+        Candidate::Track.id(),
         SetupCandidate::Stated.id(),
         SetupCandidate::EffectiveMass.id(),
         SetupCandidate::SeriesCompliance.id(),

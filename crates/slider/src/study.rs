@@ -359,6 +359,10 @@ fn window_s(m: &Measured, p: &StudyParams) -> f64 {
 /// so a long period is measured as such.
 pub fn predict(model: Model, x: &[f64], m: &Measured, p: &StudyParams) -> Features {
     let mut window = window_s(m, p);
+    // A law with a track covers enough of it for the events' statistics.
+    if let (crate::sim::Law::Track(t), _) = model.law(x) {
+        window = window.max(t.min_window_s(m.drive_speed_um_s * 1e-6)).min(p.sim_max_window_s).min(m.duration_s);
+    }
     loop {
         let f = SCRATCH.with_borrow_mut(|(run, force, time)| {
             // A law whose simulation leaves the physical range predicts nothing: no slip.
