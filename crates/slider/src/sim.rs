@@ -193,13 +193,10 @@ impl Contact {
 }
 
 impl ImplicitFriction for Contact {
-    /// Coulomb: none; static ageing: the time stuck (0); rate and state: θ = Dc/V.
+    /// Coulomb: none; static ageing: the time stuck (0); rate and state: θ = Dc/V; a track: the travel (0).
     fn initial_state(&self, drive_m_s: f64) -> [f64; MAX_FRICTION_STATES] {
         if let Law::Heslot(law) = self.law {
             return crate::heslot::Contact { law, weight_n: self.weight_n }.initial_state(drive_m_s);
-        }
-        if let Law::Track(law) = self.law {
-            return crate::track::Contact { law, weight_n: self.weight_n }.initial_state(drive_m_s);
         }
         self.rate_state().map_or([0.0; MAX_FRICTION_STATES], |r| r.initial_state(drive_m_s))
     }
@@ -234,9 +231,7 @@ impl ImplicitFriction for Contact {
             Law::Heslot(law) => {
                 crate::heslot::Contact { law, weight_n: w }.implicit_step(state, stuck, p, h_over_mass, h_s)
             }
-            Law::Track(law) => {
-                crate::track::Contact { law, weight_n: w }.implicit_step(state, stuck, p, h_over_mass, h_s)
-            }
+            Law::Track(law) => law.step(&mut state[0], stuck, p, h_over_mass, h_s, w),
         }
     }
 }

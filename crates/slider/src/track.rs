@@ -27,12 +27,13 @@
 //! the soft one at the same V, with no velocity dependence at all. The
 //! static-to-kinetic drop Δμ keeps Coulomb's dynamic slip.
 //!
-//! The implicit step (`one_dof::ImplicitFriction`, Moreau): Coulomb's step
+//! The implicit step ([`Track::step`], Moreau, through `sim`'s
+//! `one_dof::ImplicitFriction`): Coulomb's step
 //! (`one_dof::implicit_coulomb_step`) at the levels of the slider's present
-//! position, which the state carries (state[0], m) and advances by v h.
+//! position, which the state carries (state[0], m, from 0) and advances by v h.
 
 use crate::fit::ParamSpec;
-use rig_model::one_dof::{ImplicitFriction, MAX_FRICTION_STATES, implicit_coulomb_step};
+use rig_model::one_dof::implicit_coulomb_step;
 
 /// The law's id in slider-diagnosis.json.
 pub const ID: &str = "track_threshold";
@@ -73,6 +74,27 @@ impl Track {
     /// The static threshold at travel `x_m`.
     pub fn threshold(&self, x_m: f64) -> f64 {
         self.mu_static0 + self.sd * profile(x_m / self.length_m)
+    }
+
+    /// One implicit step of the contact under the normal load `weight_n`
+    /// (N; speeds in m/s, forces in N), for `sim`'s `one_dof::ImplicitFriction`:
+    /// Coulomb's step at the levels of the slider's travel `travel_m` (its
+    /// state, from 0 at the start), which it advances by v h. Returns the
+    /// new speed and the signed contact force.
+    pub fn step(
+        &self,
+        travel_m: &mut f64,
+        stuck: &mut bool,
+        p: f64,
+        h_over_mass: f64,
+        h_s: f64,
+        weight_n: f64,
+    ) -> (f64, f64) {
+        let mu_s = self.threshold(*travel_m);
+        let kinetic = weight_n * (mu_s - self.mu_drop);
+        let r = implicit_coulomb_step(p, h_over_mass, weight_n * mu_s, |_| kinetic, stuck);
+        *travel_m += r.0 * h_s;
+        r
     }
 
     /// The simulated window that covers [`TRACK_LENGTHS`] correlation lengths at `drive_m_s`, s.
@@ -119,37 +141,6 @@ fn node(i: i64) -> f64 {
     (-2.0 * unit(a).ln()).sqrt() * (2.0 * std::f64::consts::PI * unit(b)).cos()
 }
 
-/// [`Track`] as one_dof's implicit contact under the normal load `weight_n`
-/// (N): speeds in m/s, forces in N.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Contact {
-    pub law: Track,
-    pub weight_n: f64,
-}
-
-impl ImplicitFriction for Contact {
-    /// The slider at the start of its track.
-    fn initial_state(&self, _drive_m_s: f64) -> [f64; MAX_FRICTION_STATES] {
-        [0.0; MAX_FRICTION_STATES]
-    }
-
-    fn implicit_step(
-        &self,
-        state: &mut [f64; MAX_FRICTION_STATES],
-        stuck: &mut bool,
-        p: f64,
-        h_over_mass: f64,
-        h_s: f64,
-    ) -> (f64, f64) {
-        let w = self.weight_n;
-        let mu_s = self.law.threshold(state[0]);
-        let kinetic = w * (mu_s - self.law.mu_drop);
-        let r = implicit_coulomb_step(p, h_over_mass, w * mu_s, |_| kinetic, stuck);
-        state[0] += r.0 * h_s;
-        r
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -170,15 +161,13 @@ mod tests {
     #[test]
     fn the_step_holds_at_the_local_threshold_and_advances_the_travel() {
         let law = Track::of(&[0.35, 0.02, 0.02, 5e-6]);
-        let c = Contact { law, weight_n: 0.301 };
-        let (hm, h) = (1e-4 / 0.0307, 1e-4);
-        let mut s = c.initial_state(42e-6);
-        let mut stuck = true;
+        let (hm, h, w) = (1e-4 / 0.0307, 1e-4, 0.301);
+        let (mut x, mut stuck) = (0.0, true);
         let here = law.threshold(0.0);
-        let (v, _) = c.implicit_step(&mut s, &mut stuck, 0.99 * hm * 0.301 * here, hm, h);
-        assert!(stuck && v == 0.0 && s[0] == 0.0);
-        let (v, f) = c.implicit_step(&mut s, &mut stuck, 1.2 * hm * 0.301 * here, hm, h);
-        assert!(!stuck && v > 0.0 && (s[0] - v * h).abs() < 1e-18);
-        assert!((f - 0.301 * (here - law.mu_drop)).abs() < 1e-12);
+        let (v, _) = law.step(&mut x, &mut stuck, 0.99 * hm * w * here, hm, h, w);
+        assert!(stuck && v == 0.0 && x == 0.0);
+        let (v, f) = law.step(&mut x, &mut stuck, 1.2 * hm * w * here, hm, h, w);
+        assert!(!stuck && v > 0.0 && (x - v * h).abs() < 1e-18);
+        assert!((f - w * (here - law.mu_drop)).abs() < 1e-12);
     }
 }
