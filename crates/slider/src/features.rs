@@ -243,14 +243,41 @@ pub fn features(time_s: &[f64], force: &[f64], c: &RunConstants, o: &FeatureOpti
 /// between half and twice the natural frequency 1/T0, refined by Gaussian
 /// interpolation (`rig_spectra::interpolate_gaussian`); s. NaN when the
 /// record is too short for a bin in that band.
-pub fn spectral_period_s(filtered: &[f64], fs_hz: f64, natural_period_s: f64) -> f64 {
+///
+/// Bins within [`MAINS_HALF_WIDTH_HZ`] of a multiple of `mains_hz` are
+/// skipped (0: none): the shipped records carry a line at the mains
+/// frequency in every run, 0.5–0.9 µm of spring extension at both springs
+/// (the sensor's pick-up, not the slider's motion), which at 2254 N/m sits
+/// at 1.16/T0, inside the band, and outgrows a spread-out oscillation.
+pub fn spectral_period_s(filtered: &[f64], fs_hz: f64, natural_period_s: f64, mains_hz: f64) -> f64 {
     use rig_spectra::{Detrend, Window, amplitude_spectrum, interpolate_gaussian};
     let Ok(s) = amplitude_spectrum(filtered, fs_hz, Window::Hann, Detrend::Linear) else { return f64::NAN };
     let (lo, hi) = (0.5 / natural_period_s, 2.0 / natural_period_s);
-    let band = (1..s.freq_hz.len().saturating_sub(1)).filter(|&i| s.freq_hz[i] >= lo && s.freq_hz[i] <= hi);
+    let mains = |f: f64| mains_hz > 0.0 && (f - mains_hz * (f / mains_hz).round()).abs() <= MAINS_HALF_WIDTH_HZ;
+    let band = (1..s.freq_hz.len().saturating_sub(1))
+        .filter(|&i| s.freq_hz[i] >= lo && s.freq_hz[i] <= hi && !mains(s.freq_hz[i]));
     let Some(k) = band.max_by(|&a, &b| s.amplitude[a].total_cmp(&s.amplitude[b])) else { return f64::NAN };
     let (delta, _) = interpolate_gaussian(s.amplitude[k - 1], s.amplitude[k], s.amplitude[k + 1]);
     1.0 / (s.freq_hz[k] + delta * s.resolution_hz)
+}
+
+/// Half width of the band skipped around each multiple of the mains
+/// frequency in [`spectral_period_s`], Hz (the line's leakage under a Hann
+/// window over the shortest shipped record, 3.8 s: two bins of 0.26 Hz).
+pub const MAINS_HALF_WIDTH_HZ: f64 = 0.6;
+
+/// The channel's resolution: the median spacing of the record's distinct
+/// values, in the record's unit (F/(m g) here). A digitised record sits on a
+/// grid (the shipped runs: 0.00059 at 168 N/m and 0.0070 at 2254 N/m, both
+/// about 1 µm of spring extension, m g/k times the step); a simulation's
+/// values are continuous and give a spacing near 0. NaN for fewer than two
+/// distinct values.
+pub fn channel_step(raw: &[f64]) -> f64 {
+    let mut v: Vec<f64> = raw.iter().copied().filter(|x| x.is_finite()).collect();
+    v.sort_by(f64::total_cmp);
+    v.dedup();
+    let gaps: Vec<f64> = v.windows(2).map(|w| w[1] - w[0]).collect();
+    Spread::of(&gaps).median
 }
 
 /// 1.4826 × the median absolute deviation of the raw record from its running
@@ -374,6 +401,17 @@ mod tests {
     }
 
     #[test]
+    fn channel_step_reads_the_grid_a_record_sits_on() {
+        // A slow ramp digitised on a grid of 0.007 with noise of a few steps: the step, not the noise.
+        let x: Vec<f64> = (0..5000)
+            .map(|i| ((0.3 + 1e-5 * i as f64 + 0.01 * ((i * 7919) % 13) as f64 / 13.0) / 0.007).round() * 0.007)
+            .collect();
+        assert!((channel_step(&x) / 0.007 - 1.0).abs() < 1e-9, "{}", channel_step(&x));
+        let smooth: Vec<f64> = (0..5000).map(|i| 0.3 + 1e-5 * i as f64).collect();
+        assert!(channel_step(&smooth) < 1e-4);
+    }
+
+    #[test]
     fn sine_near_the_natural_period_is_inertial_and_noise_is_steady() {
         let c = RunConstants { stiffness_n_m: 2254.0, drive_speed_m_s: 1.1e-3, mass_kg: 0.0307, gravity_m_s2: 9.81 };
         let t0 = 2.0 * std::f64::consts::PI * (c.mass_kg / c.stiffness_n_m).sqrt();
@@ -384,8 +422,14 @@ mod tests {
         assert_eq!(r.regime, Regime::InertialOscillation);
         assert!((r.period_s.median / (1.1 * t0) - 1.0).abs() < 0.03, "{:?}", r.period_s);
         // The spectrum reads the same period without the turning points (bins of 0.5 Hz at 39 Hz).
-        let ps = spectral_period_s(&f, 2000.0, t0);
+        let ps = spectral_period_s(&f, 2000.0, t0, 0.0);
         assert!((ps / (1.1 * t0) - 1.0).abs() < 0.003, "spectral period {ps} vs {}", 1.1 * t0);
+        // A stronger mains line in the band (50 Hz, 1.16/T0) is skipped, not read as the oscillation.
+        let hum: Vec<f64> =
+            t.iter().zip(&f).map(|(&t, &x)| x + 0.08 * (2.0 * std::f64::consts::PI * 50.0 * t).sin()).collect();
+        assert!((spectral_period_s(&hum, 2000.0, t0, 0.0) * 50.0 - 1.0).abs() < 0.003, "unmasked, the hum wins");
+        let ps = spectral_period_s(&hum, 2000.0, t0, 50.0);
+        assert!((ps / (1.1 * t0) - 1.0).abs() < 0.003, "spectral period with the hum skipped {ps}");
         let quiet: Vec<f64> =
             t.iter().enumerate().map(|(i, _)| 0.33 + 0.005 * ((i * 7919) % 13) as f64 / 13.0).collect();
         assert_eq!(features(&t, &quiet, &c, &opts()).regime, Regime::SteadySliding);

@@ -30,10 +30,12 @@ pub enum Candidate {
     RateState,
     /// Heslot et al. 1994's law: rate and state cut off at small speeds and ages ([`crate::heslot`]).
     Heslot,
+    /// Coulomb with a threshold that varies along the track ([`crate::track`]).
+    Track,
 }
 
-pub const CANDIDATES: [Candidate; 4] =
-    [Candidate::Coulomb, Candidate::StaticAgeing, Candidate::RateState, Candidate::Heslot];
+pub const CANDIDATES: [Candidate; 5] =
+    [Candidate::Coulomb, Candidate::StaticAgeing, Candidate::RateState, Candidate::Heslot, Candidate::Track];
 
 /// A fitted parameter's name (with unit), bounds and whether it is searched in log.
 #[derive(Debug, Clone, Copy)]
@@ -60,6 +62,7 @@ impl Candidate {
             Candidate::StaticAgeing => "static_ageing",
             Candidate::RateState => "rate_state_ageing",
             Candidate::Heslot => crate::heslot::ID,
+            Candidate::Track => crate::track::ID,
         }
     }
 
@@ -84,6 +87,7 @@ impl Candidate {
             Candidate::StaticAgeing => AGEING,
             Candidate::RateState => RATE_STATE,
             Candidate::Heslot => crate::heslot::PARAMS,
+            Candidate::Track => crate::track::PARAMS,
         }
     }
     /// The law of parameter vector `x`.
@@ -102,6 +106,7 @@ impl Candidate {
                 Law::RateState { mu0: x[0], a: x[1], b: x[1] + x[2], dc_m: x[3], v_ref_m_s: V_REF_M_S }
             }
             Candidate::Heslot => Law::Heslot(crate::heslot::Heslot::of(x)),
+            Candidate::Track => Law::Track(crate::track::Track::of(x)),
         }
     }
 
@@ -137,6 +142,7 @@ impl Candidate {
                 v
             }
             Candidate::Heslot => crate::heslot::Heslot::starts(mu, kc_over_weight_per_m),
+            Candidate::Track => crate::track::Track::starts(mu),
         }
     }
 }

@@ -27,7 +27,10 @@ rate-and-state law with an inertia term, whose Hopf frequency Ω² = k/(m + N a 
 interface term dominates) and the inertial one at high V (m dominates). The candidates here are three forms of that \
 memory (static ageing with a rate-strengthening kinetic law; rate-and-state with the ageing law, started also on a \
 creeping calibration run's Hopf point; Heslot et al.'s law with the speed and the age cut off at small values, \
-`heslot_creep`, whose speed term vanishing at rest gives a static threshold) and three set-ups (an \
+`heslot_creep`, whose speed term vanishing at rest gives a static threshold), one of the interface's heterogeneity \
+(`track_threshold`: Coulomb whose threshold varies along the paper, σ over a correlation length ℓ — a stiff spring \
+follows the track, creeping, and slips only where the threshold falls faster than k/(m g) per metre; a soft one \
+stick-slips over it) and three set-ups (an \
 effective mass, a compliance in series, a scaled spring), fitted by simulation on the calibration runs and chosen by \
 forward selection on the held-out runs.";
 
@@ -87,8 +90,9 @@ fn inertial_note(s: &Study) -> String {
         let _ = write!(
             spectral,
             " The spectrum reads the period without the turning points (the largest line of the filtered force between \
-             half and twice 1/T0) and agrees with their median within 5 % at {}: the short period is the oscillation's, \
+             half and twice 1/T0, the mains line at {} Hz skipped) and agrees with their median within 5 % at {}: the short period is the oscillation's, \
              not the feature's reading of a short, noisy record.",
+            s.params.mains_hz,
             names.join(", ")
         );
     }
@@ -153,6 +157,38 @@ fn inertial_note(s: &Study) -> String {
             } else {
                 "not resolved, so one set-up number for every spring is what the data allow"
             }
+        );
+    }
+    // The drive: a ripple of the stage at the screw's pitch (V/pitch) or any
+    // line of the drive is one frequency at one V whatever the spring; the
+    // mass on its spring oscillates at a frequency ∝ √k. Inertial runs at one
+    // V on two springs tell them apart (the spectrum's reading).
+    let pairs: Vec<String> = inertial
+        .iter()
+        .flat_map(|a| inertial.iter().map(move |b| (a, b)))
+        .filter(|(a, b)| a.drive_speed_um_s == b.drive_speed_um_s && a.stiffness_n_m < b.stiffness_n_m)
+        .filter(|(a, b)| a.spectral_period_s.is_finite() && b.spectral_period_s.is_finite())
+        .map(|(a, b)| {
+            format!(
+                "at {} µm/s, {:.1} Hz at {} N/m and {:.1} Hz at {} N/m, a ratio of {:.2} against √(k ratio) = {:.2}",
+                a.drive_speed_um_s,
+                1.0 / a.spectral_period_s,
+                a.stiffness_n_m,
+                1.0 / b.spectral_period_s,
+                b.stiffness_n_m,
+                a.spectral_period_s / b.spectral_period_s,
+                (b.stiffness_n_m / a.stiffness_n_m).sqrt()
+            )
+        })
+        .collect();
+    if !pairs.is_empty() {
+        let _ = writeln!(
+            out,
+            "The drive (the README names neither motor, screw nor stage, and the drive speed is not recorded): a speed ripple \
+             of the stage (at V/pitch of a screw) or any line of the drive has one frequency at one V whatever the spring, \
+             and a drive compliance in series slows the oscillation (above). The spectrum's inertial lines: {}. The spring \
+             sets them, not the drive.\n",
+            pairs.join("; ")
         );
     }
     // The loading rate where the slider rests (stick-slip runs): a spring r
@@ -232,6 +268,105 @@ fn inertial_note(s: &Study) -> String {
             all,
             per_fold.join(", "),
             if at_bounds(c).contains(&specs[0].name) { " (at its bound in a fit)" } else { "" }
+        );
+    }
+    out
+}
+
+/// What the records can show: each run's grid (the channel's step, in
+/// F/(m g) and in µm of spring extension), noise and hysteresis (the
+/// smallest slip that is an event), and for each creeping run whether the
+/// Coulomb fit that did not see its spring would show its slips there
+/// through the run's own channel ([`crate::study::through_channel`]).
+fn channel_note(s: &Study) -> String {
+    let weight_n = s.params.mass_kg * s.params.gravity_m_s2;
+    let mut out = String::from(
+        "## What the channel resolves
+
+",
+    );
+    let list: Vec<String> = s
+        .runs
+        .iter()
+        .map(|r| {
+            let f = &r.features;
+            let um = |x: f64| 1e6 * x * weight_n / r.stiffness_n_m;
+            // A robust deviation of 0: most samples sit on their running median's step.
+            let noise = if f.noise_sd > 0.0 {
+                format!("noise sd {:.4} ({:.1} steps)", f.noise_sd, f.noise_sd / r.force_step)
+            } else {
+                "noise below one step (most samples on their running median)".to_string()
+            };
+            format!(
+                "{} step {:.5} ({:.2} µm), {noise}, hysteresis {:.4} ({:.1} steps, a slip of {:.1} µm)",
+                r.name,
+                r.force_step,
+                um(r.force_step),
+                f.hysteresis,
+                f.hysteresis / r.force_step,
+                um(f.hysteresis)
+            )
+        })
+        .collect();
+    let _ = writeln!(
+        out,
+        "The force is digitised: its values sit on a grid (`rig_slider::features::channel_step`, the median spacing of a \
+         record's distinct values), about one micrometre of spring extension at every spring, so the step in F/(m g) \
+         grows with k. The turning points' hysteresis is the larger of `min_drop` and `noise_multiple` robust noise \
+         deviations: a slip smaller than it is no event, and a run that slips only by less reads as creep or steady \
+         sliding. Per run: {}.\n",
+        list.join("; ")
+    );
+    for c in &s.channel_checks {
+        let r = &s.runs[c.run];
+        let m = &r.features;
+        let read = |f: &Features| {
+            format!(
+                "{} ({} events, period {:.3} s, drop {:.4}, stick fraction {:.2}, load rate {:.2} L)",
+                f.regime.label(),
+                f.events,
+                f.period_s.median,
+                f.drop.median,
+                f.stick_fraction.median,
+                f.load_rate.median
+            )
+        };
+        let verdict = if c.channel.regime == c.clean.regime {
+            format!(
+                "the channel resolves its slips ({:.1} steps, {:.1} µm, against a hysteresis of {:.1} steps), so the \
+                 record's {} (load rate {:.2} L) is not this stick-slip lost in the noise",
+                c.clean.drop.median / r.force_step,
+                1e6 * c.clean.drop.median * weight_n / r.stiffness_n_m,
+                m.hysteresis / r.force_step,
+                m.regime.label(),
+                m.load_rate.median
+            )
+        } else {
+            format!(
+                "the channel loses its slips ({:.1} steps against a hysteresis of {:.1} steps): at this run the record \
+                 cannot tell them from its {}",
+                c.clean.drop.median / r.force_step,
+                m.hysteresis / r.force_step,
+                m.regime.label()
+            )
+        };
+        let _ = writeln!(
+            out,
+            "- {}: {} with {} fitted on the other runs reads {} noiseless; its first {:.0} s rounded onto the run's grid \
+             with the record's own noise added (`rig_slider::study::through_channel`) read {}: {}.",
+            r.name,
+            c.model.id(),
+            c.model
+                .params()
+                .iter()
+                .zip(&c.params)
+                .map(|(p, v)| format!("{}={:.4}", p.name, v))
+                .collect::<Vec<_>>()
+                .join(" "),
+            read(&c.clean),
+            c.seconds,
+            read(&c.channel),
+            verdict
         );
     }
     out
@@ -566,6 +701,7 @@ pub fn render(s: &Study) -> StudyOutput {
         "mean_force",
         "noise_sd",
         "hysteresis",
+        "force_step",
     ]);
     for r in &s.runs {
         let f = &r.features;
@@ -591,6 +727,7 @@ pub fn render(s: &Study) -> StudyOutput {
             f4(f.mean_force),
             f4(f.noise_sd),
             f4(f.hysteresis),
+            format!("{:.6}", r.force_step),
         ]);
     }
     out.tables.push(("tables/slider-features.csv".into(), ft));
@@ -1073,7 +1210,8 @@ fn markdown(s: &Study) -> String {
             pm(&f.load_rate)
         );
     }
-    let _ = writeln!(md, "\n{}", inertial_note(s));
+    let _ = writeln!(md, "\n{}", channel_note(s));
+    let _ = writeln!(md, "{}", inertial_note(s));
     let _ = writeln!(
         md,
         "## Forward selection (held-out misfit, {})\n",
@@ -1256,11 +1394,12 @@ fn markdown(s: &Study) -> String {
     );
     let _ = writeln!(
         md,
-        "Ids (crate docs of `rig_slider`): friction laws `{}`, `{}`, `{}`, `{}`; set-ups `{}`, `{}`, `{}`, `{}`; a model is `law+set-up`.",
+        "Ids (crate docs of `rig_slider`): friction laws `{}`, `{}`, `{}`, `{}`, `{}`; set-ups `{}`, `{}`, `{}`, `{}`; a model is `law+set-up`.",
         Candidate::Coulomb.id(),
         Candidate::StaticAgeing.id(),
         Candidate::RateState.id(),
         Candidate::Heslot.id(),
+        Candidate::Track.id(),
         SetupCandidate::Stated.id(),
         SetupCandidate::EffectiveMass.id(),
         SetupCandidate::SeriesCompliance.id(),

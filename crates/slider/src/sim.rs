@@ -43,6 +43,8 @@ pub enum Law {
     /// Heslot et al. 1994's law, the velocity and the age cut off at small
     /// values ([`crate::heslot`]).
     Heslot(crate::heslot::Heslot),
+    /// Coulomb with a threshold that varies along the track ([`crate::track`]).
+    Track(crate::track::Track),
 }
 
 /// The set-up as the simulation sees it, beside the friction law: the mass
@@ -121,6 +123,7 @@ impl Law {
             Law::StaticAgeing { mu_kinetic0, .. } => mu_kinetic0,
             Law::RateState { mu0, .. } => mu0,
             Law::Heslot(h) => h.mu0,
+            Law::Track(t) => t.mu_static0 - t.mu_drop,
         }
     }
 }
@@ -190,7 +193,7 @@ impl Contact {
 }
 
 impl ImplicitFriction for Contact {
-    /// Coulomb: none; static ageing: the time stuck (0); rate and state: θ = Dc/V.
+    /// Coulomb: none; static ageing: the time stuck (0); rate and state: θ = Dc/V; a track: the travel (0).
     fn initial_state(&self, drive_m_s: f64) -> [f64; MAX_FRICTION_STATES] {
         if let Law::Heslot(law) = self.law {
             return crate::heslot::Contact { law, weight_n: self.weight_n }.initial_state(drive_m_s);
@@ -228,6 +231,7 @@ impl ImplicitFriction for Contact {
             Law::Heslot(law) => {
                 crate::heslot::Contact { law, weight_n: w }.implicit_step(state, stuck, p, h_over_mass, h_s)
             }
+            Law::Track(law) => law.step(&mut state[0], stuck, p, h_over_mass, h_s, w),
         }
     }
 }

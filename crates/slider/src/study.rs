@@ -57,6 +57,9 @@ pub struct StudyParams {
     /// ...and the model is adequate when its mean held-out misfit is at most
     /// this and it gets the regime of every held-out run right.
     pub adequacy_threshold: f64,
+    /// The mains frequency of the lab, Hz: its line (the sensor's pick-up) is
+    /// skipped where the spectrum reads an inertial period ([`spectral_period_s`]); 0: none.
+    pub mains_hz: f64,
     pub features: FeatureOptions,
 }
 
@@ -95,6 +98,8 @@ pub struct Measured {
     /// ([`spectral_period_s`]: the check of the turning points' median), s;
     /// NaN for the other regimes.
     pub spectral_period_s: f64,
+    /// The channel's resolution, F/(m g) ([`crate::features::channel_step`]).
+    pub force_step: f64,
 }
 
 /// A model fitted on some runs.
@@ -171,7 +176,28 @@ pub struct Study {
     /// Per creeping run, whether rate and state creeps across its stability
     /// boundary ([`boundary_scan`]).
     pub boundary_scans: Vec<BoundaryScan>,
+    /// Per creeping run, the Coulomb baseline of the fold that held it out,
+    /// simulated there and read through the run's channel ([`through_channel`]).
+    pub channel_checks: Vec<ChannelCheck>,
 }
+
+/// Whether a model's slips would show in a run's record ([`through_channel`]).
+#[derive(Debug, Clone)]
+pub struct ChannelCheck {
+    /// Index into `Study::runs`.
+    pub run: usize,
+    pub model: Model,
+    pub params: Vec<f64>,
+    /// Its features read noiseless, and through the run's channel.
+    pub clean: Features,
+    pub channel: Features,
+    /// Simulated seconds read.
+    pub seconds: f64,
+}
+
+/// Simulated seconds a channel check reads (what the record's noise is
+/// taken from: its first `CHANNEL_S` s).
+pub const CHANNEL_S: f64 = 20.0;
 
 /// The rate-and-state law (ageing law) simulated at one run while its
 /// quasi-static critical stiffness k_c = m g (b − a)/Dc crosses the run's
@@ -272,14 +298,50 @@ pub fn measure(r: &SliderRun, p: &StudyParams) -> Measured {
         sample_rate_hz: (n - 1) as f64 / duration_s,
         features: Features::default_steady(),
         spectral_period_s: f64::NAN,
+        force_step: crate::features::channel_step(&r.force_over_weight),
     };
     m.features = features(&r.time_s, &r.force_over_weight, &m.constants(p), &p.features);
     if m.features.regime == Regime::InertialOscillation {
         let half = (p.features.median_window_s * m.sample_rate_hz / 2.0).round() as usize;
         let filtered = crate::features::running_median(&r.force_over_weight, half);
-        m.spectral_period_s = spectral_period_s(&filtered, m.sample_rate_hz, m.features.natural_period_s);
+        m.spectral_period_s = spectral_period_s(&filtered, m.sample_rate_hz, m.features.natural_period_s, p.mains_hz);
     }
     m
+}
+
+/// A model's force at run `m` read through that run's channel, then by the
+/// one feature function: `channel_s` s simulated (after the warm-up),
+/// rounded onto the record's grid (its step, [`Measured::force_step`], at
+/// the grid's offset) and with the record's own noise added sample by
+/// sample (raw minus its running median: the spikes and the flicker between
+/// steps the measurement carries). Whether the record could have shown what
+/// the model does: a slip the channel resolves stays an event, one below
+/// the hysteresis does not. Deterministic (the record's noise, no draw).
+pub fn through_channel(
+    model: Model,
+    x: &[f64],
+    m: &Measured,
+    raw: &SliderRun,
+    p: &StudyParams,
+    channel_s: f64,
+) -> Features {
+    let mut q = p.clone();
+    q.sim_min_window_s = channel_s;
+    q.sim_max_window_s = channel_s;
+    let (_, clean) = predict_trace(model, x, m, &q, usize::MAX);
+    let half = (p.features.median_window_s * m.sample_rate_hz / 2.0).round() as usize;
+    let median = crate::features::running_median(&raw.force_over_weight, half);
+    let step = m.force_step;
+    let offset = raw.force_over_weight[0] - step * (raw.force_over_weight[0] / step).round();
+    let n = clean.len().min(raw.force_over_weight.len());
+    let force: Vec<f64> = (0..n)
+        .map(|i| {
+            let on_grid = offset + step * ((clean[i] - offset) / step).round();
+            on_grid + raw.force_over_weight[i] - median[i]
+        })
+        .collect();
+    let time: Vec<f64> = (0..n).map(|i| i as f64 / m.sample_rate_hz).collect();
+    features(&time, &force, &m.constants(p), &p.features)
 }
 
 /// The simulated (and the figures' measured) stretch of run `m`, s.
@@ -297,6 +359,10 @@ fn window_s(m: &Measured, p: &StudyParams) -> f64 {
 /// so a long period is measured as such.
 pub fn predict(model: Model, x: &[f64], m: &Measured, p: &StudyParams) -> Features {
     let mut window = window_s(m, p);
+    // A law with a track covers enough of it for the events' statistics.
+    if let (crate::sim::Law::Track(t), _) = model.law(x) {
+        window = window.max(t.min_window_s(m.drive_speed_um_s * 1e-6)).min(p.sim_max_window_s).min(m.duration_s);
+    }
     loop {
         let f = SCRATCH.with_borrow_mut(|(run, force, time)| {
             // A law whose simulation leaves the physical range predicts nothing: no slip.
@@ -643,8 +709,20 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
     let folder_name = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let creeping: Vec<usize> = (0..runs.len()).filter(|&i| runs[i].features.regime == Regime::Creep).collect();
     let boundary_scans = creeping.iter().map(|&i| boundary_scan(&runs, i, p)).collect();
+    let channel_checks = creeping
+        .par_iter()
+        .filter_map(|&i| {
+            let fold = folds.iter().find(|f| f.held_out.contains(&i))?;
+            let base = baselines.iter().find(|b| b.train == fold.train)?;
+            let seconds = CHANNEL_S.min(runs[i].duration_s);
+            let clean = predict(base.model, &base.params, &runs[i], p);
+            let channel = through_channel(base.model, &base.params, &runs[i], &raw[i], p, seconds);
+            Some(ChannelCheck { run: i, model: base.model, params: base.params.clone(), clean, channel, seconds })
+        })
+        .collect();
     Ok(Study {
         boundary_scans,
+        channel_checks,
         params: p.clone(),
         runs,
         leave_one_out,
