@@ -162,16 +162,37 @@ fn fit_gains_path(runs: &[Recording], limit_v: f64, start: Option<&Pi>, mut visi
 /// a limit no training sample reaches is reported as the supply itself.
 /// Returns (Pi, rss, n, stderr of Vmax from the RSS curvature).
 pub fn fit_limit(runs: &[&RunSignals], supply_v: f64) -> Option<(Pi, f64, usize, f64)> {
-    let runs = &Recording::all(runs);
+    search_limit(&Recording::all(runs), supply_v, true)
+}
+
+/// [`fit_limit`]'s gains and limit alone, as a cross-validation fold uses
+/// them: the same search and the same [`Pi`] to the bit, without the two
+/// fits of the RSS curvature that only the standard error reads.
+pub fn fit_limit_gains(runs: &[&RunSignals], supply_v: f64) -> Option<Pi> {
+    search_limit(&Recording::all(runs), supply_v, false).map(|x| x.0)
+}
+
+/// [`fit_limit`] on prepared recordings; the standard error (NaN without
+/// `with_se`) from two more fits beside the optimum.
+fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi, f64, usize, f64)> {
     // Every trial limit refits the gains from the unlimited fit (warm start).
     let p0 = fit_gains_from(runs, supply_v, None)?;
-    let eval_at = |l: f64| fit_gains_from(runs, l, Some(&p0)).map(|p| rss_of(&p, runs).0).unwrap_or(f64::INFINITY);
+    // Each trial's fit is kept: the search ends on a limit it has fitted, and
+    // the result is that fit (the same call on the same limit, so the same
+    // bits) instead of a refit.
+    let fitted = std::cell::RefCell::new(Vec::<(f64, Option<Pi>, f64)>::new());
+    let eval_at = |l: f64| {
+        let pi = fit_gains_from(runs, l, Some(&p0));
+        let rss = pi.map(|p| rss_of(&p, runs).0).unwrap_or(f64::INFINITY);
+        fitted.borrow_mut().push((l, pi, rss));
+        rss
+    };
     // A limit that binds nowhere gives the same arithmetic as any other such
     // limit (the clamp and the exclusion of saturated samples are the only
     // places the limit enters), so those trials reuse one evaluation.
     let free = non_binding_from(runs, supply_v, &p0);
     let eval = |l: f64| match free {
-        Some((l_free, rss)) if l >= l_free => rss,
+        Some((l_free, rss, _)) if l >= l_free => rss,
         _ => eval_at(l),
     };
     // Coarse grid first (the RSS is not unimodal far from the optimum), then Brent's method.
@@ -203,12 +224,23 @@ pub fn fit_limit(runs: &[&RunSignals], supply_v: f64) -> Option<(Pi, f64, usize,
     // baseline's). Any other point of the flat stretch is the search's
     // accident, and one at its edge clamps the first held-out run that drives
     // harder.
-    let l = match free {
-        Some((l_free, _)) if l >= l_free => supply_v,
-        _ => l,
+    let known = |l: f64| fitted.borrow().iter().find(|f| f.0.to_bits() == l.to_bits()).map(|f| (f.1, f.2));
+    let (l, pi, rss) = match free {
+        // The fit at the supply from p0 is the one `non_binding_from` traced.
+        Some((l_free, rss, at_supply)) if l >= l_free => (supply_v, Some(at_supply), rss),
+        _ => known(l).map_or_else(
+            || {
+                let pi = fit_gains_from(runs, l, Some(&p0));
+                (l, pi, pi.map(|p| rss_of(&p, runs).0).unwrap_or(f64::INFINITY))
+            },
+            |(pi, rss)| (l, pi, rss),
+        ),
     };
-    let pi = fit_gains_from(runs, l, Some(&p0))?;
-    let (rss, n) = rss_of(&pi, runs);
+    let pi = pi?;
+    let n = runs.iter().map(|r| r.e_rad_s.len()).sum::<usize>();
+    if !with_se {
+        return Some((pi, rss, n, f64::NAN));
+    }
     // Profile-likelihood curvature: Var(Vmax) ≈ 2σ²/RSS''; RSS is in noise units (σ² = rss/n).
     let h = (1e-3 * supply_v).max(1e-4);
     let d2 = (eval(l + h) - 2.0 * rss + eval(l - h)) / (h * h);
@@ -232,8 +264,9 @@ fn rss_lower_bound(runs: &[Recording], l: f64) -> f64 {
 /// the limit, with the RSS there: the fit at the supply, traced, clamps no
 /// sample and excludes none; then every limit above both the largest
 /// |V̂| of its passes and the largest |V|/0.999 gives the same passes.
-/// `None` when the supply itself binds.
-fn non_binding_from(runs: &[Recording], supply_v: f64, p0: &Pi) -> Option<(f64, f64)> {
+/// `None` when the supply itself binds; else (that limit, the RSS there,
+/// the fit at the supply).
+fn non_binding_from(runs: &[Recording], supply_v: f64, p0: &Pi) -> Option<(f64, f64, Pi)> {
     let v_meas = runs.iter().flat_map(|s| s.voltage_v.iter()).fold(0.0f64, |m, v| m.max(v.abs()));
     let mut v_pred = 0.0f64;
     let mut binds = false;
@@ -252,7 +285,7 @@ fn non_binding_from(runs: &[Recording], supply_v: f64, p0: &Pi) -> Option<(f64, 
     if binds || v_meas >= 0.999 * supply_v || l_free > supply_v {
         return None;
     }
-    Some((l_free, rss_of(&fitted, runs).0))
+    Some((l_free, rss_of(&fitted, runs).0, fitted))
 }
 
 /// Relative RMS voltage error of one run: sqrt(mean((V̂ − V)²)) / V_supply.
@@ -313,7 +346,9 @@ mod tests {
     #[test]
     fn the_prepared_recursion_is_the_per_sample_formula_bit_for_bit() {
         let limited = runs(Pi { kp_v_s_rad: 2.0, ki_v_rad: 10.0, limit_v: 5.0 }, &[1.0, 3.0]);
-        for pi in [Pi { kp_v_s_rad: 2.5, ki_v_rad: 7.0, limit_v: 0.1 }, Pi { kp_v_s_rad: 1.0, ki_v_rad: 0.0, limit_v: 0.05 }] {
+        for pi in
+            [Pi { kp_v_s_rad: 2.5, ki_v_rad: 7.0, limit_v: 0.1 }, Pi { kp_v_s_rad: 1.0, ki_v_rad: 0.0, limit_v: 0.05 }]
+        {
             let mut clamped = 0;
             for s in &limited {
                 let mut got = Vec::new();
@@ -323,7 +358,11 @@ mod tests {
                     let e = s.reference_rad_s(s.time_s[k]) - s.motor_speed_rad_s[k];
                     let u = pi.kp_v_s_rad * e + pi.ki_v_rad * i_acc;
                     let v = u.clamp(-pi.limit_v, pi.limit_v);
-                    assert_eq!((g.0.to_bits(), g.1.to_bits(), g.2.to_bits(), g.3), (e.to_bits(), v.to_bits(), i_acc.to_bits(), v != u), "{k}");
+                    assert_eq!(
+                        (g.0.to_bits(), g.1.to_bits(), g.2.to_bits(), g.3),
+                        (e.to_bits(), v.to_bits(), i_acc.to_bits(), v != u),
+                        "{k}"
+                    );
                     clamped += usize::from(v != u);
                     if k + 1 < s.time_s.len() {
                         let tt = rig_model::ANTI_WINDUP_TRACKING_S;
@@ -333,6 +372,23 @@ mod tests {
                 }
             }
             assert!(clamped > 100, "{clamped} clamped samples");
+        }
+    }
+
+    /// The limit search's result is the refit at its limit to the bit (the
+    /// trial it ended on, kept, not refitted), and a fold's gains-only search
+    /// gives the same gains and limit.
+    #[test]
+    fn the_kept_trial_is_the_refit_and_the_folds_search_the_same_gains() {
+        for (truth, sp) in [(5.0, [1.0, 2.0, 3.0]), (24.0, [1.0, 1.5, 2.0])] {
+            let rs = runs(Pi { kp_v_s_rad: 2.0, ki_v_rad: 10.0, limit_v: truth }, &sp);
+            let r: Vec<&RunSignals> = rs.iter().collect();
+            let (pi, rss, n, _) = fit_limit(&r, 24.0).expect("fit");
+            let rec = Recording::all(&r);
+            let p0 = fit_gains_from(&rec, 24.0, None).expect("p0");
+            let refit = fit_gains_from(&rec, pi.limit_v, Some(&p0)).expect("refit");
+            assert_eq!((pi, rss.to_bits(), n), (refit, rss_of(&refit, &rec).0.to_bits(), rss_of(&refit, &rec).1));
+            assert_eq!(fit_limit_gains(&r, 24.0), Some(pi));
         }
     }
 
