@@ -23,25 +23,55 @@ pub struct Pi {
     pub limit_v: f64,
 }
 
+/// What the PI recursion reads of one run, computed once per fit instead of
+/// once per pass: the error e = Ω_ref(t) − Ω2 of every sample (the measured
+/// speed drives the loop, so e depends only on the recording), the sample
+/// steps and the recorded voltage. The same expressions as before on the same
+/// numbers, so every pass gives the same bits.
+struct Recording<'a> {
+    e_rad_s: Vec<f64>,
+    dt_s: Vec<f64>,
+    voltage_v: &'a [f64],
+    voltage_noise_v: f64,
+}
+
+impl<'a> Recording<'a> {
+    fn of(s: &'a RunSignals) -> Self {
+        let e_rad_s = s.time_s.iter().zip(&s.motor_speed_rad_s).map(|(&t, &w)| s.reference_rad_s(t) - w).collect();
+        let dt_s = s.time_s.windows(2).map(|w| w[1] - w[0]).collect();
+        Recording { e_rad_s, dt_s, voltage_v: &s.voltage_v, voltage_noise_v: s.voltage_noise_v }
+    }
+
+    fn all(runs: &[&'a RunSignals]) -> Vec<Self> {
+        runs.iter().map(|s| Recording::of(s)).collect()
+    }
+}
+
 /// Visits every sample of the teacher-forced PI loop with (k, e, V̂, ∫e,
 /// clamped): no allocation, so the fits below can call it thousands of times.
 /// Anti-windup by back-calculation exactly as rig-model's drive:
 /// d(∫e)/dt = e + (V − V_raw)/(ki·T_t), T_t = rig_model::ANTI_WINDUP_TRACKING_S
 /// (explicit Euler at the sample step; dt/T_t = 0.2 at 500 Hz is stable).
+/// Where the clamp is idle (V = V_raw, finite) the back-calculation term is
+/// exactly ±0, so the rate is e without the division: the same ∫e to the bit
+/// (∫e starts at +0 and a sum of finite terms is −0 only if both are, so the
+/// sign of a zero rate cannot reach it), and the loop's serial chain is one
+/// addition per sample instead of a division and four more operations.
 #[inline]
-fn visit(pi: &Pi, s: &RunSignals, mut f: impl FnMut(usize, f64, f64, f64, bool)) {
-    let n = s.time_s.len();
+fn visit(pi: &Pi, r: &Recording, mut f: impl FnMut(usize, f64, f64, f64, bool)) {
+    let n = r.e_rad_s.len();
     let mut i_acc = 0.0;
     let tt = rig_model::ANTI_WINDUP_TRACKING_S;
+    let no_windup = pi.ki_v_rad.abs() < 1e-9;
     for k in 0..n {
-        let e = s.reference_rad_s(s.time_s[k]) - s.motor_speed_rad_s[k];
+        let e = r.e_rad_s[k];
         let u = pi.kp_v_s_rad * e + pi.ki_v_rad * i_acc;
         let clamped = u.clamp(-pi.limit_v, pi.limit_v);
         f(k, e, clamped, i_acc, clamped != u);
         if k + 1 < n {
-            let dt = s.time_s[k + 1] - s.time_s[k];
-            let rate = if pi.ki_v_rad.abs() < 1e-9 { e } else { e + (clamped - u) / (pi.ki_v_rad * tt) };
-            i_acc += rate * dt;
+            let rate =
+                if no_windup || (clamped == u && u.is_finite()) { e } else { e + (clamped - u) / (pi.ki_v_rad * tt) };
+            i_acc += rate * r.dt_s[k];
         }
     }
 }
@@ -50,10 +80,11 @@ fn visit(pi: &Pi, s: &RunSignals, mut f: impl FnMut(usize, f64, f64, f64, bool))
 /// sample by sample (see [`visit`] for the anti-windup).
 pub fn predict_voltage(pi: &Pi, s: &RunSignals) -> (Vec<f64>, Vec<f64>, Vec<bool>) {
     let n = s.time_s.len();
+    let r = Recording::of(s);
     let mut v = Vec::with_capacity(n);
     let mut integ = Vec::with_capacity(n);
     let mut sat = Vec::with_capacity(n);
-    visit(pi, s, |_, _, vk, ik, sk| {
+    visit(pi, &r, |_, _, vk, ik, sk| {
         v.push(vk);
         integ.push(ik);
         sat.push(sk);
@@ -62,20 +93,25 @@ pub fn predict_voltage(pi: &Pi, s: &RunSignals) -> (Vec<f64>, Vec<f64>, Vec<bool
 }
 
 /// Sum of squared voltage errors of one run, V.
-fn run_sse(pi: &Pi, s: &RunSignals) -> f64 {
+fn run_sse(pi: &Pi, r: &Recording) -> f64 {
     let mut sse = 0.0;
-    visit(pi, s, |k, _, vk, _, _| sse += (vk - s.voltage_v[k]).powi(2));
+    visit(pi, r, |k, _, vk, _, _| sse += (vk - r.voltage_v[k]).powi(2));
     sse
 }
 
 /// Voltage RSS in noise units (each run weighted by 1/σ_V²) and sample count.
 pub fn voltage_rss(pi: &Pi, runs: &[&RunSignals]) -> (f64, usize) {
+    rss_of(pi, &Recording::all(runs))
+}
+
+/// [`voltage_rss`] of recordings already prepared.
+fn rss_of(pi: &Pi, runs: &[Recording]) -> (f64, usize) {
     let mut rss = 0.0;
     let mut n = 0;
-    for s in runs {
-        let w = 1.0 / s.voltage_noise_v.max(1e-6).powi(2);
-        rss += w * run_sse(pi, s);
-        n += s.time_s.len();
+    for r in runs {
+        let w = 1.0 / r.voltage_noise_v.max(1e-6).powi(2);
+        rss += w * run_sse(pi, r);
+        n += r.e_rad_s.len();
     }
     (rss, n)
 }
@@ -83,17 +119,17 @@ pub fn voltage_rss(pi: &Pi, runs: &[&RunSignals]) -> (f64, usize) {
 /// Fits kp, ki for a fixed limit: alternate (clamp pattern and integral from
 /// the current gains) → (linear least squares on the unclamped samples).
 pub fn fit_gains(runs: &[&RunSignals], limit_v: f64) -> Option<Pi> {
-    fit_gains_from(runs, limit_v, None)
+    fit_gains_from(&Recording::all(runs), limit_v, None)
 }
 
 /// [`fit_gains`] started from `start`'s gains (the same fixed point, reached in
 /// fewer passes when the start is near it); `None` starts unclamped from zero.
-fn fit_gains_from(runs: &[&RunSignals], limit_v: f64, start: Option<&Pi>) -> Option<Pi> {
+fn fit_gains_from(runs: &[Recording], limit_v: f64, start: Option<&Pi>) -> Option<Pi> {
     fit_gains_path(runs, limit_v, start, |_| {})
 }
 
 /// [`fit_gains_from`], calling `visited` with the gains of every pass over the data.
-fn fit_gains_path(runs: &[&RunSignals], limit_v: f64, start: Option<&Pi>, mut visited: impl FnMut(&Pi)) -> Option<Pi> {
+fn fit_gains_path(runs: &[Recording], limit_v: f64, start: Option<&Pi>, mut visited: impl FnMut(&Pi)) -> Option<Pi> {
     let mut pi = match start {
         Some(p) => Pi { limit_v, ..*p },
         None => Pi { kp_v_s_rad: 0.0, ki_v_rad: 0.0, limit_v: f64::INFINITY },
@@ -102,11 +138,11 @@ fn fit_gains_path(runs: &[&RunSignals], limit_v: f64, start: Option<&Pi>, mut vi
         visited(&pi);
         // Two columns, no block: the sums add_sparse would make (ArrowNormal), bit for bit.
         let mut ne = ArrowNormal::<2, 0>::new(0);
-        for s in runs {
-            let w = 1.0 / s.voltage_noise_v.max(1e-6);
-            visit(&pi, s, |k, e, _, integ, sat| {
-                if !(sat || s.voltage_v[k].abs() >= 0.999 * limit_v) {
-                    ne.add(&[w * e, w * integ], 0, &[], w * s.voltage_v[k]);
+        for r in runs {
+            let w = 1.0 / r.voltage_noise_v.max(1e-6);
+            visit(&pi, r, |k, e, _, integ, sat| {
+                if !(sat || r.voltage_v[k].abs() >= 0.999 * limit_v) {
+                    ne.add(&[w * e, w * integ], 0, &[], w * r.voltage_v[k]);
                 }
             });
         }
@@ -126,15 +162,37 @@ fn fit_gains_path(runs: &[&RunSignals], limit_v: f64, start: Option<&Pi>, mut vi
 /// a limit no training sample reaches is reported as the supply itself.
 /// Returns (Pi, rss, n, stderr of Vmax from the RSS curvature).
 pub fn fit_limit(runs: &[&RunSignals], supply_v: f64) -> Option<(Pi, f64, usize, f64)> {
+    search_limit(&Recording::all(runs), supply_v, true)
+}
+
+/// [`fit_limit`]'s gains and limit alone, as a cross-validation fold uses
+/// them: the same search and the same [`Pi`] to the bit, without the two
+/// fits of the RSS curvature that only the standard error reads.
+pub fn fit_limit_gains(runs: &[&RunSignals], supply_v: f64) -> Option<Pi> {
+    search_limit(&Recording::all(runs), supply_v, false).map(|x| x.0)
+}
+
+/// [`fit_limit`] on prepared recordings; the standard error (NaN without
+/// `with_se`) from two more fits beside the optimum.
+fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi, f64, usize, f64)> {
     // Every trial limit refits the gains from the unlimited fit (warm start).
-    let p0 = fit_gains(runs, supply_v)?;
-    let eval_at = |l: f64| fit_gains_from(runs, l, Some(&p0)).map(|p| voltage_rss(&p, runs).0).unwrap_or(f64::INFINITY);
+    let p0 = fit_gains_from(runs, supply_v, None)?;
+    // Each trial's fit is kept: the search ends on a limit it has fitted, and
+    // the result is that fit (the same call on the same limit, so the same
+    // bits) instead of a refit.
+    let fitted = std::cell::RefCell::new(Vec::<(f64, Option<Pi>, f64)>::new());
+    let eval_at = |l: f64| {
+        let pi = fit_gains_from(runs, l, Some(&p0));
+        let rss = pi.map(|p| rss_of(&p, runs).0).unwrap_or(f64::INFINITY);
+        fitted.borrow_mut().push((l, pi, rss));
+        rss
+    };
     // A limit that binds nowhere gives the same arithmetic as any other such
     // limit (the clamp and the exclusion of saturated samples are the only
     // places the limit enters), so those trials reuse one evaluation.
     let free = non_binding_from(runs, supply_v, &p0);
     let eval = |l: f64| match free {
-        Some((l_free, rss)) if l >= l_free => rss,
+        Some((l_free, rss, _)) if l >= l_free => rss,
         _ => eval_at(l),
     };
     // Coarse grid first (the RSS is not unimodal far from the optimum), then Brent's method.
@@ -166,12 +224,23 @@ pub fn fit_limit(runs: &[&RunSignals], supply_v: f64) -> Option<(Pi, f64, usize,
     // baseline's). Any other point of the flat stretch is the search's
     // accident, and one at its edge clamps the first held-out run that drives
     // harder.
-    let l = match free {
-        Some((l_free, _)) if l >= l_free => supply_v,
-        _ => l,
+    let known = |l: f64| fitted.borrow().iter().find(|f| f.0.to_bits() == l.to_bits()).map(|f| (f.1, f.2));
+    let (l, pi, rss) = match free {
+        // The fit at the supply from p0 is the one `non_binding_from` traced.
+        Some((l_free, rss, at_supply)) if l >= l_free => (supply_v, Some(at_supply), rss),
+        _ => known(l).map_or_else(
+            || {
+                let pi = fit_gains_from(runs, l, Some(&p0));
+                (l, pi, pi.map(|p| rss_of(&p, runs).0).unwrap_or(f64::INFINITY))
+            },
+            |(pi, rss)| (l, pi, rss),
+        ),
     };
-    let pi = fit_gains_from(runs, l, Some(&p0))?;
-    let (rss, n) = voltage_rss(&pi, runs);
+    let pi = pi?;
+    let n = runs.iter().map(|r| r.e_rad_s.len()).sum::<usize>();
+    if !with_se {
+        return Some((pi, rss, n, f64::NAN));
+    }
     // Profile-likelihood curvature: Var(Vmax) ≈ 2σ²/RSS''; RSS is in noise units (σ² = rss/n).
     let h = (1e-3 * supply_v).max(1e-4);
     let d2 = (eval(l + h) - 2.0 * rss + eval(l - h)) / (h * h);
@@ -182,7 +251,7 @@ pub fn fit_limit(runs: &[&RunSignals], supply_v: f64) -> Option<(Pi, f64, usize,
 /// A lower bound of the voltage RSS (noise units, as [`voltage_rss`]) of any
 /// gains at limit `l`: the prediction is clamped to ±l, so a sample measured
 /// at |V| > l misses by at least |V| − l.
-fn rss_lower_bound(runs: &[&RunSignals], l: f64) -> f64 {
+fn rss_lower_bound(runs: &[Recording], l: f64) -> f64 {
     runs.iter()
         .map(|s| {
             let w = 1.0 / s.voltage_noise_v.max(1e-6).powi(2);
@@ -195,8 +264,9 @@ fn rss_lower_bound(runs: &[&RunSignals], l: f64) -> f64 {
 /// the limit, with the RSS there: the fit at the supply, traced, clamps no
 /// sample and excludes none; then every limit above both the largest
 /// |V̂| of its passes and the largest |V|/0.999 gives the same passes.
-/// `None` when the supply itself binds.
-fn non_binding_from(runs: &[&RunSignals], supply_v: f64, p0: &Pi) -> Option<(f64, f64)> {
+/// `None` when the supply itself binds; else (that limit, the RSS there,
+/// the fit at the supply).
+fn non_binding_from(runs: &[Recording], supply_v: f64, p0: &Pi) -> Option<(f64, f64, Pi)> {
     let v_meas = runs.iter().flat_map(|s| s.voltage_v.iter()).fold(0.0f64, |m, v| m.max(v.abs()));
     let mut v_pred = 0.0f64;
     let mut binds = false;
@@ -204,8 +274,8 @@ fn non_binding_from(runs: &[&RunSignals], supply_v: f64, p0: &Pi) -> Option<(f64
     let fitted = fit_gains_path(runs, supply_v, Some(p0), |pi| passes.push(*pi))?;
     passes.push(fitted); // the RSS pass
     for pi in &passes {
-        for s in runs {
-            visit(pi, s, |_, _, v, _, sat| {
+        for r in runs {
+            visit(pi, r, |_, _, v, _, sat| {
                 v_pred = v_pred.max(v.abs());
                 binds |= sat;
             });
@@ -215,12 +285,12 @@ fn non_binding_from(runs: &[&RunSignals], supply_v: f64, p0: &Pi) -> Option<(f64
     if binds || v_meas >= 0.999 * supply_v || l_free > supply_v {
         return None;
     }
-    Some((l_free, voltage_rss(&fitted, runs).0))
+    Some((l_free, rss_of(&fitted, runs).0, fitted))
 }
 
 /// Relative RMS voltage error of one run: sqrt(mean((V̂ − V)²)) / V_supply.
 pub fn relative_voltage_error(pi: &Pi, s: &RunSignals, supply_v: f64) -> f64 {
-    let ms = run_sse(pi, s) / s.time_s.len().max(1) as f64;
+    let ms = run_sse(pi, &Recording::of(s)) / s.time_s.len().max(1) as f64;
     ms.sqrt() / supply_v
 }
 
@@ -269,6 +339,59 @@ mod tests {
             .collect()
     }
 
+    /// The recursion with the recording's error and steps prepared once and
+    /// the division skipped where the clamp is idle gives, sample by sample,
+    /// the bits of the per-sample formula (e from the reference at t, the
+    /// back-calculation always divided), clamped stretches included.
+    #[test]
+    fn the_prepared_recursion_is_the_per_sample_formula_bit_for_bit() {
+        let limited = runs(Pi { kp_v_s_rad: 2.0, ki_v_rad: 10.0, limit_v: 5.0 }, &[1.0, 3.0]);
+        for pi in
+            [Pi { kp_v_s_rad: 2.5, ki_v_rad: 7.0, limit_v: 0.1 }, Pi { kp_v_s_rad: 1.0, ki_v_rad: 0.0, limit_v: 0.05 }]
+        {
+            let mut clamped = 0;
+            for s in &limited {
+                let mut got = Vec::new();
+                visit(&pi, &Recording::of(s), |_, e, v, i, sat| got.push((e, v, i, sat)));
+                let mut i_acc = 0.0;
+                for (k, g) in got.iter().enumerate() {
+                    let e = s.reference_rad_s(s.time_s[k]) - s.motor_speed_rad_s[k];
+                    let u = pi.kp_v_s_rad * e + pi.ki_v_rad * i_acc;
+                    let v = u.clamp(-pi.limit_v, pi.limit_v);
+                    assert_eq!(
+                        (g.0.to_bits(), g.1.to_bits(), g.2.to_bits(), g.3),
+                        (e.to_bits(), v.to_bits(), i_acc.to_bits(), v != u),
+                        "{k}"
+                    );
+                    clamped += usize::from(v != u);
+                    if k + 1 < s.time_s.len() {
+                        let tt = rig_model::ANTI_WINDUP_TRACKING_S;
+                        let rate = if pi.ki_v_rad.abs() < 1e-9 { e } else { e + (v - u) / (pi.ki_v_rad * tt) };
+                        i_acc += rate * (s.time_s[k + 1] - s.time_s[k]);
+                    }
+                }
+            }
+            assert!(clamped > 100, "{clamped} clamped samples");
+        }
+    }
+
+    /// The limit search's result is the refit at its limit to the bit (the
+    /// trial it ended on, kept, not refitted), and a fold's gains-only search
+    /// gives the same gains and limit.
+    #[test]
+    fn the_kept_trial_is_the_refit_and_the_folds_search_the_same_gains() {
+        for (truth, sp) in [(5.0, [1.0, 2.0, 3.0]), (24.0, [1.0, 1.5, 2.0])] {
+            let rs = runs(Pi { kp_v_s_rad: 2.0, ki_v_rad: 10.0, limit_v: truth }, &sp);
+            let r: Vec<&RunSignals> = rs.iter().collect();
+            let (pi, rss, n, _) = fit_limit(&r, 24.0).expect("fit");
+            let rec = Recording::all(&r);
+            let p0 = fit_gains_from(&rec, 24.0, None).expect("p0");
+            let refit = fit_gains_from(&rec, pi.limit_v, Some(&p0)).expect("refit");
+            assert_eq!((pi, rss.to_bits(), n), (refit, rss_of(&refit, &rec).0.to_bits(), rss_of(&refit, &rec).1));
+            assert_eq!(fit_limit_gains(&r, 24.0), Some(pi));
+        }
+    }
+
     /// The bound that lets the limit's grid skip fits holds: at every grid limit
     /// the fitted gains' RSS is at least [`rss_lower_bound`], which is zero where
     /// no sample is beyond the limit; and it prunes: far below the driven
@@ -277,10 +400,11 @@ mod tests {
     fn the_lower_bound_is_below_every_fitted_rss_and_prunes_hopeless_limits() {
         let limited = runs(Pi { kp_v_s_rad: 2.0, ki_v_rad: 10.0, limit_v: 5.0 }, &[1.0, 2.0, 3.0]);
         let r: Vec<&RunSignals> = limited.iter().collect();
+        let rec = Recording::all(&r);
         let scored: Vec<(f64, f64, f64)> = (0..=38)
             .map(|j| {
                 let l = 24.0 * (0.05 + 0.025 * j as f64);
-                (l, rss_lower_bound(&r, l), fit_gains(&r, l).map(|p| voltage_rss(&p, &r).0).expect("fit"))
+                (l, rss_lower_bound(&rec, l), fit_gains(&r, l).map(|p| voltage_rss(&p, &r).0).expect("fit"))
             })
             .collect();
         let best = scored.iter().map(|x| x.2).fold(f64::INFINITY, f64::min);

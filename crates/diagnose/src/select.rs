@@ -159,7 +159,7 @@ impl Cv<'_> {
             .map(|f| {
                 let train = self.train(f);
                 if limit {
-                    drive::fit_limit(&train, self.supply_v).map(|x| x.0)
+                    drive::fit_limit_gains(&train, self.supply_v)
                 } else {
                     drive::fit_gains(&train, self.supply_v)
                 }
