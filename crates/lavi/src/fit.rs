@@ -435,6 +435,33 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
             insert_law_params(&mut params, &m, family);
             (m, n + nl)
         }
+        Candidate::MotorDrive => {
+            // The drive identified on the record (crate::drive), no simulation fit; then the law
+            // decided on the calibration window: the current one or the least-squares law of the
+            // torque as the current structure reads it (the falling law, run again under a top
+            // that answers the bit).
+            let id = crate::drive::identify(ev, current)?;
+            at_bounds.extend(id.at_bounds.iter().cloned());
+            let kept = Model { drive: Some(id.used), ..*current };
+            let (ls, _) = derive(ev.data, &ev.windows[cal], ev.slip_speed_rpm, current.structure)?;
+            let falling = Model { friction: ls.friction, ..kept };
+            let from_torque = falling.friction != kept.friction && misfit(&falling) < misfit(&kept);
+            let m = if from_torque { falling } else { kept };
+            params.insert("drive_inertia_kgm2".into(), id.used.inertia_kgm2);
+            params.insert("kp_nm_s_rad".into(), id.used.kp_nm_s_rad);
+            params.insert("ki_nm_rad".into(), id.used.ki_nm_rad);
+            params.insert("load_nm".into(), id.used.load_nm);
+            params.insert("law_from_torque".into(), f64::from(u8::from(from_torque)));
+            let family = if m.friction.shape_exponent == 2.0 {
+                2.0
+            } else if m.friction.stribeck_speed_rad_s == 0.01 {
+                0.0
+            } else {
+                1.0
+            };
+            insert_law_params(&mut params, &m, family);
+            (m, 2)
+        }
         Candidate::CompliantDrive => {
             // Start: motor inertia 10 J, a 2 Hz speed loop with a 0.5 Hz integral corner.
             let jm0 = 10.0 * j;
@@ -445,6 +472,7 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
                     inertia_kgm2: jm0 * x[0].exp(),
                     kp_nm_s_rad: kp0 * x[1].exp(),
                     ki_nm_rad: ki0 * x[2].exp(),
+                    load_nm: 0.0,
                 }),
                 ..*current
             };
