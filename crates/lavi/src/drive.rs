@@ -451,7 +451,7 @@ mod tests {
     use super::*;
     use crate::FeatureOptions;
     use crate::data::{Prepared, Split, WindowSpec};
-    use rig_model::one_dof::{self, Coulomb, OneDofState, Shaft};
+    use rig_model::one_dof::{self, Coulomb, OneDofState};
 
     /// 12 s at 1 kHz of stick-slip under a motor of inertia `jm` and a PI speed loop (`kp`, `ki`)
     /// holding 1 rad/s (the one core), bit J 0.01 kg m2, k 4 N m/rad, c 0.01 N m s/rad, Coulomb
@@ -459,13 +459,7 @@ mod tests {
     fn motor_record(jm: f64, kp: f64, ki: f64) -> Prepared {
         let (n, fs) = (12_000, 1000.0);
         let reference = vec![1.0; n];
-        let shaft = Shaft {
-            inertia_kgm2: 0.01,
-            stiffness_nm_rad: 4.0,
-            twist_damping_nm_s_rad: 0.01,
-            absolute_damping_nm_s_rad: 0.0,
-            mid: None,
-        };
+        let shaft = crate::fit::tests::shaft();
         let drive =
             one_dof::Drive::SpeedLoop { inertia_kgm2: jm, kp_nm_s_rad: kp, ki_nm_rad: ki, reference_rad_s: &reference };
         let start = OneDofState { top_rad_s: 1.0, stuck: true, ..OneDofState::default() };
@@ -473,20 +467,7 @@ mod tests {
         let r = one_dof::simulate(&shaft, &law, drive, None, start, fs, n, 10).unwrap();
         let rpm = |x: &[f64]| x.iter().map(|v| v / RPM_TO_RAD_S).collect::<Vec<f64>>();
         let (top_rpm, bit_rpm) = (rpm(&r.top_rad_s), rpm(&r.bit_rad_s));
-        Prepared {
-            fs_hz: fs,
-            time_s: (0..n).map(|i| i as f64 / fs).collect(),
-            top_rpm,
-            wob_n: vec![500.0; n],
-            bit_raw_rpm: bit_rpm.clone(),
-            torque_raw_nm: r.friction_nm.clone(),
-            bit_rpm,
-            torque_nm: r.friction_nm,
-            glitches: rig_spectra::stickslip::GlitchReport { runs: 0, samples: 0, longest_run: 0 },
-            top_noise_rad_s: 0.0,
-            twist_excursion_rad: (0.0, 0.0),
-            repairs: Vec::new(),
-        }
+        crate::fit::tests::prepared((0..n).map(|i| i as f64 / fs).collect(), top_rpm, bit_rpm, r.friction_nm)
     }
 
     fn evaluator(d: &Prepared) -> Evaluator<'_> {

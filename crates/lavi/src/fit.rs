@@ -600,11 +600,22 @@ fn law_is_derived(current: &Model, ev: &Evaluator) -> Result<bool, LaviError> {
 pub use rig_types::minimize::nelder_mead;
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
+    /// The test records' shaft: J 0.01 kg m2, k 4 N m/rad, c 0.01 N m s/rad on the twist rate.
+    pub(crate) fn shaft() -> rig_model::one_dof::Shaft {
+        rig_model::one_dof::Shaft {
+            inertia_kgm2: 0.01,
+            stiffness_nm_rad: 4.0,
+            twist_damping_nm_s_rad: 0.01,
+            absolute_damping_nm_s_rad: 0.0,
+            mid: None,
+        }
+    }
+
     /// A record at 1 kHz of these channels (the raw ones equal to them, no dips, no repairs).
-    fn prepared(time_s: Vec<f64>, top_rpm: Vec<f64>, bit_rpm: Vec<f64>, torque_nm: Vec<f64>) -> Prepared {
+    pub(crate) fn prepared(time_s: Vec<f64>, top_rpm: Vec<f64>, bit_rpm: Vec<f64>, torque_nm: Vec<f64>) -> Prepared {
         let n = time_s.len();
         Prepared {
             fs_hz: 1000.0,
@@ -646,16 +657,10 @@ mod tests {
     /// 2.5/1.5 N m, top 2 + sin(2π 0.5 t) rad/s), its contact torque recorded `late` samples late
     /// plus `js` times the bit's acceleration; the calibration-like window 4-8 s.
     fn simulated_record(late: usize, js: f64) -> (Prepared, WindowSpec, Model) {
-        use rig_model::one_dof::{Coulomb, Drive, OneDofState, Shaft, simulate};
+        use rig_model::one_dof::{Coulomb, Drive, OneDofState, simulate};
         let (n, fs) = (12_000, 1000.0);
         let top: Vec<f64> = (0..n).map(|i| 2.0 + (std::f64::consts::TAU * 0.5 * i as f64 / fs).sin()).collect();
-        let shaft = Shaft {
-            inertia_kgm2: 0.01,
-            stiffness_nm_rad: 4.0,
-            twist_damping_nm_s_rad: 0.01,
-            absolute_damping_nm_s_rad: 0.0,
-            mid: None,
-        };
+        let shaft = shaft();
         let law = Coulomb { static_nm: 2.5, kinetic_nm: 1.5 };
         let r = simulate(&shaft, &law, Drive::Speed(&top), None, OneDofState::default(), fs, n, 10).unwrap();
         let torque_nm: Vec<f64> = (0..n)
