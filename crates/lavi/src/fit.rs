@@ -435,6 +435,33 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
             insert_law_params(&mut params, &m, family);
             (m, n + nl)
         }
+        Candidate::MotorDrive => {
+            // The drive identified on the record (crate::drive), no simulation fit; then the law
+            // decided on the calibration window: the current one or the least-squares law of the
+            // torque as the current structure reads it (the falling law, run again under a top
+            // that answers the bit).
+            let id = crate::drive::identify(ev, current)?;
+            at_bounds.extend(id.at_bounds.iter().cloned());
+            let kept = Model { drive: Some(id.used), ..*current };
+            let (ls, _) = derive(ev.data, &ev.windows[cal], ev.slip_speed_rpm, current.structure)?;
+            let falling = Model { friction: ls.friction, ..kept };
+            let from_torque = falling.friction != kept.friction && misfit(&falling) < misfit(&kept);
+            let m = if from_torque { falling } else { kept };
+            params.insert("drive_inertia_kgm2".into(), id.used.inertia_kgm2);
+            params.insert("kp_nm_s_rad".into(), id.used.kp_nm_s_rad);
+            params.insert("ki_nm_rad".into(), id.used.ki_nm_rad);
+            params.insert("load_nm".into(), id.used.load_nm);
+            params.insert("law_from_torque".into(), f64::from(u8::from(from_torque)));
+            let family = if m.friction.shape_exponent == 2.0 {
+                2.0
+            } else if m.friction.stribeck_speed_rad_s == 0.01 {
+                0.0
+            } else {
+                1.0
+            };
+            insert_law_params(&mut params, &m, family);
+            (m, 2)
+        }
         Candidate::CompliantDrive => {
             // Start: motor inertia 10 J, a 2 Hz speed loop with a 0.5 Hz integral corner.
             let jm0 = 10.0 * j;
@@ -445,6 +472,7 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
                     inertia_kgm2: jm0 * x[0].exp(),
                     kp_nm_s_rad: kp0 * x[1].exp(),
                     ki_nm_rad: ki0 * x[2].exp(),
+                    load_nm: 0.0,
                 }),
                 ..*current
             };
@@ -572,11 +600,22 @@ fn law_is_derived(current: &Model, ev: &Evaluator) -> Result<bool, LaviError> {
 pub use rig_types::minimize::nelder_mead;
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
+    /// The test records' shaft: J 0.01 kg m2, k 4 N m/rad, c 0.01 N m s/rad on the twist rate.
+    pub(crate) fn shaft() -> rig_model::one_dof::Shaft {
+        rig_model::one_dof::Shaft {
+            inertia_kgm2: 0.01,
+            stiffness_nm_rad: 4.0,
+            twist_damping_nm_s_rad: 0.01,
+            absolute_damping_nm_s_rad: 0.0,
+            mid: None,
+        }
+    }
+
     /// A record at 1 kHz of these channels (the raw ones equal to them, no dips, no repairs).
-    fn prepared(time_s: Vec<f64>, top_rpm: Vec<f64>, bit_rpm: Vec<f64>, torque_nm: Vec<f64>) -> Prepared {
+    pub(crate) fn prepared(time_s: Vec<f64>, top_rpm: Vec<f64>, bit_rpm: Vec<f64>, torque_nm: Vec<f64>) -> Prepared {
         let n = time_s.len();
         Prepared {
             fs_hz: 1000.0,
@@ -618,16 +657,10 @@ mod tests {
     /// 2.5/1.5 N m, top 2 + sin(2π 0.5 t) rad/s), its contact torque recorded `late` samples late
     /// plus `js` times the bit's acceleration; the calibration-like window 4-8 s.
     fn simulated_record(late: usize, js: f64) -> (Prepared, WindowSpec, Model) {
-        use rig_model::one_dof::{Coulomb, Drive, OneDofState, Shaft, simulate};
+        use rig_model::one_dof::{Coulomb, Drive, OneDofState, simulate};
         let (n, fs) = (12_000, 1000.0);
         let top: Vec<f64> = (0..n).map(|i| 2.0 + (std::f64::consts::TAU * 0.5 * i as f64 / fs).sin()).collect();
-        let shaft = Shaft {
-            inertia_kgm2: 0.01,
-            stiffness_nm_rad: 4.0,
-            twist_damping_nm_s_rad: 0.01,
-            absolute_damping_nm_s_rad: 0.0,
-            mid: None,
-        };
+        let shaft = shaft();
         let law = Coulomb { static_nm: 2.5, kinetic_nm: 1.5 };
         let r = simulate(&shaft, &law, Drive::Speed(&top), None, OneDofState::default(), fs, n, 10).unwrap();
         let torque_nm: Vec<f64> = (0..n)

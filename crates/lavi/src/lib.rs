@@ -25,6 +25,7 @@
 //! | `absolute_damping` | the damping acts on the absolute bit speed (Eq. 4-7's placement), or on both it and the twist rate: J Ω̇ = k φ + c (Ω_top − Ω) − c_a Ω − T_f | J, k, c, c_a refitted by least squares on the calibration window; a damping below 0 pinned there and reported | `damping_nm_s_rad`, `absolute_damping_nm_s_rad` |
 //! | `channel_delay` | the torque channel is late (or early) on the speed channels: T_m(t) = T_f(t − τ) | τ by least squares of the equation of motion over ±50 ms, J, k, c refitted with T_m(t + τ) as the contact torque, the law then refitted by simulation as `friction_law`'s; the simulated torque channel is read τ late, like the measured one, so every torque–speed feature compares one time base | `torque_delay_s`, and `friction_law`'s keys |
 //! | `compliant_drive` | the top speed is not imposed: a PI speed loop on a motor inertia | J_m, K_p, K_i; set point = moving mean of the measured top speed (the law is kept: refitted by simulation it lowered the calibration misfit and raised the held-out one) | `drive_inertia_kgm2`, `kp_nm_s_rad`, `ki_nm_rad` |
+//! | `motor_drive` | the top answers the bit: a motor under a speed loop whose speed responds to the string torque (the chapter's Eq. 4-6/4-7 motor row with its PI loop, [`drive`]) | J_m, K_p, K_i, T_0 identified by linear least squares on the calibration window (the top speed's response to the string torque; J_m below the chapter's motor inertia and K_i < 0 pinned, reported); reference = the measured top speed's moving mean; then the law decided on the calibration window by the joint score: the current one, or the least-squares law of the torque as the current structure reads it (the falling law, run again now that the top answers) | `drive_inertia_kgm2`, `kp_nm_s_rad`, `ki_nm_rad`, `load_nm`, `law_from_torque` (1: the least-squares law), and `friction_law`'s keys |
 //! | `unexplained` | a significant mismatch is left (adequacy below) | — | — |
 //!
 //! The structural candidates that change the motion (`channel_delay`,
@@ -49,6 +50,7 @@
 
 pub mod data;
 pub mod describe;
+pub mod drive;
 pub mod eom;
 pub mod features;
 pub mod fit;
@@ -99,10 +101,11 @@ pub enum Candidate {
     CompliantDrive,
     AbsoluteDamping,
     ChannelDelay,
+    MotorDrive,
 }
 
 impl Candidate {
-    pub const ALL: [Candidate; 8] = [
+    pub const ALL: [Candidate; 9] = [
         Candidate::FrictionLaw,
         Candidate::WobNormalForce,
         Candidate::SensorInertia,
@@ -111,6 +114,7 @@ impl Candidate {
         Candidate::CompliantDrive,
         Candidate::AbsoluteDamping,
         Candidate::ChannelDelay,
+        Candidate::MotorDrive,
     ];
 
     pub fn id(self) -> &'static str {
@@ -123,6 +127,7 @@ impl Candidate {
             Candidate::CompliantDrive => "compliant_drive",
             Candidate::AbsoluteDamping => "absolute_damping",
             Candidate::ChannelDelay => "channel_delay",
+            Candidate::MotorDrive => "motor_drive",
         }
     }
 }

@@ -32,7 +32,7 @@ const TARGETS: [&str; N_FEATURES] = [
     "within 10 %",
 ];
 /// The effect ids of this rig, as the crate docs list them.
-const EFFECT_IDS: [(&str, &str); 10] = [
+const EFFECT_IDS: [(&str, &str); 11] = [
     ("none", "the baseline explains the held-out windows within the adequacy threshold."),
     (
         "friction_law",
@@ -62,6 +62,10 @@ const EFFECT_IDS: [(&str, &str); 10] = [
     (
         "channel_delay",
         "the torque channel late (or early) on the speed channels by τ, chosen by least squares of the equation of motion within ±50 ms; J, k, c refitted with the torque read τ later, the law then refitted by simulation like `friction_law`, and the simulated torque channel read τ late like the measured one (`torque_delay_s` and the law's keys).",
+    ),
+    (
+        "motor_drive",
+        "the top answers the bit: a motor under a speed loop, J_m Ω'_top = K_p (Ω_ref − Ω_top) + K_i ∫(Ω_ref − Ω_top) dt + T_0 − T_s (the chapter's Eq. 4-6/4-7 motor row with its PI loop), J_m, K_p, K_i, T_0 identified by linear least squares on the calibration window, Ω_ref the measured top speed's moving mean; the law then decided on the calibration window: the current one or the least-squares law of the torque as the current structure reads it (`drive_inertia_kgm2`, `kp_nm_s_rad`, `ki_nm_rad`, `load_nm`, `law_from_torque` and the law's keys).",
     ),
     (
         "unexplained",
@@ -242,6 +246,9 @@ pub fn render(s: &Study, d: &Prepared, rec: &LaviRecording) -> Result<StudyOutpu
         ]);
     }
     out.tables.push(("tables/lavi-structures.csv".into(), st));
+    if let Some(t) = crate::drive::table(s) {
+        out.tables.push(("tables/lavi-drive.csv".into(), t));
+    }
     let labels: Vec<String> = s.windows.iter().map(|w| w.label.clone()).collect();
     out.tables.push(("tables/lavi-repairs.csv".into(), crate::describe::repairs_table(d, &labels)));
 
@@ -473,7 +480,8 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
          and judged on {} held-out windows ({}), whose mean top speeds differ. Features (rig_lavi::features, one function for \
          measurement and simulation, {} Hz low-pass): the mean over stick-slip cycles of the bit-speed maximum and minimum, the \
          fraction of time below {} rpm, the fundamental from the line analysis, and the mean torque-bit-speed loop area per cycle. \
-         Every simulation runs free from the measured state {} s before its window, driven by the top speed as measured. Two torque \
+         Every simulation runs free from the measured state {} s before its window, driven by the top speed as measured (the drives \
+         `compliant_drive` and `motor_drive` simulate the top instead, their reference from the record). Two torque \
          features judge the friction level (issue 26): the mean torque while the bit slips and the break-away torque (mean of the \
          complete stick phases' largest torque). Misfit, joint in motion and torque level (issue 26: a law that reproduces the \
          motion with a friction level off the measured one is no explanation): each feature's error in units of its target (10 %, \
@@ -753,9 +761,19 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
                 "\nWhat would reach the missed targets ({missed}): the leftover torque follows the bit speed most, i.e. the recorded \
                  torque falls with speed more steeply than the law the free run accepts (the torque-level hypothesis above). A steeper \
                  law inside the contact is what runs away in free run, and the bit's balance leaves no room for a drag along the shaft \
-                 (What the torque channel reads), so the next rung is not a law term but the drive as a state that answers the bit (the \
-                 top speed's feedback, which keeps a falling law's free run bounded), fitted jointly with the falling law on the \
-                 calibration window, with a fit budget that reaches it (the `compliant_drive` fit with the law, tried, did not).\n"
+                 (What the torque channel reads). {}\n",
+                if s.drive.as_ref().is_some_and(|d| s
+                    .selection
+                    .trials
+                    .iter()
+                    .any(|t| t.step == d.step && t.candidate == Candidate::MotorDrive && t.earns_place))
+                {
+                    "The drive that answers the bit (below) earns its place."
+                } else {
+                    "The drive that answers the bit, identified on the record and run with the law the calibration window chose (below), is not kept: \
+                     what holds the real rig's falling torque in stick-slip is not a motor answering the string torque as the \
+                     record's top speed allows."
+                }
             );
         } else {
             let _ = writeln!(
@@ -765,6 +783,7 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
             );
         }
     }
+    md.push_str(&crate::drive::section(s));
     let h = &s.wob;
     let _ = writeln!(md, "## The chapter's hypothesis: a varying normal force\n");
     let _ = writeln!(
@@ -1065,10 +1084,10 @@ fn torque_level_hypothesis(s: &Study) -> String {
          the recorded torque read {:.0} ms later goes from {:.3} to {:.3} N m; run free, that falling law takes the bit far from the \
          record (held-out misfit {:.3}, the structure table). The motion is reproduced by a law that falls less (or rises) with speed, \
          so the free run's slip torque is {:+.0} % and its break-away torque {:+.0} % of the measured ones (held-out means). Not in the \
-         sensor: the channel reads the contact torque (What the torque channel reads, rung 2). The hypothesis left: a falling law is \
-         unstable under an imposed top speed (its slope beats the damping), and the real rig's top speed answers the bit's motion, \
-         a feedback (a dissipation at the drive) that the recorded top speed, imposed on a free run whose phase drifts from the \
-         record's, cannot give; the fitted law stands in for it.",
+         sensor: the channel reads the contact torque (What the torque channel reads, rung 2). A falling law is unstable under an \
+         imposed top speed (its slope beats the damping). The hypothesis that the real top answers the bit as a motor under a \
+         speed loop, a feedback the imposed top speed cannot give, is tested by `motor_drive` (The drive that answers the bit, \
+         below): {}",
         ext.slip_nm(0.0),
         ext.slip_nm(v),
         1e3 * s.structures[i].1.structure.torque_delay_s,
@@ -1077,6 +1096,22 @@ fn torque_level_hypothesis(s: &Study) -> String {
         s.structure_heldout[i],
         rel(&|f| f.slip_torque_nm),
         rel(&|f| f.breakaway_torque_nm),
+        match &s.drive {
+            None => "not tried.".to_string(),
+            Some(d) => format!(
+                "identified on the calibration window (motor inertia {:.4} kg m², unconstrained), run with {}, it leaves the \
+                 held-out misfit at {:.3}.",
+                d.fit.inertia_kgm2,
+                if d.law_from_torque { "the falling law" } else { "the model's own law" },
+                crate::select::overall(
+                    &s.selection
+                        .trials
+                        .iter()
+                        .find(|t| t.step == d.step && t.candidate == Candidate::MotorDrive)
+                        .map_or(Vec::new(), |t| t.heldout.clone())
+                ),
+            ),
+        }
     )
 }
 

@@ -147,6 +147,11 @@ impl<'a> Evaluator<'a> {
         })
     }
 
+    /// The compliant drives' reference: the measured top speed's centred moving mean, rad/s (whole record).
+    pub fn top_ref_rad_s(&self) -> &[f64] {
+        &self.top_ref_rad_s
+    }
+
     /// Index of the calibration window.
     pub fn calibration(&self) -> usize {
         0

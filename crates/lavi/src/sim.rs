@@ -21,7 +21,9 @@
 //!   (series stiffness k kept);
 //! - `compliant_drive`: the top speed is a state, J_m Ω̇_top = K_p (Ω_ref − Ω_top)
 //!   plus K_i ∫(Ω_ref − Ω_top) minus the torque into the shaft, with Ω_ref the
-//!   measured top speed's moving mean (a PI speed loop; Newton on the motor).
+//!   measured top speed's moving mean (a PI speed loop; Newton on the motor);
+//! - `motor_drive`: the same motor row, identified by least squares on the
+//!   record ([`crate::drive`]), with the droop offset T_0 of a P loop.
 //!
 //! - `channel_delay`: the torque channel reads T_m(t) = T_f(t − τ).
 //!
@@ -75,12 +77,16 @@ pub struct MidDof {
     pub split: f64,
 }
 
-/// A speed-controlled drive whose speed is not imposed.
+/// A speed-controlled drive whose speed is not imposed: the motor torque is
+/// K_p (Ω_ref − Ω_top) + K_i ∫(Ω_ref − Ω_top) dt + T_0 (T_0 = `load_nm`, the
+/// torque the loop delivers at the reference speed: a P loop's droop offset,
+/// run on the core's speed loop as the reference Ω_ref + T_0/K_p).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Drive {
     pub inertia_kgm2: f64,
     pub kp_nm_s_rad: f64,
     pub ki_nm_rad: f64,
+    pub load_nm: f64,
 }
 
 /// The baseline and every extension (an extension is off at its neutral value).
@@ -199,18 +205,23 @@ pub fn simulate(m: &Model, u: &Inputs, start: Start, substeps: usize) -> Result<
         mid_rad_s: 0.5 * (top0 + om),
         top_rad_s: top0,
         loop_integral_rad: match m.drive {
-            Some(d) if d.ki_nm_rad > 0.0 => tau0 / d.ki_nm_rad,
+            Some(d) if d.ki_nm_rad > 0.0 => (tau0 - d.load_nm) / d.ki_nm_rad,
             _ => 0.0,
         },
         friction_state: [tf0.abs(), 0.0],
         stuck: om.abs() < STICK_RAD_S && tau0.abs() <= scale0 * m.friction.static_nm,
     };
+    // T_0 as a shift of the reference: K_p (Ω_ref + T_0/K_p − Ω_top) = K_p (Ω_ref − Ω_top) + T_0.
+    let shifted: Option<Vec<f64>> = m
+        .drive
+        .filter(|d| d.load_nm != 0.0)
+        .map(|d| u.top_ref_rad_s.iter().map(|r| r + d.load_nm / d.kp_nm_s_rad).collect());
     let drive = match m.drive {
         Some(d) => one_dof::Drive::SpeedLoop {
             inertia_kgm2: d.inertia_kgm2,
             kp_nm_s_rad: d.kp_nm_s_rad,
             ki_nm_rad: d.ki_nm_rad,
-            reference_rad_s: u.top_ref_rad_s,
+            reference_rad_s: shifted.as_deref().unwrap_or(u.top_ref_rad_s),
         },
         None => one_dof::Drive::Speed(u.top_rad_s),
     };
@@ -320,10 +331,23 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn a_proportional_drive_droops_from_its_reference_by_the_load_over_its_gain() {
+        // Steady slip far past v_s (friction T_k = 1 N m): the motor's torque K_p (Ω_ref − Ω_top) + T_0
+        // carries T_k, so Ω_top = Ω_ref + (T_0 − T_k)/K_p = 20 + (1.5 − 1)/0.5 = 21 rad/s.
+        let m = Model {
+            drive: Some(Drive { inertia_kgm2: 0.05, kp_nm_s_rad: 0.5, ki_nm_rad: 0.0, load_nm: 1.5 }),
+            ..base()
+        };
+        let r = run(&m, 20.0, 60.0);
+        let n = r.top_rad_s.len() - 1;
+        assert!((r.top_rad_s[n] - 21.0).abs() < 1e-3 && (r.bit_rad_s[n] - 21.0).abs() < 1e-3, "{}", r.top_rad_s[n]);
+    }
+
+    #[test]
     fn the_extensions_run() {
         let mut m = base();
         m.mid = Some(MidDof { inertia_kgm2: 0.02, split: 0.5 });
-        m.drive = Some(Drive { inertia_kgm2: 0.1, kp_nm_s_rad: 2.0, ki_nm_rad: 5.0 });
+        m.drive = Some(Drive { inertia_kgm2: 0.1, kp_nm_s_rad: 2.0, ki_nm_rad: 5.0, load_nm: 0.0 });
         m.friction_lag_s = 0.02;
         m.sensor_inertia_kgm2 = 0.01;
         m.wob_ref_n = Some(500.0);

@@ -67,6 +67,8 @@ pub struct Study {
     pub stick_torque: Vec<[StickTorque; 2]>,
     /// Per step-1 candidate (trial order): the torque through the stick phases of its free runs, per held-out window.
     pub candidate_stick_torque: Vec<(Candidate, Vec<StickTorque>)>,
+    /// The drive that answers the bit (`motor_drive`): its identification and its free runs' channels.
+    pub drive: Option<crate::drive::DriveReport>,
 }
 
 impl Study {
@@ -143,6 +145,7 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
             Ok((t.candidate, per))
         })
         .collect::<Result<Vec<_>, LaviError>>()?;
+    let drive = crate::drive::report(&ev, &selection)?;
     let study = Study {
         params: p.clone(),
         windows: wins,
@@ -164,6 +167,7 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
         parameters_at_bounds,
         stick_torque,
         candidate_stick_torque,
+        drive,
     };
     Ok((study, d, rec))
 }

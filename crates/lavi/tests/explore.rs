@@ -42,6 +42,12 @@ fn explore() {
         );
     }
     println!("wob {:?} adequate {}", s.wob, s.adequate);
+    if let Some(d) = &s.drive {
+        println!("drive step {} fit {:?}\n model {:?}\n law_from_torque {}", d.step, d.fit, d.model, d.law_from_torque);
+        for (i, w) in s.windows.iter().enumerate() {
+            println!("{} top {:?}\n   feat {:?}", w.label, d.top[i], d.features[i]);
+        }
+    }
     // Step-1 candidates: held-out windows within each feature's target.
     for (c, f) in &s.candidate_features {
         let met: Vec<usize> = (0..rig_lavi::FEATURES.len())
