@@ -159,22 +159,15 @@ pub struct Aligned {
 }
 
 impl StructureData {
-    /// `balance` (the records as recorded) and every realignment of the
-    /// delay grid ([`channel_delay`]'s docs).
-    pub fn of(
-        c: &Campaign,
-        cal: &rig_calibrate::CampaignCalibration,
-        opts: &DiagnoseOptions,
-        o: &crate::ChannelOptions,
-        balance: BalanceData,
-    ) -> Self {
+    /// The balance of the records as recorded and through every
+    /// realignment of the delay grid ([`channel_delay`]'s docs) and every
+    /// sensor model ([`sensor_dynamics`]), all built from the channels read
+    /// once (`rec`).
+    pub fn of(c: &Campaign, rec: &crate::channels::Recorded, o: &crate::ChannelOptions, balance: BalanceData) -> Self {
         let tick_loss = crate::channels::tick_loss_check_of(&balance, o).flagged;
-        StructureData {
-            balance,
-            aligned: channel_delay::grid(c, cal, opts, o),
-            tick_loss,
-            sensors: sensor_dynamics::grid(c, cal, opts, o),
-        }
+        let rate = c.rig.sample_rate_hz;
+        let (aligned, sensors) = rayon::join(|| channel_delay::grid(rec, rate), || sensor_dynamics::grid(rec, rate));
+        StructureData { balance, aligned, tick_loss, sensors }
     }
 
     /// The balance data a fit was made on.
