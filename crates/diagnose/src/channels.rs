@@ -37,7 +37,7 @@ mod step;
 mod twist;
 
 pub use balance::{
-    BalanceData, BalanceFit, TICK_LOSS_CHECK, balance_data, balance_data_aligned, balance_data_with,
+    BalanceData, BalanceFit, Channels, Recorded, RecordedRun, TICK_LOSS_CHECK, advanced, balance_data,
     tick_loss_check_of, torque_balance_check, torque_balance_check_of,
 };
 pub use drive_balance::drive_balance_check;

@@ -296,7 +296,8 @@ pub fn diagnose(
     };
     let runs = prepare::prepare_runs(c, law, opts)?;
     let mut checks: Vec<ChannelCheck> = Vec::new();
-    let balance = baseline.map(|_| channels::balance_data(c, cal, opts, o));
+    let recorded = baseline.map(|_| channels::Recorded::of(c, cal, opts, o));
+    let balance = recorded.as_ref().map(channels::Recorded::balance);
     if let (Some(p), Some(data)) = (baseline, &balance) {
         checks.extend(channels::static_twist_checks(c, cal, o));
         checks.push(channels::torque_balance_check_of(c, data, p, o));
@@ -347,6 +348,9 @@ pub fn diagnose(
         || baseline.map(|p| channels::free_run_pairs(c, p, &s)),
     );
     let mut found = sel?;
+    // The structural candidates' balances depend on the records alone: built
+    // once, though the second look may conclude twice.
+    let sdata = std::sync::OnceLock::new();
     // The free-run second look (second_look module docs) may admit one
     // effect and conclude again: at most two passes.
     let mut looked = false;
@@ -370,8 +374,10 @@ pub fn diagnose(
                 channels::with_run_phases(m, phases.get(id).copied().unwrap_or_default())
             };
             let ext_pairs = channels::free_run_pairs_by(c, &s, |id| Some(phased(&ext, id)));
-            let sdata = structure::StructureData::of(c, cal, opts, o, data.clone());
-            let sel = structure::select_structure(c, &sdata, &ext, &ext_pairs, &d.detail.runs, &s, opts);
+            let sdata = sdata.get_or_init(|| {
+                structure::StructureData::of(c, recorded.as_ref().expect("with the balance"), o, data.clone())
+            });
+            let sel = structure::select_structure(c, sdata, &ext, &ext_pairs, &d.detail.runs, &s, opts);
             let moved = sel.damping != structure::REGISTRY[0].id();
             let final_pairs =
                 if moved { channels::free_run_pairs_by(c, &s, |id| Some(phased(&sel.model, id))) } else { ext_pairs };

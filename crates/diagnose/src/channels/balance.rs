@@ -7,6 +7,7 @@ use crate::prepare::diff_noise;
 use rig_calibrate::CampaignCalibration;
 use rig_types::sensor::{ForceCal, force_n, nominal_window_samples, tick_rad, ticks_to_rad};
 use rig_types::{Campaign, RigParams, RunKind};
+use std::borrow::Cow;
 
 /// Regressors of one window boundary: [⟨Ω̇1⟩, ⟨φ2−φ1⟩, ⟨Ω2−Ω1⟩, ⟨Ω1⟩, 1] and r⟨F⟩.
 type Row = ([f64; 5], f64);
@@ -39,9 +40,49 @@ fn row_at(phi1: &[f64], phi2: &[f64], force_n: &[f64], dt: f64, w: usize, r_m: f
     ))
 }
 
-/// [`row_at`] every `w` samples from `from` on (the steady state's grid).
+/// [`row_at`] every `w` samples from `from` on (the steady state's grid),
+/// the triangle-weighted means from running box sums: the triangle
+/// w − |k − b| (|k − b| < w) is a box of w samples convolved with itself,
+/// so its weighted sum at b is the sum of the w box sums B(s) = Σ x[s..s+w]
+/// for s = b − w + 1 … b, and B is updated by one sample in and one out
+/// (the same rows as [`row_at`]'s to rounding, without its 2w + 1
+/// products per boundary; a campaign's structural grids build ≈ 100
+/// balances of every run).
 fn rows(phi1: &[f64], phi2: &[f64], force_n: &[f64], dt: f64, w: usize, r_m: f64, from: usize) -> Vec<Row> {
-    (from.max(w)..phi1.len()).step_by(w).map_while(|b| row_at(phi1, phi2, force_n, dt, w, r_m, b)).collect()
+    let n = phi1.len().min(phi2.len()).min(force_n.len());
+    let first = from.max(w);
+    if first + w >= n {
+        return Vec::new();
+    }
+    let tw = |k: usize| phi2[k] - phi1[k];
+    let big_t = w as f64 * dt;
+    let s_k = (w * w) as f64;
+    // Box sums starting at s = first − w + 1, advanced along the boundaries.
+    let mut s = first + 1 - w;
+    let (mut b_tw, mut b_f) = ((s..s + w).map(tw).sum::<f64>(), force_n[s..s + w].iter().sum::<f64>());
+    let mut out = Vec::with_capacity((n - first) / w + 1);
+    let mut b = first;
+    while b + w < n {
+        let (mut t_tw, mut t_f) = (0.0, 0.0);
+        // Σ over s = b − w + 1 … b of B(s); on leaving, s = b + 1.
+        while s <= b {
+            t_tw += b_tw;
+            t_f += b_f;
+            b_tw += tw(s + w) - tw(s);
+            b_f += force_n[s + w] - force_n[s];
+            s += 1;
+        }
+        let w1_prev = (phi1[b] - phi1[b - w]) / big_t;
+        let w1_next = (phi1[b + w] - phi1[b]) / big_t;
+        let tw_prev = (tw(b) - tw(b - w)) / big_t;
+        let tw_next = (tw(b + w) - tw(b)) / big_t;
+        out.push((
+            [(w1_next - w1_prev) / big_t, t_tw / s_k, 0.5 * (tw_prev + tw_next), 0.5 * (w1_prev + w1_next), 1.0],
+            r_m * t_f / s_k,
+        ));
+        b += w;
+    }
+    out
 }
 
 /// The stick↔slip transitions of a recorded rotor encoder from sample
@@ -73,6 +114,17 @@ struct RunRows {
     events: Vec<(usize, Vec<Row>)>,
     force_noise_n: f64,
     kernel_gain: f64,
+    /// The steady rows' normal equations in (Ω̇1, tw, tẇ, Ω1, 1) against
+    /// r·F + J1 Ω̇1, row-major 5 × 5, and their right-hand side: summed
+    /// once, so a fit on any subset of runs ([`BalanceData::fit`]) is a sum
+    /// of 5 × 5 blocks (the structural candidates fit every grid point on
+    /// every fold).
+    ata: [f64; 25],
+    atb: [f64; 5],
+    /// Σ (r·F + J1 Ω̇1)² over the steady rows: with `ata` and `atb`, a
+    /// fit's sum of squared residuals on the run without its rows
+    /// ([`BalanceData::run_rms`]).
+    yty: f64,
 }
 
 /// The rotor torque balance's data: every operating point's window rows over
@@ -118,90 +170,149 @@ pub fn balance_data(
     opts: &DiagnoseOptions,
     o: &ChannelOptions,
 ) -> BalanceData {
-    balance_data_aligned(c, cal, opts, o, 0, 0)
+    Recorded::of(c, cal, opts, o).balance()
 }
 
 /// `x` advanced by `lead` samples, x'[k] = x[k + lead] (the last sample held):
 /// a channel recorded `lead` samples late, put back in time.
-fn advanced(x: Vec<f64>, lead: usize) -> Vec<f64> {
-    if lead == 0 || x.is_empty() {
-        return x;
-    }
+pub fn advanced(x: &[f64], lead: usize) -> Vec<f64> {
     let n = x.len();
     (0..n).map(|k| x[(k + lead).min(n - 1)]).collect()
 }
 
-/// [`balance_data`] with the rotor encoder's angle advanced by `rotor_lead`
-/// samples and the force channel's by `force_lead`: the balance of a
-/// campaign whose channel is recorded that many samples late (the
-/// structural candidate `channel_delay`, [`crate::structure`]).
-pub fn balance_data_aligned(
-    c: &Campaign,
-    cal: &CampaignCalibration,
-    opts: &DiagnoseOptions,
-    o: &ChannelOptions,
-    rotor_lead: usize,
-    force_lead: usize,
-) -> BalanceData {
-    balance_data_with(c, cal, opts, o, |phi1, _, f| {
-        *phi1 = advanced(std::mem::take(phi1), rotor_lead);
-        *f = advanced(std::mem::take(f), force_lead);
-    })
+/// One operating point's channels in physical units (rotor and motor
+/// angle, rad; force, N) and what no realignment or sensor model of them
+/// changes: where its steady state starts and its stick↔slip transitions,
+/// located on the rotor encoder as recorded (so every realignment of the
+/// delay grid and every sensor model is scored on the same transitions).
+#[derive(Debug, Clone)]
+pub struct RecordedRun {
+    pub id: String,
+    pub rotor_rad: Vec<f64>,
+    pub motor_rad: Vec<f64>,
+    pub force_n: Vec<f64>,
+    /// First sample of the steady state (after the ramp and `settle_s`).
+    from: usize,
+    transitions: Vec<(usize, usize)>,
+    /// The recorded force's noise (first differences, [`diff_noise`]): the
+    /// torque balance check's floor, which only the balance as recorded uses.
+    force_noise_n: f64,
 }
 
-/// [`balance_data`] of the channels as `transform` leaves them (the
-/// realignments and sensor models of [`crate::structure`]): it is handed
-/// each run's rotor angle (rad), motor angle (rad) and force (N), whole
-/// records. The transitions of the event-locked rows are located on the
-/// encoder as recorded.
-pub fn balance_data_with(
-    c: &Campaign,
-    cal: &CampaignCalibration,
-    opts: &DiagnoseOptions,
-    o: &ChannelOptions,
-    transform: impl Fn(&mut Vec<f64>, &mut Vec<f64>, &mut Vec<f64>),
-) -> BalanceData {
-    let w = nominal_window_samples(o.balance_window_s, c.rig.sample_rate_hz).max(2);
-    let dt = 1.0 / c.rig.sample_rate_hz;
-    let r_m = c.rig.brake_disc_radius_m;
-    // Σk²/(Σk)² of the triangle kernel: the variance gain of white noise.
-    let kernel_gain = {
-        let ks: Vec<f64> = (0..=2 * w).map(|k| (w - k.abs_diff(w)) as f64).collect();
-        ks.iter().map(|k| k * k).sum::<f64>() / ks.iter().sum::<f64>().powi(2)
-    };
-    let mut runs = Vec::new();
-    for run in c.runs_of("operating_point") {
-        let RunKind::OperatingPoint { ramp_s, .. } = run.kind else { continue };
-        let d = &run.data;
-        let (Some(t1), Some(t2), Some(mv)) = (&d.rotor_ticks, &d.motor_ticks, &d.brake_force_mv) else { continue };
-        let mut phi1 = ticks_to_rad(t1, c.rig.encoder_ticks_per_rev);
-        let mut phi2 = ticks_to_rad(t2, c.rig.encoder_ticks_per_rev);
-        let mut f =
-            force_n(mv, ForceCal { factor_mv_per_n: cal.force_factor_mv_per_n, offset_mv: cal.force_offset_mv });
-        transform(&mut phi1, &mut phi2, &mut f);
-        let from = d.time_s.partition_point(|&x| x < ramp_s + opts.settle_s);
-        let grid = rows(&phi1, &phi2, &f, dt, w, r_m, from);
-        let angle_rad = (0..grid.len()).map(|j| phi1[from.max(w) + j * w]).collect();
-        // Located on the encoder as recorded, so every realignment of the
-        // delay grid is scored on the same transitions.
-        let events = transitions(&d.time_s, t1, c.rig.encoder_ticks_per_rev, opts.slip_speed_rad_s, from.max(w))
-            .into_iter()
-            .filter_map(|(kind, e)| {
-                let rows: Option<Vec<Row>> =
-                    (0..EVENT_ROWS).map(|j| row_at(&phi1, &phi2, &f, dt, w, r_m, e + j * w)).collect();
-                rows.map(|r| (kind, r))
+/// Every operating point's channels, read once per campaign: the balance
+/// as recorded ([`Recorded::balance`]) and through any realignment or
+/// sensor model ([`Recorded::balance_with`]) are built from it, so the
+/// structural candidates' grids ([`crate::structure`]) do not convert
+/// ticks, locate transitions or measure noise once per grid point.
+#[derive(Debug, Clone)]
+pub struct Recorded {
+    pub runs: Vec<RecordedRun>,
+    /// The balance window, samples.
+    w: usize,
+    dt: f64,
+    r_m: f64,
+    /// Σk²/(Σk)² of the triangle kernel: the variance gain of white noise.
+    kernel_gain: f64,
+    j1_kgm2: f64,
+}
+
+/// A run's three channels as a transform leaves them: rotor angle (rad),
+/// motor angle (rad), force (N), borrowed where left as recorded.
+pub type Channels<'a> = (Cow<'a, [f64]>, Cow<'a, [f64]>, Cow<'a, [f64]>);
+
+impl Recorded {
+    /// The operating points of `c` with their three channels.
+    pub fn of(c: &Campaign, cal: &CampaignCalibration, opts: &DiagnoseOptions, o: &ChannelOptions) -> Self {
+        let w = nominal_window_samples(o.balance_window_s, c.rig.sample_rate_hz).max(2);
+        let kernel_gain = {
+            let ks: Vec<f64> = (0..=2 * w).map(|k| (w - k.abs_diff(w)) as f64).collect();
+            ks.iter().map(|k| k * k).sum::<f64>() / ks.iter().sum::<f64>().powi(2)
+        };
+        let mut runs = Vec::new();
+        for run in c.runs_of("operating_point") {
+            let RunKind::OperatingPoint { ramp_s, .. } = run.kind else { continue };
+            let d = &run.data;
+            let (Some(t1), Some(t2), Some(mv)) = (&d.rotor_ticks, &d.motor_ticks, &d.brake_force_mv) else { continue };
+            let f =
+                force_n(mv, ForceCal { factor_mv_per_n: cal.force_factor_mv_per_n, offset_mv: cal.force_offset_mv });
+            let from = d.time_s.partition_point(|&x| x < ramp_s + opts.settle_s);
+            let per_rev = c.rig.encoder_ticks_per_rev;
+            runs.push(RecordedRun {
+                id: run.id.clone(),
+                rotor_rad: ticks_to_rad(t1, per_rev),
+                motor_rad: ticks_to_rad(t2, per_rev),
+                force_noise_n: diff_noise(&f),
+                force_n: f,
+                from,
+                transitions: transitions(&d.time_s, t1, per_rev, opts.slip_speed_rad_s, from.max(w)),
+            });
+        }
+        Recorded {
+            runs,
+            w,
+            dt: 1.0 / c.rig.sample_rate_hz,
+            r_m: c.rig.brake_disc_radius_m,
+            kernel_gain,
+            j1_kgm2: cal.rotor_inertia_kgm2,
+        }
+    }
+
+    /// The balance of the channels as recorded.
+    pub fn balance(&self) -> BalanceData {
+        self.balance_with(|_, r| {
+            (r.rotor_rad.as_slice().into(), r.motor_rad.as_slice().into(), r.force_n.as_slice().into())
+        })
+    }
+
+    /// The balance of the channels as `transform` gives them (the
+    /// realignments and sensor models of [`crate::structure`]): it is handed
+    /// each run with its index and returns the run's [`Channels`], whole
+    /// records. The event-locked rows stay at the recorded transitions.
+    pub fn balance_with<'a>(&'a self, transform: impl Fn(usize, &'a RecordedRun) -> Channels<'a>) -> BalanceData {
+        let (w, dt, r_m) = (self.w, self.dt, self.r_m);
+        let runs = self
+            .runs
+            .iter()
+            .enumerate()
+            .map(|(i, run)| {
+                let (phi1, phi2, f) = transform(i, run);
+                let grid = rows(&phi1, &phi2, &f, dt, w, r_m, run.from);
+                let angle_rad = (0..grid.len()).map(|j| phi1[run.from.max(w) + j * w]).collect();
+                let events = run
+                    .transitions
+                    .iter()
+                    .filter_map(|&(kind, e)| {
+                        let rows: Option<Vec<Row>> =
+                            (0..EVENT_ROWS).map(|j| row_at(&phi1, &phi2, &f, dt, w, r_m, e + j * w)).collect();
+                        rows.map(|r| (kind, r))
+                    })
+                    .collect();
+                let (mut ata, mut atb, mut yty) = ([0.0; 25], [0.0; 5], 0.0);
+                for (x, y) in &grid {
+                    let y = y + self.j1_kgm2 * x[0];
+                    yty += y * y;
+                    for i in 0..5 {
+                        atb[i] += x[i] * y;
+                        for j in 0..5 {
+                            ata[5 * i + j] += x[i] * x[j];
+                        }
+                    }
+                }
+                RunRows {
+                    id: run.id.clone(),
+                    rows: grid,
+                    angle_rad,
+                    events,
+                    force_noise_n: run.force_noise_n,
+                    kernel_gain: self.kernel_gain,
+                    ata,
+                    atb,
+                    yty,
+                }
             })
             .collect();
-        runs.push(RunRows {
-            id: run.id.clone(),
-            rows: grid,
-            angle_rad,
-            events,
-            force_noise_n: diff_noise(&f),
-            kernel_gain,
-        });
+        BalanceData { runs, j1_kgm2: self.j1_kgm2 }
     }
-    BalanceData { runs, j1_kgm2: cal.rotor_inertia_kgm2 }
 }
 
 impl BalanceData {
@@ -209,20 +320,22 @@ impl BalanceData {
     /// held; C (twist rate) and C_r (absolute rotor speed) are fitted only
     /// when asked, else held at 0. `None` when the regression is singular.
     pub fn fit(&self, include: impl Fn(&str) -> bool, twist_damping: bool, rotor_drag: bool) -> Option<BalanceFit> {
-        let j1 = self.j1_kgm2;
         let free = [false, true, twist_damping, rotor_drag, true];
-        let mut ne = rig_estimate::linear::Normal::new(5);
+        // The runs' normal equations summed over the free columns; a held
+        // coefficient gets a unit diagonal and no data (one unit row pins it at 0).
+        let (mut ata, mut atb) = ([0.0; 25], [0.0; 5]);
         for r in self.runs.iter().filter(|r| include(&r.id)) {
-            for (x, y) in &r.rows {
-                let row: Vec<(usize, f64)> = x.iter().copied().enumerate().filter(|(i, _)| free[*i]).collect();
-                ne.add_sparse(&row, y + j1 * x[0]);
+            for i in (0..5).filter(|&i| free[i]) {
+                atb[i] += r.atb[i];
+                for j in (0..5).filter(|&j| free[j]) {
+                    ata[5 * i + j] += r.ata[5 * i + j];
+                }
             }
         }
-        // A held coefficient: one unit row pins it at 0 (its column carries no data).
-        for (i, _) in free.iter().enumerate().filter(|(_, f)| !**f) {
-            ne.add_sparse(&[(i, 1.0)], 0.0);
+        for i in (0..5).filter(|&i| !free[i]) {
+            ata[5 * i + i] = 1.0;
         }
-        let b = ne.solve()?;
+        let b = rig_estimate::linear::Normal::from_row_major(5, &ata, atb.to_vec()).solve()?;
         Some(BalanceFit {
             stiffness_nm_rad: b[1],
             twist_damping_nm_s_rad: b[2],
@@ -235,11 +348,19 @@ impl BalanceData {
     /// accepts (runs without rows left out): the teacher-forced misfit a
     /// structural candidate is compared on.
     pub fn run_rms(&self, fit: &BalanceFit, include: impl Fn(&str) -> bool) -> Vec<(String, f64)> {
-        let beta = fit.beta(self.j1_kgm2);
+        // r = y' − γ·x with y' = r·F + J1 Ω̇1 and γ the fit without its J1:
+        // Σr² = y'ᵀy' − 2γᵀXᵀy' + γᵀXᵀXγ from the run's sums (no pass over its rows).
+        let mut g = fit.beta(self.j1_kgm2);
+        g[0] = 0.0;
         self.runs
             .iter()
             .filter(|r| include(&r.id) && !r.rows.is_empty())
-            .map(|r| (r.id.clone(), rms(&residuals(&r.rows, &beta))))
+            .map(|r| {
+                let quad: f64 = (0..5).map(|i| g[i] * (0..5).map(|j| r.ata[5 * i + j] * g[j]).sum::<f64>()).sum();
+                let lin: f64 = (0..5).map(|i| g[i] * r.atb[i]).sum();
+                let ssr = (r.yty - 2.0 * lin + quad).max(0.0);
+                (r.id.clone(), (ssr / r.rows.len() as f64).sqrt())
+            })
             .collect()
     }
 
@@ -456,4 +577,33 @@ pub fn tick_loss_check_of(data: &BalanceData, o: &ChannelOptions) -> ChannelChec
             "a lost tick is a step in the angle never given back; a delay is a shift"
         ),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{row_at, rows};
+
+    /// The running box sums give [`row_at`]'s rows (its explicit triangle
+    /// weights, the independent reference) on a record with every term
+    /// moving: ramps, a ring and a noisy force.
+    #[test]
+    fn rows_are_the_triangle_rows() {
+        let (n, dt, w, r_m) = (3000, 0.002, 50, 0.09);
+        let t = |k: usize| k as f64 * dt;
+        let phi1: Vec<f64> = (0..n).map(|k| 3.0 * t(k) + 0.02 * (40.0 * t(k)).sin()).collect();
+        let phi2: Vec<f64> = (0..n).map(|k| 3.0 * t(k) + 0.5 + 0.01 * (7.0 * t(k)).cos()).collect();
+        let f: Vec<f64> = (0..n).map(|k| 10.0 + ((k * 7919) % 101) as f64 * 0.01).collect();
+        for from in [0, 37, 120] {
+            let fast = rows(&phi1, &phi2, &f, dt, w, r_m, from);
+            let slow: Vec<_> =
+                (from.max(w)..n).step_by(w).map_while(|b| row_at(&phi1, &phi2, &f, dt, w, r_m, b)).collect();
+            assert_eq!(fast.len(), slow.len());
+            for ((x, y), (xs, ys)) in fast.iter().zip(&slow) {
+                assert!((y - ys).abs() < 1e-12 * ys.abs().max(1.0), "{y} vs {ys}");
+                for (a, b) in x.iter().zip(xs) {
+                    assert!((a - b).abs() < 1e-9 * b.abs().max(1.0), "{a} vs {b}");
+                }
+            }
+        }
+    }
 }

@@ -18,7 +18,7 @@
 //!
 //! Over a grid of whole-sample delays of each channel (1 sample to
 //! [`MAX_DELAY_S`], counted at the campaign's sample rate), the channel is
-//! advanced by the delay ([`crate::channels::balance_data_aligned`]) and the
+//! advanced by the delay ([`crate::channels::advanced`]) and the
 //! balance refitted with the rig model's structure (C on the twist rate, no
 //! drag); the fit is the delay with the smallest sum over training runs of
 //! each run's squared RMS residual, or no delay when the records as recorded
@@ -31,9 +31,8 @@
 //! delays are not tried: its count falls behind, it is not late.
 
 use super::{Aligned, Fitted, ParamSpec, StructureCandidate, StructureData};
-use crate::DiagnoseOptions;
-use crate::channels::{BalanceData, ChannelOptions, balance_data_aligned};
-use rig_types::{Campaign, RigParams};
+use crate::channels::{BalanceData, Recorded, advanced};
+use rig_types::RigParams;
 
 pub struct ChannelDelay;
 
@@ -76,24 +75,20 @@ const PARAMS: &[ParamSpec] = &[
 ];
 
 /// The balance of `c` with each channel advanced by 1 … [`MAX_DELAY_S`] samples.
-pub(super) fn grid(
-    c: &Campaign,
-    cal: &rig_calibrate::CampaignCalibration,
-    opts: &DiagnoseOptions,
-    o: &ChannelOptions,
-) -> Vec<Aligned> {
-    let rate = c.rig.sample_rate_hz;
-    let n = (MAX_DELAY_S * rate).round() as usize;
+pub(super) fn grid(rec: &Recorded, rate_hz: f64) -> Vec<Aligned> {
+    let n = (MAX_DELAY_S * rate_hz).round() as usize;
     let mut out = Vec::new();
     for channel in [DelayedChannel::RotorEncoder, DelayedChannel::Force] {
         for samples in 1..=n {
-            let (r, f) = if channel == DelayedChannel::RotorEncoder { (samples, 0) } else { (0, samples) };
-            out.push(Aligned {
-                channel,
-                samples,
-                delay_s: samples as f64 / rate,
-                data: balance_data_aligned(c, cal, opts, o, r, f),
+            let data = rec.balance_with(|_, r| match channel {
+                DelayedChannel::RotorEncoder => {
+                    (advanced(&r.rotor_rad, samples).into(), r.motor_rad.as_slice().into(), r.force_n.as_slice().into())
+                }
+                DelayedChannel::Force => {
+                    (r.rotor_rad.as_slice().into(), r.motor_rad.as_slice().into(), advanced(&r.force_n, samples).into())
+                }
             });
+            out.push(Aligned { channel, samples, delay_s: samples as f64 / rate_hz, data });
         }
     }
     out
