@@ -381,7 +381,7 @@ pub fn diagnose(
             let moved = sel.damping != structure::REGISTRY[0].id();
             let final_pairs =
                 if moved { channels::free_run_pairs_by(c, &s, |id| Some(phased(&sel.model, id))) } else { ext_pairs };
-            let free_run_baseline = channels::free_run_checks_of(c, &base_pairs, &s, o);
+            let free_run_baseline = channels::free_run_checks_of(c, base_pairs, &s, o);
             let free_run_final = channels::free_run_checks_of(c, &final_pairs, &s, o);
             // Free run is part of adequacy (issue 25): a flagged free-run check of
             // the final model makes the answer `unexplained` (`where`: free_run);
@@ -431,7 +431,7 @@ pub fn diagnose(
             d.detail.breakaway = level;
             d.detail.free_run_baseline = free_run_baseline;
             d.detail.free_run_extended = free_run_final;
-            d.detail.speed_traces = channels::speed_traces(&base_pairs, &final_pairs);
+            d.detail.speed_traces = channels::speed_traces(base_pairs, &final_pairs);
             d.detail.motor_speed_tick_rad_s = base_pairs.first().map_or(0.0, |q| q.motor_tick_rad_s);
             // An `unexplained` answer carries the best data-driven extension (issue 25, item 6).
             let model = if moved { &sel.model } else { &ext };

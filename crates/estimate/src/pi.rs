@@ -16,7 +16,7 @@
 
 use crate::{EstimateError, linear};
 use rig_types::sensor::{nominal_window_samples, ticks_to_rad, window_samples};
-use rig_types::{Campaign, RunKind};
+use rig_types::{Campaign, Run, RunKind};
 use serde::{Deserialize, Serialize};
 
 /// How the encoder quantisation in the regressors is handled.
@@ -89,23 +89,89 @@ fn trapz(t: &[f64], y: &[f64], a: usize, b: usize) -> f64 {
     (a..b).map(|i| 0.5 * (y[i] + y[i + 1]) * (t[i + 1] - t[i])).sum()
 }
 
-/// A saturation plateau in the recorded voltages: the largest |V| of all
-/// operating points, if at least two runs each spend 0.5 % of their samples
-/// within 0.1 V of it. A drive that clips piles samples up at one level in
-/// every run that asks for more; a run merely holding a steady voltage has
-/// its own level, which other runs do not share. Blind evidence of a drive
-/// limit below the nominal supply.
+/// A saturation plateau in the recorded voltages below the supply, or
+/// `None`. Its level is the largest of the runs' 99th percentiles of |V|,
+/// `L` (a quantile, not the extreme: the maximum of a clipped run's tens of
+/// thousands of noisy samples sits 4–6 σ_V above the clip, so samples
+/// "within 0.1 V of the maximum" were only the noise's tail — 0.3 % of the
+/// clipped runs' samples at σ_V = 0.032 V in the full battery's
+/// `ladder-drive_voltage_limit-3-2`, whose 5.62 V clip went unseen and
+/// wrecked the PI gains: kp 0.46 against 1.90, ki 0.0003 against 12.4). A
+/// drive that clips piles samples up at one level, seen in either of two
+/// ways:
+/// - in at least two runs, each with 0.5 % of its samples within
+///   [`PLATEAU_BAND_V`] of `L` (a run merely holding a steady voltage has
+///   its own level, which other runs seldom share), or
+/// - in one run that holds the level ([`holds_clipped`]): at least half its
+///   samples after the ramp within the band while the motor falls behind
+///   its reference, the PI error's integral growing by at least
+///   [`CLIP_LAG_TICKS`] encoder ticks after the ramp. A PI with integral
+///   action holds that integral bounded unless its output is clipped; a
+///   steady run at its own level does not lag, and a stick-slipping run's
+///   voltage swings far beyond the band. The weakest rung of the
+///   battery's drive limit clips one run only, which the two-run rule
+///   cannot see and whose plateau samples then gave kp −7.4
+///   (`ladder-drive_voltage_limit-5-4`: op-16 at 7.14 V, 0.7 % slow for
+///   the whole run) or −4.3 (`-5-11`: op-16 at 7.07 V, clipped from the
+///   ramp to 14 s while its integral grew by 100 ticks, then just below
+///   the limit).
+///
+/// Blind evidence of a drive limit below the nominal supply.
 pub fn voltage_plateau_v(c: &Campaign) -> Option<f64> {
-    let runs: Vec<&Vec<f64>> = c.runs_of("operating_point").filter_map(|r| r.data.motor_voltage_v.as_ref()).collect();
-    let max = runs.iter().flat_map(|v| v.iter()).map(|v| v.abs()).fold(0.0_f64, f64::max);
-    let at_limit = runs
+    let runs: Vec<&Run> = c.runs_of("operating_point").filter(|r| r.data.motor_voltage_v.is_some()).collect();
+    fn volts(r: &Run) -> &[f64] {
+        r.data.motor_voltage_v.as_deref().unwrap_or(&[])
+    }
+    let top = |v: &[f64]| {
+        let mut a: Vec<f64> = v.iter().map(|x| x.abs()).collect();
+        if a.is_empty() {
+            return 0.0;
+        }
+        let k = ((0.99 * a.len() as f64) as usize).min(a.len() - 1);
+        *a.select_nth_unstable_by(k, f64::total_cmp).1
+    };
+    let level = runs.iter().map(|r| top(volts(r))).fold(0.0_f64, f64::max);
+    let near = |v: &[f64]| v.iter().filter(|x| x.abs() >= level - PLATEAU_BAND_V).count();
+    let shared = runs
         .iter()
-        .filter(|v| {
-            let near = v.iter().filter(|x| x.abs() >= max - 0.1).count();
-            !v.is_empty() && near as f64 >= 0.005 * v.len() as f64
+        .filter(|r| {
+            let v = volts(r);
+            !v.is_empty() && near(v) as f64 >= 0.005 * v.len() as f64
         })
         .count();
-    (at_limit >= 2).then_some(max)
+    (level > 0.0 && (shared >= 2 || runs.iter().any(|r| holds_clipped(c, r, level)))).then_some(level)
+}
+
+/// How close to the plateau's level a sample counts as on it, V.
+pub const PLATEAU_BAND_V: f64 = 0.1;
+
+/// Encoder ticks the PI error's integral must grow by after the ramp for
+/// [`holds_clipped`]: a clipped drive lags (the one clipped run of
+/// `ladder-drive_voltage_limit-5-11`, `-5-12`, `-5-14`: 101, 61 and 41
+/// ticks); an unclipped PI's integral settles after the ramp, moving by
+/// ΔV/ki as the acceleration torque goes (the same campaigns' unclipped
+/// runs at the top set speed: 5–7 ticks).
+pub const CLIP_LAG_TICKS: f64 = 20.0;
+
+/// One run holding the voltage `level` while its motor falls behind the
+/// reference ([`voltage_plateau_v`]'s second way): at least half its
+/// samples after the ramp within [`PLATEAU_BAND_V`] of the level, and
+/// ∫(Ω_ref − Ω2) dt growing by at least [`CLIP_LAG_TICKS`] ticks from the
+/// ramp's end to the run's.
+fn holds_clipped(c: &Campaign, r: &Run, level: f64) -> bool {
+    let RunKind::OperatingPoint { motor_rpm_setpoint, ramp_s, .. } = r.kind else { return false };
+    let (Some(v), Some(ticks)) = (r.data.motor_voltage_v.as_ref(), r.data.motor_ticks.as_ref()) else { return false };
+    let t = &r.data.time_s;
+    let from = t.partition_point(|&x| x < ramp_s);
+    let n = t.len().min(v.len()).min(ticks.len());
+    if n < from + 4 {
+        return false;
+    }
+    let on = v[from..n].iter().filter(|x| x.abs() >= level - PLATEAU_BAND_V).count();
+    let sp = rig_types::units::rpm_to_rad_s(motor_rpm_setpoint);
+    let tick = rig_types::sensor::tick_rad(c.rig.encoder_ticks_per_rev);
+    let integral = |k: usize| reference_angle_rad(t[k], sp, ramp_s) - ticks[k] as f64 * tick;
+    2 * on >= n - from && integral(n - 1) - integral(from) >= CLIP_LAG_TICKS * tick
 }
 
 /// Estimates kp, ki from every operating-point run of `c`, drive limit `limit_v`

@@ -162,6 +162,27 @@ fn pi_gains_recovered_with_an_unannounced_lower_limit() {
     assert!(rel(pi.ki_v_rad, truth.drive.ki_v_rad) < 0.05, "ki {} ± {}", pi.ki_v_rad, pi.ki_stderr);
 }
 
+/// One run of three clips (the full battery's weakest drive limit clips one
+/// run of 30, issue 25): the two-run rule cannot see it, the run that holds
+/// the level while its motor falls behind does; without the plateau its
+/// flat voltage beside a growing ∫e wrecked the gains. The same runs
+/// without the limit show no plateau (the steady run at the top level does
+/// not lag).
+#[test]
+fn pi_gains_recovered_when_one_run_clips() {
+    let mut truth = common::truth();
+    let conditions = [(20.0, 10.0), (45.0, 4.0), (85.0, 25.0)];
+    let c = common::campaign(&truth, &[], 10.0, &conditions, 15.0, 6);
+    assert_eq!(estimate_pi(&c, 24.0, &PiOptions::default()).unwrap().voltage_plateau_v, None);
+    truth.drive.limit_v = 3.0;
+    let c = common::campaign(&truth, &[], 10.0, &conditions, 15.0, 6);
+    let pi = estimate_pi(&c, 24.0, &PiOptions::default()).unwrap();
+    let plateau = pi.voltage_plateau_v.expect("plateau at the 3 V limit");
+    assert!((plateau - 3.0).abs() < 0.1, "plateau {plateau}");
+    assert!(rel(pi.kp_v_s_rad, truth.drive.kp_v_s_rad) < 0.05, "kp {} ± {}", pi.kp_v_s_rad, pi.kp_stderr);
+    assert!(rel(pi.ki_v_rad, truth.drive.ki_v_rad) < 0.05, "ki {} ± {}", pi.ki_v_rad, pi.ki_stderr);
+}
+
 /// Without the quantisation correction (plain least squares) kp comes out
 /// attenuated by more than 10 %: the correction is doing real work.
 #[test]
