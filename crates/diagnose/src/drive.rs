@@ -194,9 +194,8 @@ pub fn fit_limit_gains(runs: &[&RunSignals], supply_v: f64) -> Option<Pi> {
 fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi, f64, usize, f64)> {
     // Every trial limit refits the gains from the unlimited fit (warm start).
     let p0 = fit_gains_from(runs, supply_v, None)?;
-    let eval_from = |l: f64, start: &Pi| {
-        fit_gains_from(runs, l, Some(start)).map(|p| rss_of(&p, runs).0).unwrap_or(f64::INFINITY)
-    };
+    let eval_from =
+        |l: f64, start: &Pi| fit_gains_from(runs, l, Some(start)).map(|p| rss_of(&p, runs).0).unwrap_or(f64::INFINITY);
     // A limit that binds nowhere gives the same arithmetic as any other such
     // limit (the clamp and the exclusion of saturated samples are the only
     // places the limit enters), so those trials reuse one evaluation.
