@@ -587,6 +587,9 @@ pub struct Selection<'a> {
     d_all: SlipData,
 }
 
+/// Every effect of a fold's model with its parameters, fitted without that fold.
+pub type FoldEffects = Vec<(EffectId, BTreeMap<String, f64>)>;
+
 /// An effect the teacher-forced rule saw but did not admit, with what a
 /// free run needs to judge it (the second look, [`crate::second_look`]):
 /// the step's teacher-forced comparison, per fold every effect of the model
@@ -595,7 +598,7 @@ pub struct Selection<'a> {
 pub struct NearMiss {
     pub effect: EffectId,
     pub teacher_forced: Comparison,
-    pub per_fold: Vec<Option<Vec<(EffectId, BTreeMap<String, f64>)>>>,
+    pub per_fold: Vec<Option<FoldEffects>>,
     pub per_run: Vec<Option<(usize, Phases)>>,
 }
 
