@@ -201,7 +201,7 @@ fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi,
     // places the limit enters), so those trials reuse one evaluation.
     let free = non_binding_from(runs, supply_v, &p0);
     let eval_with = |l: f64, start: &Pi| match free {
-        Some((l_free, rss, _)) if l >= l_free => rss,
+        Some((l_free, rss)) if l >= l_free => rss,
         _ => eval_from(l, start),
     };
     // Coarse grid first (the RSS is not unimodal far from the optimum), then Brent's method.
@@ -267,7 +267,7 @@ fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi,
     // stretch's end (7.11 V), 0.0045. When it is not there, clamping the
     // harder-driving held-out run only costs the candidate held-out gain.
     let l = match free {
-        Some((l_free, _, _)) if l >= l_free => l_free,
+        Some((l_free, _)) if l >= l_free => l_free,
         _ => l,
     };
     let fit_at = |p: &Pi| fit_gains_from(runs, l, Some(p)).map(|pi| (rss_of(&pi, runs), pi));
@@ -307,9 +307,8 @@ fn rss_lower_bound(runs: &[Recording], l: f64) -> f64 {
 /// the limit, with the RSS there: the fit at the supply, traced, clamps no
 /// sample and excludes none; then every limit above both the largest
 /// |V̂| of its passes and the largest |V|/0.999 gives the same passes.
-/// `None` when the supply itself binds; else (that limit, the RSS there,
-/// the fit at the supply).
-fn non_binding_from(runs: &[Recording], supply_v: f64, p0: &Pi) -> Option<(f64, f64, Pi)> {
+/// `None` when the supply itself binds; else (that limit, the RSS there).
+fn non_binding_from(runs: &[Recording], supply_v: f64, p0: &Pi) -> Option<(f64, f64)> {
     let v_meas = runs.iter().flat_map(|s| s.voltage_v.iter()).fold(0.0f64, |m, v| m.max(v.abs()));
     let mut v_pred = 0.0f64;
     let mut binds = false;
@@ -328,7 +327,7 @@ fn non_binding_from(runs: &[Recording], supply_v: f64, p0: &Pi) -> Option<(f64, 
     if binds || v_meas >= 0.999 * supply_v || l_free > supply_v {
         return None;
     }
-    Some((l_free, rss_of(&fitted, runs).0, fitted))
+    Some((l_free, rss_of(&fitted, runs).0))
 }
 
 /// Relative RMS voltage error of one run: sqrt(mean((V̂ − V)²)) / V_supply.
