@@ -79,19 +79,26 @@ impl Regime {
     }
 }
 
-/// A feature over the events: median, standard deviation, count.
+/// A feature over the events: median, standard deviation, count, and the
+/// first and third quartiles (the events' dispersion the misfit reads,
+/// `rig_slider::fit::dispersion`: robust where the sd is not, one outlier
+/// event moves neither).
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct Spread {
     pub median: f64,
     pub sd: f64,
     pub n: usize,
+    pub q1: f64,
+    pub q3: f64,
 }
 
 impl Spread {
-    /// Median, sample sd and count of `v` (NaN median and sd when empty).
+    /// Median, sample sd, count and quartiles of `v` (NaN median, sd and
+    /// quartiles when empty). Quartiles interpolate linearly between order
+    /// statistics (Hyndman & Fan's type 7: q(p) at rank p (n − 1)).
     pub fn of(v: &[f64]) -> Spread {
         if v.is_empty() {
-            return Spread { median: f64::NAN, sd: f64::NAN, n: 0 };
+            return Spread { median: f64::NAN, sd: f64::NAN, n: 0, q1: f64::NAN, q3: f64::NAN };
         }
         let mut s = v.to_vec();
         s.sort_by(f64::total_cmp);
@@ -99,7 +106,12 @@ impl Spread {
         let median = if n % 2 == 1 { s[n / 2] } else { 0.5 * (s[n / 2 - 1] + s[n / 2]) };
         let mean = s.iter().sum::<f64>() / n as f64;
         let sd = if n > 1 { (s.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt() } else { 0.0 };
-        Spread { median, sd, n }
+        let quantile = |q: f64| {
+            let r = q * (n - 1) as f64;
+            let (i, w) = (r.floor() as usize, r - r.floor());
+            if i + 1 < n { s[i] + w * (s[i + 1] - s[i]) } else { s[i] }
+        };
+        Spread { median, sd, n, q1: quantile(0.25), q3: quantile(0.75) }
     }
 }
 
@@ -419,7 +431,13 @@ mod tests {
         let x: Vec<f64> = (0..3000u64)
             .map(|i| {
                 let z = (i.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 40) as f64 / (1u64 << 24) as f64;
-                if i % 97 == 0 { -0.1 } else if i % 89 == 0 { -0.0 } else { (z * 20.0).round() * 0.007 }
+                if i % 97 == 0 {
+                    -0.1
+                } else if i % 89 == 0 {
+                    -0.0
+                } else {
+                    (z * 20.0).round() * 0.007
+                }
             })
             .collect();
         for half in [1, 3, 7, 40] {
