@@ -302,29 +302,43 @@ pub fn robust_noise_sd(raw: &[f64], filtered: &[f64]) -> f64 {
 }
 
 /// Running median over 2·`half` + 1 samples (shrinking at the ends): the
-/// window kept sorted (under `f64::total_cmp`) as it slides, one sample in
-/// and one out, and its middle element (index len/2) read: the element a
-/// selection over each window gives, bit for bit, without selecting anew at
-/// every sample (the selection was a tenth of the `slider` stage's CPU).
+/// window kept sorted (under `f64::total_cmp`) as it slides — the sample
+/// that leaves is overwritten by the one that enters, which then moves to
+/// its place by swaps — and its middle element (index len/2) read: the
+/// element a selection over each window gives, bit for bit.
 pub fn running_median(x: &[f64], half: usize) -> Vec<f64> {
+    use std::cmp::Ordering::Greater;
     if half == 0 {
         return x.to_vec();
     }
     let n = x.len();
-    let mut w: Vec<f64> = Vec::with_capacity(2 * half + 1);
-    let at = |w: &[f64], v: f64| w.partition_point(|e| e.total_cmp(&v).is_lt());
-    for &v in &x[..half.min(n)] {
-        w.insert(at(&w, v), v);
-    }
+    let mut w: Vec<f64> = x[..half.min(n)].to_vec();
+    w.sort_by(f64::total_cmp);
+    let settle = |w: &mut [f64], mut k: usize| {
+        while k > 0 && w[k - 1].total_cmp(&w[k]) == Greater {
+            w.swap(k - 1, k);
+            k -= 1;
+        }
+        while k + 1 < w.len() && w[k].total_cmp(&w[k + 1]) == Greater {
+            w.swap(k, k + 1);
+            k += 1;
+        }
+    };
+    let slot = |w: &[f64], v: f64| w.iter().position(|e| e.to_bits() == v.to_bits()).expect("a sample of the window");
     let mut out = Vec::with_capacity(n);
     for i in 0..n {
-        if i + half < n {
-            let v = x[i + half];
-            w.insert(at(&w, v), v);
-        }
-        if i > half {
-            let v = x[i - half - 1];
-            w.remove(at(&w, v));
+        let (enters, leaves) = (i + half < n, i > half);
+        if enters && leaves {
+            let k = slot(&w, x[i - half - 1]);
+            w[k] = x[i + half];
+            settle(&mut w, k);
+        } else if enters {
+            w.push(x[i + half]);
+            let k = w.len() - 1;
+            settle(&mut w, k);
+        } else if leaves {
+            let k = slot(&w, x[i - half - 1]);
+            w.remove(k);
         }
         out.push(w[w.len() / 2]);
     }
