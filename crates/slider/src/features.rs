@@ -79,19 +79,26 @@ impl Regime {
     }
 }
 
-/// A feature over the events: median, standard deviation, count.
+/// A feature over the events: median, standard deviation, count, and the
+/// first and third quartiles (the events' dispersion the misfit reads,
+/// `rig_slider::fit::dispersion`: robust where the sd is not, one outlier
+/// event moves neither).
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct Spread {
     pub median: f64,
     pub sd: f64,
     pub n: usize,
+    pub q1: f64,
+    pub q3: f64,
 }
 
 impl Spread {
-    /// Median, sample sd and count of `v` (NaN median and sd when empty).
+    /// Median, sample sd, count and quartiles of `v` (NaN median, sd and
+    /// quartiles when empty). Quartiles interpolate linearly between order
+    /// statistics (Hyndman & Fan's type 7: q(p) at rank p (n − 1)).
     pub fn of(v: &[f64]) -> Spread {
         if v.is_empty() {
-            return Spread { median: f64::NAN, sd: f64::NAN, n: 0 };
+            return Spread { median: f64::NAN, sd: f64::NAN, n: 0, q1: f64::NAN, q3: f64::NAN };
         }
         let mut s = v.to_vec();
         s.sort_by(f64::total_cmp);
@@ -99,7 +106,12 @@ impl Spread {
         let median = if n % 2 == 1 { s[n / 2] } else { 0.5 * (s[n / 2 - 1] + s[n / 2]) };
         let mean = s.iter().sum::<f64>() / n as f64;
         let sd = if n > 1 { (s.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt() } else { 0.0 };
-        Spread { median, sd, n }
+        let quantile = |q: f64| {
+            let r = q * (n - 1) as f64;
+            let (i, w) = (r.floor() as usize, r - r.floor());
+            if i + 1 < n { s[i] + w * (s[i + 1] - s[i]) } else { s[i] }
+        };
+        Spread { median, sd, n, q1: quantile(0.25), q3: quantile(0.75) }
     }
 }
 
@@ -289,21 +301,48 @@ pub fn robust_noise_sd(raw: &[f64], filtered: &[f64]) -> f64 {
     1.4826 * *d.select_nth_unstable_by(m, f64::total_cmp).1
 }
 
-/// Running median over 2·`half` + 1 samples (shrinking at the ends).
+/// Running median over 2·`half` + 1 samples (shrinking at the ends): the
+/// window kept sorted (under `f64::total_cmp`) as it slides — the sample
+/// that leaves is overwritten by the one that enters, which then moves to
+/// its place by swaps — and its middle element (index len/2) read: the
+/// element a selection over each window gives, bit for bit.
 pub fn running_median(x: &[f64], half: usize) -> Vec<f64> {
+    use std::cmp::Ordering::Greater;
     if half == 0 {
         return x.to_vec();
     }
-    let mut w = Vec::with_capacity(2 * half + 1);
-    (0..x.len())
-        .map(|i| {
-            let (a, b) = (i.saturating_sub(half), (i + half + 1).min(x.len()));
-            w.clear();
-            w.extend_from_slice(&x[a..b]);
-            let m = w.len() / 2;
-            *w.select_nth_unstable_by(m, f64::total_cmp).1
-        })
-        .collect()
+    let n = x.len();
+    let mut w: Vec<f64> = x[..half.min(n)].to_vec();
+    w.sort_by(f64::total_cmp);
+    let settle = |w: &mut [f64], mut k: usize| {
+        while k > 0 && w[k - 1].total_cmp(&w[k]) == Greater {
+            w.swap(k - 1, k);
+            k -= 1;
+        }
+        while k + 1 < w.len() && w[k].total_cmp(&w[k + 1]) == Greater {
+            w.swap(k, k + 1);
+            k += 1;
+        }
+    };
+    let slot = |w: &[f64], v: f64| w.iter().position(|e| e.to_bits() == v.to_bits()).expect("a sample of the window");
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        let (enters, leaves) = (i + half < n, i > half);
+        if enters && leaves {
+            let k = slot(&w, x[i - half - 1]);
+            w[k] = x[i + half];
+            settle(&mut w, k);
+        } else if enters {
+            w.push(x[i + half]);
+            let k = w.len() - 1;
+            settle(&mut w, k);
+        } else if leaves {
+            let k = slot(&w, x[i - half - 1]);
+            w.remove(k);
+        }
+        out.push(w[w.len() / 2]);
+    }
+    out
 }
 
 /// Turning points with hysteresis `h`: (index, is_maximum), alternating.
@@ -398,6 +437,35 @@ mod tests {
         assert!(r.stick_fraction.median > 0.95, "{:?}", r.stick_fraction);
         assert!(r.creep.median.abs() < 0.02, "{:?}", r.creep);
         assert!((r.load_rate.median - 1.0).abs() < 0.02, "{:?}", r.load_rate);
+    }
+
+    #[test]
+    fn the_sliding_median_is_the_selection_over_each_window() {
+        // On a grid (many ties), with spikes, signed zeros and both ends.
+        let x: Vec<f64> = (0..3000u64)
+            .map(|i| {
+                let z = (i.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 40) as f64 / (1u64 << 24) as f64;
+                if i % 97 == 0 {
+                    -0.1
+                } else if i % 89 == 0 {
+                    -0.0
+                } else {
+                    (z * 20.0).round() * 0.007
+                }
+            })
+            .collect();
+        for half in [1, 3, 7, 40] {
+            let fast = running_median(&x, half);
+            for (i, &f) in fast.iter().enumerate() {
+                let (a, b) = (i.saturating_sub(half), (i + half + 1).min(x.len()));
+                let mut w = x[a..b].to_vec();
+                let m = w.len() / 2;
+                let slow = *w.select_nth_unstable_by(m, f64::total_cmp).1;
+                assert_eq!(f.to_bits(), slow.to_bits(), "half {half} at {i}");
+            }
+        }
+        assert!(running_median(&[], 3).is_empty());
+        assert_eq!(running_median(&x[..2], 3).len(), 2);
     }
 
     #[test]

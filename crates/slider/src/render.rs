@@ -1390,7 +1390,11 @@ fn markdown(s: &Study) -> String {
     let _ = writeln!(
         md,
         "Misfit (defined in `rig_slider::fit`): RMS over a run of the regime term (0 or 2), ln(period ratio)/ln 2 \
-         (ln 1.15 for inertial oscillations), ln(drop ratio)/ln 2 and onset difference/0.05; 1 is a run at the issue's bounds.\n"
+         (ln 1.15 for inertial oscillations), ln(drop ratio)/ln 2, onset difference/0.05 and the events' spread \
+         (one term: the RMS over period, drop and onset of the difference of their interquartile widths, of ln P and \
+         ln D over ln 2 and of the onset over 0.05; a simulated stretch whose events do not repeat one cycle holds at \
+         least {} periods); 1 is a run at the issue's bounds.\n",
+        s.params.spread_periods
     );
     let _ = writeln!(
         md,

@@ -42,6 +42,9 @@ pub struct StudyParams {
     pub sim_periods: f64,
     pub sim_min_window_s: f64,
     pub sim_max_window_s: f64,
+    /// Periods a simulated stretch holds at least when its events do not
+    /// repeat one cycle (the misfit reads their spread; [`predict`]).
+    pub spread_periods: usize,
     /// Simulated time discarded before it, as a fraction of the window (the start from rest).
     pub warmup_fraction: f64,
     /// Integration steps per natural period.
@@ -352,16 +355,21 @@ fn window_s(m: &Measured, p: &StudyParams) -> f64 {
 
 /// The features of `law` simulated at run `m`'s (k, V), through the same feature function.
 ///
-/// The simulated stretch is [`window_s`] (set by the *measured* period);
-/// when the law's own slips are too slow to give `min_events` in it (a
-/// regime of slips the window cannot hold, which the feature function would
-/// call steady sliding) the stretch is doubled, up to `sim_max_window_s`,
-/// so a long period is measured as such.
+/// The simulated stretch is [`window_s`] (set by the *measured* period).
+/// It is lengthened, up to `sim_max_window_s` and the record's length, when
+/// - the law's own slips are too slow to give `min_events` in it (a regime
+///   of slips the window cannot hold, which the feature function would call
+///   steady sliding): doubled, so a long period is measured as such;
+/// - its events do not repeat one cycle ([`crate::fit::repeats`]) and it
+///   holds fewer than `spread_periods` periods: to about that many, so the
+///   misfit's spread term ([`crate::fit::spread_term`]) reads quartiles of
+///   that many events (a cycle that repeats has its dispersion from two).
 pub fn predict(model: Model, x: &[f64], m: &Measured, p: &StudyParams) -> Features {
+    let cap = p.sim_max_window_s.min(m.duration_s);
     let mut window = window_s(m, p);
     // A law with a track covers enough of it for the events' statistics.
     if let (crate::sim::Law::Track(t), _) = model.law(x) {
-        window = window.max(t.min_window_s(m.drive_speed_um_s * 1e-6)).min(p.sim_max_window_s).min(m.duration_s);
+        window = window.max(t.min_window_s(m.drive_speed_um_s * 1e-6)).min(cap);
     }
     loop {
         let f = SCRATCH.with_borrow_mut(|(run, force, time)| {
@@ -374,10 +382,15 @@ pub fn predict(model: Model, x: &[f64], m: &Measured, p: &StudyParams) -> Featur
             features(time, &force[skip..], &m.constants(p), &p.features)
         });
         let slow_slips = f.regime == Regime::SteadySliding && f.events > 0;
-        if !slow_slips || window >= p.sim_max_window_s {
+        let periods = f.period_s.n;
+        let few = f.events > 0 && periods < p.spread_periods && !crate::fit::repeats(&f);
+        if !(slow_slips || few) || window >= cap {
             return f;
         }
-        window = (2.0 * window).min(p.sim_max_window_s);
+        // Periods in a stretch grow with it: n + 1 maxima in the window.
+        let grow =
+            if slow_slips || periods < 2 { 2.0 } else { 1.1 * (p.spread_periods + 1) as f64 / (periods + 1) as f64 };
+        window = (grow.max(1.25) * window).min(cap);
     }
 }
 

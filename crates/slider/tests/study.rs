@@ -3,7 +3,7 @@
 //! (calibrate on one stiffness, predict the other). The last two read
 //! ../shared and are skipped with a message when it is absent.
 
-use rig_slider::fit::{Candidate, Model, SetupCandidate, fit, run_misfit};
+use rig_slider::fit::{Candidate, Model, SetupCandidate, dispersion, fit, repeats, run_misfit};
 use rig_slider::study::{Measured, predict};
 use rig_slider::{Regime, StudyParams, render, run_study};
 use std::path::{Path, PathBuf};
@@ -200,26 +200,29 @@ fn each_shipped_stiffness_held_out() {
         }
     }
     eprintln!("passed: {passed:?}\nfailed: {failed:?}");
-    // What holds today (slider.md and the crate docs give the numbers). The
-    // selection is the workspace's one engine (`rig_types::select::
-    // forward_select_from`, its pair step on): calibrated on 168 N/m the
-    // effective mass lowers the RMS held-out misfit by 18 % but wins on one
-    // of the three held-out runs only (paired t 0.35 < min_t: it mends
-    // k2254-v4300's period and loses k2254-v1100's,
-    // whose cycles spread over 0.7–1.5 T0), and the pair step's
-    // static_ageing+effective_mass gains 17 % at t 0.27; so Coulomb on the
-    // stated m and k is kept and the inertial period at 2254 N/m, 4300 µm/s
-    // is missed; calibrated on 2254 N/m nothing gains (the pair
-    // track_threshold+spring_scale loses 0.5 %, t −1.58; the track law alone
-    // gets all three regimes at 168 N/m but not closer than Coulomb), and
-    // Coulomb gets 168 N/m's stick-slip runs within every bound.
+    // What holds today (slider.md and docs/findings.md give the numbers),
+    // with the misfit's spread term (`fit::spread_term`). The selection is
+    // the workspace's one engine (`rig_types::select::forward_select_from`,
+    // its pair step on): calibrated on 168 N/m the effective mass lowers the
+    // RMS held-out misfit by 11.5 % at paired t 0.38 and the pair step's
+    // static_ageing+effective_mass loses 8.3 % (t −0.99), so
+    // Coulomb on the stated m and k is kept: it misses k2254-v42's regime,
+    // k2254-v4300's inertial period, and now k2254-v42's period (×0.47
+    // against ×0.5: the check held by 0.020 ln units against a standard
+    // error of 0.028, unresolved, and that creeping run's period is the
+    // reading's, 0.32–1.65 s across running medians; the spread term, a
+    // constant for Coulomb, reweighs the runs of its fit and Δμ, which sets
+    // the stick-slip period 2 Δμ m g/(k V), comes out lower). Calibrated on
+    // 2254 N/m the pair track_threshold+spring_scale is kept (gain 17.2 %,
+    // t 4.49): it gets 168 N/m's stick-slip runs within every bound and
+    // k168-v4300's inertial period within 15 % (+11.0 %, unresolved), not
+    // its onset (the level 0.55 of that run).
     for want in [
         "k2254-v1100 regime",
         "k2254-v1100 inertial period",
         "k2254-v1100 onset",
         "k2254-v4300 regime",
         "k2254-v4300 onset",
-        "k2254-v42 period",
         "k2254-v42 drop",
         "k2254-v42 onset",
         "k168-v42 regime",
@@ -231,6 +234,7 @@ fn each_shipped_stiffness_held_out() {
         "k168-v1100 drop",
         "k168-v1100 onset",
         "k168-v4300 regime",
+        "k168-v4300 inertial period",
     ] {
         assert!(passed.iter().any(|p| p == want), "{want}: passed {passed:?}");
     }
@@ -248,10 +252,7 @@ fn each_shipped_stiffness_held_out() {
     // numbers leave, and held out it mends one run of three, t 0.35); at
     // k168-v4300 it also slips at μs where the record slips at 0.55 (its mean
     // force 0.50, every other run's 0.30–0.37).
-    assert_eq!(
-        failed,
-        ["k2254-v42 regime", "k2254-v4300 inertial period", "k168-v4300 inertial period", "k168-v4300 onset"]
-    );
+    assert_eq!(failed, ["k2254-v42 regime", "k2254-v42 period", "k2254-v4300 inertial period", "k168-v4300 onset"]);
 }
 
 #[test]
@@ -320,7 +321,7 @@ fn a_description_that_does_not_fit_the_files_names_the_field() {
 }
 
 #[test]
-fn rate_and_state_creeps_at_the_creeping_run_only_on_its_hopf_point() {
+fn rate_and_state_creeps_at_the_creeping_run_only_as_a_start_up_transient() {
     // Why no fitted model gets k2254-v42's regime (creep: the slider moves
     // through the loading phase at 0.67 V, stick fraction 0.21, drop 0.042,
     // period 0.323 s = 13.9 T0, P V = 13.6 µm). `study::boundary_scan`: the
@@ -329,36 +330,48 @@ fn rate_and_state_creeps_at_the_creeping_run_only_on_its_hopf_point() {
     // With a = 0.003 or 0.01 and Dc = 0.3 or 1 µm (the literature's range for
     // paper) it goes from steady sliding to stick-slip with no creep between.
     // On the run's own Hopf point (`fit::hopf_starts`: ω_c = (V/Dc)
-    // √((b − a)/a) at the measured period, a = 0.035 at Dc = 1 µm, a direct
-    // effect four to five times b − a) it creeps, with the period within
-    // 10 % — and the same law stick-slips at k2254-v1100, which oscillates
-    // inertially: creep at 42 µm/s and an inertial oscillation at 1100 µm/s
-    // on one spring is what this law cannot give at once.
+    // √((b − a)/a) at the measured period, a = 0.035 at Dc = 1 µm) it used to
+    // read as creep in a band (k_c = 1.1–1.15 k) over the study's old
+    // stretch of three measured periods (1.2 s with the warm-up): that was
+    // the start from a preloaded spring, the oscillation still growing. Its
+    // events do not repeat there, so the stretch is now lengthened to
+    // `spread_periods` periods (`study::predict`), and over it, as over a
+    // plain 30 s, the same law stick-slips (load rate above 0.9 L, stick
+    // fraction 0.9): rate and state with the ageing law has no creep regime
+    // at this (k, V) in the scanned range.
     let Some((p, runs)) = shipped_runs() else { return };
     let i = runs.iter().position(|r| r.name == "k2254-v42").expect("the creeping run");
     assert_eq!(runs[i].features.regime, Regime::Creep);
     // The study's own scan (slider.md prints it).
     let scan = rig_slider::study::boundary_scan(&runs, i, &p);
     assert_eq!(scan.scans.len(), 5);
-    for (a, dc, regimes) in &scan.scans[..4] {
+    for (a, dc, regimes) in &scan.scans {
         eprintln!("a {a} Dc {dc:e}: {regimes:?}");
         assert!(regimes.iter().all(|r| r.1 != Regime::Creep), "a {a} Dc {dc}: {regimes:?}");
         assert_eq!(regimes[0].1, Regime::SteadySliding, "a {a} Dc {dc}: steady below the boundary");
         assert_eq!(regimes[12].1, Regime::StickSlip, "a {a} Dc {dc}: stick-slip above it");
     }
-    let (a, dc, regimes) = &scan.scans[4];
-    eprintln!("Hopf point a {a} Dc {dc:e}: {regimes:?}");
+    let (a, dc, _) = &scan.scans[4];
     assert!((a / 0.035 - 1.0).abs() < 0.05 && *dc == 1e-6, "the Hopf start at Dc = 1 µm: a {a}");
-    assert!(regimes.iter().any(|r| r.1 == Regime::Creep), "{regimes:?}");
-    let (x, at) = scan.creeping_law.as_ref().expect("a law of the scan creeps");
-    let here = at.iter().find(|(j, ..)| *j == i).unwrap();
-    assert_eq!(here.1.regime, Regime::Creep, "{x:?}");
-    let ratio = here.1.period_s.median / runs[i].features.period_s.median;
-    assert!((ratio - 1.0).abs() < 0.1, "Hopf period {:?} against the measured", here.1.period_s);
-    let j = runs.iter().position(|r| r.name == "k2254-v1100").unwrap();
-    let v1100 = at.iter().find(|(k, ..)| *k == j).unwrap();
-    assert_eq!(runs[j].features.regime, Regime::InertialOscillation);
-    assert_eq!(v1100.1.regime, Regime::StickSlip, "{x:?}");
+    assert!(scan.creeping_law.is_none());
+    // The transient: k_c = 1.1 k on the Hopf point, over the old stretch and over 30 s.
+    let weight_n = p.mass_kg * p.gravity_m_s2;
+    let x = [runs[i].features.mean_force, *a, 1.1 * runs[i].stiffness_n_m * dc / weight_n, *dc];
+    let rs = Model { friction: Candidate::RateState, setup: SetupCandidate::Stated };
+    let mut short = p.clone();
+    short.spread_periods = 0;
+    let mut long = short.clone();
+    long.sim_min_window_s = 30.0;
+    long.sim_max_window_s = 30.0;
+    let (f_short, f_now, f_long) =
+        (predict(rs, &x, &runs[i], &short), predict(rs, &x, &runs[i], &p), predict(rs, &x, &runs[i], &long));
+    eprintln!("short {f_short:?}\nnow {f_now:?}\nlong {f_long:?}");
+    assert_eq!(f_short.regime, Regime::Creep, "the old stretch reads the transient");
+    for f in [f_now, f_long] {
+        assert_eq!(f.regime, Regime::StickSlip, "{f:?}");
+        assert!(f.load_rate.median > 0.9 && f.stick_fraction.median > 0.85, "{f:?}");
+    }
+    assert!(f_long.events >= 50 && f_now.period_s.n >= p.spread_periods, "{f_long:?} {f_now:?}");
 }
 
 #[test]
@@ -459,4 +472,34 @@ fn the_track_law_fitted_on_the_stiff_spring_gets_every_regime() {
     let c = s.candidates.iter().find(|c| c.model == model).unwrap();
     let creeping = c.heldout.iter().find(|h| s.runs[h.0].name == "k2254-v42").unwrap();
     assert_eq!(creeping.2.regime, Regime::StickSlip, "fitted on 168 N/m");
+}
+
+#[test]
+fn the_channel_adds_little_spread_to_a_cycle_that_repeats() {
+    // The misfit's spread term compares a record's dispersion (the
+    // interquartile widths of ln P, ln D over ln 2 and of the onset over
+    // 0.05, `fit::dispersion`) with a noiseless simulation's. What the channel
+    // alone adds: a Coulomb law (one cycle that repeats, width 0) at each
+    // run's (k, V), read through the run's own channel (its grid and its
+    // noise, `study::through_channel`), against the record's own widths.
+    let Some(dir) = shipped() else { return };
+    let p = params();
+    let raw = rig_ingest::slider::read_slider_folder(&dir).unwrap();
+    for r in &raw {
+        let m = rig_slider::study::measure(r, &p);
+        let mu = m.features.mean_force;
+        let clean = predict(Model::BASELINE, &[mu + 0.02, 0.04], &m, &p);
+        let seconds = 20.0f64.min(m.duration_s);
+        let through = rig_slider::study::through_channel(Model::BASELINE, &[mu + 0.02, 0.04], &m, r, &p, seconds);
+        let (d0, d1, dm) =
+            (dispersion(&clean), dispersion(&through), dispersion(&m.features).expect("every run has periods"));
+        eprintln!("{}: measured {dm:.3?}; Coulomb clean {d0:.3?}, through the channel {d1:.3?}", m.name);
+        assert!(repeats(&clean), "{}: a Coulomb cycle repeats: {d0:?}", m.name);
+        if let Some(d1) = d1 {
+            // The channel's share is below half of what the record shows, feature by feature.
+            for k in 0..3 {
+                assert!(d1[k] < 0.5 * dm[k].max(0.2), "{} feature {k}: channel {d1:?} record {dm:?}", m.name);
+            }
+        }
+    }
 }
