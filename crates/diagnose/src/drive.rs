@@ -8,7 +8,7 @@
 //! one-step filter of the data, not a free-run simulation.)
 
 use crate::prepare::RunSignals;
-use rig_estimate::linear::ArrowNormal;
+use rig_estimate::linear::Normal;
 use rig_types::minimize::brent_min;
 
 /// The JSON key [`fit_limit`]'s limit is reported under (the drive term's
@@ -23,23 +23,152 @@ pub struct Pi {
     pub limit_v: f64,
 }
 
-/// What the PI recursion reads of one run, computed once per fit instead of
-/// once per pass: the error e = Ω_ref(t) − Ω2 of every sample (the measured
-/// speed drives the loop, so e depends only on the recording), the sample
-/// steps and the recorded voltage. The same expressions as before on the same
-/// numbers, so every pass gives the same bits.
-struct Recording<'a> {
+/// What the PI recursion reads of one run, computed once per run (cached in
+/// [`RunSignals::drive`] and shared by every fold, trial limit and selection
+/// step): the error e = Ω_ref(t) − Ω2 of every sample (the measured speed
+/// drives the loop, so e depends only on the recording) and the sample
+/// steps; and the recursion's closed form where the clamp never acts.
+///
+/// # The closed form of an unclamped run
+///
+/// Where no sample of a run clamps, the back-calculation term is ±0 at every
+/// sample, so ∫e is the running sum I₀(k) = Σ_{j<k} e_j·dt_j, the same for
+/// every gain pair (computed here by the recursion's own additions, so the
+/// same bits), and V̂ = kp·e + ki·I₀ is linear in the gains. Whether a run
+/// clamps is then a question about the points (e_k, I₀(k)) alone: the largest
+/// |kp·e + ki·I₀| over them is reached at a vertex of their convex hull
+/// (`hull`, a few dozen of 20 000 points), so one look at the vertices
+/// decides it, with a margin of 10⁻⁹ of the terms' scale for rounding (a run
+/// within it of the limit is treated as clamping: the recursion, exact, runs
+/// then). For an unclamped run a pass's normal equations are sums of e², e·I₀,
+/// I₀², e·V, I₀·V over the samples the fit keeps (|V| < 0.999·Vmax), which
+/// are the first samples in the order of |V|: prefix sums in that order
+/// (`cum`) give them for any limit, and its RSS is the quadratic form of the
+/// totals. So a pass costs a run O(hull) instead of O(samples) unless the
+/// run clamps. Not bit-identical to the per-sample sums (other order of the
+/// same additions; the RSS as a quadratic form cancels ≈ 10⁻¹⁰ of it).
+#[derive(Debug, Clone)]
+pub struct Prepared {
     e_rad_s: Vec<f64>,
     dt_s: Vec<f64>,
+    /// The convex hull's vertices of the points (e_k, I₀(k)).
+    hull: Vec<[f64; 2]>,
+    /// max |e|, max |I₀|: the scale of the rounding margin.
+    e_max: f64,
+    i_max: f64,
+    /// |V| in ascending order, and the prefix sums in that order of
+    /// (e², e·I₀, I₀², e·V, I₀·V, V²): `cum[m]` sums the first m samples.
+    v_abs_sorted: Vec<f64>,
+    cum: Vec<[f64; 6]>,
+}
+
+impl Prepared {
+    /// The error and the steps alone: what [`visit`] reads (no closed form).
+    fn bare(s: &RunSignals) -> Self {
+        Prepared {
+            e_rad_s: s.time_s.iter().zip(&s.motor_speed_rad_s).map(|(&t, &w)| s.reference_rad_s(t) - w).collect(),
+            dt_s: s.time_s.windows(2).map(|w| w[1] - w[0]).collect(),
+            hull: Vec::new(),
+            e_max: 0.0,
+            i_max: 0.0,
+            v_abs_sorted: Vec::new(),
+            cum: vec![[0.0; 6]],
+        }
+    }
+
+    fn of(s: &RunSignals) -> Self {
+        let Prepared { e_rad_s, dt_s, .. } = Prepared::bare(s);
+        let n = e_rad_s.len();
+        assert_eq!(s.voltage_v.len(), n, "run {}: a voltage sample per time sample", s.id);
+        // The recursion's additions with the clamp idle ([`visit`]): rate = e.
+        let mut i0_rad = Vec::with_capacity(n);
+        let mut i_acc = 0.0;
+        for k in 0..n {
+            i0_rad.push(i_acc);
+            if k + 1 < n {
+                i_acc += e_rad_s[k] * dt_s[k];
+            }
+        }
+        let mut pts: Vec<[f64; 2]> = e_rad_s.iter().zip(&i0_rad).map(|(&e, &i)| [e, i]).collect();
+        let hull = convex_hull(&mut pts);
+        let e_max = e_rad_s.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let i_max = i0_rad.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_unstable_by(|&a, &b| s.voltage_v[a].abs().total_cmp(&s.voltage_v[b].abs()).then(a.cmp(&b)));
+        let v_abs_sorted = order.iter().map(|&k| s.voltage_v[k].abs()).collect();
+        let mut cum = Vec::with_capacity(n + 1);
+        let mut acc = [0.0; 6];
+        cum.push(acc);
+        for &k in &order {
+            let (e, i, v) = (e_rad_s[k], i0_rad[k], s.voltage_v[k]);
+            for (a, x) in acc.iter_mut().zip([e * e, e * i, i * i, e * v, i * v, v * v]) {
+                *a += x;
+            }
+            cum.push(acc);
+        }
+        Prepared { e_rad_s, dt_s, hull, e_max, i_max, v_abs_sorted, cum }
+    }
+
+    /// The largest |kp·e + ki·I₀| over the run (at the hull's vertices) and
+    /// the rounding margin of its terms.
+    fn max_abs_unclamped(&self, pi: &Pi) -> (f64, f64) {
+        let m = self.hull.iter().fold(0.0f64, |m, p| m.max((pi.kp_v_s_rad * p[0] + pi.ki_v_rad * p[1]).abs()));
+        (m, 1e-9 * (pi.kp_v_s_rad.abs() * self.e_max + pi.ki_v_rad.abs() * self.i_max))
+    }
+
+    /// Whether no sample of the run clamps under `pi` (false when in doubt).
+    fn idle(&self, pi: &Pi) -> bool {
+        if !(pi.kp_v_s_rad.is_finite() && pi.ki_v_rad.is_finite()) {
+            return false;
+        }
+        let (m, tol) = self.max_abs_unclamped(pi);
+        m + tol < pi.limit_v
+    }
+
+    /// The prefix sums of the samples with |V| < 0.999·`limit_v`.
+    fn kept_sums(&self, limit_v: f64) -> &[f64; 6] {
+        &self.cum[self.v_abs_sorted.partition_point(|&v| v < 0.999 * limit_v)]
+    }
+}
+
+/// Andrew's monotone chain: the convex hull's vertices of `pts` (sorted in place).
+fn convex_hull(pts: &mut [[f64; 2]]) -> Vec<[f64; 2]> {
+    pts.sort_unstable_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
+    if pts.len() < 3 {
+        return pts.to_vec();
+    }
+    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+    let mut h: Vec<[f64; 2]> = Vec::with_capacity(64);
+    for pass in 0..2 {
+        let start = h.len();
+        let iter: Box<dyn Iterator<Item = &[f64; 2]>> =
+            if pass == 0 { Box::new(pts.iter()) } else { Box::new(pts.iter().rev()) };
+        for &p in iter {
+            while h.len() >= start + 2 && cross(h[h.len() - 2], h[h.len() - 1], p) <= 0.0 {
+                h.pop();
+            }
+            h.push(p);
+        }
+        h.pop();
+    }
+    h
+}
+
+/// A run as the fits read it: its [`Prepared`] closed form (built on first
+/// use) with the recorded voltage and its noise.
+struct Recording<'a> {
+    p: &'a Prepared,
     voltage_v: &'a [f64],
     voltage_noise_v: f64,
 }
 
 impl<'a> Recording<'a> {
     fn of(s: &'a RunSignals) -> Self {
-        let e_rad_s = s.time_s.iter().zip(&s.motor_speed_rad_s).map(|(&t, &w)| s.reference_rad_s(t) - w).collect();
-        let dt_s = s.time_s.windows(2).map(|w| w[1] - w[0]).collect();
-        Recording { e_rad_s, dt_s, voltage_v: &s.voltage_v, voltage_noise_v: s.voltage_noise_v }
+        Recording {
+            p: s.drive.get_or_init(|| Prepared::of(s)),
+            voltage_v: &s.voltage_v,
+            voltage_noise_v: s.voltage_noise_v,
+        }
     }
 
     fn all(runs: &[&'a RunSignals]) -> Vec<Self> {
@@ -59,19 +188,20 @@ impl<'a> Recording<'a> {
 /// addition per sample instead of a division and four more operations.
 #[inline]
 fn visit(pi: &Pi, r: &Recording, mut f: impl FnMut(usize, f64, f64, f64, bool)) {
-    let n = r.e_rad_s.len();
+    let (e_rad_s, dt_s) = (&r.p.e_rad_s, &r.p.dt_s);
+    let n = e_rad_s.len();
     let mut i_acc = 0.0;
     let tt = rig_model::ANTI_WINDUP_TRACKING_S;
     let no_windup = pi.ki_v_rad.abs() < 1e-9;
     for k in 0..n {
-        let e = r.e_rad_s[k];
+        let e = e_rad_s[k];
         let u = pi.kp_v_s_rad * e + pi.ki_v_rad * i_acc;
         let clamped = u.clamp(-pi.limit_v, pi.limit_v);
         f(k, e, clamped, i_acc, clamped != u);
         if k + 1 < n {
             let rate =
                 if no_windup || (clamped == u && u.is_finite()) { e } else { e + (clamped - u) / (pi.ki_v_rad * tt) };
-            i_acc += rate * r.dt_s[k];
+            i_acc += rate * dt_s[k];
         }
     }
 }
@@ -80,7 +210,8 @@ fn visit(pi: &Pi, r: &Recording, mut f: impl FnMut(usize, f64, f64, f64, bool)) 
 /// sample by sample (see [`visit`] for the anti-windup).
 pub fn predict_voltage(pi: &Pi, s: &RunSignals) -> (Vec<f64>, Vec<f64>, Vec<bool>) {
     let n = s.time_s.len();
-    let r = Recording::of(s);
+    let p = Prepared::bare(s);
+    let r = Recording { p: &p, voltage_v: &s.voltage_v, voltage_noise_v: s.voltage_noise_v };
     let mut v = Vec::with_capacity(n);
     let mut integ = Vec::with_capacity(n);
     let mut sat = Vec::with_capacity(n);
@@ -104,16 +235,24 @@ pub fn voltage_rss(pi: &Pi, runs: &[&RunSignals]) -> (f64, usize) {
     rss_of(pi, &Recording::all(runs))
 }
 
-/// [`voltage_rss`] of recordings already prepared.
+/// [`voltage_rss`] of recordings already prepared: a run the gains do not
+/// clamp by its closed form ([`Prepared`]), the others by the recursion.
 fn rss_of(pi: &Pi, runs: &[Recording]) -> (f64, usize) {
     let mut rss = 0.0;
     let mut n = 0;
     for r in runs {
         let w = 1.0 / r.voltage_noise_v.max(1e-6).powi(2);
-        rss += w * run_sse(pi, r);
-        n += r.e_rad_s.len();
+        rss += w * if r.p.idle(pi) { idle_sse(pi, r.p.cum.last().expect("cum[0]")) } else { run_sse(pi, r) };
+        n += r.p.e_rad_s.len();
     }
     (rss, n)
+}
+
+/// Σ (kp·e + ki·I₀ − V)² from the sums (e², e·I₀, I₀², e·V, I₀·V, V²): the
+/// SSE of a run the gains do not clamp, never below 0.
+fn idle_sse(pi: &Pi, s: &[f64; 6]) -> f64 {
+    let (kp, ki) = (pi.kp_v_s_rad, pi.ki_v_rad);
+    (kp * kp * s[0] + 2.0 * kp * ki * s[1] + ki * ki * s[2] - 2.0 * (kp * s[3] + ki * s[4]) + s[5]).max(0.0)
 }
 
 /// Fits kp, ki for a fixed limit: alternate (clamp pattern and integral from
@@ -136,17 +275,30 @@ fn fit_gains_path(runs: &[Recording], limit_v: f64, start: Option<&Pi>, mut visi
     };
     for it in 0..8 {
         visited(&pi);
-        // Two columns, no block: the sums add_sparse would make (ArrowNormal), bit for bit.
-        let mut ne = ArrowNormal::<2, 0>::new(0);
+        // The normal equations of (kp, ki) on the unclamped samples whose
+        // |V| < 0.999·Vmax, each run weighted by 1/σ_V²: a run the gains do
+        // not clamp from its prefix sums ([`Prepared`]), the others sample by sample.
+        let mut sums = [0.0; 5];
         for r in runs {
-            let w = 1.0 / r.voltage_noise_v.max(1e-6);
-            visit(&pi, r, |k, e, _, integ, sat| {
-                if !(sat || r.voltage_v[k].abs() >= 0.999 * limit_v) {
-                    ne.add(&[w * e, w * integ], 0, &[], w * r.voltage_v[k]);
-                }
-            });
+            let w2 = 1.0 / r.voltage_noise_v.max(1e-6).powi(2);
+            let mut run_sums = [0.0; 5];
+            if r.p.idle(&pi) {
+                run_sums.copy_from_slice(&r.p.kept_sums(limit_v)[..5]);
+            } else {
+                visit(&pi, r, |k, e, _, integ, sat| {
+                    let v = r.voltage_v[k];
+                    if !(sat || v.abs() >= 0.999 * limit_v) {
+                        for (a, x) in run_sums.iter_mut().zip([e * e, e * integ, integ * integ, e * v, integ * v]) {
+                            *a += x;
+                        }
+                    }
+                });
+            }
+            for (a, x) in sums.iter_mut().zip(run_sums) {
+                *a += w2 * x;
+            }
         }
-        let p = ne.into_normal().solve()?;
+        let p = Normal::from_row_major(2, &[sums[0], sums[1], sums[1], sums[2]], vec![sums[3], sums[4]]).solve()?;
         let next = Pi { kp_v_s_rad: p[0], ki_v_rad: p[1], limit_v };
         let done = it > 0 && (next.kp_v_s_rad - pi.kp_v_s_rad).abs() < 1e-9 * (1.0 + pi.kp_v_s_rad.abs());
         pi = next;
@@ -317,6 +469,12 @@ fn non_binding_from(runs: &[Recording], supply_v: f64, p0: &Pi) -> Option<(f64, 
     passes.push(fitted); // the RSS pass
     for pi in &passes {
         for r in runs {
+            // An unclamped run's largest |V̂| at its hull's vertices (within
+            // 10⁻¹⁵ of the samples', which the margin below covers).
+            if r.p.idle(pi) {
+                v_pred = v_pred.max(r.p.max_abs_unclamped(pi).0);
+                continue;
+            }
             visit(pi, r, |_, _, v, _, sat| {
                 v_pred = v_pred.max(v.abs());
                 binds |= sat;
@@ -372,6 +530,7 @@ mod tests {
                     force_noise_n: 0.0,
                     voltage_noise_v: 0.01,
                     steady_from: 0,
+                    drive: Default::default(),
                 };
                 let (v, _, _) = predict_voltage(&truth, &s);
                 s.voltage_v =
@@ -415,6 +574,48 @@ mod tests {
             }
             assert!(clamped > 100, "{clamped} clamped samples");
         }
+    }
+
+    /// The closed form of an unclamped run ([`Prepared`]) is the recursion:
+    /// where the hull says no sample clamps, none does, and the kept samples'
+    /// normal-equation sums and the SSE equal the per-sample ones to 10⁻⁹;
+    /// where a sample clamps, the hull says so.
+    #[test]
+    fn the_closed_form_of_an_unclamped_run_is_the_recursion() {
+        let rs = runs(Pi { kp_v_s_rad: 2.0, ki_v_rad: 10.0, limit_v: 5.0 }, &[1.0, 2.0, 3.0]);
+        let (mut idle_seen, mut clamped_seen) = (0, 0);
+        for s in &rs {
+            let r = Recording::of(s);
+            for (kp, ki, limit_v) in
+                [(2.0, 10.0, 24.0), (1.5, 8.0, 6.0), (2.0, 10.0, 5.0), (2.5, 12.0, 3.0), (0.0, 0.0, f64::INFINITY)]
+            {
+                let pi = Pi { kp_v_s_rad: kp, ki_v_rad: ki, limit_v };
+                let (mut sums, mut sse, mut any_clamped) = ([0.0; 5], 0.0, false);
+                visit(&pi, &r, |k, e, v_hat, i, sat| {
+                    let v = r.voltage_v[k];
+                    any_clamped |= sat;
+                    sse += (v_hat - v).powi(2);
+                    if !(sat || v.abs() >= 0.999 * limit_v) {
+                        for (a, x) in sums.iter_mut().zip([e * e, e * i, i * i, e * v, i * v]) {
+                            *a += x;
+                        }
+                    }
+                });
+                if !r.p.idle(&pi) {
+                    clamped_seen += usize::from(any_clamped);
+                    continue;
+                }
+                assert!(!any_clamped, "{pi:?}: a sample clamps where the hull says none does");
+                idle_seen += 1;
+                let closed = r.p.kept_sums(limit_v);
+                for (a, b) in sums.iter().zip(closed) {
+                    assert!((a - b).abs() <= 1e-9 * a.abs().max(1e-300), "{pi:?}: {a} vs {b}");
+                }
+                let q = idle_sse(&pi, r.p.cum.last().expect("cum"));
+                assert!((q - sse).abs() <= 1e-9 * r.p.cum.last().expect("cum")[5], "{pi:?}: {q} vs {sse}");
+            }
+        }
+        assert!(idle_seen >= 6 && clamped_seen >= 3, "{idle_seen} idle, {clamped_seen} clamped");
     }
 
     /// The limit search's reported RSS is its gains' RSS to the bit, and a

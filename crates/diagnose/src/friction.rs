@@ -1279,6 +1279,7 @@ pub(crate) mod tests {
                 force_noise_n: 0.1,
                 voltage_noise_v: 0.01,
                 steady_from: 0,
+                drive: Default::default(),
             }
         };
         let runs: Vec<RunSignals> = (0..3).map(run).collect();

@@ -37,6 +37,12 @@ pub struct RunSignals {
     pub voltage_noise_v: f64,
     /// First sample of the steady state (after ramp + settle time).
     pub steady_from: usize,
+    /// The drive fits' closed form of this run's PI recursion
+    /// ([`crate::drive::Prepared`]), built on the first fit that reads the
+    /// run and shared by every fold and selection step after it: the fields
+    /// above must not change once a drive fit has read them (`Default` for a
+    /// run built by hand).
+    pub drive: std::sync::OnceLock<crate::drive::Prepared>,
 }
 
 impl RunSignals {
@@ -199,6 +205,7 @@ fn prepare_run(
         slip_idx,
         mu_obs,
         steady_from,
+        drive: Default::default(),
     })
 }
 

@@ -338,6 +338,7 @@ mod tests {
                         force_noise_n: 0.002 * 10.0 * 0.58,
                         voltage_noise_v: 0.01 * 0.58,
                         steady_from: n - 400,
+                        drive: Default::default(),
                     };
                     let (v, _, _) = predict_voltage(&truth, &s);
                     s.voltage_v = v.iter().enumerate().map(|(k, v)| v + 0.01 * noise(k, 104_729)).collect();
