@@ -524,7 +524,10 @@ pub(crate) fn select_over<'a>(
     if runs.len() < 3 || folds < 2 {
         return Err(DiagnoseError::TooFewRuns { campaign: campaign.into(), needed: 3, found: runs.len() });
     }
-    if SlipData::from_runs(&runs.iter().collect::<Vec<_>>()).len() < 10 {
+    // Every run's slip samples (the joint fits' and the check's).
+    let all: Vec<&RunSignals> = runs.iter().collect();
+    let d_all = SlipData::from_runs(&all);
+    if d_all.len() < 10 {
         return Err(DiagnoseError::Singular("no slip samples in the operating points: μk cannot be fitted"));
     }
     let freqs: Vec<f64> = {
@@ -533,8 +536,6 @@ pub(crate) fn select_over<'a>(
     };
     let fold_data = Cv::fold_data(runs, folds, opts.fold_fit_spacing_s);
     let cv = Cv { runs, folds, supply_v, freqs, max_order: opts.max_order, fold_data };
-    let all: Vec<&RunSignals> = runs.iter().collect();
-    let d_all = SlipData::from_runs(&all);
 
     // Forward selection on the one engine: the runs are the units, fold f
     // holds out the runs of fold f and trains on the others; the baseline
