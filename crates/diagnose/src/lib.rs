@@ -16,7 +16,9 @@
 //!    is not punished): the friction coefficient in slip, μ_obs = F/N0
 //!    ([`friction`], [`composite`], Eq. 4-10), and the armature voltage of the
 //!    PI drive ([`drive`]). The vocabulary is one file per effect ([`effects`], `REGISTRY`).
-//! 3. **Forward selection** ([`select`]): starting from the baseline (Coulomb μk,
+//! 3. **Forward selection** ([`select`], on the workspace's one engine,
+//!    `rig_types::select`: the runs are its units, the k folds over runs its
+//!    folds, each effect of the registry a candidate): starting from the baseline (Coulomb μk,
 //!    drive saturating at `supply_voltage_v`), every remaining effect is added
 //!    to the current model, fitted on the training folds and scored on the
 //!    held-out fold (each run is held out exactly once). The effect with the
@@ -253,6 +255,9 @@ pub enum DiagnoseError {
     Estimation(String),
     #[error("the baseline fit is singular: {0}")]
     Singular(&'static str),
+    /// The engine refused the folds (`rig_types::select::SelectError`).
+    #[error("{0}")]
+    Selection(String),
 }
 
 /// Diagnosis of a campaign whose calibration is done: prepares the signals

@@ -1,6 +1,20 @@
 //! Cross-validated forward selection of vocabulary effects, the adequacy test
 //! of the final model and the residual signature (the rules are stated in the
 //! crate docs).
+//!
+//! The selection runs on the workspace's one engine,
+//! [`rig_types::select::forward_select_from`]: the campaign's runs are the
+//! units (in campaign order, `Search::units_ascending`), fold f holds out the
+//! runs of fold f and trains on the others, each [`VocabularyEffect`] of the
+//! registry is a candidate (`Effect`: its id, its fit, its `inadmissible`
+//! rule) and the model is one `FoldModel` per fold: its effects and each
+//! channel's fit on the fold's training runs. What keeps it fast lives in the
+//! study (`Vocabulary`): a channel's fit is shared by every model with the
+//! same friction set or the same drive limit, and each friction fit is
+//! warm-started from the current model's fit of the same fold. The engine
+//! fits every (candidate, fold) as a task of its own, so a step's 3–4
+//! friction sets × 5 folds keep two cores evenly busy. The engine's trace
+//! is the report's (`StepRow`s).
 
 use crate::composite::{self, Composite, CompositeFit, FrictionSet, Phases};
 use crate::drive::{self, Pi};
@@ -17,8 +31,10 @@ use crate::{DiagnoseError, DiagnoseOptions};
 use rayon::prelude::*;
 use rig_spectra::{LineAnalysisOptions, line_analysis};
 use rig_sweep::ClassifyOptions;
+use rig_types::select::{self as engine, Fold};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
+use std::sync::{Arc, Mutex};
 
 /// A model of both channels: which friction effects, whether the drive has its own limit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Default)]
@@ -72,32 +88,116 @@ struct Cv<'a> {
 /// held-out run, (run index, relative μ error, phases fitted on that run).
 type FoldFriction = (Option<Composite>, Vec<(usize, Option<f64>, Phases)>);
 
+/// One fold's drive fit: the PI fitted on its training runs and, per
+/// held-out run, (run index, relative voltage error).
+type FoldDrive = (Option<Pi>, Vec<(usize, f64)>);
+
+/// A model of both channels as the engine carries it, one per fold: which
+/// effects, and each channel fitted on the fold's training runs with its
+/// held-out runs' errors. A candidate refits only the channel its effect acts
+/// on and shares the other's fit ([`Arc`]).
+#[derive(Clone)]
+struct FoldModel {
+    set: ModelSet,
+    fold: usize,
+    friction: Arc<FoldFriction>,
+    drive: Arc<FoldDrive>,
+}
+
+/// The diagnosis as [`rig_types::select`] sees it: the campaign's runs are
+/// the units, a run's misfit M_r (crate docs) is read from its fold's
+/// model. The channels' fits are kept by (friction set or limit, fold): a
+/// friction set is fitted once per fold, whichever step and candidate reach
+/// it (the drive limit accepted first leaves every friction set as it was),
+/// and the drive with its own limit once per fold. The lock is held for
+/// look-ups only, never during a fit.
+struct Vocabulary<'c, 'a> {
+    cv: &'c Cv<'a>,
+    frictions: Mutex<BTreeMap<(FrictionSet, usize), Arc<FoldFriction>>>,
+    drives: Mutex<BTreeMap<(bool, usize), Arc<FoldDrive>>>,
+    /// Every run's slip samples and the joint fit of a friction set on them
+    /// (the admissibility rule's and, for the retained set, the final one).
+    d_all: &'c SlipData,
+    all_fits: Mutex<BTreeMap<FrictionSet, Option<CompositeFit>>>,
+}
+
+/// `cache[key]`, computed by `fit` (outside the lock) when missing.
+fn cached<K: Ord + Copy, V>(cache: &Mutex<BTreeMap<K, Arc<V>>>, key: K, fit: impl FnOnce() -> V) -> Arc<V> {
+    if let Some(v) = cache.lock().expect("cache").get(&key) {
+        return v.clone();
+    }
+    let v = Arc::new(fit());
+    cache.lock().expect("cache").entry(key).or_insert(v).clone()
+}
+
+impl Vocabulary<'_, '_> {
+    /// Fold `f`'s friction channel of `set`, warm-started from `start` when
+    /// it is fitted here.
+    fn friction(&self, set: FrictionSet, f: usize, start: Option<&Composite>) -> Arc<FoldFriction> {
+        cached(&self.frictions, (set, f), || self.cv.fold_friction(set, f, start))
+    }
+
+    fn drive(&self, limit: bool, f: usize) -> Arc<FoldDrive> {
+        cached(&self.drives, (limit, f), || self.cv.fold_drive(limit, f))
+    }
+
+    /// The joint fit of `set` on every run (memoised).
+    fn fit_all(&self, set: FrictionSet) -> Option<CompositeFit> {
+        if let Some(fit) = self.all_fits.lock().expect("joint fits").get(&set) {
+            return fit.clone();
+        }
+        let fit = composite::fit_composite(self.d_all, set, &self.cv.freqs, self.cv.max_order);
+        self.all_fits.lock().expect("joint fits").entry(set).or_insert(fit).clone()
+    }
+}
+
+impl engine::Study<FoldModel> for Vocabulary<'_, '_> {
+    /// M_r of run `r` under its fold's model ([`combine`]).
+    fn score(&self, m: &FoldModel, r: usize) -> f64 {
+        let e_mu = m.friction.1.iter().find(|h| h.0 == r).and_then(|h| h.1);
+        let e_v = m.drive.1.iter().find(|h| h.0 == r).map_or(f64::INFINITY, |h| h.1);
+        combine(e_mu, e_v)
+    }
+}
+
+/// A vocabulary effect as the engine's candidate: its id the registry's,
+/// its fit the current model with the effect's term added and that channel
+/// refitted on the fold's training runs (the friction warm-started from the
+/// current model's fit of the same fold), its admissibility rule its own.
+struct Effect(EffectId);
+
+impl engine::Candidate<Vocabulary<'_, '_>, FoldModel> for Effect {
+    fn id(&self) -> &str {
+        self.0.id()
+    }
+
+    fn fit(&self, v: &Vocabulary<'_, '_>, current: &FoldModel, _train: &[usize]) -> Result<FoldModel, String> {
+        let set = current.set.with(self.0);
+        let f = current.fold;
+        Ok(match self.0.term() {
+            Term::DriveLimit => FoldModel { set, drive: v.drive(set.limit, f), ..current.clone() },
+            Term::Friction(_) => {
+                FoldModel { set, friction: v.friction(set.friction, f, current.friction.0.as_ref()), ..current.clone() }
+            }
+        })
+    }
+
+    /// Whether the effect fitted on every run is the effect its name says:
+    /// its own rule ([`VocabularyEffect::inadmissible`], e.g. viscous c > 0,
+    /// velocity weakening μs > μk, diagnosis.md's table). A fit with the
+    /// opposite sign is a shape outside the vocabulary (friction falling
+    /// linearly with speed, or rising toward a plateau), so the effect is not
+    /// accepted and selection stops: a second-best vocabulary effect would
+    /// only paper over the mismatch, which the adequacy test then judges.
+    fn inadmissible(&self, v: &Vocabulary<'_, '_>, current: &[FoldModel], _: &[FoldModel]) -> Option<String> {
+        let set = current[0].set.with(self.0).friction;
+        self.0.inadmissible(&mut || v.fit_all(set).map(|f| f.model))
+    }
+}
+
 impl Cv<'_> {
     fn train(&self, f: usize) -> Vec<&RunSignals> {
         self.runs.iter().filter(|r| r.fold != f).collect()
-    }
-
-    fn friction(&self, set: FrictionSet) -> FrictionCv {
-        self.friction_many(&[set], None).pop().expect("one set")
-    }
-
-    /// The cross-validated friction channel of each set, every (set, fold) fit
-    /// a task of its own: a forward-selection step fits 3–4 sets × 5 folds,
-    /// which two cores share evenly, where 5 folds alone leave one idle a
-    /// third of the time. Each fit is the one [`Cv::fold_friction`] makes,
-    /// warm-started from `start`'s model of the same fold (the previous
-    /// step's model, whose terms every set of the step extends).
-    fn friction_many(&self, sets: &[FrictionSet], start: Option<&FrictionCv>) -> Vec<FrictionCv> {
-        let tasks: Vec<(usize, usize)> = (0..sets.len()).flat_map(|k| (0..self.folds).map(move |f| (k, f))).collect();
-        let start_of = |f: usize| start.and_then(|s| s.models.get(f)).and_then(Option::as_ref);
-        let mut fits: Vec<FoldFriction> =
-            tasks.par_iter().map(|&(k, f)| self.fold_friction(sets[k], f, start_of(f))).collect();
-        let mut out = Vec::with_capacity(sets.len());
-        for _ in sets {
-            let rest = fits.split_off(self.folds);
-            out.push(self.assemble(std::mem::replace(&mut fits, rest)));
-        }
-        out
     }
 
     /// Fold `f`'s friction fit: the model of `set` fitted on the other folds
@@ -153,46 +253,35 @@ impl Cv<'_> {
         out
     }
 
-    fn drive(&self, limit: bool) -> DriveCv {
-        let per_fold: Vec<Option<Pi>> = (0..self.folds)
-            .into_par_iter()
-            .map(|f| {
-                let train = self.train(f);
-                if limit {
-                    drive::fit_limit_gains(&train, self.supply_v)
-                } else {
-                    drive::fit_gains(&train, self.supply_v)
-                }
-            })
-            .collect();
-        let e_v = self
+    /// Fold `f`'s drive fit: the PI (with its own limit when `limit`, else
+    /// saturating at the supply) fitted on the other folds, and each held-out
+    /// run's relative voltage error under it (∞ without a fit).
+    fn fold_drive(&self, limit: bool, f: usize) -> FoldDrive {
+        let train = self.train(f);
+        let pi =
+            if limit { drive::fit_limit_gains(&train, self.supply_v) } else { drive::fit_gains(&train, self.supply_v) };
+        let held = self
             .runs
             .iter()
-            .map(|s| match &per_fold[s.fold] {
-                Some(pi) => drive::relative_voltage_error(pi, s, self.supply_v),
-                None => f64::INFINITY,
+            .enumerate()
+            .filter(|(_, s)| s.fold == f)
+            .map(|(i, s)| {
+                (i, pi.as_ref().map_or(f64::INFINITY, |pi| drive::relative_voltage_error(pi, s, self.supply_v)))
             })
             .collect();
-        DriveCv { e_v, pis: per_fold }
+        (pi, held)
     }
-}
 
-/// Whether adding `e` to the current model gives the effect its name says,
-/// fitted on every run: each effect's own rule
-/// ([`VocabularyEffect::inadmissible`], e.g. viscous c > 0, velocity
-/// weakening μs > μk, diagnosis.md's table). A fit with the opposite sign is
-/// a shape outside the vocabulary (friction falling linearly with speed, or
-/// rising toward a plateau), so the effect is not accepted and selection
-/// stops: a second-best vocabulary effect would only paper over the mismatch,
-/// which the adequacy test then judges. `None` when admissible. `fit_all` is
-/// the joint fit of a friction set on every run (memoised: the final joint
-/// fit reuses it), called only by an effect with a rule.
-fn inadmissible(
-    fit_all: &mut impl FnMut(FrictionSet) -> Option<CompositeFit>,
-    current: ModelSet,
-    e: EffectId,
-) -> Option<String> {
-    e.inadmissible(&mut || fit_all(current.with(e).friction).map(|f| f.model))
+    /// The drive channel of every run from its fold's fit (`per_fold[f]`).
+    fn assemble_drive(&self, per_fold: &[&FoldDrive]) -> DriveCv {
+        let mut e_v = vec![f64::INFINITY; self.runs.len()];
+        for (_, held) in per_fold {
+            for &(i, e) in held {
+                e_v[i] = e;
+            }
+        }
+        DriveCv { e_v, pis: per_fold.iter().map(|d| d.0).collect() }
+    }
 }
 
 /// The parameters of effect `e` among a fit's (term, JSON key, value,
@@ -435,7 +524,10 @@ pub(crate) fn select_over<'a>(
     if runs.len() < 3 || folds < 2 {
         return Err(DiagnoseError::TooFewRuns { campaign: campaign.into(), needed: 3, found: runs.len() });
     }
-    if SlipData::from_runs(&runs.iter().collect::<Vec<_>>()).len() < 10 {
+    // Every run's slip samples (the joint fits' and the check's).
+    let all: Vec<&RunSignals> = runs.iter().collect();
+    let d_all = SlipData::from_runs(&all);
+    if d_all.len() < 10 {
         return Err(DiagnoseError::Singular("no slip samples in the operating points: μk cannot be fitted"));
     }
     let freqs: Vec<f64> = {
@@ -445,101 +537,80 @@ pub(crate) fn select_over<'a>(
     let fold_data = Cv::fold_data(runs, folds, opts.fold_fit_spacing_s);
     let cv = Cv { runs, folds, supply_v, freqs, max_order: opts.max_order, fold_data };
 
-    // Channel caches: the friction channel depends only on the friction set,
-    // the drive channel only on the limit.
+    // Forward selection on the one engine: the runs are the units, fold f
+    // holds out the runs of fold f and trains on the others; the baseline
+    // (Coulomb μk, the PI saturating at the supply) fitted on each.
+    let engine_folds: Vec<Fold> = (0..folds)
+        .map(|f| {
+            let (held_out, train): (Vec<usize>, Vec<usize>) = (0..runs.len()).partition(|&r| runs[r].fold == f);
+            Fold { train, held_out }
+        })
+        .collect();
+    let study = Vocabulary {
+        cv: &cv,
+        frictions: Mutex::default(),
+        drives: Mutex::default(),
+        d_all: &d_all,
+        all_fits: Mutex::default(),
+    };
+    let baselines: Vec<FoldModel> = (0..folds)
+        .into_par_iter()
+        .map(|f| {
+            let set = ModelSet::default();
+            let (friction, drive) = rayon::join(|| study.friction(set.friction, f, None), || study.drive(set.limit, f));
+            FoldModel { set, fold: f, friction, drive }
+        })
+        .collect();
+    let effects: Vec<Effect> = registry.iter().map(|e| Effect(EffectId(*e))).collect();
+    let candidates: Vec<&dyn engine::Candidate<Vocabulary, FoldModel>> =
+        effects.iter().map(|e| e as &dyn engine::Candidate<Vocabulary, FoldModel>).collect();
+    // Runs in campaign order (the stratified folds interleave them).
+    let search = engine::Search { units_ascending: true, ..engine::Search::default() };
+    let sel = engine::forward_select_from(&study, &candidates, &baselines, &engine_folds, &opts.selection, &search)
+        .map_err(|e| DiagnoseError::Selection(e.to_string()))?;
+
+    // The trace, as the report prints it.
+    let effect = |t: &engine::Trial<FoldModel>| EffectId(registry[t.candidate]);
+    let steps: Vec<StepRow> = sel
+        .trials
+        .iter()
+        .map(|t| StepRow {
+            step: t.step,
+            effect: t.id.clone(),
+            misfit_before: t.comparison.before,
+            misfit_after: t.comparison.after,
+            gain: t.comparison.gain,
+            gain_fold_sd: t.comparison.gain_fold_sd,
+            t: t.comparison.t,
+            accepted: t.accepted,
+            inadmissible: t.inadmissible.clone(),
+        })
+        .collect();
+    let first_step: Vec<(EffectId, Comparison, Vec<f64>)> =
+        sel.step(1).map(|t| (effect(t), t.comparison, t.misfits.clone())).collect();
+    let accepted: Vec<(EffectId, Comparison)> =
+        sel.chosen.iter().map(|&i| (effect(&sel.trials[i]), sel.trials[i].comparison)).collect();
+    let current = sel.final_models[0].set;
+    // Every channel the selection fitted, by friction set and by limit (the
+    // conclusion, the second look and `admit` read them).
     let mut fr_cache: BTreeMap<FrictionSet, FrictionCv> = BTreeMap::new();
     let mut dr_cache: BTreeMap<bool, DriveCv> = BTreeMap::new();
-    let misfits = |fr_cache: &mut BTreeMap<FrictionSet, FrictionCv>,
-                   dr_cache: &mut BTreeMap<bool, DriveCv>,
-                   m: ModelSet|
-     -> Vec<f64> {
-        let fr = fr_cache.entry(m.friction).or_insert_with(|| cv.friction(m.friction));
-        let e_mu = fr.e_mu.clone();
-        let dr = dr_cache.entry(m.limit).or_insert_with(|| cv.drive(m.limit));
-        e_mu.iter().zip(&dr.e_v).map(|(a, b)| combine(*a, *b)).collect()
-    };
-
-    // Every run's slip samples, and the joint fit of a friction set on them
-    // (the admissibility test's and, for the retained set, the final one).
-    let all: Vec<&RunSignals> = runs.iter().collect();
-    let d_all = SlipData::from_runs(&all);
-    let mut all_fits: BTreeMap<FrictionSet, Option<CompositeFit>> = BTreeMap::new();
-    let mut fit_all = |set: FrictionSet| {
-        all_fits.entry(set).or_insert_with(|| composite::fit_composite(&d_all, set, &cv.freqs, opts.max_order)).clone()
-    };
-
-    // Forward selection.
-    let mut current = ModelSet::default();
-    let base_ms = misfits(&mut fr_cache, &mut dr_cache, current);
-    let mut cur_ms = base_ms.clone();
-    let mut accepted: Vec<(EffectId, Comparison)> = Vec::new();
-    let mut steps: Vec<StepRow> = Vec::new();
-    let mut first_step: Vec<(EffectId, Comparison, Vec<f64>)> = Vec::new();
-    let significant = |c: &Comparison| opts.selection.admits(c);
-    for step in 1..=registry.len() {
-        let remaining: Vec<EffectId> =
-            registry.iter().map(|e| EffectId(*e)).filter(|e| !accepted.iter().any(|a| a.0 == *e)).collect();
-        // Fit every candidate's friction sets (and the drive limit) at once, in parallel.
-        let needed: Vec<FrictionSet> = {
-            let mut v: Vec<FrictionSet> = remaining.iter().map(|&e| current.with(e).friction).collect();
-            v.sort();
-            v.dedup();
-            v.retain(|set| !fr_cache.contains_key(set));
-            v
-        };
-        let limit_needed = remaining.iter().map(|&e| current.with(e).limit).find(|l| !dr_cache.contains_key(l));
-        // Each fold's fit starts from the current model's fit of the same fold.
-        let start = fr_cache.get(&current.friction);
-        let (fr_new, dr_new) =
-            rayon::join(|| cv.friction_many(&needed, start), || limit_needed.map(|l| (l, cv.drive(l))));
-        fr_cache.extend(needed.into_iter().zip(fr_new));
-        dr_cache.extend(dr_new);
-        let mut tried: Vec<(EffectId, Comparison, Vec<f64>)> = Vec::new();
-        for e in remaining {
-            let ms = misfits(&mut fr_cache, &mut dr_cache, current.with(e));
-            tried.push((e, compare(&cur_ms, &ms, runs, folds), ms));
-        }
-        let best = tried
-            .iter()
-            .enumerate()
-            .filter(|(_, t)| t.1.after.is_finite())
-            .max_by(|a, b| a.1.1.gain.total_cmp(&b.1.1.gain).then(b.0.cmp(&a.0)))
-            .map(|(i, _)| i);
-        // A significant best effect must be the effect its name says: its fit on
-        // every run has the sign that defines it (crate docs, "admissible").
-        let inadmissible =
-            best.filter(|&i| significant(&tried[i].1)).and_then(|i| inadmissible(&mut fit_all, current, tried[i].0));
-        for (i, (e, c, _)) in tried.iter().enumerate() {
-            let is_best = Some(i) == best;
-            steps.push(StepRow {
-                step,
-                effect: e.id().into(),
-                misfit_before: c.before,
-                misfit_after: c.after,
-                gain: c.gain,
-                gain_fold_sd: c.gain_fold_sd,
-                t: c.t,
-                accepted: is_best && significant(c) && inadmissible.is_none(),
-                inadmissible: if is_best { inadmissible.clone() } else { None },
-            });
-        }
-        if step == 1 {
-            first_step = tried.clone();
-        }
-        match best {
-            Some(i) if significant(&tried[i].1) && inadmissible.is_none() => {
-                let (e, c, ms) = tried.swap_remove(i);
-                current = current.with(e);
-                cur_ms = ms;
-                accepted.push((e, c));
-            }
-            _ => break,
-        }
+    for models in std::iter::once(&baselines).chain(sel.trials.iter().map(|t| &t.fitted)) {
+        let Some(m) = models.first() else { continue };
+        fr_cache
+            .entry(m.set.friction)
+            .or_insert_with(|| cv.assemble(models.iter().map(|m| (*m.friction).clone()).collect()));
+        dr_cache
+            .entry(m.set.limit)
+            .or_insert_with(|| cv.assemble_drive(&models.iter().map(|m| &*m.drive).collect::<Vec<_>>()));
     }
+    let (base_ms, cur_ms) = (sel.baseline_misfits, sel.final_misfits);
 
     // Final joint fit on every run for the reported parameters.
-    let full =
-        fit_all(current.friction).ok_or(DiagnoseError::Singular("the joint fit of the retained friction effects"))?;
+    let full = study
+        .fit_all(current.friction)
+        .ok_or(DiagnoseError::Singular("the joint fit of the retained friction effects"))?;
+    drop(study);
     let limit_fit = if current.limit { drive::fit_limit(&all, supply_v) } else { None };
     let pi_base = drive::fit_gains(&all, supply_v).ok_or(DiagnoseError::Singular("PI gains of the baseline drive"))?;
     let coulomb = composite::fit_composite(&d_all, FrictionSet::default(), &[], opts.max_order)

@@ -659,7 +659,7 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
     let cands: Vec<&dyn engine::Candidate<OnRuns, Fitted>> =
         extensions.iter().map(|e| e as &dyn engine::Candidate<OnRuns, Fitted>).collect();
     let on = OnRuns { runs: &runs, p };
-    let search = engine::Search { pair_step: true };
+    let search = engine::Search { pair_step: true, ..engine::Search::default() };
     let sel = engine::forward_select_from(&on, &cands, &baselines, &folds, &p.selection, &search)
         .map_err(|e| SliderError::Selection(e.0))?;
     let mut candidates = vec![record(&baselines, &sel.baseline_misfits, &sel, &folds, &runs, &cal, p)];

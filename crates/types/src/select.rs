@@ -28,6 +28,15 @@
 //! ([`Candidate::group`]: candidates of one group are alternatives, one per
 //! model) is fitted on top of it and judged once more by the same rule
 //! against the model the step started from; admitted, both are added.
+//! [`Search::units_ascending`] orders the held-out units ascending in every
+//! misfit vector instead of fold by fold (a campaign's runs in campaign order
+//! under interleaved folds).
+//!
+//! Who runs on it: the thesis rig's diagnosis (runs as units, k folds over
+//! runs, the vocabulary's effects as candidates: `rig_diagnose::select`), the
+//! LAVI study (held-out windows, one calibration window) and the slider study
+//! (stiffnesses). A crate writes no selection loop of its own (tidy test
+//! `forward_selection_has_one_engine`).
 //!
 //! # The step rule ([`compare`], the thesis rig's since issue 19)
 //!
@@ -275,6 +284,12 @@ pub struct Search {
     /// that moves another); the pair is one more trial in the trace, in a
     /// step of its own, never a way round the rule.
     pub pair_step: bool,
+    /// The held-out units in ascending order in every misfit vector
+    /// ([`Selection::units`]) rather than fold by fold: a campaign's runs in
+    /// campaign order, the order its per-run misfits are reported in, when
+    /// its folds interleave the runs (the thesis rig's stratified folds). The
+    /// comparisons sum over the units in that order.
+    pub units_ascending: bool,
 }
 
 /// The training sets of `folds`, distinct, in order of first appearance: the
@@ -342,6 +357,11 @@ where
             fold_of.push(f);
         }
         set_of_fold.push(train_sets.iter().position(|t| *t == fold.train).expect("every fold's set is listed"));
+    }
+    if search.units_ascending {
+        let mut order: Vec<(usize, usize)> = units.iter().copied().zip(fold_of.iter().copied()).collect();
+        order.sort_unstable();
+        (units, fold_of) = order.into_iter().unzip();
     }
     if baselines.len() != train_sets.len() {
         return Err(SelectError(format!(
@@ -597,7 +617,7 @@ mod tests {
         assert!(plain.chosen.is_empty() && plain.trials.len() == 3, "{:?}", plain.chosen_ids());
         // With the pair step: the step's best (ties: the first, `law`) with the best
         // of another group (`setup`, not its alternative `law2`), fitted on top of it.
-        let search = Search { pair_step: true };
+        let search = Search { pair_step: true, ..Search::default() };
         let bases = vec![base; train_sets(&folds).len()];
         let sel = forward_select_from(&s, &cands, &bases, &folds, &rule(), &search).unwrap();
         assert_eq!(sel.chosen_ids(), ["law+setup"]);
@@ -622,6 +642,35 @@ mod tests {
         assert_eq!(sel.chosen_ids(), ["law"]);
         // Step 2 tries `setup` only: `law2` left with its group.
         assert_eq!(sel.step(2).map(|t| t.id.as_str()).collect::<Vec<_>>(), ["setup"]);
+    }
+
+    #[test]
+    fn units_in_ascending_order_keep_their_folds_and_the_comparisons() {
+        // Interleaved folds (unit u in fold u mod 2), as a campaign's stratified folds.
+        let s = Levels(vec![1.0, 1.3, 0.8, 1.2, 0.9, 1.25]);
+        let folds = [
+            Fold { train: vec![1, 3, 5], held_out: vec![0, 2, 4] },
+            Fold { train: vec![0, 2, 4], held_out: vec![1, 3, 5] },
+        ];
+        let fit_level = Shift("fit_level", f64::NAN);
+        let cands: [&dyn Candidate<Levels, f64>; 1] = [&fit_level];
+        let by_fold = forward_select(&s, &cands, &0.0, &folds, &rule()).unwrap();
+        assert_eq!(by_fold.units, [0, 2, 4, 1, 3, 5]);
+        let search = Search { units_ascending: true, ..Search::default() };
+        let sel = forward_select_from(&s, &cands, &[0.0, 0.0], &folds, &rule(), &search).unwrap();
+        assert_eq!(sel.units, [0, 1, 2, 3, 4, 5]);
+        assert_eq!(sel.fold_of, [0, 1, 0, 1, 0, 1]);
+        // Each unit scored with its own fold's fit, wherever it sits.
+        let t = &sel.trials[0];
+        let level = |f: usize| folds[f].train.iter().map(|&u| s.0[u]).sum::<f64>() / 3.0;
+        for (i, &u) in sel.units.iter().enumerate() {
+            assert_eq!(t.misfits[i], (level(sel.fold_of[i]) - s.0[u]).abs() + 0.01);
+        }
+        // The same misfits, the same comparison up to the order of the sums.
+        let c = compare(&sel.baseline_misfits, &t.misfits, &sel.fold_of, 2);
+        assert_eq!(t.comparison, c);
+        let b = &by_fold.trials[0].comparison;
+        assert!((b.gain - c.gain).abs() < 1e-12 && (b.t - c.t).abs() < 1e-9 && sel.chosen_ids() == ["fit_level"]);
     }
 
     #[test]
