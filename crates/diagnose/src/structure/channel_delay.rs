@@ -25,18 +25,13 @@
 //! fit best. The two parameters are the delays of the rotor encoder and of
 //! the force channel, one of them 0; the fold-jackknife rule of the
 //! selection ([`super`]) then asks every fold to pick the same channel and
-//! a delay consistent across folds. The realigned balances are built
-//! when the first fit asks for them ([`StructureData::aligned_data`]) and
-//! kept; every point is scanned (a coarse-to-fine search was tried and
-//! missed a fold's minimum on `structural-channel_delay-1`: the training
-//! cost along the delay is not unimodal, docs/performance.md). When the tick-loss check flags the
+//! a delay consistent across folds. When the tick-loss check flags the
 //! records ([`crate::channels::tick_loss_check_of`]: the twist grows with
 //! the angle travelled, a lost tick is never given back) the rotor encoder's
 //! delays are not tried: its count falls behind, it is not late.
 
 use super::{Aligned, Fitted, ParamSpec, StructureCandidate, StructureData};
 use crate::channels::{BalanceData, Recorded, advanced};
-use rayon::prelude::*;
 use rig_types::RigParams;
 
 pub struct ChannelDelay;
@@ -79,33 +74,24 @@ const PARAMS: &[ParamSpec] = &[
     },
 ];
 
-/// The delay grid: each channel advanced by 1 … [`MAX_DELAY_S`] samples,
-/// no balance built yet ([`StructureData::aligned_data`] builds one on first use).
-pub(super) fn grid(rate_hz: f64) -> Vec<Aligned> {
+/// The balance of `c` with each channel advanced by 1 … [`MAX_DELAY_S`] samples.
+pub(super) fn grid(rec: &Recorded, rate_hz: f64) -> Vec<Aligned> {
     let n = (MAX_DELAY_S * rate_hz).round() as usize;
-    [DelayedChannel::RotorEncoder, DelayedChannel::Force]
-        .into_iter()
-        .flat_map(|channel| {
-            (1..=n).map(move |samples| Aligned {
-                channel,
-                samples,
-                delay_s: samples as f64 / rate_hz,
-                data: Default::default(),
-            })
-        })
-        .collect()
-}
-
-/// The balance of the records with `channel` advanced by `samples`.
-pub(super) fn realigned(rec: &Recorded, channel: DelayedChannel, samples: usize) -> BalanceData {
-    rec.balance_with(|_, r| match channel {
-        DelayedChannel::RotorEncoder => {
-            (advanced(&r.rotor_rad, samples).into(), r.motor_rad.as_slice().into(), r.force_n.as_slice().into())
+    let mut out = Vec::new();
+    for channel in [DelayedChannel::RotorEncoder, DelayedChannel::Force] {
+        for samples in 1..=n {
+            let data = rec.balance_with(|_, r| match channel {
+                DelayedChannel::RotorEncoder => {
+                    (advanced(&r.rotor_rad, samples).into(), r.motor_rad.as_slice().into(), r.force_n.as_slice().into())
+                }
+                DelayedChannel::Force => {
+                    (r.rotor_rad.as_slice().into(), r.motor_rad.as_slice().into(), advanced(&r.force_n, samples).into())
+                }
+            });
+            out.push(Aligned { channel, samples, delay_s: samples as f64 / rate_hz, data });
         }
-        DelayedChannel::Force => {
-            (r.rotor_rad.as_slice().into(), r.motor_rad.as_slice().into(), advanced(&r.force_n, samples).into())
-        }
-    })
+    }
+    out
 }
 
 /// Sum over the runs `include` accepts of each run's squared RMS residual of
@@ -134,16 +120,13 @@ impl StructureCandidate for ChannelDelay {
         // A rotor encoder that loses ticks falls behind for good; a delay of it
         // would be fitted to the lost ticks' growing twist (the tick-loss
         // check, `crate::channels::tick_loss_check_of`, names that fault).
-        let tried: Vec<usize> = (0..data.aligned.len())
-            .filter(|&i| !(data.tick_loss && data.aligned[i].channel == DelayedChannel::RotorEncoder))
-            .collect();
-        // Every realignment tried is built (in parallel, once per campaign:
-        // the later fits find them built), then scanned in grid order.
-        tried.par_iter().for_each(|&i| {
-            data.aligned_data(i);
-        });
-        for i in tried {
-            if let Some((cost, fit)) = training_cost(data.aligned_data(i), include)
+        let tried = data
+            .aligned
+            .iter()
+            .enumerate()
+            .filter(|(_, a)| !(data.tick_loss && a.channel == DelayedChannel::RotorEncoder));
+        for (i, a) in tried {
+            if let Some((cost, fit)) = training_cost(&a.data, include)
                 && cost < best_cost
             {
                 (best_cost, best_fit, best) = (cost, fit, Some(i));

@@ -144,25 +144,21 @@ pub struct Fitted {
 pub struct StructureData {
     pub balance: BalanceData,
     pub aligned: Vec<Aligned>,
-    /// The records the lazy grids build their points from.
-    rec: std::sync::Arc<crate::channels::Recorded>,
     /// The tick-loss check flags the records
     /// ([`crate::channels::tick_loss_check_of`]): the rotor encoder's count
     /// falls behind, which a delay of that encoder must not be fitted to.
     pub tick_loss: bool,
-    /// The balance through every sensor model of the grid
-    /// ([`sensor_dynamics`]), each point built when a fit first asks for it.
-    pub sensors: sensor_dynamics::SensorGrid,
+    /// The balance through every sensor model of the grid ([`sensor_dynamics`]).
+    pub sensors: Vec<sensor_dynamics::SensorPoint>,
 }
 
-/// The balance with `channel` advanced by `samples` (recorded that late),
-/// built on first use ([`channel_delay`]'s lazy grid).
+/// The balance with `channel` advanced by `samples` (recorded that late).
 #[derive(Debug, Clone)]
 pub struct Aligned {
     pub channel: DelayedChannel,
     pub samples: usize,
     pub delay_s: f64,
-    data: std::sync::OnceLock<BalanceData>,
+    pub data: BalanceData,
 }
 
 impl StructureData {
@@ -173,23 +169,16 @@ impl StructureData {
     pub fn of(c: &Campaign, rec: &crate::channels::Recorded, o: &crate::ChannelOptions, balance: BalanceData) -> Self {
         let tick_loss = crate::channels::tick_loss_check_of(&balance, o).flagged;
         let rate = c.rig.sample_rate_hz;
-        let rec = std::sync::Arc::new(rec.clone());
-        let (aligned, sensors) = (channel_delay::grid(rate), sensor_dynamics::SensorGrid::new(rec.clone(), rate));
-        StructureData { balance, aligned, rec, tick_loss, sensors }
+        let (aligned, sensors) = rayon::join(|| channel_delay::grid(rec, rate), || sensor_dynamics::grid(rec, rate));
+        StructureData { balance, aligned, tick_loss, sensors }
     }
 
     /// The balance data a fit was made on.
     pub fn of_fit(&self, f: &Fitted) -> &BalanceData {
-        if let Some(i) = f.sensor.filter(|&i| i < self.sensors.points.len()) {
-            return self.sensors.data(i);
+        if let Some(p) = f.sensor.and_then(|i| self.sensors.get(i)) {
+            return &p.data;
         }
-        f.aligned.filter(|&i| i < self.aligned.len()).map_or(&self.balance, |i| self.aligned_data(i))
-    }
-
-    /// The balance of realignment `i` of the delay grid, built on first use.
-    pub fn aligned_data(&self, i: usize) -> &BalanceData {
-        let a = &self.aligned[i];
-        a.data.get_or_init(|| channel_delay::realigned(&self.rec, a.channel, a.samples))
+        f.aligned.and_then(|i| self.aligned.get(i)).map_or(&self.balance, |a| &a.data)
     }
 }
 

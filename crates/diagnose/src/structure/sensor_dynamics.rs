@@ -41,21 +41,6 @@
 //! [`DAMPING_RATIOS`]) with the smallest sum over training runs of each run's
 //! squared RMS residual of the twist-rate balance, or none when the records
 //! as recorded fit best (as `channel_delay`'s grid).
-//!
-//! # Lazy grid (issue 23)
-//!
-//! A grid point's balance (both channels through the filter, every run's
-//! rows) is what costs: 120 of them were ≈ 0.5 s of a campaign's CPU. The
-//! grid is now evaluated where a fit looks ([`SensorGrid::data`] builds a
-//! point on first use and keeps it): each fit (every training set of every
-//! fold, and all runs) scans a coarse lattice ([`COARSE_F`] × [`COARSE_Z`],
-//! 8 points per sensor), then the full grid's 8 neighbours of its best
-//! point, moving to the best until the best has no unvisited neighbour. This
-//! is a local search, not a proof: a training cost with a narrow minimum
-//! off the lattice and away from every neighbourhood the search visits
-//! would be missed. Measured against the full scan (docs/performance.md):
-//! every diagnosis.json byte-identical on the cases compared, while a
-//! non-winning candidate's fold fit (its score row) differed on 3 of them.
 
 use super::{Fitted, ParamSpec, StructureCandidate, StructureData};
 use crate::channels::{BalanceData, Recorded};
@@ -90,27 +75,13 @@ pub enum Sensor {
     EncoderCoupling,
 }
 
-/// One point of the grid: the sensor's f_n and ζ and, once evaluated, the
-/// balance it gives ([`SensorGrid::data`]).
+/// One point of the grid: the sensor's f_n and ζ and the balance it gives.
 #[derive(Debug, Clone)]
 pub struct SensorPoint {
     pub sensor: Sensor,
     pub natural_frequency_hz: f64,
     pub damping_ratio: f64,
-    data: std::sync::OnceLock<BalanceData>,
-}
-
-/// The two sensors' grids of (f_n, ζ), each point's balance built the first
-/// time a fit asks for it (module docs, "Lazy grid"), from the records read
-/// once and their smoothings computed once.
-#[derive(Debug, Clone)]
-pub struct SensorGrid {
-    rec: std::sync::Arc<Recorded>,
-    rate_hz: f64,
-    /// Each run's rotor angle, motor angle and force smoothed over ±[`SMOOTH_HALF_S`].
-    smooth: Vec<[Vec<f64>; 3]>,
-    /// Sensor-major, then f_n, then ζ (the order of [`FREQUENCIES_HZ`] and [`DAMPING_RATIOS`]).
-    pub points: Vec<SensorPoint>,
+    pub data: BalanceData,
 }
 
 /// The bilinear-transform coefficients of F(s) = (b1 s + ω²)/(s² + 2ζωs +
@@ -159,41 +130,29 @@ fn corrected_pair(a: (&[f64], &[f64]), b: (&[f64], &[f64]), q: Biquad) -> (Vec<f
     (out_a, out_b)
 }
 
-impl SensorGrid {
-    /// Both sensors' grids, no point evaluated yet: each run's channels
-    /// smoothed once ([`SMOOTH_HALF_S`]).
-    pub(super) fn new(rec: std::sync::Arc<Recorded>, rate_hz: f64) -> Self {
-        let half = nominal_window_samples(SMOOTH_HALF_S, rate_hz);
-        let smooth = rec
-            .runs
-            .iter()
-            .map(|r| [&r.rotor_rad, &r.motor_rad, &r.force_n].map(|x| centred_moving_average(x, half)))
-            .collect();
-        let points = [Sensor::Force, Sensor::EncoderCoupling]
-            .into_iter()
-            .flat_map(|sensor| {
-                FREQUENCIES_HZ.iter().flat_map(move |&f_n| {
-                    DAMPING_RATIOS.iter().map(move |&zeta| SensorPoint {
-                        sensor,
-                        natural_frequency_hz: f_n,
-                        damping_ratio: zeta,
-                        data: std::sync::OnceLock::new(),
-                    })
-                })
-            })
-            .collect();
-        SensorGrid { rec, rate_hz, smooth, points }
-    }
-
-    /// The balance of the records through grid point `i`'s sensor, built on
-    /// first use: a point filters the smoothed channels its sensor touches.
-    pub fn data(&self, i: usize) -> &BalanceData {
-        let p = &self.points[i];
-        p.data.get_or_init(|| {
-            let (rate_hz, f_n, zeta) = (self.rate_hz, p.natural_frequency_hz, p.damping_ratio);
-            self.rec.balance_with(|k, r| {
-                let [s1, s2, sf] = &self.smooth[k];
-                match p.sensor {
+/// The balance of the records at every point of the grid, for both
+/// sensors. Each run's channels are smoothed once ([`SMOOTH_HALF_S`]); a
+/// grid point filters the smoothed channels its sensor touches.
+pub(super) fn grid(rec: &Recorded, rate_hz: f64) -> Vec<SensorPoint> {
+    let half = nominal_window_samples(SMOOTH_HALF_S, rate_hz);
+    let smooth: Vec<[Vec<f64>; 3]> = rec
+        .runs
+        .iter()
+        .map(|r| [&r.rotor_rad, &r.motor_rad, &r.force_n].map(|x| centred_moving_average(x, half)))
+        .collect();
+    // Every grid point's balance is independent: built in parallel, in grid order.
+    let points: Vec<(Sensor, f64, f64)> = [Sensor::Force, Sensor::EncoderCoupling]
+        .into_iter()
+        .flat_map(|sensor| {
+            FREQUENCIES_HZ.iter().flat_map(move |&f_n| DAMPING_RATIOS.iter().map(move |&zeta| (sensor, f_n, zeta)))
+        })
+        .collect();
+    points
+        .into_par_iter()
+        .map(|(sensor, f_n, zeta)| {
+            let data = rec.balance_with(|i, r| {
+                let [s1, s2, sf] = &smooth[i];
+                match sensor {
                     Sensor::Force => {
                         let q = Biquad::new(rate_hz, f_n, zeta, false);
                         let (phi1, phi2) = corrected_pair((&r.rotor_rad, s1), (&r.motor_rad, s2), q);
@@ -205,31 +164,11 @@ impl SensorGrid {
                         (r.rotor_rad.as_slice().into(), phi2.into(), f.into())
                     }
                 }
-            })
+            });
+            SensorPoint { sensor, natural_frequency_hz: f_n, damping_ratio: zeta, data }
         })
-    }
-
-    /// The index of `sensor`'s point (f_n index, ζ index).
-    fn index(sensor: Sensor, fi: usize, zi: usize) -> usize {
-        let per = FREQUENCIES_HZ.len() * DAMPING_RATIOS.len();
-        usize::from(sensor == Sensor::EncoderCoupling) * per + fi * DAMPING_RATIOS.len() + zi
-    }
-
-    /// Builds the points `idx` not built yet, in parallel (each point's
-    /// balance is independent; the memo makes the order irrelevant).
-    fn evaluate(&self, idx: &[usize]) {
-        idx.par_iter().for_each(|&i| {
-            self.data(i);
-        });
-    }
+        .collect()
 }
-
-/// The coarse lattice every search starts from (indices into
-/// [`FREQUENCIES_HZ`] and [`DAMPING_RATIOS`]): 2.5, 5, 8 and 15 Hz at ζ 0.1
-/// and 0.3, 8 points per sensor (the climb from the best of them reaches
-/// the grid's edges).
-const COARSE_F: [usize; 4] = [1, 4, 7, 10];
-const COARSE_Z: [usize; 2] = [1, 3];
 
 const FORCE_PARAMS: &[ParamSpec] = &[
     ParamSpec {
@@ -302,49 +241,20 @@ pub static ENCODER_COUPLING: SensorCandidate = SensorCandidate {
 };
 
 /// The grid point of `sensor` with the smallest training cost, if it beats
-/// the records as recorded: the coarse lattice, then the best point's
-/// neighbours on the full grid until the best has no unvisited neighbour
-/// (module docs, "Lazy grid"). Ties go to the lower grid index, as a scan
-/// of the whole grid in order gives them.
+/// the records as recorded.
 fn fit_sensor(sensor: Sensor, data: &StructureData, include: &dyn Fn(&str) -> bool) -> Option<Fitted> {
-    let grid = &data.sensors;
-    let (base_cost, base_fit) = super::channel_delay::training_cost(&data.balance, include)?;
-    let (nf, nz) = (FREQUENCIES_HZ.len(), DAMPING_RATIOS.len());
-    let mut visited = vec![false; nf * nz];
-    let mut costs: Vec<Option<(f64, usize, crate::channels::BalanceFit)>> = Vec::new();
-    let mut todo: Vec<(usize, usize)> = COARSE_F.iter().flat_map(|&f| COARSE_Z.iter().map(move |&z| (f, z))).collect();
-    let mut best: Option<(f64, usize, (usize, usize))> = None;
-    while !todo.is_empty() {
-        let idx: Vec<usize> = todo.iter().map(|&(f, z)| SensorGrid::index(sensor, f, z)).collect();
-        grid.evaluate(&idx);
-        for (&(f, z), &i) in todo.iter().zip(&idx) {
-            visited[f * nz + z] = true;
-            if let Some((cost, fit)) = super::channel_delay::training_cost(grid.data(i), include) {
-                if best.is_none_or(|(c, j, _)| cost < c || (cost == c && i < j)) {
-                    best = Some((cost, i, (f, z)));
-                }
-                costs.push(Some((cost, i, fit)));
-            }
+    let (mut best_cost, mut best_fit) = super::channel_delay::training_cost(&data.balance, include)?;
+    let mut best: Option<usize> = None;
+    for (i, p) in data.sensors.iter().enumerate().filter(|(_, p)| p.sensor == sensor) {
+        if let Some((cost, fit)) = super::channel_delay::training_cost(&p.data, include)
+            && cost < best_cost
+        {
+            (best_cost, best_fit, best) = (cost, fit, Some(i));
         }
-        let Some((_, _, (f, z))) = best else { break };
-        todo = (f.saturating_sub(1)..=(f + 1).min(nf - 1))
-            .flat_map(|g| (z.saturating_sub(1)..=(z + 1).min(nz - 1)).map(move |y| (g, y)))
-            .filter(|&(g, y)| !visited[g * nz + y])
-            .collect();
     }
-    match best.filter(|(c, _, _)| *c < base_cost) {
-        Some((_, i, _)) => {
-            let fit = costs.into_iter().flatten().find(|x| x.1 == i).map(|x| x.2).expect("the best point's fit");
-            let p = &grid.points[i];
-            Some(Fitted {
-                values: vec![p.natural_frequency_hz, p.damping_ratio],
-                balance: fit,
-                aligned: None,
-                sensor: Some(i),
-            })
-        }
-        None => Some(Fitted { values: vec![0.0, 0.0], balance: base_fit, aligned: None, sensor: None }),
-    }
+    let values =
+        best.map_or(vec![0.0, 0.0], |i| vec![data.sensors[i].natural_frequency_hz, data.sensors[i].damping_ratio]);
+    Some(Fitted { values, balance: best_fit, aligned: None, sensor: best })
 }
 
 impl StructureCandidate for SensorCandidate {
