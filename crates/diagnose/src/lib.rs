@@ -319,6 +319,9 @@ pub fn diagnose(
             o.breakaway_dwell_ratio,
         ));
     }
+    // A fading pad shows as a slow trend of the slip force within a run, which
+    // no vocabulary model has (extension::drift).
+    checks.push(extension::drift::slip_drift_check(&runs, opts.settle_s));
     let flagged_of = |v: &[ChannelCheck]| v.iter().filter(|k| k.flagged).map(ChannelCheck::as_pair).collect::<Vec<_>>();
     // The findings do not depend on the flagged checks (only the adequacy
     // test does): one forward selection, concluded once per set of flags.
