@@ -94,17 +94,11 @@ pub fn slip_drift_check(runs: &[RunSignals], settle_s: f64) -> ChannelCheck {
         runs.iter().filter_map(|r| run_drift(r, settle_s).map(|(d, z)| (r.id.as_str(), d, z))).collect();
     let ids: Vec<String> = rows.iter().map(|r| r.0.to_string()).collect();
     if rows.is_empty() {
-        return ChannelCheck {
-            channel: CHECK.into(),
-            run_kind: "operating_point".into(),
-            runs: ids,
-            statistic: 0.0,
-            noise_floor: 0.0,
-            ratio: 0.0,
-            threshold: f64::INFINITY,
-            flagged: false,
-            detail: format!("no run slips for {MIN_SLIP_SAMPLES} samples after the settle: no drift to read"),
-        };
+        return ChannelCheck::not_testable(
+            CHECK,
+            ids,
+            format!("no run slips for {MIN_SLIP_SAMPLES} samples after the settle: no drift to read"),
+        );
     }
     let ratio = (rows.iter().map(|r| r.2 * r.2).sum::<f64>() / rows.len() as f64).sqrt();
     let worst = rows.iter().max_by(|a, b| a.2.abs().total_cmp(&b.2.abs())).expect("rows");

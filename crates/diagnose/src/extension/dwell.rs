@@ -213,19 +213,13 @@ pub fn breakaway_dwell_check(runs: &[RunSignals], slip_rad_s: f64, half_window_s
 fn check_of(rows: &[DwellRow], threshold: f64, what: &str, per_run: String) -> ChannelCheck {
     let ids: Vec<String> = rows.iter().map(|r| r.0.clone()).collect();
     let Some((b, se, dof)) = slope(rows) else {
-        return ChannelCheck {
-            channel: CHECK.into(),
-            run_kind: "operating_point".into(),
-            runs: ids,
-            statistic: 0.0,
-            noise_floor: 0.0,
-            ratio: 0.0,
-            threshold: f64::INFINITY,
-            flagged: false,
-            detail: format!(
+        return ChannelCheck::not_testable(
+            CHECK,
+            ids,
+            format!(
                 "fewer than {MIN_RUNS} runs both break away from rest and stick and slip: the dwell cannot be compared"
             ),
-        };
+        );
     };
     let floor = se.hypot(MIN_SLOPE);
     // One-sided (module docs): only a level that grows with the dwell is ageing.
