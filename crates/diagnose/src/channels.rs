@@ -93,7 +93,7 @@ impl ChannelCheck {
     }
 
     /// A check the campaign's protocol cannot make (never flagged).
-    fn not_testable(channel: &str, runs: Vec<String>, why: String) -> Self {
+    pub(crate) fn not_testable(channel: &str, runs: Vec<String>, why: String) -> Self {
         let mut c = ChannelCheck::new(channel, runs, 0.0, 0.0, f64::INFINITY, why);
         c.flagged = false;
         c

@@ -314,12 +314,19 @@ pub fn diagnose(
     checks.push(force_check);
     // Contact ageing shows only at break-away (issue 25, item 5): the records'
     // break-away level against the dwell, within runs (extension::dwell).
-    checks.push(extension::dwell::breakaway_dwell_check(
-        &runs,
-        opts.slip_speed_rad_s,
-        opts.rotor_speed_half_window_s,
-        o.breakaway_dwell_ratio,
-    ));
+    // With a model, the record's against the final model's free run (below):
+    // a modulated normal force moves the first break-away too.
+    if baseline.is_none() {
+        checks.push(extension::dwell::breakaway_dwell_check(
+            &runs,
+            opts.slip_speed_rad_s,
+            opts.rotor_speed_half_window_s,
+            o.breakaway_dwell_ratio,
+        ));
+    }
+    // A fading pad shows as a slow trend of the slip force within a run, which
+    // no vocabulary model has (extension::drift).
+    checks.push(extension::drift::slip_drift_check(&runs, opts.settle_s));
     let flagged_of = |v: &[ChannelCheck]| v.iter().filter(|k| k.flagged).map(ChannelCheck::as_pair).collect::<Vec<_>>();
     // The findings do not depend on the flagged checks (only the adequacy
     // test does): one forward selection, concluded once per set of flags.
@@ -392,9 +399,19 @@ pub fn diagnose(
             // the final model makes the answer `unexplained` (`where`: free_run);
             // the selection is concluded again with it so the unexplained finding,
             // its signature and the adequacy record come from the one place that makes them.
+            // The dwell of the break-aways, record against the final model's free
+            // run, run by run (extension::dwell, "Against the model's free run").
+            let dwell_pairs: Vec<_> =
+                final_pairs.iter().filter_map(|q| Some((q.dwell.0.clone()?, q.dwell.1.clone()?))).collect();
+            let dwell = extension::dwell::breakaway_dwell_model_check(&dwell_pairs, o.breakaway_dwell_ratio);
             let mut flagged = flagged1.clone();
-            flagged
-                .extend(free_run_final.iter().filter(|k| k.flagged).map(|k| ("free_run".to_string(), k.as_pair().1)));
+            flagged.extend(
+                free_run_final
+                    .iter()
+                    .chain([&dwell])
+                    .filter(|k| k.flagged)
+                    .map(|k| ("free_run".to_string(), k.as_pair().1)),
+            );
             // Only a mismatch the motion alone shows (every other check and the
             // teacher-forced adequacy pass: `d` is concluded without the free-run
             // flags): where another check fails, an effect that clears the free
@@ -426,6 +443,7 @@ pub fn diagnose(
             }
             let at = checks.iter().take_while(|k| k.run_kind == "static_twist").count();
             checks.splice(at..at, steps.take().unwrap_or_default());
+            checks.push(dwell);
             for row in d.detail.runs.iter_mut() {
                 if let Some(q) = base_pairs.iter().find(|q| q.id == row.id) {
                     row.measured = q.measured;

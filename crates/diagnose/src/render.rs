@@ -1,6 +1,7 @@
 //! The diagnosis for people: diagnosis.md, the tables and the evidence
 //! figures (as rig_types data; the pipeline stage writes them).
 
+use crate::ChannelCheck;
 use crate::result::{Diagnosis, Features, round_sig};
 use rig_types::{AxisScale, FigureSpec, MarkerShape, Panel, Series, SeriesStyle, Sheet, Table, band, fmt_fixed};
 use std::fmt::Write as _;
@@ -81,10 +82,17 @@ pub fn checks_table(d: &Diagnosis) -> Table {
         "in_adequacy",
     ]);
     let det = &d.detail;
+    // With a free run, the break-away dwell is the record's against the final
+    // model's (lib.rs, extension::dwell); the other run kinds judge the baseline.
+    let model_of =
+        |k: &ChannelCheck| match k.channel == crate::extension::dwell::CHECK && !det.free_run_extended.is_empty() {
+            true => "extended",
+            false => "baseline",
+        };
     let rows = det
         .channel_checks
         .iter()
-        .map(|k| ("baseline", k, true))
+        .map(|k| (model_of(k), k, true))
         .chain(det.free_run_baseline.iter().map(|k| ("baseline", k, false)))
         .chain(det.free_run_extended.iter().map(|k| ("extended", k, false)));
     for (model, k, adequacy) in rows {

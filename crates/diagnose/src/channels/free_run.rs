@@ -96,6 +96,7 @@
 
 use super::{ChannelCheck, ChannelOptions, rms};
 use crate::DiagnoseOptions;
+use crate::extension::dwell::{DwellRow, dwell_row};
 use crate::prepare::{SensorLaw, centred_speed, diff_noise};
 use crate::result::{ChannelFeatures, Features};
 use crate::select::steady_features;
@@ -208,6 +209,12 @@ pub struct Pair {
     /// ([`attractor_stick_slip`]). The regime check counts a run whose
     /// regimes differ in both readings.
     pub window_stick_slip: (bool, Option<bool>),
+    /// The first break-away from rest against the steady sticks over the
+    /// whole run, record and simulation read by one rule
+    /// ([`crate::extension::dwell::dwell_row`]; `None` where a side has no
+    /// first break-away and two steady sticks): the dwell check against the
+    /// model's free run.
+    pub dwell: (Option<DwellRow>, Option<DwellRow>),
 }
 
 /// Ω1 over a run's steady window at about [`TRACE_RATE_HZ`] (every k-th
@@ -540,6 +547,17 @@ fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) 
         sigma_f: m_force.as_ref().map_or(f64::NAN, |f| diff_noise(&f[from..])),
     };
     let mut floors = channel_floors(&m_win, s.slip_speed_rad_s, &noise, h1, (cycle_s / dt).round() as usize);
+    // The dwell rows read the whole run, from rest (record and simulation alike).
+    let dwell_of = |w1: &[f64], force_n: &[f64]| {
+        let slip: Vec<f64> =
+            w1.iter().zip(force_n).filter(|(w, _)| w.abs() >= s.slip_speed_rad_s).map(|x| *x.1).collect();
+        let smooth = centred_moving_average(force_n, h1);
+        dwell_row(&run.id, t, w1, &smooth, mean(&slip), s.slip_speed_rad_s)
+    };
+    let m_dwell = match (s.force, run.data.brake_force_mv.as_ref()) {
+        (Some(law), Some(mv)) if normal_force_n > 0.0 => dwell_of(&centred_speed(t, &phi1_all, h1), &law.force_n(mv)),
+        _ => None,
+    };
     let slip = &mut floors.values[6];
     *slip = slip.hypot(normal_force_n * s.mu_kinetic_stderr);
     let input = RunInput::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s };
@@ -556,6 +574,10 @@ fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) 
             .as_ref()
             .map(|_| breakaway_peaks(tt, &enc[..to], &force, from, normal_force_n, &s.stick_episodes))
             .unwrap_or_default();
+        let dwell = m_dwell.as_ref().and_then(|_| {
+            let all: Vec<f64> = tr.friction_torque_nm.iter().map(|x| x / p.brake_disc_radius_m).collect();
+            dwell_of(&centred_speed(t, &enc, h1), &all)
+        });
         let win = Window {
             w1: &w1[from..],
             w2: &w2[from..],
@@ -568,10 +590,11 @@ fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) 
             stick_slip: attractor_stick_slip(t, &tr.rotor_angle_rad, regime_from, h1, &s.classify),
             ..window
         };
-        (f, trace_of(&w1), ChannelFeatures { values: channel_values(&win, s.slip_speed_rad_s, 0.0) }, window.stick_slip)
+        let ch = ChannelFeatures { values: channel_values(&win, s.slip_speed_rad_s, 0.0) };
+        (f, trace_of(&w1), ch, window.stick_slip, dwell)
     });
-    let (simulated, simulated_rad_s, channels_simulated, sim_window_ss) =
-        sim.map_or((None, None, None, None), |(f, w, ch, ss)| (Some(f), Some(w), Some(ch), Some(ss)));
+    let (simulated, simulated_rad_s, channels_simulated, sim_window_ss, sim_dwell) =
+        sim.map_or((None, None, None, None, None), |(f, w, ch, ss, d)| (Some(f), Some(w), Some(ch), Some(ss), d));
     let trace = Trace {
         time_s: tt[from..].iter().step_by(stride).copied().collect(),
         measured_rad_s: trace_of(&m1),
@@ -589,6 +612,7 @@ fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) 
         channels_simulated,
         floors,
         window_stick_slip: (window_measured.stick_slip, sim_window_ss),
+        dwell: (m_dwell, sim_dwell),
     })
 }
 

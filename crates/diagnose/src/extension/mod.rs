@@ -74,6 +74,7 @@
 //! training runs (the CI ageing case: 2.4 → 14 s on a loaded 2-core
 //! machine). Only an `unexplained` verdict with a baseline model pays it.
 
+pub mod drift;
 pub mod dwell;
 
 use crate::channels::{
