@@ -357,8 +357,17 @@ pub fn diagnose(
     flagged1.extend(flagged_of(&steps));
     let (sel, base_pairs) = rayon::join(
         || select::select_effects(&c.name, &runs, c.rig.supply_voltage_v, opts),
-        || baseline.map(|p| channels::free_run_pairs(c, p, &s)),
+        || {
+            // The records' side of every free run, read once and shared by the
+            // baseline's, the extended and the final model's runs.
+            baseline.map(|p| {
+                let m = channels::MeasuredRuns::of(c, &s);
+                let pairs = channels::free_run_pairs_measured(c, &s, &m, |_| Some(p.clone()));
+                (m, pairs)
+            })
+        },
     );
+    let (measured, base_pairs) = base_pairs.unzip();
     let mut found = sel?;
     // The structural candidates' balances depend on the records alone: built
     // once, though the second look may conclude twice.
@@ -385,14 +394,18 @@ pub fn diagnose(
             let phased = |m: &rig_types::RigParams, id: &str| {
                 channels::with_run_phases(m, phases.get(id).copied().unwrap_or_default())
             };
-            let ext_pairs = channels::free_run_pairs_by(c, &s, |id| Some(phased(&ext, id)));
+            let measured = measured.as_ref().expect("measured with the baseline's pairs");
+            let ext_pairs = channels::free_run_pairs_measured(c, &s, measured, |id| Some(phased(&ext, id)));
             let sdata = sdata.get_or_init(|| {
                 structure::StructureData::of(c, recorded.as_ref().expect("with the balance"), o, data.clone())
             });
             let sel = structure::select_structure(c, sdata, &ext, &ext_pairs, &d.detail.runs, &s, opts);
             let moved = sel.damping != structure::REGISTRY[0].id();
-            let final_pairs =
-                if moved { channels::free_run_pairs_by(c, &s, |id| Some(phased(&sel.model, id))) } else { ext_pairs };
+            let final_pairs = if moved {
+                channels::free_run_pairs_measured(c, &s, measured, |id| Some(phased(&sel.model, id)))
+            } else {
+                ext_pairs
+            };
             let free_run_baseline = channels::free_run_checks_of(c, base_pairs, &s, o);
             let free_run_final = channels::free_run_checks_of(c, &final_pairs, &s, o);
             // Free run is part of adequacy (issue 25): a flagged free-run check of

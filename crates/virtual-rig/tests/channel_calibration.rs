@@ -287,3 +287,46 @@ fn shipped_campaign_with_baseline_and_extended_model() {
         .collect();
     assert!(left.is_empty(), "flagged with the extended model: {left:?}");
 }
+
+/// The records' side measured once ([`rig_diagnose::channels::MeasuredRuns`],
+/// shared by the diagnosis' baseline, extended and final free runs) gives
+/// the pairs and checks of measuring it per call, to the bit: every feature,
+/// floor, trace and check of two models (the drive-limit campaign, the force
+/// channel read through the calibration line).
+#[test]
+fn free_runs_on_records_measured_once_are_the_same_to_the_bit() {
+    use rig_diagnose::channels::{
+        FreeRunPair, FreeRunSettings, MeasuredRuns, free_run_checks_of, free_run_pairs_by, free_run_pairs_measured,
+    };
+    let th = thesis();
+    let dopts = opts();
+    let o = dopts.channels.clone();
+    let truth = draw_truth(ids::DRIVE_VOLTAGE_LIMIT, 130.0, 16);
+    let c = generate("dvl", &truth, &Protocol::small(), 16).expect("generate");
+    let (cal, base) = calibrate(&c, &th);
+    let law = rig_diagnose::prepare::SensorLaw::Line(rig_types::sensor::ForceCal {
+        factor_mv_per_n: cal.force_factor_mv_per_n,
+        offset_mv: cal.force_offset_mv,
+    });
+    let s = FreeRunSettings::of(&dopts, &o).with_force(law).with_mu_kinetic_stderr(1e-3);
+    let m = MeasuredRuns::of(&c, &s);
+    let mut slower = base.clone();
+    slower.drive.limit_v *= 0.8;
+    // Debug text prints every f64 to its shortest round trip: equal text, equal bits.
+    let bits = |v: &[FreeRunPair]| format!("{v:?}");
+    for p in [&base, &slower] {
+        let by = free_run_pairs_by(&c, &s, |_| Some(p.clone()));
+        let once = free_run_pairs_measured(&c, &s, &m, |_| Some(p.clone()));
+        assert!(!by.is_empty() && by.iter().all(|q| q.simulated.is_some()), "every operating point simulated");
+        assert!(by.iter().any(|q| q.channels_measured.values[6].is_finite()), "the force features are read");
+        assert_eq!(bits(&by), bits(&once));
+        let (kb, ko) = (free_run_checks_of(&c, &by, &s, &o), free_run_checks_of(&c, &once, &s, &o));
+        assert_eq!(format!("{kb:?}"), format!("{ko:?}"));
+    }
+    // Every other run held out: the runs without a model are skipped alike.
+    let held = |id: &str| id.ends_with(['0', '2', '4', '6', '8']);
+    let by = free_run_pairs_by(&c, &s, |id| held(id).then(|| base.clone()));
+    let once = free_run_pairs_measured(&c, &s, &m, |id| held(id).then(|| base.clone()));
+    assert!(!by.is_empty() && by.len() < c.runs_of("operating_point").count(), "some runs skipped, some kept");
+    assert_eq!(bits(&by), bits(&once));
+}

@@ -482,11 +482,87 @@ fn channel_floors(w: &Window, slip_rad_s: f64, noise: &Noise, h1: usize, cycle: 
     ChannelFeatures { values: v }
 }
 
+/// What [`pair`] reads from one run's record alone, the same for every model
+/// simulated against it: built once per run ([`MeasuredRuns`]) and shared by
+/// the baseline's, the extended and the final model's free runs.
+#[derive(Debug, Clone)]
+pub struct MeasuredRun {
+    id: String,
+    normal_force_n: f64,
+    input: RunInput,
+    from: usize,
+    to: usize,
+    h1: usize,
+    h2: usize,
+    dt: f64,
+    stride: usize,
+    regime_from: usize,
+    measured: Features,
+    window_measured: Features,
+    /// Whether the friction-level features are read (force law, force channel, N0 > 0).
+    has_force: bool,
+    has_voltage: bool,
+    channels_measured: ChannelFeatures,
+    floors: ChannelFeatures,
+    measured_trace: Vec<f64>,
+    /// The record's dwell row ([`dwell_of`]; `None` without a force channel).
+    dwell: Option<DwellRow>,
+}
+
+/// Every operating point's [`MeasuredRun`] of one campaign under one set of
+/// [`FreeRunSettings`], campaign order kept (`None`: a run [`pair`] skips).
+#[derive(Debug, Clone)]
+pub struct MeasuredRuns {
+    runs: Vec<Option<MeasuredRun>>,
+    settings: FreeRunSettings,
+}
+
+impl MeasuredRuns {
+    /// The record's side of every operating point of `c` (in parallel).
+    pub fn of(c: &Campaign, s: &FreeRunSettings) -> Self {
+        use rayon::prelude::*;
+        let runs: Vec<&rig_types::Run> = c.runs_of("operating_point").collect();
+        MeasuredRuns { runs: runs.par_iter().map(|r| measure(c, r, s)).collect(), settings: s.clone() }
+    }
+}
+
+/// [`free_run_pairs_by`] against records already measured with the same
+/// settings (`m` from [`MeasuredRuns::of`] with `s`): only the simulations
+/// run; the pairs are the same to the bit.
+pub fn free_run_pairs_measured(
+    c: &Campaign,
+    s: &FreeRunSettings,
+    m: &MeasuredRuns,
+    params_of: impl Fn(&str) -> Option<RigParams> + Sync,
+) -> Vec<Pair> {
+    use rayon::prelude::*;
+    assert!(m.settings == *s, "free_run_pairs_measured: records measured under other settings");
+    let runs: Vec<&rig_types::Run> = c.runs_of("operating_point").collect();
+    assert_eq!(runs.len(), m.runs.len(), "free_run_pairs_measured: records of another campaign");
+    runs.par_iter()
+        .zip(&m.runs)
+        .map(|(r, mr)| {
+            let mr = mr.as_ref()?;
+            debug_assert_eq!(mr.id, r.id);
+            params_of(&r.id).map(|p| simulate_pair(c, r, mr, &p, s))
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .flatten()
+        .collect()
+}
+
 /// Features of one run: measured from the encoders, the voltage and force
 /// channels, and simulated with `p`, all through the same operators (the
 /// diagnosis' centred differences, so the smoothing of the extrema is the
 /// same on both sides; the force smoothed over the rotor-speed window).
 fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) -> Option<Pair> {
+    let m = measure(c, run, s)?;
+    Some(simulate_pair(c, run, &m, p, s))
+}
+
+/// The record's side of [`pair`]: features, floors and trace of one run.
+fn measure(c: &Campaign, run: &rig_types::Run, s: &FreeRunSettings) -> Option<MeasuredRun> {
     let RunKind::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s } = run.kind else { return None };
     let t = &run.data.time_s;
     let from = t.partition_point(|&x| x < ramp_s + s.settle_s);
@@ -504,16 +580,12 @@ fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) 
     let stride = ((1.0 / (TRACE_RATE_HZ * dt)).round() as usize).max(1);
     let (h1, h2) =
         (half_window_samples(tt, s.rotor_speed_half_window_s), half_window_samples(tt, s.motor_speed_half_window_s));
-    let speeds = |a1: &[f64], a2: &[f64]| (centred_speed(tt, a1, h1), centred_speed(tt, a2, h2));
-    let feat = |w1: &[f64], w2: &[f64]| {
-        steady_features(&tt[from..], &w1[from..], &w2[from..], w_set, s.slip_speed_rad_s, &s.classify)
-    };
-    let trace_of = |w1: &[f64]| w1[from..].iter().step_by(stride).copied().collect::<Vec<f64>>();
-    let (m1, m2) = speeds(phi1, &phi2);
+    let (m1, m2) = (centred_speed(tt, phi1, h1), centred_speed(tt, &phi2, h2));
     // The regime is the attractor's, read over the record's last `steady_s`
     // ([`attractor_stick_slip`]); every other feature over the window.
     let regime_from = t.partition_point(|&x| x < t[t.len() - 1] - s.steady_s).max(from);
-    let window_measured = feat(&m1, &m2);
+    let window_measured =
+        steady_features(&tt[from..], &m1[from..], &m2[from..], w_set, s.slip_speed_rad_s, &s.classify);
     let measured =
         Features { stick_slip: attractor_stick_slip(t, &phi1_all, regime_from, h1, &s.classify), ..window_measured };
     let m_voltage = run.data.motor_voltage_v.as_ref().map(|v| v[from..to].to_vec());
@@ -548,72 +620,113 @@ fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) 
     };
     let mut floors = channel_floors(&m_win, s.slip_speed_rad_s, &noise, h1, (cycle_s / dt).round() as usize);
     // The dwell rows read the whole run, from rest (record and simulation alike).
-    let dwell_of = |w1: &[f64], force_n: &[f64]| {
-        let slip: Vec<f64> =
-            w1.iter().zip(force_n).filter(|(w, _)| w.abs() >= s.slip_speed_rad_s).map(|x| *x.1).collect();
-        let smooth = centred_moving_average(force_n, h1);
-        dwell_row(&run.id, t, w1, &smooth, mean(&slip), s.slip_speed_rad_s)
-    };
-    let m_dwell = match (s.force, run.data.brake_force_mv.as_ref()) {
-        (Some(law), Some(mv)) if normal_force_n > 0.0 => dwell_of(&centred_speed(t, &phi1_all, h1), &law.force_n(mv)),
+    let dwell = match (s.force, run.data.brake_force_mv.as_ref()) {
+        (Some(law), Some(mv)) if normal_force_n > 0.0 => {
+            dwell_of(&run.id, t, &centred_speed(t, &phi1_all, h1), &law.force_n(mv), h1, s.slip_speed_rad_s)
+        }
         _ => None,
     };
     let slip = &mut floors.values[6];
     *slip = slip.hypot(normal_force_n * s.mu_kinetic_stderr);
-    let input = RunInput::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s };
+    Some(MeasuredRun {
+        id: run.id.clone(),
+        normal_force_n,
+        input: RunInput::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s },
+        from,
+        to,
+        h1,
+        h2,
+        dt,
+        stride,
+        regime_from,
+        measured,
+        window_measured,
+        has_force: m_force.is_some(),
+        has_voltage: m_voltage.is_some(),
+        channels_measured,
+        floors,
+        measured_trace: m1[from..].iter().step_by(stride).copied().collect(),
+        dwell,
+    })
+}
+
+/// A run's dwell row ([`dwell_row`]) from its rotor speed and friction force
+/// over the whole run, from rest: one rule for the record and a simulation.
+fn dwell_of(id: &str, t: &[f64], w1: &[f64], force_n: &[f64], h1: usize, slip_speed_rad_s: f64) -> Option<DwellRow> {
+    let slip: Vec<f64> = w1.iter().zip(force_n).filter(|(w, _)| w.abs() >= slip_speed_rad_s).map(|x| *x.1).collect();
+    let smooth = centred_moving_average(force_n, h1);
+    dwell_row(id, t, w1, &smooth, mean(&slip), slip_speed_rad_s)
+}
+
+/// The model's side of [`pair`]: run `p` on the record `m` was measured from.
+fn simulate_pair(c: &Campaign, run: &rig_types::Run, m: &MeasuredRun, p: &RigParams, s: &FreeRunSettings) -> Pair {
+    let t = &run.data.time_s;
+    let MeasuredRun { from, to, h1, h2, dt, stride, regime_from, normal_force_n, .. } = *m;
+    let tt = &t[..to];
+    let w_set = match m.input {
+        RunInput::OperatingPoint { motor_rpm_setpoint, .. } => rig_types::units::rpm_to_rad_s(motor_rpm_setpoint),
+        _ => unreachable!("a MeasuredRun is an operating point's"),
+    };
+    let rad = tick_rad(c.rig.encoder_ticks_per_rev);
     // The whole record is simulated (the regime is read at its end); the
     // window's features from its first `to` samples.
-    let sim = rig_model::simulate(p, &input, t, &s.integrator).ok().map(|tr| {
-        let (w1, w2) = speeds(&tr.rotor_angle_rad[..to], &tr.motor_angle_rad[..to]);
+    let sim = rig_model::simulate(p, &m.input, t, &s.integrator).ok().map(|tr| {
+        let (w1, w2) =
+            (centred_speed(tt, &tr.rotor_angle_rad[..to], h1), centred_speed(tt, &tr.motor_angle_rad[..to], h2));
         let force: Vec<f64> = tr.friction_torque_nm[..to].iter().map(|x| x / p.brake_disc_radius_m).collect();
-        let force_smooth = m_force.as_ref().map(|_| centred_moving_average(&force, h1)[from..].to_vec());
-        // The simulated angle through the encoder, as the record's.
-        let ticks = rig_types::sensor::encoder_ticks(&tr.rotor_angle_rad, c.rig.encoder_ticks_per_rev);
-        let enc = ticks_to_rad(&ticks, c.rig.encoder_ticks_per_rev);
-        let peaks = m_force
-            .as_ref()
-            .map(|_| breakaway_peaks(tt, &enc[..to], &force, from, normal_force_n, &s.stick_episodes))
-            .unwrap_or_default();
-        let dwell = m_dwell.as_ref().and_then(|_| {
+        let force_smooth = m.has_force.then(|| centred_moving_average(&force, h1)[from..].to_vec());
+        // The simulated angle through the encoder, as the record's: the
+        // window's first `to` samples for the peaks, the whole run for the
+        // dwell row (only where the record has one).
+        let peaks = if m.has_force {
+            let ticks = rig_types::sensor::encoder_ticks(&tr.rotor_angle_rad[..to], c.rig.encoder_ticks_per_rev);
+            let enc = ticks_to_rad(&ticks, c.rig.encoder_ticks_per_rev);
+            breakaway_peaks(tt, &enc, &force, from, normal_force_n, &s.stick_episodes)
+        } else {
+            Vec::new()
+        };
+        let dwell = m.dwell.as_ref().and_then(|_| {
+            let ticks = rig_types::sensor::encoder_ticks(&tr.rotor_angle_rad, c.rig.encoder_ticks_per_rev);
+            let enc = ticks_to_rad(&ticks, c.rig.encoder_ticks_per_rev);
             let all: Vec<f64> = tr.friction_torque_nm.iter().map(|x| x / p.brake_disc_radius_m).collect();
-            dwell_of(&centred_speed(t, &enc, h1), &all)
+            dwell_of(&m.id, t, &centred_speed(t, &enc, h1), &all, h1, s.slip_speed_rad_s)
         });
         let win = Window {
             w1: &w1[from..],
             w2: &w2[from..],
-            voltage_v: m_voltage.as_ref().map(|_| &tr.voltage_v[from..to]),
+            voltage_v: m.has_voltage.then(|| &tr.voltage_v[from..to]),
             force_n: force_smooth.as_deref(),
             peaks: &peaks,
         };
-        let window = feat(&w1, &w2);
+        let window = steady_features(&tt[from..], &w1[from..], &w2[from..], w_set, s.slip_speed_rad_s, &s.classify);
         let f = Features {
             stick_slip: attractor_stick_slip(t, &tr.rotor_angle_rad, regime_from, h1, &s.classify),
             ..window
         };
-        let ch = ChannelFeatures { values: channel_values(&win, s.slip_speed_rad_s, 0.0) };
-        (f, trace_of(&w1), ch, window.stick_slip, dwell)
+        let trace = w1[from..].iter().step_by(stride).copied().collect::<Vec<f64>>();
+        (f, trace, ChannelFeatures { values: channel_values(&win, s.slip_speed_rad_s, 0.0) }, window.stick_slip, dwell)
     });
     let (simulated, simulated_rad_s, channels_simulated, sim_window_ss, sim_dwell) =
         sim.map_or((None, None, None, None, None), |(f, w, ch, ss, d)| (Some(f), Some(w), Some(ch), Some(ss), d));
     let trace = Trace {
         time_s: tt[from..].iter().step_by(stride).copied().collect(),
-        measured_rad_s: trace_of(&m1),
+        measured_rad_s: m.measured_trace.clone(),
         simulated_rad_s,
     };
     let motor_tick_rad_s = rad / (2.0 * h2 as f64 * dt);
-    Some(Pair {
-        id: run.id.clone(),
-        measured,
+    Pair {
+        id: m.id.clone(),
+        measured: m.measured,
         simulated,
         window_s: tt[to - 1] - tt[from],
         trace,
         motor_tick_rad_s,
-        channels_measured,
+        channels_measured: m.channels_measured,
         channels_simulated,
-        floors,
-        window_stick_slip: (window_measured.stick_slip, sim_window_ss),
-        dwell: (m_dwell, sim_dwell),
-    })
+        floors: m.floors,
+        window_stick_slip: (m.window_measured.stick_slip, sim_window_ss),
+        dwell: (m.dwell.clone(), sim_dwell),
+    }
 }
 
 /// Stick-slip of the attractor a run settles to: the regime classifier
