@@ -6,7 +6,6 @@ use crate::{Protocol, Truth, VirtualRigError, draw_rig, times};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use rig_model::SimOptions;
 use rig_types::{FrictionLaw, RunInput};
 
 /// Stick phases of one operating point over the second half of its run
@@ -34,7 +33,7 @@ impl StickSlip {
 /// sensor chain, no per-run phases) and reports its stick phases.
 pub fn stick_slip_runs(truth: &Truth, protocol: &Protocol) -> Result<Vec<StickSlip>, VirtualRigError> {
     let t = times(protocol.op_duration_s, protocol.sample_rate_hz);
-    let opts = SimOptions::default();
+    let opts = crate::TRUTH_SIM_OPTIONS; // the truth model's one integrator setting
     protocol
         .op_points
         .par_iter()
