@@ -194,6 +194,9 @@ pub struct ChannelOptions {
     /// ([`tick_loss_check_of`]: mean over runs over its standard error ⊕
     /// a minimum).
     pub tick_loss_ratio: f64,
+    /// Does the slip force trend within a run? RMS over runs of each run's
+    /// relative drift over its floor ([`crate::extension::drift`]).
+    pub slip_drift_ratio: f64,
     /// Window of the step residual, s (the estimate's 50 ms).
     pub window_s: f64,
     /// Window of the torque balance, s (long enough that the

@@ -326,7 +326,7 @@ pub fn diagnose(
     }
     // A fading pad shows as a slow trend of the slip force within a run, which
     // no vocabulary model has (extension::drift).
-    checks.push(extension::drift::slip_drift_check(&runs, opts.settle_s));
+    checks.push(extension::drift::slip_drift_check(&runs, opts.settle_s, o.slip_drift_ratio));
     let flagged_of = |v: &[ChannelCheck]| v.iter().filter(|k| k.flagged).map(ChannelCheck::as_pair).collect::<Vec<_>>();
     // The findings do not depend on the flagged checks (only the adequacy
     // test does): one forward selection, concluded once per set of flags.

@@ -20,7 +20,8 @@
 //! friction or a stick-slip cycle scatters the blocks, not the line, so it
 //! raises the floor instead of the drift): z_r = drift / (its standard error
 //! ⊕ [`MIN_DRIFT`]). The check's ratio is
-//! the RMS of z_r over the runs, flagged above [`THRESHOLD`].
+//! the RMS of z_r over the runs, flagged above `slip_drift_ratio`
+//! (pipeline.toml's `[stage.params.channels]`, as every check's threshold).
 //!
 //! # Calibration (seed 7000's full battery, docs/findings.md)
 //!
@@ -29,7 +30,7 @@
 //! one vocabulary effect (or two with a drive limit) 0.44–1.28 (14), brake
 //! fade 14.1–51.3 (4), without [`MIN_DRIFT`]; in the diagnosis one right
 //! modulation read 4.59 without it, hence the floor (which can only lower
-//! a ratio). [`THRESHOLD`] = 4 is about 3× the largest null.
+//! a ratio). The threshold, 4, is about 3× the largest null.
 
 use crate::channels::ChannelCheck;
 use crate::prepare::RunSignals;
@@ -48,9 +49,6 @@ pub const MIN_SLIP_SAMPLES: usize = 500;
 /// by at most 0.12 % with block means so steady that z reached 6 (RMS 4.59,
 /// flagged); brake fades drift by 5–26 % at high friction power.
 pub const MIN_DRIFT: f64 = 0.005;
-
-/// The flag: RMS of z over runs (module docs: nulls ≤ 1.23).
-pub const THRESHOLD: f64 = 4.0;
 
 /// One run's relative drift over the run and its z (module docs), `None`
 /// below [`MIN_SLIP_SAMPLES`] or four blocks.
@@ -88,8 +86,8 @@ pub fn run_drift(r: &RunSignals, settle_s: f64) -> Option<(f64, f64)> {
     (se > 0.0).then(|| (drift, drift / se_rel.hypot(MIN_DRIFT)))
 }
 
-/// The check (module docs).
-pub fn slip_drift_check(runs: &[RunSignals], settle_s: f64) -> ChannelCheck {
+/// The check (module docs), flagged above `threshold` (`slip_drift_ratio`).
+pub fn slip_drift_check(runs: &[RunSignals], settle_s: f64, threshold: f64) -> ChannelCheck {
     let rows: Vec<(&str, f64, f64)> =
         runs.iter().filter_map(|r| run_drift(r, settle_s).map(|(d, z)| (r.id.as_str(), d, z))).collect();
     let ids: Vec<String> = rows.iter().map(|r| r.0.to_string()).collect();
@@ -110,8 +108,8 @@ pub fn slip_drift_check(runs: &[RunSignals], settle_s: f64) -> ChannelCheck {
         statistic: ratio,
         noise_floor: 1.0,
         ratio,
-        threshold: THRESHOLD,
-        flagged: ratio > THRESHOLD,
+        threshold,
+        flagged: ratio > threshold,
         detail: format!(
             "the slip force drifts within the runs by {:+.2} % on average over {} runs (a line through each run's \
              slip samples after the settle, its slope over the {BLOCK_S} s block means' scatter: RMS z {ratio:.2}); \
