@@ -8,7 +8,6 @@ use rig_calibrate::CampaignCalibration;
 use rig_types::sensor::{ForceCal, force_n, nominal_window_samples, tick_rad, ticks_to_rad};
 use rig_types::{Campaign, RigParams, RunKind};
 use std::borrow::Cow;
-use std::sync::Arc;
 
 /// Regressors of one window boundary: [⟨Ω̇1⟩, ⟨φ2−φ1⟩, ⟨Ω2−Ω1⟩, ⟨Ω1⟩, 1] and r⟨F⟩.
 type Row = ([f64; 5], f64);
@@ -101,12 +100,9 @@ fn transitions(time_s: &[f64], ticks: &[i64], per_rev: u32, slip_rad_s: f64, fro
         .collect()
 }
 
-/// One operating point's balance rows and what its noise floor needs
-/// (opaque outside this module: built by [`Recorded::run_rows`], gathered
-/// into a [`BalanceData`] by [`Recorded::gather`]; the structural grids'
-/// screen, [`crate::structure`], builds them one run at a time).
+/// One operating point's balance rows and what its noise floor needs.
 #[derive(Debug, Clone)]
-pub struct RunRows {
+struct RunRows {
     id: String,
     rows: Vec<Row>,
     /// The recorded rotor angle at each row's boundary, rad (the tick-loss
@@ -138,9 +134,7 @@ pub struct RunRows {
 /// teacher-forced on training folds.
 #[derive(Debug, Clone)]
 pub struct BalanceData {
-    /// Shared: a structural grid point's runs are built once and gathered
-    /// into the balance of any subset of runs without a copy.
-    runs: Vec<Arc<RunRows>>,
+    runs: Vec<RunRows>,
     /// Rotor inertia held at the calibration's (Eqs. 4-4/4-5), kg·m².
     pub j1_kgm2: f64,
 }
@@ -263,41 +257,6 @@ impl Recorded {
         }
     }
 
-    /// Records made of given channels (id, rotor and motor angle in rad,
-    /// force in N, transitions as (kind, sample)), steady from the first
-    /// sample: the structural grids' tests.
-    #[cfg(test)]
-    pub(crate) fn synthetic(
-        runs: Vec<(String, Vec<f64>, Vec<f64>, Vec<f64>, Vec<(usize, usize)>)>,
-        rate_hz: f64,
-        window_s: f64,
-        r_m: f64,
-        j1_kgm2: f64,
-    ) -> Self {
-        let w = nominal_window_samples(window_s, rate_hz).max(2);
-        let ks: Vec<f64> = (0..=2 * w).map(|k| (w - k.abs_diff(w)) as f64).collect();
-        let kernel_gain = ks.iter().map(|k| k * k).sum::<f64>() / ks.iter().sum::<f64>().powi(2);
-        Recorded {
-            runs: runs
-                .into_iter()
-                .map(|(id, rotor_rad, motor_rad, force_n, transitions)| RecordedRun {
-                    id,
-                    rotor_rad,
-                    motor_rad,
-                    force_noise_n: diff_noise(&force_n),
-                    force_n,
-                    from: 0,
-                    transitions,
-                })
-                .collect(),
-            w,
-            dt: 1.0 / rate_hz,
-            r_m,
-            kernel_gain,
-            j1_kgm2,
-        }
-    }
-
     /// The balance of the channels as recorded.
     pub fn balance(&self) -> BalanceData {
         self.balance_with(|_, r| {
@@ -310,92 +269,50 @@ impl Recorded {
     /// each run with its index and returns the run's [`Channels`], whole
     /// records. The event-locked rows stay at the recorded transitions.
     pub fn balance_with<'a>(&'a self, transform: impl Fn(usize, &'a RecordedRun) -> Channels<'a>) -> BalanceData {
-        self.gather((0..self.runs.len()).map(|i| Arc::new(self.run_rows(i, transform(i, &self.runs[i])))).collect())
-    }
-
-    /// The balance of the runs given, in the order given (each built by
-    /// [`Recorded::run_rows`]).
-    pub fn gather(&self, runs: Vec<Arc<RunRows>>) -> BalanceData {
-        BalanceData { runs, j1_kgm2: self.j1_kgm2 }
-    }
-
-    /// The balance rows of run `i` (index into [`Recorded::runs`]) from its
-    /// channels `ch` as a transform leaves them ([`Recorded::balance_with`]).
-    pub fn run_rows(&self, i: usize, ch: Channels<'_>) -> RunRows {
         let (w, dt, r_m) = (self.w, self.dt, self.r_m);
-        let run = &self.runs[i];
-        let (phi1, phi2, f) = ch;
-        let grid = rows(&phi1, &phi2, &f, dt, w, r_m, run.from);
-        let angle_rad = (0..grid.len()).map(|j| phi1[run.from.max(w) + j * w]).collect();
-        let events = run
-            .transitions
+        let runs = self
+            .runs
             .iter()
-            .filter_map(|&(kind, e)| {
-                let rows: Option<Vec<Row>> =
-                    (0..EVENT_ROWS).map(|j| row_at(&phi1, &phi2, &f, dt, w, r_m, e + j * w)).collect();
-                rows.map(|r| (kind, r))
+            .enumerate()
+            .map(|(i, run)| {
+                let (phi1, phi2, f) = transform(i, run);
+                let grid = rows(&phi1, &phi2, &f, dt, w, r_m, run.from);
+                let angle_rad = (0..grid.len()).map(|j| phi1[run.from.max(w) + j * w]).collect();
+                let events = run
+                    .transitions
+                    .iter()
+                    .filter_map(|&(kind, e)| {
+                        let rows: Option<Vec<Row>> =
+                            (0..EVENT_ROWS).map(|j| row_at(&phi1, &phi2, &f, dt, w, r_m, e + j * w)).collect();
+                        rows.map(|r| (kind, r))
+                    })
+                    .collect();
+                let (mut ata, mut atb, mut yty) = ([0.0; 25], [0.0; 5], 0.0);
+                for (x, y) in &grid {
+                    let y = y + self.j1_kgm2 * x[0];
+                    yty += y * y;
+                    for i in 0..5 {
+                        atb[i] += x[i] * y;
+                        for j in 0..5 {
+                            ata[5 * i + j] += x[i] * x[j];
+                        }
+                    }
+                }
+                RunRows {
+                    id: run.id.clone(),
+                    rows: grid,
+                    angle_rad,
+                    events,
+                    force_noise_n: run.force_noise_n,
+                    kernel_gain: self.kernel_gain,
+                    ata,
+                    atb,
+                    yty,
+                }
             })
             .collect();
-        let (mut ata, mut atb, mut yty) = ([0.0; 25], [0.0; 5], 0.0);
-        for (x, y) in &grid {
-            let y = y + self.j1_kgm2 * x[0];
-            yty += y * y;
-            for i in 0..5 {
-                atb[i] += x[i] * y;
-                for j in 0..5 {
-                    ata[5 * i + j] += x[i] * x[j];
-                }
-            }
-        }
-        RunRows {
-            id: run.id.clone(),
-            rows: grid,
-            angle_rad,
-            events,
-            force_noise_n: run.force_noise_n,
-            kernel_gain: self.kernel_gain,
-            ata,
-            atb,
-            yty,
-        }
+        BalanceData { runs, j1_kgm2: self.j1_kgm2 }
     }
-}
-
-impl RunRows {
-    /// The operating point's run id.
-    pub fn id(&self) -> &str {
-        &self.id
-    }
-}
-
-/// A lower bound of Σ_r RMS_r² over `runs` — each run's squared RMS
-/// residual of the steady rows ([`BalanceData::run_rms`]) — for every fit
-/// of the balance with J1 held, whichever of K, C, C_r and the offset it
-/// fits: the minimum over all four of Σ_r ssr_r/n_r, a weighted least
-/// squares solved from the runs' sums (runs without rows left out); and
-/// the scale Σ_r yᵀy/n_r the sums' rounding is relative to. The bound is
-/// 0 when that regression is singular. Used by the structural grids'
-/// screen ([`crate::structure`]): a training cost that adds nonnegative
-/// terms to Σ RMS_r² over more runs is at least this bound.
-pub fn rms2_floor<'a>(runs: impl IntoIterator<Item = &'a RunRows>) -> (f64, f64) {
-    const FREE: [usize; 4] = [1, 2, 3, 4];
-    let (mut a, mut b, mut c) = ([0.0; 16], [0.0; 4], 0.0);
-    for r in runs.into_iter().filter(|r| !r.rows.is_empty()) {
-        let wt = 1.0 / r.rows.len() as f64;
-        c += wt * r.yty;
-        for (i, &p) in FREE.iter().enumerate() {
-            b[i] += wt * r.atb[p];
-            for (j, &q) in FREE.iter().enumerate() {
-                a[4 * i + j] += wt * r.ata[5 * p + q];
-            }
-        }
-    }
-    let Some(g) = rig_estimate::linear::Normal::from_row_major(4, &a, b.to_vec()).solve() else {
-        return (0.0, c);
-    };
-    let quad: f64 = (0..4).map(|i| g[i] * (0..4).map(|j| a[4 * i + j] * g[j]).sum::<f64>()).sum();
-    let lin: f64 = (0..4).map(|i| g[i] * b[i]).sum();
-    ((c - 2.0 * lin + quad).max(0.0), c)
 }
 
 impl BalanceData {
@@ -425,11 +342,6 @@ impl BalanceData {
             rotor_drag_nm_s_rad: -b[3],
             offset_nm: b[4],
         })
-    }
-
-    /// [`rms2_floor`] over the runs `include` accepts.
-    pub fn rms2_floor(&self, include: impl Fn(&str) -> bool) -> (f64, f64) {
-        rms2_floor(self.runs.iter().filter(|r| include(&r.id)).map(|r| &**r))
     }
 
     /// Each run's RMS residual of `fit`, N·m, over the runs `include`

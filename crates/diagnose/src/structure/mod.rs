@@ -101,7 +101,6 @@
 mod both;
 mod channel_delay;
 mod rotor_absolute;
-mod screen;
 mod sensor_dynamics;
 mod twist_rate;
 
@@ -149,10 +148,8 @@ pub struct StructureData {
     /// ([`crate::channels::tick_loss_check_of`]): the rotor encoder's count
     /// falls behind, which a delay of that encoder must not be fitted to.
     pub tick_loss: bool,
-    /// Every sensor model of the grid ([`sensor_dynamics`]).
+    /// The balance through every sensor model of the grid ([`sensor_dynamics`]).
     pub sensors: Vec<sensor_dynamics::SensorPoint>,
-    /// The balance through each of them, built on demand ([`screen`]).
-    pub sensor_balances: std::sync::Arc<screen::LazyGrid>,
 }
 
 /// The balance with `channel` advanced by `samples` (recorded that late).
@@ -172,15 +169,14 @@ impl StructureData {
     pub fn of(c: &Campaign, rec: &crate::channels::Recorded, o: &crate::ChannelOptions, balance: BalanceData) -> Self {
         let tick_loss = crate::channels::tick_loss_check_of(&balance, o).flagged;
         let rate = c.rig.sample_rate_hz;
-        let (aligned, (sensors, grid)) =
-            rayon::join(|| channel_delay::grid(rec, rate), || sensor_dynamics::grid(rec, rate));
-        StructureData { balance, aligned, tick_loss, sensors, sensor_balances: std::sync::Arc::new(grid) }
+        let (aligned, sensors) = rayon::join(|| channel_delay::grid(rec, rate), || sensor_dynamics::grid(rec, rate));
+        StructureData { balance, aligned, tick_loss, sensors }
     }
 
     /// The balance data a fit was made on.
     pub fn of_fit(&self, f: &Fitted) -> &BalanceData {
-        if let Some(i) = f.sensor.filter(|&i| i < self.sensors.len()) {
-            return self.sensor_balances.data(i);
+        if let Some(p) = f.sensor.and_then(|i| self.sensors.get(i)) {
+            return &p.data;
         }
         f.aligned.and_then(|i| self.aligned.get(i)).map_or(&self.balance, |a| &a.data)
     }

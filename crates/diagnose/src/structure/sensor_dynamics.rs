@@ -42,9 +42,9 @@
 //! squared RMS residual of the twist-rate balance, or none when the records
 //! as recorded fit best (as `channel_delay`'s grid).
 
-use super::screen::LazyGrid;
 use super::{Fitted, ParamSpec, StructureCandidate, StructureData};
-use crate::channels::Recorded;
+use crate::channels::{BalanceData, Recorded};
+use rayon::prelude::*;
 use rig_types::RigParams;
 use rig_types::sensor::{centred_moving_average, nominal_window_samples};
 
@@ -75,13 +75,13 @@ pub enum Sensor {
     EncoderCoupling,
 }
 
-/// One point of the grid: the sensor's f_n and ζ (the balance it gives is
-/// the grid's [`LazyGrid`] point of the same index).
+/// One point of the grid: the sensor's f_n and ζ and the balance it gives.
 #[derive(Debug, Clone)]
 pub struct SensorPoint {
     pub sensor: Sensor,
     pub natural_frequency_hz: f64,
     pub damping_ratio: f64,
+    pub data: BalanceData,
 }
 
 /// The bilinear-transform coefficients of F(s) = (b1 s + ω²)/(s² + 2ζωs +
@@ -130,57 +130,44 @@ fn corrected_pair(a: (&[f64], &[f64]), b: (&[f64], &[f64]), q: Biquad) -> (Vec<f
     (out_a, out_b)
 }
 
-/// The grid's points for both sensors, and the balance of the records at
-/// each, built on demand run by run ([`super::screen`]). Each run's channels
-/// are smoothed once ([`SMOOTH_HALF_S`]); a grid point filters the smoothed
-/// channels its sensor touches.
-pub(super) fn grid(rec: &Recorded, rate_hz: f64) -> (Vec<SensorPoint>, LazyGrid) {
+/// The balance of the records at every point of the grid, for both
+/// sensors. Each run's channels are smoothed once ([`SMOOTH_HALF_S`]); a
+/// grid point filters the smoothed channels its sensor touches.
+pub(super) fn grid(rec: &Recorded, rate_hz: f64) -> Vec<SensorPoint> {
     let half = nominal_window_samples(SMOOTH_HALF_S, rate_hz);
     let smooth: Vec<[Vec<f64>; 3]> = rec
         .runs
         .iter()
         .map(|r| [&r.rotor_rad, &r.motor_rad, &r.force_n].map(|x| centred_moving_average(x, half)))
         .collect();
-    let points: Vec<SensorPoint> = [Sensor::Force, Sensor::EncoderCoupling]
+    // Every grid point's balance is independent: built in parallel, in grid order.
+    let points: Vec<(Sensor, f64, f64)> = [Sensor::Force, Sensor::EncoderCoupling]
         .into_iter()
         .flat_map(|sensor| {
-            FREQUENCIES_HZ.iter().flat_map(move |&f_n| {
-                DAMPING_RATIOS.iter().map(move |&zeta| SensorPoint {
-                    sensor,
-                    natural_frequency_hz: f_n,
-                    damping_ratio: zeta,
-                })
-            })
+            FREQUENCIES_HZ.iter().flat_map(move |&f_n| DAMPING_RATIOS.iter().map(move |&zeta| (sensor, f_n, zeta)))
         })
         .collect();
-    let params: Vec<(Sensor, f64, f64)> =
-        points.iter().map(|p| (p.sensor, p.natural_frequency_hz, p.damping_ratio)).collect();
-    let lazy = LazyGrid::new(rec, points.len(), move |rec, p, i| {
-        let (sensor, f_n, zeta) = params[p];
-        let r = &rec.runs[i];
-        let [s1, s2, sf] = &smooth[i];
-        let ch = match sensor {
-            Sensor::Force => {
-                let q = Biquad::new(rate_hz, f_n, zeta, false);
-                let (phi1, phi2) = corrected_pair((&r.rotor_rad, s1), (&r.motor_rad, s2), q);
-                (phi1.into(), phi2.into(), r.force_n.as_slice().into())
-            }
-            Sensor::EncoderCoupling => {
-                let q = Biquad::new(rate_hz, f_n, zeta, true);
-                let (phi2, f) = corrected_pair((&r.motor_rad, s2), (&r.force_n, sf), q);
-                (r.rotor_rad.as_slice().into(), phi2.into(), f.into())
-            }
-        };
-        rec.run_rows(i, ch)
-    });
-    (points, lazy)
-}
-
-/// `u` through the force sensor's second-order system at f_n, ζ (from rest
-/// at u[0]): a planted sensor for the tests.
-#[cfg(test)]
-pub(super) fn through_force_sensor(u: &[f64], rate_hz: f64, f_n: f64, zeta: f64) -> Vec<f64> {
-    corrected_pair((u, u), (u, u), Biquad::new(rate_hz, f_n, zeta, false)).0
+    points
+        .into_par_iter()
+        .map(|(sensor, f_n, zeta)| {
+            let data = rec.balance_with(|i, r| {
+                let [s1, s2, sf] = &smooth[i];
+                match sensor {
+                    Sensor::Force => {
+                        let q = Biquad::new(rate_hz, f_n, zeta, false);
+                        let (phi1, phi2) = corrected_pair((&r.rotor_rad, s1), (&r.motor_rad, s2), q);
+                        (phi1.into(), phi2.into(), r.force_n.as_slice().into())
+                    }
+                    Sensor::EncoderCoupling => {
+                        let q = Biquad::new(rate_hz, f_n, zeta, true);
+                        let (phi2, f) = corrected_pair((&r.motor_rad, s2), (&r.force_n, sf), q);
+                        (r.rotor_rad.as_slice().into(), phi2.into(), f.into())
+                    }
+                }
+            });
+            SensorPoint { sensor, natural_frequency_hz: f_n, damping_ratio: zeta, data }
+        })
+        .collect()
 }
 
 const FORCE_PARAMS: &[ParamSpec] = &[
@@ -254,13 +241,17 @@ pub static ENCODER_COUPLING: SensorCandidate = SensorCandidate {
 };
 
 /// The grid point of `sensor` with the smallest training cost, if it beats
-/// the records as recorded (the grid's screened search, [`super::screen`]:
-/// the full grid's point, each point's balance built only on the runs the
-/// search needs).
+/// the records as recorded.
 fn fit_sensor(sensor: Sensor, data: &StructureData, include: &dyn Fn(&str) -> bool) -> Option<Fitted> {
-    let points = data.sensors.iter().enumerate().filter(|(_, p)| p.sensor == sensor).map(|(i, _)| i);
-    let (best, best_fit) =
-        data.sensor_balances.best(points, include, &data.balance, &super::channel_delay::training_cost)?;
+    let (mut best_cost, mut best_fit) = super::channel_delay::training_cost(&data.balance, include)?;
+    let mut best: Option<usize> = None;
+    for (i, p) in data.sensors.iter().enumerate().filter(|(_, p)| p.sensor == sensor) {
+        if let Some((cost, fit)) = super::channel_delay::training_cost(&p.data, include)
+            && cost < best_cost
+        {
+            (best_cost, best_fit, best) = (cost, fit, Some(i));
+        }
+    }
     let values =
         best.map_or(vec![0.0, 0.0], |i| vec![data.sensors[i].natural_frequency_hz, data.sensors[i].damping_ratio]);
     Some(Fitted { values, balance: best_fit, aligned: None, sensor: best })
