@@ -133,8 +133,15 @@ pub struct Features {
     /// in units of L = k V/(m g) (stated k and m): 1 for a slider at rest on
     /// the stated spring, r for a spring r times stiffer, below 1 while it creeps.
     pub load_rate: Spread,
+    /// Force where a slip ends (the minimum after each maximum), F/(m g).
+    pub trough: Spread,
     /// Mean force over the record, F/(m g).
     pub mean_force: f64,
+    /// The mean force of each of the record's [`LEVEL_PARTS`] consecutive
+    /// parts, over the parts: how far the friction level wanders along the
+    /// track within one run (every run covers 15.8–16.3 mm of paper), the
+    /// yardstick for a level that differs between runs ([`crate::level`]).
+    pub level_parts: Spread,
     /// 2π √(m/k), s.
     pub natural_period_s: f64,
     /// The record's robust noise deviation, F/(m g) ([`robust_noise_sd`]).
@@ -153,10 +160,12 @@ impl Features {
             period_s: none,
             drop: none,
             onset: none,
+            trough: none,
             stick_fraction: none,
             creep: none,
             load_rate: none,
             mean_force: f64::NAN,
+            level_parts: none,
             natural_period_s: f64::NAN,
             noise_sd: f64::NAN,
             hysteresis: f64::NAN,
@@ -186,6 +195,7 @@ pub fn features(time_s: &[f64], force: &[f64], c: &RunConstants, o: &FeatureOpti
     let hysteresis = o.min_drop.max(o.noise_multiple * noise_sd);
     let turns = turning_points(&f, hysteresis);
     let (mut period, mut drop, mut onset, mut stick, mut creep) = (vec![], vec![], vec![], vec![], vec![]);
+    let mut trough = vec![];
     let mut rise = vec![];
     // turns alternate; a slip is a maximum followed by a minimum.
     let maxima: Vec<usize> = (0..turns.len()).filter(|&j| turns[j].1 && j + 1 < turns.len()).collect();
@@ -193,6 +203,7 @@ pub fn features(time_s: &[f64], force: &[f64], c: &RunConstants, o: &FeatureOpti
         let (imax, imin) = (turns[j].0, turns[j + 1].0);
         drop.push(f[imax] - f[imin]);
         onset.push(f[imax]);
+        trough.push(f[imin]);
         // The complete cycle ending at this maximum: previous maximum → min → this maximum.
         if e == 0 || j < 2 {
             continue;
@@ -242,11 +253,26 @@ pub fn features(time_s: &[f64], force: &[f64], c: &RunConstants, o: &FeatureOpti
         stick_fraction,
         creep: Spread::of(&creep),
         load_rate: Spread::of(&rise),
+        trough: Spread::of(&trough),
         mean_force: f.iter().sum::<f64>() / n as f64,
+        level_parts: Spread::of(&level_parts(&f)),
         natural_period_s,
         noise_sd,
         hysteresis,
     }
+}
+
+/// Parts a record is cut into for [`Features::level_parts`].
+pub const LEVEL_PARTS: usize = 4;
+
+/// The mean of each of [`LEVEL_PARTS`] consecutive, equal parts of `f`
+/// (empty when `f` has fewer samples than parts).
+fn level_parts(f: &[f64]) -> Vec<f64> {
+    let len = f.len() / LEVEL_PARTS;
+    if len == 0 {
+        return Vec::new();
+    }
+    f.chunks_exact(len).take(LEVEL_PARTS).map(|c| c.iter().sum::<f64>() / len as f64).collect()
 }
 
 /// An independent reading of an oscillation's period, blind to the turning
@@ -434,6 +460,10 @@ mod tests {
         assert!((r.period_s.median / period - 1.0).abs() < 1e-3, "{:?}", r.period_s);
         assert!((r.drop.median - 0.05).abs() < 1e-3, "{:?}", r.drop);
         assert!((r.onset.median - 0.35).abs() < 1e-3, "{:?}", r.onset);
+        assert!((r.trough.median - 0.30).abs() < 1e-3, "{:?}", r.trough);
+        // The level over the record's parts (2.5 cycles each: 0.3225 and 0.3275 by turns), spikes filtered out.
+        assert_eq!(r.level_parts.n, LEVEL_PARTS);
+        assert!((r.level_parts.median - 0.325).abs() < 1e-3 && r.level_parts.sd < 4e-3, "{:?}", r.level_parts);
         assert!(r.stick_fraction.median > 0.95, "{:?}", r.stick_fraction);
         assert!(r.creep.median.abs() < 0.02, "{:?}", r.creep);
         assert!((r.load_rate.median - 1.0).abs() < 0.02, "{:?}", r.load_rate);

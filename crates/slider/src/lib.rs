@@ -33,6 +33,7 @@
 pub mod features;
 pub mod fit;
 pub mod heslot;
+pub mod level;
 pub mod render;
 pub mod sim;
 pub mod study;

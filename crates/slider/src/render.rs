@@ -438,32 +438,6 @@ fn causes(s: &Study) -> String {
             kc.join("; ")
         );
     }
-    // The friction level run by run: a run whose mean force stands apart from
-    // every other at its drive speed says something no law of V alone can.
-    for r in &s.runs {
-        let same_v: Vec<&crate::study::Measured> =
-            s.runs.iter().filter(|q| q.name != r.name && q.drive_speed_um_s == r.drive_speed_um_s).collect();
-        let others: Vec<f64> = s.runs.iter().filter(|q| q.name != r.name).map(|q| q.features.mean_force).collect();
-        let (lo, hi) = others.iter().fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
-        let apart = r.features.mean_force > hi + 0.05 || r.features.mean_force < lo - 0.05;
-        if apart && !same_v.is_empty() {
-            let _ = writeln!(
-                out,
-                "- {}'s mean force is {:.2} of the weight against {:.2}–{:.2} at every other run ({} at the same drive \
-                 speed): a friction law of the speed alone cannot give both, and with one run per (k, V) the data cannot \
-                 tell a dependence on the spring from a change of the paper between runs.",
-                r.name,
-                r.features.mean_force,
-                lo,
-                hi,
-                same_v
-                    .iter()
-                    .map(|q| format!("{} {:.2}", q.name, q.features.mean_force))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
-        }
-    }
     for b in &s.boundary_scans {
         let r = &s.runs[b.run];
         let cases: Vec<String> = b
@@ -692,6 +666,8 @@ pub fn render(s: &Study) -> StudyOutput {
         "drop_sd",
         "onset",
         "onset_sd",
+        "slip_end",
+        "slip_end_sd",
         "stick_fraction",
         "stick_fraction_sd",
         "creep",
@@ -699,6 +675,7 @@ pub fn render(s: &Study) -> StudyOutput {
         "load_rate",
         "load_rate_sd",
         "mean_force",
+        "mean_force_parts_sd",
         "noise_sd",
         "hysteresis",
         "force_step",
@@ -718,6 +695,8 @@ pub fn render(s: &Study) -> StudyOutput {
             f4(f.drop.sd),
             f4(f.onset.median),
             f4(f.onset.sd),
+            f4(f.trough.median),
+            f4(f.trough.sd),
             f4(f.stick_fraction.median),
             f4(f.stick_fraction.sd),
             f4(f.creep.median),
@@ -725,6 +704,7 @@ pub fn render(s: &Study) -> StudyOutput {
             f4(f.load_rate.median),
             f4(f.load_rate.sd),
             f4(f.mean_force),
+            f4(f.level_parts.sd),
             f4(f.noise_sd),
             f4(f.hysteresis),
             format!("{:.6}", r.force_step),
@@ -1125,6 +1105,123 @@ fn bounds_rows(s: &Study, c: &CandidateResult, md: &mut String) -> (usize, usize
     (pass, all)
 }
 
+/// The friction level against V and k, run by run, from the one feature
+/// function ([`crate::level`]): whether a law of the speed, of the spring,
+/// or neither can carry it, and what a velocity-strengthening kinetic term
+/// fitted by the study (`static_ageing`'s α) makes of it.
+fn level_note(s: &Study) -> String {
+    use crate::level::LevelCause;
+    let lv = &s.level;
+    let mut out = String::from("## The friction level against the drive speed and the stiffness\n\n");
+    out.push_str(
+        "Per run, from the one feature function: the mean force over the record, its mean over each of the record's \
+         parts (median ± sd over the parts: how far the level wanders along the paper within the run), the force at slip \
+         onset and where a slip ends (median ± sd over slip events), all in F/(m g).\n\n",
+    );
+    out.push_str("| run | k [N/m] | V [µm/s] | regime | mean force | over the parts | onset | slip end |\n|---|---|---|---|---|---|---|---|\n");
+    let pm = |x: &Spread| format!("{:.3} ± {:.3}", x.median, x.sd);
+    for r in &s.runs {
+        let f = &r.features;
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {} | {:.3} | {} | {} | {} |",
+            r.name,
+            r.stiffness_n_m,
+            r.drive_speed_um_s,
+            f.regime.label(),
+            f.mean_force,
+            pm(&f.level_parts),
+            pm(&f.onset),
+            pm(&f.trough)
+        );
+    }
+    let list = |a: &crate::level::Across| {
+        let v: Vec<String> =
+            a.runs.iter().map(|&i| format!("{} {:.3}", s.runs[i].name, s.runs[i].features.mean_force)).collect();
+        format!("{} (apart by {:.3})", v.join(", "), a.range)
+    };
+    let speeds: Vec<String> = lv.at_speed.iter().map(|a| format!("at {} µm/s {}", a.at, list(a))).collect();
+    let springs: Vec<String> = lv.at_stiffness.iter().map(|a| format!("at {} N/m {}", a.at, list(a))).collect();
+    let _ = writeln!(
+        out,
+        "\nThe yardstick is twice the largest sd of a run's level over its parts: {:.3}. Across the springs at one drive \
+         speed: {}. Across the speeds at one spring: {}.\n",
+        lv.yardstick,
+        if speeds.is_empty() { "no speed has two springs".to_string() } else { speeds.join("; ") },
+        if springs.is_empty() { "no spring has two speeds".to_string() } else { springs.join("; ") },
+    );
+    let worst = |a: &[crate::level::Across]| a.iter().max_by(|x, y| x.range.total_cmp(&y.range)).cloned();
+    let verdict = match lv.cause {
+        LevelCause::Untested => "No speed was run at two springs and a spring at two speeds: the records cannot say \
+            what the level depends on."
+            .to_string(),
+        LevelCause::Constant => {
+            "One level everywhere, within the yardstick: nothing for a law of the speed to carry.".into()
+        }
+        LevelCause::Speed => {
+            "The level is one at every speed across the springs and differs across the speeds: a law of \
+            the speed can carry it (a candidate for the selection, fitted on the calibration stiffnesses)."
+                .into()
+        }
+        LevelCause::Stiffness => {
+            "The level is one at every spring across the speeds and differs across the springs: not a \
+            friction law of the speed; a set-up number of the spring (or another strip of paper per spring)."
+                .into()
+        }
+        LevelCause::Neither => {
+            let (a, b) = (worst(&lv.at_speed).expect("tested"), worst(&lv.at_stiffness).expect("tested"));
+            format!(
+                "Neither a law of the speed nor one of the spring: at {} µm/s the springs differ by {:.3} ({:.1} \
+                 yardsticks), at {} N/m the speeds by {:.3} ({:.1} yardsticks). A steady drive moves the slider at V on \
+                 average, so a law of the sliding speed — the velocity-strengthening steady state of paper on paper at \
+                 high V (Heslot, Baumberger, Perrin, Caroli & Caroli, Phys. Rev. E 49, 4973 (1994); its generality: \
+                 Bar-Sinai, Spatschek, Brener & Bouchbinder, J. Geophys. Res. Solid Earth 119, 1738 (2014)) — gives one \
+                 level per V at both springs, and a law of the spring one level per k at every V. With one run per \
+                 (k, V), a level that depends on both at one cell cannot be told from another strip of paper: the data \
+                 cannot tell, so no law of the speed is offered to the selection.",
+                a.at,
+                a.range,
+                a.range / lv.yardstick,
+                b.at,
+                b.range,
+                b.range / lv.yardstick
+            )
+        }
+    };
+    let _ = writeln!(out, "{verdict}");
+    // The velocity-strengthening kinetic term the study did fit: static ageing's α ln(1 + v/v1).
+    let vs = distinct(s.runs.iter().map(|r| r.drive_speed_um_s));
+    let (v_lo, v_hi) = (vs[0], vs[vs.len() - 1]);
+    let at = |v_um_s: f64| (1.0 + 1e-6 * v_um_s / crate::fit::V1_M_S).ln();
+    let fits: Vec<(Vec<f64>, f64, f64)> = s
+        .candidates
+        .iter()
+        .filter(|c| c.model.friction == Candidate::StaticAgeing && c.model.setup == SetupCandidate::Stated)
+        .flat_map(|c| c.fold_fits.iter())
+        .map(|f| {
+            let ks = distinct(f.train.iter().map(|&i| s.runs[i].stiffness_n_m));
+            (ks, f.params[4], f.params[4] * (at(v_hi) - at(v_lo)))
+        })
+        .collect();
+    let largest = lv.at_speed.iter().chain(&lv.at_stiffness).map(|a| a.range).fold(0.0, f64::max);
+    if !fits.is_empty() && largest > 0.0 {
+        let each: Vec<String> = fits
+            .iter()
+            .map(|(ks, alpha, rise)| format!("α = {alpha:.1e} fitted on k = {ks:?} N/m, a rise of {rise:.4}"))
+            .collect();
+        let most = fits.iter().map(|f| f.2).fold(0.0, f64::max);
+        let _ = writeln!(
+            out,
+            "\nThe study's one velocity-strengthening kinetic term, `static_ageing`'s μk(v) = μk0 + α ln(1 + v/v1), \
+             fitted with every run of its springs, the fastest included, raises the kinetic level from {v_lo} to {v_hi} \
+             µm/s by: {}; at most {:.0} % of the largest difference above ({largest:.3}).",
+            each.join("; "),
+            100.0 * most / largest
+        );
+    }
+    out
+}
+
 /// What no model reaches held out: per run, the checks every model fails,
 /// with the measured value and the range of the predictions.
 fn unreached(s: &Study) -> String {
@@ -1326,6 +1423,7 @@ fn markdown(s: &Study) -> String {
     }
     let _ = writeln!(md, "\n{CAUSE}\n");
     let _ = writeln!(md, "{}", causes(s));
+    let _ = writeln!(md, "{}", level_note(s));
     let verdict = diagnosis_json(s)["verdict"].as_str().unwrap_or("").to_string();
     let _ = writeln!(md, "## Verdict: `{verdict}`\n");
     for st in kept_steps(s) {

@@ -182,6 +182,8 @@ pub struct Study {
     /// Per creeping run, the Coulomb baseline of the fold that held it out,
     /// simulated there and read through the run's channel ([`through_channel`]).
     pub channel_checks: Vec<ChannelCheck>,
+    /// The friction level against V and k ([`crate::level::friction_level`]).
+    pub level: crate::level::Level,
 }
 
 /// Whether a model's slips would show in a run's record ([`through_channel`]).
@@ -733,7 +735,9 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
             Some(ChannelCheck { run: i, model: base.model, params: base.params.clone(), clean, channel, seconds })
         })
         .collect();
+    let level = crate::level::friction_level(&runs);
     Ok(Study {
+        level,
         boundary_scans,
         channel_checks,
         params: p.clone(),
