@@ -110,6 +110,7 @@ pub fn forward_select(
         params: BTreeMap::new(),
         calibration_misfit: ev.misfit(baseline, ev.calibration()),
         evaluations: 0,
+        top_scan: Vec::new(),
     };
     let study = Lavi { ev, max_evals };
     let cands: Vec<&dyn engine::Candidate<Lavi, Fitted>> =
@@ -128,6 +129,7 @@ pub fn forward_select(
                 params: BTreeMap::new(),
                 calibration_misfit: f64::INFINITY,
                 evaluations: 0,
+                top_scan: Vec::new(),
             },
         };
         trials.push(Trial {
