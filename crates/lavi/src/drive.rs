@@ -90,9 +90,7 @@ pub fn identify(ev: &Evaluator, m: &Model) -> Result<DriveFit, LaviError> {
     let (acc_top, acc_bit) = (derivative(&top, d.fs_hz), derivative(&bit, d.fs_hz));
     // The reference is the top-speed channel's moving mean: on the bit's clock like the top speed.
     let k = delay_samples(m.structure.top_delay_s, d.fs_hz);
-    let full = ev.top_ref_rad_s();
-    let reference: Vec<f64> =
-        r.clone().map(|i| full[(i as isize + k).clamp(0, full.len() as isize - 1) as usize]).collect();
+    let reference = crate::sim::read_late(ev.top_ref_rad_s(), &r, k);
     let shift = delay_samples(m.torque_delay_s, d.fs_hz);
     let string_nm: Vec<f64> = r
         .clone()

@@ -196,7 +196,7 @@ fn derive_with(
 /// channel's sample i + τ_top f_s (whole samples, the record's ends standing in beyond them).
 pub fn top_rad_s(d: &Prepared, r: std::ops::Range<usize>, top_delay_s: f64) -> Vec<f64> {
     let k = crate::sim::delay_samples(top_delay_s, d.fs_hz);
-    r.map(|i| d.top_rpm[(i as isize + k).clamp(0, d.len() as isize - 1) as usize] * RPM_TO_RAD_S).collect()
+    crate::sim::read_late(&d.top_rpm, &r, k).iter().map(|v| v * RPM_TO_RAD_S).collect()
 }
 
 /// The torque channel's delay on the speed channels that fits the equation of

@@ -28,7 +28,7 @@
 use crate::LaviError;
 use crate::data::{Prepared, RPM_TO_RAD_S, WindowSpec, derivative};
 use crate::features::{FeatureOptions, Features, N_FEATURES, StickTorque, stick_torque, window_features};
-use crate::sim::{Inputs, Model, Run, Start, delay_samples, simulate};
+use crate::sim::{Inputs, Model, Run, Start, delay_samples, read_late, simulate};
 use rayon::prelude::*;
 
 /// Cap on one feature's normalised error.
@@ -167,7 +167,7 @@ impl<'a> Evaluator<'a> {
         let s = self.windows[wi].span.clone();
         // The top speed on the bit's clock: the channel read τ_top later when it is late by τ_top.
         let k = delay_samples(m.structure.top_delay_s, self.data.fs_hz);
-        let (top, top_ref) = (late(&self.top_rad_s, &s, k), late(&self.top_ref_rad_s, &s, k));
+        let (top, top_ref) = (read_late(&self.top_rad_s, &s, k), read_late(&self.top_ref_rad_s, &s, k));
         let u = Inputs {
             fs_hz: self.data.fs_hz,
             top_rad_s: &top,
@@ -228,16 +228,6 @@ impl<'a> Evaluator<'a> {
     /// parallel and in window order; a run that fails has NaN features.
     pub fn all_features(&self, m: &Model) -> Vec<Features> {
         (0..self.windows.len()).into_par_iter().map(|w| self.features(m, w).unwrap_or(Features::NAN)).collect()
-    }
-}
-
-/// Samples `s` of the channel `x` read `k` samples later (the record's ends standing in beyond them).
-fn late<'x>(x: &'x [f64], s: &std::ops::Range<usize>, k: isize) -> std::borrow::Cow<'x, [f64]> {
-    let (a, b) = (s.start as isize + k, s.end as isize + k);
-    if a >= 0 && b <= x.len() as isize {
-        std::borrow::Cow::Borrowed(&x[a as usize..b as usize])
-    } else {
-        s.clone().map(|i| x[(i as isize + k).clamp(0, x.len() as isize - 1) as usize]).collect()
     }
 }
 
