@@ -687,6 +687,18 @@ pub(crate) mod tests {
         (d, cal)
     }
 
+    /// The calibration-like window 4-8 s of a 12 s test record at 1 kHz (warm-up from 1 s).
+    pub(crate) fn window_4_8() -> WindowSpec {
+        WindowSpec {
+            label: "4-8".into(),
+            split: crate::data::Split::Train,
+            start_s: 4.0,
+            end_s: 8.0,
+            span: 1000..8000,
+            window: 3000..7000,
+        }
+    }
+
     /// 12 s of stick-slip simulated by the one core (J 0.01 kg m2, k 4 N m/rad, c 0.01 N m s/rad, Coulomb
     /// 2.5/1.5 N m, top 2 + sin(2π 0.5 t) rad/s), its contact torque recorded `late` samples late
     /// plus `js` times the bit's acceleration; the calibration-like window 4-8 s.
@@ -703,14 +715,7 @@ pub(crate) mod tests {
         let rpm = |x: &[f64]| x.iter().map(|v| v / RPM_TO_RAD_S).collect::<Vec<f64>>();
         let (top_rpm, bit_rpm) = (rpm(&top), rpm(&r.bit_rad_s));
         let d = prepared((0..n).map(|i| i as f64 / fs).collect(), top_rpm, bit_rpm, torque_nm);
-        let w = WindowSpec {
-            label: "4-8".into(),
-            split: crate::data::Split::Train,
-            start_s: 4.0,
-            end_s: 8.0,
-            span: 1000..8000,
-            window: 3000..7000,
-        };
+        let w = window_4_8();
         let law = FrictionLaw {
             static_nm: 2.5,
             kinetic_nm: 1.5,

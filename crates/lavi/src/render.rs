@@ -1084,7 +1084,16 @@ fn torque_level_hypothesis(s: &Study) -> String {
         100.0 * mean(&held.iter().map(|&w| f(&s.final_features[w]) / f(&s.measured[w]) - 1.0).collect::<Vec<f64>>())
     };
     let top_delay_s = s.selection.final_model.structure.top_delay_s;
-    if top_delay_s != 0.0 && ext.slip_nm(v) < ext.slip_nm(0.0) {
+    // The two laws from 0 to the cycle maximum, the delay, and the least-squares law's free run.
+    let (e0, ev_, tau_ms, a0, av, free) = (
+        ext.slip_nm(0.0),
+        ext.slip_nm(v),
+        1e3 * s.structures[i].1.structure.torque_delay_s,
+        aligned.slip_nm(0.0),
+        aligned.slip_nm(v),
+        s.structure_heldout[i],
+    );
+    if top_delay_s != 0.0 && ev_ < e0 {
         return format!(
             "- The torque level (`slip_torque_nm`, `breakaway_torque_nm`): from 0 to {v_rpm:.0} rpm (the calibration window's mean \
              cycle maximum) the extended model's law falls from {:.3} to {:.3} N m, as the torque channel does (the least-squares law \
@@ -1092,12 +1101,12 @@ fn torque_level_hypothesis(s: &Study) -> String {
              misfit at {:.3}, the structure table): with the top speed read {:.0} ms later, the falling law runs free in stick-slip \
              (The top speed's clock, below). The free run's slip torque is {:+.0} % and its break-away torque {:+.0} % of the \
              measured ones (held-out means).",
-            ext.slip_nm(0.0),
-            ext.slip_nm(v),
-            1e3 * s.structures[i].1.structure.torque_delay_s,
-            aligned.slip_nm(0.0),
-            aligned.slip_nm(v),
-            s.structure_heldout[i],
+            e0,
+            ev_,
+            tau_ms,
+            a0,
+            av,
+            free,
             1e3 * top_delay_s,
             rel(&|f| f.slip_torque_nm),
             rel(&|f| f.breakaway_torque_nm),
@@ -1113,12 +1122,12 @@ fn torque_level_hypothesis(s: &Study) -> String {
          imposed top speed (its slope beats the damping). The hypothesis that the real top answers the bit as a motor under a \
          speed loop, a feedback the imposed top speed cannot give, is tested by `motor_drive` (The drive that answers the bit, \
          below): {}",
-        ext.slip_nm(0.0),
-        ext.slip_nm(v),
-        1e3 * s.structures[i].1.structure.torque_delay_s,
-        aligned.slip_nm(0.0),
-        aligned.slip_nm(v),
-        s.structure_heldout[i],
+        e0,
+        ev_,
+        tau_ms,
+        a0,
+        av,
+        free,
         rel(&|f| f.slip_torque_nm),
         rel(&|f| f.breakaway_torque_nm),
         match &s.drive {

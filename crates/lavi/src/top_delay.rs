@@ -394,7 +394,7 @@ pub fn section(s: &crate::study::Study) -> String {
 
 #[cfg(test)]
 mod tests {
-    use crate::data::{RPM_TO_RAD_S, Split, WindowSpec};
+    use crate::data::RPM_TO_RAD_S;
     use crate::fit::tests::prepared;
     use crate::fit::{Structure, best_delay_s, derive, top_rad_s};
 
@@ -413,14 +413,7 @@ mod tests {
         // The channel is late: its sample i is the top's speed at i − 20.
         let channel: Vec<f64> = (0..n).map(|i| top[i.saturating_sub(late)]).collect();
         let d = prepared((0..n).map(|i| i as f64 / fs).collect(), rpm(&channel), rpm(&r.bit_rad_s), r.friction_nm);
-        let cal = WindowSpec {
-            label: "4-8".into(),
-            split: Split::Train,
-            start_s: 4.0,
-            end_s: 8.0,
-            span: 1000..8000,
-            window: 3000..7000,
-        };
+        let cal = crate::fit::tests::window_4_8();
         let read = top_rad_s(&d, 4000..8000, 0.020);
         assert!(read.iter().zip(&top[4000..8000]).all(|(a, b)| (a - b).abs() < 1e-9));
         let on_clock = Structure { top_delay_s: 0.020, ..Structure::BASELINE };
