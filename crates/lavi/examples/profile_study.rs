@@ -10,6 +10,9 @@
 //! levels the torque channel measures on the calibration window (break-away
 //! T_s, slip T_k), and with T_s and T_k swept: which targets hold on the
 //! held-out windows, per feature, and the torque through the stick phases.
+//!
+//! `cargo run --profile dev --example profile_study -- top`: `top_delay`'s scan
+//! on the baseline (rig_lavi::top_delay::scan), point by point, and its CPU time.
 
 use rig_lavi::score::{Evaluator, feature_errors};
 use rig_lavi::sim::{FrictionLaw, Model};
