@@ -10,6 +10,9 @@
 //! levels the torque channel measures on the calibration window (break-away
 //! T_s, slip T_k), and with T_s and T_k swept: which targets hold on the
 //! held-out windows, per feature, and the torque through the stick phases.
+//!
+//! `cargo run --profile dev --example profile_study -- top`: `top_delay`'s scan
+//! on the baseline (rig_lavi::top_delay::scan), point by point, and its CPU time.
 
 use rig_lavi::score::{Evaluator, feature_errors};
 use rig_lavi::sim::{FrictionLaw, Model};
@@ -37,6 +40,8 @@ fn main() {
     let (path, p) = setup();
     if std::env::args().nth(1).as_deref() == Some("torque") {
         torque_level(&path, &p);
+    } else if std::env::args().nth(1).as_deref() == Some("top") {
+        top_scan(&path, &p);
     } else {
         profile(&path, &p);
     }
@@ -128,4 +133,46 @@ fn torque_level(path: &Path, p: &StudyParams) {
     for tk in [1.6, 1.8, 2.0, 2.2] {
         report(&format!("final structure, Coulomb T_s {ts:.2}, T_k {tk:.1}"), &coulomb(ts, tk, &fin));
     }
+}
+
+/// `-- top`: the `top_delay` scan on the baseline (τ_top, the torque delay, the equation of motion, the
+/// least-squares law and its free run's calibration misfit), with the CPU time it takes.
+fn top_scan(path: &Path, p: &StudyParams) {
+    let (d, wins, fopts) = prepared(path, p);
+    let ev =
+        Evaluator::new(&d, wins.clone(), fopts, p.substeps, p.slip_speed_rpm, p.drive_ref_window_s).expect("evaluator");
+    let (base, _) =
+        rig_lavi::fit::derive(&d, &wins[0], p.slip_speed_rpm, rig_lavi::fit::Structure::BASELINE).expect("baseline");
+    let c = cpu_s();
+    let (pts, best) = rig_lavi::top_delay::scan(&ev, &base).expect("scan");
+    println!("scan: {} points, CPU {:.2} s, best {}", pts.len(), cpu_s() - c, best);
+    for q in &pts {
+        println!(
+            "tau_top {:+5.1} ms torque {:+5.1} ms R2 {:.4} k {:.3} c {:+.4} law {:.3} -> {:.3} N m cal {:.3}",
+            1e3 * q.top_delay_s,
+            1e3 * q.torque_delay_s,
+            q.r_squared,
+            q.stiffness_nm_rad,
+            q.damping_nm_s_rad,
+            q.law_static_nm,
+            q.law_at_max_nm,
+            q.calibration_misfit
+        );
+    }
+}
+
+/// The record prepared and its windows, as the study cuts them.
+fn prepared(
+    path: &Path,
+    p: &StudyParams,
+) -> (rig_lavi::data::Prepared, Vec<rig_lavi::data::WindowSpec>, FeatureOptions) {
+    let (_, d) = rig_lavi::data::prepare(path, p).expect("run 175 reads");
+    let wins = rig_lavi::data::windows(&d, p).expect("windows");
+    let fopts = FeatureOptions {
+        fs_hz: d.fs_hz,
+        cutoff_hz: p.cutoff_hz,
+        transition_hz: p.transition_hz,
+        stick_speed_rpm: p.stick_speed_rpm,
+    };
+    (d, wins, fopts)
 }

@@ -85,10 +85,12 @@ pub fn identify(ev: &Evaluator, m: &Model) -> Result<DriveFit, LaviError> {
     let d = ev.data;
     let w = &ev.windows[ev.calibration()];
     let r = (w.span.start + w.window.start)..(w.span.start + w.window.end);
-    let top: Vec<f64> = d.top_rpm[r.clone()].iter().map(|v| v * RPM_TO_RAD_S).collect();
+    let top = crate::fit::top_rad_s(d, r.clone(), m.structure.top_delay_s);
     let bit: Vec<f64> = d.bit_rpm[r.clone()].iter().map(|v| v * RPM_TO_RAD_S).collect();
     let (acc_top, acc_bit) = (derivative(&top, d.fs_hz), derivative(&bit, d.fs_hz));
-    let reference = &ev.top_ref_rad_s()[r.clone()];
+    // The reference is the top-speed channel's moving mean: on the bit's clock like the top speed.
+    let k = delay_samples(m.structure.top_delay_s, d.fs_hz);
+    let reference = crate::sim::read_late(ev.top_ref_rad_s(), &r, k);
     let shift = delay_samples(m.torque_delay_s, d.fs_hz);
     let string_nm: Vec<f64> = r
         .clone()
@@ -275,10 +277,11 @@ pub fn report(ev: &Evaluator, sel: &crate::select::Selection) -> Result<Option<D
 }
 
 /// Short names of the seven targets (per-window table).
-const SHORT: [&str; crate::features::N_FEATURES] = ["max", "min", "stick", "fund", "loop", "slip T", "break-away T"];
+pub(crate) const SHORT: [&str; crate::features::N_FEATURES] =
+    ["max", "min", "stick", "fund", "loop", "slip T", "break-away T"];
 
 /// The targets `sim` holds on window `wi` of the study (|e| ≤ 1, [`crate::score::feature_errors`]).
-fn held(s: &crate::study::Study, sim: &crate::Features, wi: usize) -> Vec<&'static str> {
+pub(crate) fn held(s: &crate::study::Study, sim: &crate::Features, wi: usize) -> Vec<&'static str> {
     let e = crate::score::feature_errors(&s.measured[wi], sim);
     SHORT.iter().zip(e).filter(|(_, x)| x.abs() <= 1.0).map(|(n, _)| *n).collect()
 }

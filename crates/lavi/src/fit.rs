@@ -22,14 +22,29 @@ pub struct Structure {
     pub sensor_inertia_kgm2: f64,
     /// The torque channel is late on the speed channels by this much: T(t) = T_m(t + τ), s.
     pub torque_delay_s: f64,
+    /// The top-speed channel is late on the bit speed by this much (negative:
+    /// early): the top's speed at t is the channel's sample at t + τ_top, s
+    /// (`top_delay`, [`crate::top_delay`]; not serialised at 0, the structures
+    /// that never read the top on another clock).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub top_delay_s: f64,
     /// The law is fitted to T·W_ref/W (torque = WOB·μ).
     pub wob: bool,
 }
 
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
+}
+
 impl Structure {
     /// The baseline: damping on the twist rate (Real et al. 2018), torque read at the contact, no WOB.
-    pub const BASELINE: Structure =
-        Structure { damping: Damping::TwistRate, sensor_inertia_kgm2: 0.0, torque_delay_s: 0.0, wob: false };
+    pub const BASELINE: Structure = Structure {
+        damping: Damping::TwistRate,
+        sensor_inertia_kgm2: 0.0,
+        torque_delay_s: 0.0,
+        top_delay_s: 0.0,
+        wob: false,
+    };
 }
 
 /// A physically constrained parameter the least squares put beyond its bound:
@@ -83,7 +98,7 @@ fn derive_with(
     let r = (cal.span.start + cal.window.start)..(cal.span.start + cal.window.end);
     let t = &d.time_s[r.clone()];
     let rad = |x: &[f64]| x.iter().map(|v| v * RPM_TO_RAD_S).collect::<Vec<f64>>();
-    let (top, bit) = (rad(&d.top_rpm[r.clone()]), rad(&d.bit_rpm[r.clone()]));
+    let (top, bit) = (top_rad_s(d, r.clone(), st.top_delay_s), rad(&d.bit_rpm[r.clone()]));
     let acc = derivative(&bit, d.fs_hz);
     let shift = (st.torque_delay_s * d.fs_hz).round() as isize;
     let torque_at = |i: usize| d.torque_nm[(i as isize + shift).clamp(0, d.len() as isize - 1) as usize];
@@ -176,14 +191,22 @@ fn derive_with(
     Ok((model, info))
 }
 
+/// The top speed over samples `r`, rad/s, on the bit speed's clock when the
+/// top-speed channel is late by `top_delay_s` (negative: early): sample i is the
+/// channel's sample i + τ_top f_s (whole samples, the record's ends standing in beyond them).
+pub fn top_rad_s(d: &Prepared, r: std::ops::Range<usize>, top_delay_s: f64) -> Vec<f64> {
+    let k = crate::sim::delay_samples(top_delay_s, d.fs_hz);
+    crate::sim::read_late(&d.top_rpm, &r, k).iter().map(|v| v * RPM_TO_RAD_S).collect()
+}
+
 /// The torque channel's delay on the speed channels that fits the equation of
 /// motion best (least residual of the unconstrained fit under `st`'s damping and
 /// sensor inertia) on the calibration window, over ±`max_s` in steps of one sample.
 pub fn best_delay_s(d: &Prepared, cal: &WindowSpec, st: Structure, max_s: f64) -> f64 {
     let r = (cal.span.start + cal.window.start)..(cal.span.start + cal.window.end);
     let t = &d.time_s[r.clone()];
-    let rad = |x: &[f64]| x.iter().map(|v| v * RPM_TO_RAD_S).collect::<Vec<f64>>();
-    let (top, bit) = (rad(&d.top_rpm[r.clone()]), rad(&d.bit_rpm[r.clone()]));
+    let bit: Vec<f64> = d.bit_rpm[r.clone()].iter().map(|v| v * RPM_TO_RAD_S).collect();
+    let top = top_rad_s(d, r.clone(), st.top_delay_s);
     let acc = derivative(&bit, d.fs_hz);
     let m = (max_s * d.fs_hz).round() as isize;
     let mut best = (f64::NEG_INFINITY, 0.0);
@@ -220,8 +243,8 @@ pub struct ChannelBalance {
 /// [`ChannelBalance`] of window `w` (its `window` samples) under `m`'s J, k, c, c_a and torque delay.
 pub fn channel_balance(d: &Prepared, w: &WindowSpec, m: &Model) -> ChannelBalance {
     let r = (w.span.start + w.window.start)..(w.span.start + w.window.end);
-    let rad = |x: &[f64]| x.iter().map(|v| v * RPM_TO_RAD_S).collect::<Vec<f64>>();
-    let (top, bit) = (rad(&d.top_rpm[r.clone()]), rad(&d.bit_rpm[r.clone()]));
+    let bit: Vec<f64> = d.bit_rpm[r.clone()].iter().map(|v| v * RPM_TO_RAD_S).collect();
+    let top = top_rad_s(d, r.clone(), m.structure.top_delay_s);
     let acc = derivative(&bit, d.fs_hz);
     let dphi = rig_model::one_dof::integrated_twist_rad(&d.time_s[r.clone()], &top, &bit);
     let shift = crate::sim::delay_samples(m.torque_delay_s, d.fs_hz);
@@ -296,6 +319,9 @@ pub struct Fitted {
     pub params: BTreeMap<String, f64>,
     pub calibration_misfit: f64,
     pub evaluations: usize,
+    /// `top_delay`'s scan on the model it extended (empty for every other candidate; reported, not serialised).
+    #[serde(skip)]
+    pub top_scan: Vec<crate::top_delay::ScanPoint>,
 }
 
 fn logistic(x: f64) -> f64 {
@@ -313,6 +339,7 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
     let j = current.inertia_kgm2;
     let mut params = BTreeMap::new();
     let mut at_bounds = Vec::new();
+    let mut top_scan = Vec::new();
     let (model, evals) = match c {
         Candidate::WobNormalForce => {
             // A least-squares law is refitted as μ = T/W (torque = WOB·μ); a simulation-fitted law is kept.
@@ -383,6 +410,9 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
             insert_law_params(&mut params, &m, family);
             (m, n + 2 * (MAX_DELAY_S * ev.data.fs_hz).round() as usize + 1)
         }
+        Candidate::TopDelay => {
+            crate::top_delay::fit(current, ev, max_evals, &mut params, &mut at_bounds, &mut top_scan)?
+        }
         Candidate::FrictionLaw => {
             let (m, total, family) = law_by_simulation(current, ev, max_evals);
             insert_law_params(&mut params, &m, family);
@@ -452,14 +482,7 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
             params.insert("ki_nm_rad".into(), id.used.ki_nm_rad);
             params.insert("load_nm".into(), id.used.load_nm);
             params.insert("law_from_torque".into(), f64::from(u8::from(from_torque)));
-            let family = if m.friction.shape_exponent == 2.0 {
-                2.0
-            } else if m.friction.stribeck_speed_rad_s == 0.01 {
-                0.0
-            } else {
-                1.0
-            };
-            insert_law_params(&mut params, &m, family);
+            insert_law_params(&mut params, &m, family_of(&m.friction));
             (m, 2)
         }
         Candidate::CompliantDrive => {
@@ -494,7 +517,7 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
         let (_, info) = derive(ev.data, &ev.windows[cal], ev.slip_speed_rpm, model.structure)?;
         at_bounds.extend(info.at_bounds);
     }
-    Ok(Fitted { model, at_bounds, params, calibration_misfit, evaluations: evals })
+    Ok(Fitted { model, at_bounds, params, calibration_misfit, evaluations: evals, top_scan })
 }
 
 /// The friction law refitted by simulation on the calibration window on top
@@ -503,7 +526,7 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
 /// each by Nelder–Mead from `current`'s law, fitted in parallel; the best on
 /// the calibration window is kept (ties: family order). Returns the model, the
 /// evaluations spent and the family (0, 1, 2).
-fn law_by_simulation(current: &Model, ev: &Evaluator, max_evals: usize) -> (Model, usize, f64) {
+pub(crate) fn law_by_simulation(current: &Model, ev: &Evaluator, max_evals: usize) -> (Model, usize, f64) {
     let keep = |m: &Model, _: &[f64]| Some(*m);
     let (m, n, family, _) = law_by_simulation_with(current, ev, max_evals, &[], &keep).expect("the law alone builds");
     (m, n, family)
@@ -556,7 +579,18 @@ fn law_by_simulation_with(
     Some((best.1?, total, best.3, best.4))
 }
 
-fn insert_law_params(params: &mut BTreeMap<String, f64>, m: &Model, family: f64) {
+/// The family of `law` as [`law_by_simulation`] numbers them: 0 Coulomb (the 0.01 rad/s jump), 1 exponential, 2 Gaussian.
+pub(crate) fn family_of(law: &FrictionLaw) -> f64 {
+    if law.shape_exponent == 2.0 {
+        2.0
+    } else if law.stribeck_speed_rad_s == 0.01 {
+        0.0
+    } else {
+        1.0
+    }
+}
+
+pub(crate) fn insert_law_params(params: &mut BTreeMap<String, f64>, m: &Model, family: f64) {
     params.insert("family".into(), family);
     params.insert("static_nm".into(), m.friction.static_nm);
     params.insert("kinetic_nm".into(), m.friction.kinetic_nm);
@@ -653,6 +687,18 @@ pub(crate) mod tests {
         (d, cal)
     }
 
+    /// The calibration-like window 4-8 s of a 12 s test record at 1 kHz (warm-up from 1 s).
+    pub(crate) fn window_4_8() -> WindowSpec {
+        WindowSpec {
+            label: "4-8".into(),
+            split: crate::data::Split::Train,
+            start_s: 4.0,
+            end_s: 8.0,
+            span: 1000..8000,
+            window: 3000..7000,
+        }
+    }
+
     /// 12 s of stick-slip simulated by the one core (J 0.01 kg m2, k 4 N m/rad, c 0.01 N m s/rad, Coulomb
     /// 2.5/1.5 N m, top 2 + sin(2π 0.5 t) rad/s), its contact torque recorded `late` samples late
     /// plus `js` times the bit's acceleration; the calibration-like window 4-8 s.
@@ -669,14 +715,7 @@ pub(crate) mod tests {
         let rpm = |x: &[f64]| x.iter().map(|v| v / RPM_TO_RAD_S).collect::<Vec<f64>>();
         let (top_rpm, bit_rpm) = (rpm(&top), rpm(&r.bit_rad_s));
         let d = prepared((0..n).map(|i| i as f64 / fs).collect(), top_rpm, bit_rpm, torque_nm);
-        let w = WindowSpec {
-            label: "4-8".into(),
-            split: crate::data::Split::Train,
-            start_s: 4.0,
-            end_s: 8.0,
-            span: 1000..8000,
-            window: 3000..7000,
-        };
+        let w = window_4_8();
         let law = FrictionLaw {
             static_nm: 2.5,
             kinetic_nm: 1.5,

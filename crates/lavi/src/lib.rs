@@ -26,6 +26,7 @@
 //! | `channel_delay` | the torque channel is late (or early) on the speed channels: T_m(t) = T_f(t − τ) | τ by least squares of the equation of motion over ±50 ms, J, k, c refitted with T_m(t + τ) as the contact torque, the law then refitted by simulation as `friction_law`'s; the simulated torque channel is read τ late, like the measured one, so every torque–speed feature compares one time base | `torque_delay_s`, and `friction_law`'s keys |
 //! | `compliant_drive` | the top speed is not imposed: a PI speed loop on a motor inertia | J_m, K_p, K_i; set point = moving mean of the measured top speed (the law is kept: refitted by simulation it lowered the calibration misfit and raised the held-out one) | `drive_inertia_kgm2`, `kp_nm_s_rad`, `ki_nm_rad` |
 //! | `motor_drive` | the top answers the bit: a motor under a speed loop whose speed responds to the string torque (the chapter's Eq. 4-6/4-7 motor row with its PI loop, [`drive`]) | J_m, K_p, K_i, T_0 identified by linear least squares on the calibration window (the top speed's response to the string torque; J_m below the chapter's motor inertia and K_i < 0 pinned, reported); reference = the measured top speed's moving mean; then the law decided on the calibration window by the joint score: the current one, or the least-squares law of the torque as the current structure reads it (the falling law, run again now that the top answers) | `drive_inertia_kgm2`, `kp_nm_s_rad`, `ki_nm_rad`, `load_nm`, `law_from_torque` (1: the least-squares law), and `friction_law`'s keys |
+//! | `top_delay` | the top-speed channel is late (or early) on the bit speed: Ω_top(t) = Ω_top,m(t + τ_top), jointly with the torque channel's delay ([`top_delay`]) | τ_top over ±50 ms on the calibration window's free run of each structure's least-squares J, k, c and law (the torque delay by least squares for each τ_top), then the law refitted by simulation on that structure (like `channel_delay`'s); the better of the two on the calibration window | `top_delay_s`, `torque_delay_s`, `law_from_torque` (1: the least-squares law kept), and `friction_law`'s keys |
 //! | `unexplained` | a significant mismatch is left (adequacy below) | — | — |
 //!
 //! The structural candidates that change the motion (`channel_delay`,
@@ -61,6 +62,7 @@ pub mod select;
 pub mod signature;
 pub mod sim;
 pub mod study;
+pub mod top_delay;
 
 pub use features::{FEATURES, FeatureOptions, Features, StickTorque, stick_torque, window_features};
 pub use render::StudyOutput;
@@ -102,10 +104,11 @@ pub enum Candidate {
     AbsoluteDamping,
     ChannelDelay,
     MotorDrive,
+    TopDelay,
 }
 
 impl Candidate {
-    pub const ALL: [Candidate; 9] = [
+    pub const ALL: [Candidate; 10] = [
         Candidate::FrictionLaw,
         Candidate::WobNormalForce,
         Candidate::SensorInertia,
@@ -115,6 +118,7 @@ impl Candidate {
         Candidate::AbsoluteDamping,
         Candidate::ChannelDelay,
         Candidate::MotorDrive,
+        Candidate::TopDelay,
     ];
 
     pub fn id(self) -> &'static str {
@@ -128,6 +132,7 @@ impl Candidate {
             Candidate::AbsoluteDamping => "absolute_damping",
             Candidate::ChannelDelay => "channel_delay",
             Candidate::MotorDrive => "motor_drive",
+            Candidate::TopDelay => "top_delay",
         }
     }
 }

@@ -32,7 +32,7 @@ const TARGETS: [&str; N_FEATURES] = [
     "within 10 %",
 ];
 /// The effect ids of this rig, as the crate docs list them.
-const EFFECT_IDS: [(&str, &str); 11] = [
+const EFFECT_IDS: [(&str, &str); 12] = [
     ("none", "the baseline explains the held-out windows within the adequacy threshold."),
     (
         "friction_law",
@@ -66,6 +66,10 @@ const EFFECT_IDS: [(&str, &str); 11] = [
     (
         "motor_drive",
         "the top answers the bit: a motor under a speed loop, J_m Ω'_top = K_p (Ω_ref − Ω_top) + K_i ∫(Ω_ref − Ω_top) dt + T_0 − T_s (the chapter's Eq. 4-6/4-7 motor row with its PI loop), J_m, K_p, K_i, T_0 identified by linear least squares on the calibration window, Ω_ref the measured top speed's moving mean; the law then decided on the calibration window: the current one or the least-squares law of the torque as the current structure reads it (`drive_inertia_kgm2`, `kp_nm_s_rad`, `ki_nm_rad`, `load_nm`, `law_from_torque` and the law's keys).",
+    ),
+    (
+        "top_delay",
+        "the top-speed channel late (or early) on the bit speed by τ_top, jointly with the torque channel's delay: τ_top within ±50 ms where the free run of the least-squares J, k, c and law of each τ_top (the torque delay by least squares for it) fits the calibration window best, then the law refitted by simulation on that structure like `friction_law`, the better of the two on the calibration window kept (`top_delay_s`, `torque_delay_s`, `law_from_torque` and the law's keys).",
     ),
     (
         "unexplained",
@@ -783,6 +787,7 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
             );
         }
     }
+    md.push_str(&crate::top_delay::section(s));
     md.push_str(&crate::drive::section(s));
     let h = &s.wob;
     let _ = writeln!(md, "## The chapter's hypothesis: a varying normal force\n");
@@ -1078,6 +1083,35 @@ fn torque_level_hypothesis(s: &Study) -> String {
     let rel = |f: &dyn Fn(&Features) -> f64| {
         100.0 * mean(&held.iter().map(|&w| f(&s.final_features[w]) / f(&s.measured[w]) - 1.0).collect::<Vec<f64>>())
     };
+    let top_delay_s = s.selection.final_model.structure.top_delay_s;
+    // The two laws from 0 to the cycle maximum, the delay, and the least-squares law's free run.
+    let (e0, ev_, tau_ms, a0, av, free) = (
+        ext.slip_nm(0.0),
+        ext.slip_nm(v),
+        1e3 * s.structures[i].1.structure.torque_delay_s,
+        aligned.slip_nm(0.0),
+        aligned.slip_nm(v),
+        s.structure_heldout[i],
+    );
+    if top_delay_s != 0.0 && ev_ < e0 {
+        return format!(
+            "- The torque level (`slip_torque_nm`, `breakaway_torque_nm`): from 0 to {v_rpm:.0} rpm (the calibration window's mean \
+             cycle maximum) the extended model's law falls from {:.3} to {:.3} N m, as the torque channel does (the least-squares law \
+             of the torque read {:.0} ms later on the top's recorded clock: {:.3} to {:.3} N m, whose free run leaves the held-out \
+             misfit at {:.3}, the structure table): with the top speed read {:.0} ms later, the falling law runs free in stick-slip \
+             (The top speed's clock, below). The free run's slip torque is {:+.0} % and its break-away torque {:+.0} % of the \
+             measured ones (held-out means).",
+            e0,
+            ev_,
+            tau_ms,
+            a0,
+            av,
+            free,
+            1e3 * top_delay_s,
+            rel(&|f| f.slip_torque_nm),
+            rel(&|f| f.breakaway_torque_nm),
+        );
+    }
     format!(
         "- Leading hypothesis for the torque level (`slip_torque_nm`, `breakaway_torque_nm`): from 0 to {v_rpm:.0} rpm (the \
          calibration window's mean cycle maximum) the extended model's law goes from {:.3} to {:.3} N m, while the least-squares law of \
@@ -1088,12 +1122,12 @@ fn torque_level_hypothesis(s: &Study) -> String {
          imposed top speed (its slope beats the damping). The hypothesis that the real top answers the bit as a motor under a \
          speed loop, a feedback the imposed top speed cannot give, is tested by `motor_drive` (The drive that answers the bit, \
          below): {}",
-        ext.slip_nm(0.0),
-        ext.slip_nm(v),
-        1e3 * s.structures[i].1.structure.torque_delay_s,
-        aligned.slip_nm(0.0),
-        aligned.slip_nm(v),
-        s.structure_heldout[i],
+        e0,
+        ev_,
+        tau_ms,
+        a0,
+        av,
+        free,
         rel(&|f| f.slip_torque_nm),
         rel(&|f| f.breakaway_torque_nm),
         match &s.drive {
@@ -1127,6 +1161,9 @@ fn stick_torque_finding(s: &Study) -> String {
         };
         (n, falling, avg(&|x| x.entry_nm), avg(&|x| x.exit_nm), avg(&|x| x.peak_position))
     };
+    // A law that does not fall over the calibration window's cycle is the one the motion forced (leading hypothesis).
+    let law = &s.selection.final_model.friction;
+    let rises = law.slip_nm(s.measured[0].bit_speed_max_rpm * RPM_TO_RAD_S) >= law.slip_nm(0.0);
     let m = pool(&s.stick_torque[1..].iter().map(|w| &w[0]).collect::<Vec<_>>());
     let f = pool(&s.stick_torque[1..].iter().map(|w| &w[1]).collect::<Vec<_>>());
     let each: Vec<String> = s
@@ -1146,8 +1183,7 @@ fn stick_torque_finding(s: &Study) -> String {
          torque of the deceleration before it. The extended model's free runs go from {:.3} to {:.3} N m ({} of {} phases end \
          lower, largest torque at {:.2}). Phases ending lower, per step-1 candidate's free runs: {}. The shape follows the \
          channel's delay; the level does not: the torque at the stick's entry is the law's low-speed torque, {:.3} N m in the \
-         extended model against {:.3} N m recorded ({:+.0} %), the law's low-speed level the free run's motion does not allow \
-         (leading hypothesis above).",
+         extended model against {:.3} N m recorded ({:+.0} %){}.",
         m.2,
         m.3,
         m.1,
@@ -1161,7 +1197,12 @@ fn stick_torque_finding(s: &Study) -> String {
         each.join(", "),
         f.2,
         m.2,
-        100.0 * (f.2 / m.2 - 1.0)
+        100.0 * (f.2 / m.2 - 1.0),
+        if rises {
+            ", the law's low-speed level the free run's motion does not allow (leading hypothesis above)"
+        } else {
+            ""
+        }
     )
 }
 

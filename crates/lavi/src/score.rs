@@ -28,7 +28,7 @@
 use crate::LaviError;
 use crate::data::{Prepared, RPM_TO_RAD_S, WindowSpec, derivative};
 use crate::features::{FeatureOptions, Features, N_FEATURES, StickTorque, stick_torque, window_features};
-use crate::sim::{Inputs, Model, Run, Start, delay_samples, simulate};
+use crate::sim::{Inputs, Model, Run, Start, delay_samples, read_late, simulate};
 use rayon::prelude::*;
 
 /// Cap on one feature's normalised error.
@@ -165,11 +165,14 @@ impl<'a> Evaluator<'a> {
     /// Free run of `m` over window `wi`'s span (warm-up included), from the measured state at its start.
     pub fn simulate(&self, m: &Model, wi: usize) -> Result<Run, LaviError> {
         let s = self.windows[wi].span.clone();
+        // The top speed on the bit's clock: the channel read τ_top later when it is late by τ_top.
+        let k = delay_samples(m.structure.top_delay_s, self.data.fs_hz);
+        let (top, top_ref) = (read_late(&self.top_rad_s, &s, k), read_late(&self.top_ref_rad_s, &s, k));
         let u = Inputs {
             fs_hz: self.data.fs_hz,
-            top_rad_s: &self.top_rad_s[s.clone()],
+            top_rad_s: &top,
             wob_n: &self.data.wob_n[s.clone()],
-            top_ref_rad_s: &self.top_ref_rad_s[s.clone()],
+            top_ref_rad_s: &top_ref,
         };
         // The contact torque at the start as the channel reads it: τ later when the channel is late by τ.
         let at = (s.start as isize + delay_samples(m.torque_delay_s, self.data.fs_hz))

@@ -45,6 +45,12 @@ impl engine::Candidate<Lavi<'_, '_>, Fitted> for Candidate {
     fn inadmissible(&self, _: &Lavi<'_, '_>, current: &[Fitted], fitted: &[Fitted]) -> Option<String> {
         worse_on_calibration(&current[0], &fitted[0])
     }
+
+    /// `top_delay` fits the torque channel's delay jointly with the top's (it is
+    /// `channel_delay` at τ_top = 0): the two are alternatives, one per model.
+    fn group(&self) -> Option<&str> {
+        matches!(self, Candidate::ChannelDelay | Candidate::TopDelay).then_some("channel_clock")
+    }
 }
 
 /// The admissibility rule: no worse on the window the candidate was fitted on.
@@ -110,6 +116,7 @@ pub fn forward_select(
         params: BTreeMap::new(),
         calibration_misfit: ev.misfit(baseline, ev.calibration()),
         evaluations: 0,
+        top_scan: Vec::new(),
     };
     let study = Lavi { ev, max_evals };
     let cands: Vec<&dyn engine::Candidate<Lavi, Fitted>> =
@@ -128,6 +135,7 @@ pub fn forward_select(
                 params: BTreeMap::new(),
                 calibration_misfit: f64::INFINITY,
                 evaluations: 0,
+                top_scan: Vec::new(),
             },
         };
         trials.push(Trial {

@@ -42,6 +42,7 @@ fn samples(ev: &Evaluator, m: &Model, wi: usize) -> Samples {
     let r = (w.span.start + w.window.start)..(w.span.start + w.window.end);
     let bit: Vec<f64> = d.bit_rpm[r.clone()].iter().map(|v| v * RPM_TO_RAD_S).collect();
     let acc = derivative(&bit, d.fs_hz);
+    let top = crate::fit::top_rad_s(d, r.clone(), m.structure.top_delay_s);
     let wob = &d.wob_n[r.clone()];
     let wdot = derivative(wob, d.fs_hz);
     let wmean = wob.iter().sum::<f64>() / wob.len() as f64;
@@ -53,7 +54,7 @@ fn samples(ev: &Evaluator, m: &Model, wi: usize) -> Samples {
         let g = m.wob_ref_n.map_or(1.0, |w_ref| wob[k] / w_ref);
         let pred = bit[k].signum() * g * m.friction.slip_nm(bit[k]) + m.sensor_inertia_kgm2 * acc[k];
         s.r.push(d.torque_nm[i] - pred);
-        s.x.push([acc[k], wob[k] - wmean, wdot[k], d.top_rpm[i] * RPM_TO_RAD_S - bit[k], bit[k]]);
+        s.x.push([acc[k], wob[k] - wmean, wdot[k], top[k] - bit[k], bit[k]]);
     }
     s
 }

@@ -171,6 +171,18 @@ pub fn delay_samples(delay_s: f64, fs_hz: f64) -> isize {
     (delay_s * fs_hz).round() as isize
 }
 
+/// Samples `s` of the channel `x` read `k` samples later (k < 0: earlier; the
+/// record's ends stand in beyond them): a channel on another clock brought onto
+/// the bit speed's. Borrowed when the shifted range lies inside the record.
+pub fn read_late<'x>(x: &'x [f64], s: &std::ops::Range<usize>, k: isize) -> std::borrow::Cow<'x, [f64]> {
+    let (a, b) = (s.start as isize + k, s.end as isize + k);
+    if a >= 0 && b <= x.len() as isize {
+        std::borrow::Cow::Borrowed(&x[a as usize..b as usize])
+    } else {
+        s.clone().map(|i| x[(i as isize + k).clamp(0, x.len() as isize - 1) as usize]).collect()
+    }
+}
+
 /// Integrates `m` from `start` under `u` (see the module docs) on the one
 /// simulator core, rig_model::one_dof; the sensor's inertia and delay act on its torque channel.
 pub fn simulate(m: &Model, u: &Inputs, start: Start, substeps: usize) -> Result<Run, LaviError> {

@@ -69,6 +69,8 @@ pub struct Study {
     pub candidate_stick_torque: Vec<(Candidate, Vec<StickTorque>)>,
     /// The drive that answers the bit (`motor_drive`): its identification and its free runs' channels.
     pub drive: Option<crate::drive::DriveReport>,
+    /// The top speed's clock (`top_delay`): its scan, its rivals side by side, per window before → after.
+    pub top_delay: Option<crate::top_delay::TopDelayReport>,
 }
 
 impl Study {
@@ -101,7 +103,7 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
     let wob = wob_hypothesis(&ev, &selection)?;
     let adequate = overall(&selection.final_heldout) <= p.adequacy_threshold;
     let signature = if adequate { Vec::new() } else { residual_signature(&ev, &selection.final_model)? };
-    let candidate_features =
+    let candidate_features: Vec<(Candidate, Vec<Features>)> =
         selection.trials.iter().filter(|t| t.step == 1).map(|t| (t.candidate, sim_features(&t.fitted.model))).collect();
     let structures = structure_lead(&d, &wins[0], p.slip_speed_rpm, &selection)?;
     let (structure_heldout, structure_laws) = structures
@@ -146,6 +148,7 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
         })
         .collect::<Result<Vec<_>, LaviError>>()?;
     let drive = crate::drive::report(&ev, &selection)?;
+    let top_delay = crate::top_delay::report(&selection, &candidate_features);
     let study = Study {
         params: p.clone(),
         windows: wins,
@@ -168,6 +171,7 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
         stick_torque,
         candidate_stick_torque,
         drive,
+        top_delay,
     };
     Ok((study, d, rec))
 }
