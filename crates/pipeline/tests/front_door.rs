@@ -237,7 +237,8 @@ fn an_accepted_campaign_is_not_validated_again_until_its_bytes_change() {
     assert_eq!(READS.load(SeqCst), 3);
     assert_eq!(std::fs::read_dir(&out).unwrap().count(), before, "a refusal writes nothing");
     // Truncated mid-line: refused too.
-    std::fs::write(&csv, &good[..good.len() / 2 - 3]).unwrap();
+    let cut = good[..good.len() / 2].rfind(',').unwrap() + 1;
+    std::fs::write(&csv, &good[..cut]).unwrap();
     let msg = rig_pipeline::describe(&run().unwrap_err().into());
     assert!(msg.starts_with(&format!("campaign refused: {}:", csv.display())), "{msg}");
     // Restored: the record is still that of these bytes (a refusal records nothing).
