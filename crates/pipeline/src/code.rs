@@ -16,6 +16,7 @@ use crate::error::PipelineError;
 use crate::fingerprint::{includes, join_rel};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
 /// One workspace crate: its folder (relative to the root) and the library
 /// names of the workspace crates it depends on (normal and build dependencies).
@@ -23,6 +24,9 @@ use std::path::{Path, PathBuf};
 struct CrateInfo {
     dir: String,
     deps: Vec<String>,
+    /// The files its sources pull in (`include_*!`), relative to the root:
+    /// scanned once per index, not once per stage that names the crate.
+    includes: OnceLock<Vec<String>>,
 }
 
 /// The workspace's crates by library name (`rig_sweep`), read from the `Cargo.toml` files.
@@ -71,7 +75,9 @@ impl CodeIndex {
                     crate_deps.extend(t.keys().filter(|k| dirs.contains_key(*k)).map(|k| lib_name(k)));
                 }
             }
-            index.crates.insert(lib_name(name), CrateInfo { dir: dir.clone(), deps: crate_deps });
+            index
+                .crates
+                .insert(lib_name(name), CrateInfo { dir: dir.clone(), deps: crate_deps, includes: OnceLock::new() });
         }
         Ok(index)
     }
@@ -131,15 +137,22 @@ impl CodeIndex {
             }
         }
         for lib in code.crates.clone() {
-            let dir = &self.crates[&lib].dir;
+            let info = &self.crates[&lib];
+            let dir = &info.dir;
             code.paths.insert(format!("{dir}/src"));
             code.paths.insert(format!("{dir}/Cargo.toml"));
-            for file in rust_files(&self.root.join(dir).join("src"), &format!("{dir}/src"))? {
-                let text = read(&self.root.join(&file))?;
-                for inc in includes(&text) {
-                    code.paths.insert(join_rel(&file, &inc));
+            let pulled = match info.includes.get() {
+                Some(pulled) => pulled,
+                None => {
+                    let mut pulled = Vec::new();
+                    for file in rust_files(&self.root.join(dir).join("src"), &format!("{dir}/src"))? {
+                        let text = read(&self.root.join(&file))?;
+                        pulled.extend(includes(&text).iter().map(|inc| join_rel(&file, inc)));
+                    }
+                    info.includes.get_or_init(|| pulled)
                 }
-            }
+            };
+            code.paths.extend(pulled.iter().cloned());
         }
         // A crate's own folder covers the files under it.
         let dirs: Vec<String> = code.paths.iter().filter(|p| self.root.join(p).is_dir()).cloned().collect();

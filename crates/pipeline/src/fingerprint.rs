@@ -11,8 +11,11 @@
 //! Covered: the root `Cargo.toml` and `Cargo.lock`; for `xtask` and every
 //! folder under `crates/`, its `Cargo.toml` and every file under `src/`;
 //! and every file those sources pull in with `include_str!` or
-//! `include_bytes!`. The hash is 64-bit FNV-1a over each file's path, length
-//! and bytes in path order: it detects an edit, it is not a security measure.
+//! `include_bytes!`. The hash is 64-bit FNV-1a's step over each file's path,
+//! length and bytes in path order, taken 8 bytes (a little-endian word) at a
+//! time and the tail byte by byte (this crate runs unoptimised in the dev
+//! profile: a step per word is 8× fewer steps than per byte): it detects an
+//! edit, it is not a security measure.
 //!
 //! This file is also compiled into the build script (`#[path]`), so it uses
 //! the standard library only.
@@ -102,7 +105,12 @@ pub fn fingerprint(root: &Path) -> std::io::Result<String> {
     const PRIME: u64 = 0x0000_0100_0000_01b3;
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     let mut feed = |bytes: &[u8]| {
-        for &b in bytes {
+        let words = bytes.chunks_exact(8);
+        let tail = words.remainder();
+        for w in words {
+            h = (h ^ u64::from_le_bytes(w.try_into().expect("8 bytes"))).wrapping_mul(PRIME);
+        }
+        for &b in tail {
             h = (h ^ u64::from(b)).wrapping_mul(PRIME);
         }
     };

@@ -14,6 +14,7 @@
 //! `<out>/manifest.json`. `cargo xtask reproduce` also writes each stage's wall
 //! and CPU time to `<out>/timings.json` ([`timing`]), outside the manifest.
 
+mod accepted;
 pub mod code;
 mod config;
 mod ctx;

@@ -1,6 +1,7 @@
 //! The DAG runner: dependency order with independent stages in parallel, skip
 //! by content hash, atomic commits, the manifest, and a report of what ran and why.
 
+use crate::accepted::{self, AcceptedCampaign};
 use crate::code::CodeIndex;
 use crate::config::{Input, ParamsCheck, PipelineConfig, Registry, Sources, StageDecl};
 use crate::error::PipelineError;
@@ -14,7 +15,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// Reads and validates a campaign folder (`rig_ingest::read_campaign`).
 pub type CampaignReader = fn(&Path) -> Result<Campaign, rig_ingest::IngestError>;
@@ -138,6 +139,10 @@ pub struct Runner {
     params_check: ParamsCheck,
     campaign_reader: Option<CampaignReader>,
     needs: Needs,
+    /// The code the reader and the needs are (the sources' fingerprint) when
+    /// they are the real ones: then an accepted campaign is remembered
+    /// (module `accepted`); `None` with any other reader or needs table.
+    accepted_code: Option<&'static str>,
     campaign: Option<PathBuf>,
     out: Option<PathBuf>,
     jobs: usize,
@@ -164,7 +169,18 @@ impl Runner {
             .stage_sources(crate::stages::source)
             .params_check(crate::stages::check_params)
             .campaign_reader(rig_ingest::read_campaign)
-            .campaign_needs(crate::stages::needs))
+            .campaign_needs(crate::stages::needs)
+            .remember_accepted(crate::BUILT_FROM))
+    }
+
+    /// Remembers an accepted campaign (module `accepted`) for a reader and
+    /// needs table whose code is `code` (`Runner::new`: the sources'
+    /// fingerprint). Set after [`Runner::campaign_reader`] and
+    /// [`Runner::campaign_needs`], which forget it; tests name their own code.
+    #[doc(hidden)]
+    pub fn remember_accepted(mut self, code: &'static str) -> Self {
+        self.accepted_code = Some(code);
+        self
     }
 
     /// The pipeline at `path` with another registry (tests use fake stages).
@@ -177,6 +193,7 @@ impl Runner {
             params_check: |_, _| Ok(()),
             campaign_reader: None,
             needs: |_| &[],
+            accepted_code: None,
             campaign: None,
             out: None,
             jobs: 2,
@@ -210,6 +227,7 @@ impl Runner {
     /// registries) stages read the campaign themselves.
     pub fn campaign_reader(mut self, read: CampaignReader) -> Self {
         self.campaign_reader = Some(read);
+        self.accepted_code = None;
         self
     }
 
@@ -220,6 +238,7 @@ impl Runner {
     /// and the stage ([`PipelineError::CampaignUnfit`]).
     pub fn campaign_needs(mut self, needs: Needs) -> Self {
         self.needs = needs;
+        self.accepted_code = None;
         self
     }
 
@@ -330,32 +349,41 @@ impl Runner {
             let names: Vec<&str> = self.only.iter().map(String::as_str).collect();
             graph::with_upstream(&self.config, &names)?
         };
+        let order: Vec<String> =
+            graph::topological_order(&self.config)?.into_iter().filter(|n| selected.contains(n)).collect();
+        // Content hashes of this run, shared by the front door and every stage key.
+        let memo = Mutex::new(BTreeMap::new());
         // The campaign is read and validated once, before any stage runs, when a
-        // selected stage reads it; stages share this copy.
+        // selected stage reads it (or, accepted before on the same bytes and code,
+        // read when the first stage that reads it runs); stages share this copy.
         let reads_campaign = self
             .config
             .stages
             .iter()
             .filter(|s| selected.contains(&s.name))
             .any(|s| s.inputs.iter().any(|i| matches!(i, Input::Path(p) if p.starts_with("{campaign}"))));
+        let mut accept = None;
         let campaign = match self.campaign_reader {
-            Some(read) if reads_campaign && dirs.campaign.is_dir() => Some(Arc::new(read(&dirs.campaign)?)),
+            Some(read) if reads_campaign && dirs.campaign.is_dir() => {
+                // Every stage that may run this time: on-demand ones only when asked for.
+                let enabled: Vec<&str> = order
+                    .iter()
+                    .filter(|n| self.may_run(self.config.stage(n).expect("validated")))
+                    .map(String::as_str)
+                    .collect();
+                let (source, record) = self.front_door(read, &dirs, &enabled, &memo)?;
+                accept = record;
+                Some(source)
+            }
             _ => None,
         };
-        let order: Vec<String> =
-            graph::topological_order(&self.config)?.into_iter().filter(|n| selected.contains(n)).collect();
-        if let Some(campaign) = &campaign {
-            // Every stage that may run this time: on-demand ones only when asked for.
-            let enabled = order.iter().filter(|n| self.may_run(self.config.stage(n).expect("validated")));
-            let unmet = needs::unmet(self.needs, enabled.map(String::as_str), campaign);
-            if !unmet.is_empty() {
-                return Err(PipelineError::CampaignUnfit { path: dirs.campaign.join("campaign.toml"), unmet });
-            }
-        }
         if !self.dry_run {
             std::fs::create_dir_all(&dirs.out)
                 .map_err(|source| PipelineError::Io { path: dirs.out.clone(), source })?;
             store::remove_temp_files(&dirs.out)?;
+            if let Some(record) = &accept {
+                accepted::save(&dirs.out, record)?;
+            }
         }
         let pool = rayon::ThreadPoolBuilder::new().num_threads(self.jobs).build().map_err(|e| {
             PipelineError::Config { path: self.config.path.clone(), stage: None, reason: format!("thread pool: {e}") }
@@ -373,7 +401,6 @@ impl Runner {
         // The manifest this run replaces: the record of an on-demand stage when
         // `.cache/` has none (a fresh clone), and entries kept for stages not run.
         let listed = manifest::load(&dirs.out);
-        let memo = Mutex::new(BTreeMap::new());
         let mut done: BTreeMap<String, StageReport> = BTreeMap::new();
         std::thread::scope(|scope| {
             let (tx, rx) = mpsc::channel::<StageReport>();
@@ -428,7 +455,7 @@ impl Runner {
                     bar.set_message(running.iter().cloned().collect::<Vec<_>>().join(", "));
                     let (tx, pool, dirs, memo, index) = (tx.clone(), &pool, &dirs, &memo, &index);
                     let listed = listed.get(&name).map(|l| l.record.clone());
-                    let campaign = campaign.clone();
+                    let campaign = campaign.as_ref();
                     scope.spawn(move || {
                         let watch = Stopwatch::start();
                         let mut report = pool.install(|| {
@@ -457,6 +484,52 @@ impl Runner {
         Ok(RunReport { stages, manifest, total: whole.stop() })
     }
 
+    /// The front door (module `accepted`): the campaign read and validated and
+    /// checked against the `enabled` stages' needs now, with the record to save
+    /// once the out dir exists; or, when the out dir's record says these bytes
+    /// were accepted by this code for these stages, a read deferred to the
+    /// first stage that runs and reads it (a no-op rerun reads nothing).
+    fn front_door(
+        &self,
+        read: CampaignReader,
+        dirs: &Dirs,
+        enabled: &[&str],
+        memo: &Mutex<BTreeMap<PathBuf, String>>,
+    ) -> Result<(CampaignSource, Option<AcceptedCampaign>), PipelineError> {
+        let dir = &dirs.campaign;
+        let source = |campaign: Option<Arc<Campaign>>| CampaignSource {
+            dir: dir.clone(),
+            read,
+            cell: campaign.map(|c| OnceLock::from(Ok(c))).unwrap_or_default(),
+        };
+        // The folder's hash, remembered for the stage keys (a failure to hash: validate).
+        let code_and_hash = self.accepted_code.and_then(|code| {
+            let h = hash_path(dir).ok()?;
+            memo.lock().expect("memo lock").insert(dir.clone(), h.clone());
+            Some((code, h))
+        });
+        if let Some((code, h)) = &code_and_hash
+            && let Some(last) = accepted::load(&dirs.out)
+            && accepted::key(code, dir, h, &last.hidden_files, enabled).is_ok_and(|k| k == last.key)
+        {
+            return Ok((source(None), None));
+        }
+        let campaign = read(dir)?;
+        let unmet = needs::unmet(self.needs, enabled.iter().copied(), &campaign);
+        if !unmet.is_empty() {
+            return Err(PipelineError::CampaignUnfit { path: dir.join("campaign.toml"), unmet });
+        }
+        let record = match code_and_hash {
+            Some((code, h)) => {
+                let hidden_files = accepted::hidden_files(campaign.runs.iter().map(|r| r.file.as_path()));
+                let key = accepted::key(code, dir, &h, &hidden_files, enabled)?;
+                Some(AcceptedCampaign { key, hidden_files })
+            }
+            None => None,
+        };
+        Ok((source(Some(Arc::new(campaign))), record))
+    }
+
     /// An on-demand stage runs only when asked for (`--only NAME` or `--all`); every other may.
     fn may_run(&self, decl: &StageDecl) -> bool {
         !decl.on_demand || self.all || self.only.iter().any(|o| o == &decl.name)
@@ -471,7 +544,7 @@ impl Runner {
         dirs: &Dirs,
         memo: &Mutex<BTreeMap<PathBuf, String>>,
         index: &CodeIndex,
-        campaign: Option<Arc<Campaign>>,
+        campaign: Option<&CampaignSource>,
         (upstream_runs, after_outputs): (&[String], &[(String, String)]),
         listed: Option<CacheRecord>,
         may_run: bool,
@@ -624,10 +697,16 @@ impl Runner {
         &self,
         decl: &StageDecl,
         dirs: &Dirs,
-        campaign: Option<Arc<Campaign>>,
+        campaign: Option<&CampaignSource>,
         mut record: CacheRecord,
     ) -> anyhow::Result<Option<CacheRecord>> {
         let body = (self.registry)(&decl.name).expect("validated against the registry");
+        // Only a stage that reads the campaign waits for (or triggers) its read.
+        let reads = decl.inputs.iter().any(|i| matches!(i, Input::Path(p) if p.starts_with("{campaign}")));
+        let campaign = match campaign.filter(|_| reads) {
+            Some(source) => Some(source.get()?),
+            None => None,
+        };
         let shared = dirs.shared.as_deref();
         let mut ctx = StageCtx::new(&decl.name, &dirs.campaign, &dirs.thesis, shared, &dirs.out, decl.params.clone())
             .with_campaign(campaign);
@@ -652,6 +731,24 @@ impl Runner {
         record.outputs = store::commit(&self.config, decl, &dirs.out, &staged, fault)?;
         store::save_record(&dirs.out, &record)?;
         Ok(Some(record))
+    }
+}
+
+/// The run's campaign: read and validated by the front door, or (accepted
+/// before on the same bytes, module `accepted`) read by the first stage that
+/// needs it; every stage gets the same copy.
+struct CampaignSource {
+    dir: PathBuf,
+    read: CampaignReader,
+    cell: OnceLock<Result<Arc<Campaign>, String>>,
+}
+
+impl CampaignSource {
+    fn get(&self) -> anyhow::Result<Arc<Campaign>> {
+        let got = self.cell.get_or_init(|| {
+            (self.read)(&self.dir).map(Arc::new).map_err(|e| crate::describe(&PipelineError::Campaign(e).into()))
+        });
+        got.clone().map_err(|e| anyhow::anyhow!(e))
     }
 }
 

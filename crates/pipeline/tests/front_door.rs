@@ -176,3 +176,90 @@ fn the_calibration_needs_are_what_rig_calibrate_refuses() {
         }
     }
 }
+
+/// Calls of [`counting_reader`] (one test uses it).
+static READS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// `rig_ingest::read_campaign`, counted.
+fn counting_reader(dir: &Path) -> Result<rig_types::Campaign, rig_ingest::IngestError> {
+    READS.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+    rig_ingest::read_campaign(dir)
+}
+
+/// Line `n` (1-based) of `file` replaced by `text`.
+fn edit_line(file: &Path, n: usize, text: &str) {
+    let old = std::fs::read_to_string(file).unwrap();
+    let mut lines: Vec<&str> = old.lines().collect();
+    lines[n - 1] = text;
+    std::fs::write(file, lines.join("\n") + "\n").unwrap();
+}
+
+/// The front door's memory (module `accepted`): a rerun on the bytes it
+/// accepted does not read them again, a stage that runs reads them once,
+/// and a changed, corrupted or truncated file is validated again and
+/// refused with the reader's message (file, line, rule), writing nothing.
+#[test]
+fn an_accepted_campaign_is_not_validated_again_until_its_bytes_change() {
+    use std::sync::atomic::Ordering::SeqCst;
+    let dir = tempfile::tempdir().unwrap();
+    let camp = campaign_without(dir.path(), |_| false);
+    let out = dir.path().join("out");
+    let run = || {
+        runner(&camp, &out)
+            .campaign_reader(counting_reader)
+            .remember_accepted("test code")
+            .only(&["campaign-calibration"])
+            .run()
+    };
+    let first = run().unwrap();
+    assert_eq!(first.ran(), ["campaign-calibration"], "{}", first.summary(true));
+    assert_eq!(READS.load(SeqCst), 1, "read once, by the front door, and shared with the stage");
+    assert!(out.join(".cache/accepted-campaign.json").is_file());
+    let again = run().unwrap();
+    assert!(again.ran().is_empty(), "{}", again.summary(true));
+    assert_eq!(READS.load(SeqCst), 1, "the no-op rerun reads nothing");
+    // An output gone: the stage runs, and reads the accepted campaign itself.
+    let calibration = out.join("tables/campaign-force-calibration.csv");
+    std::fs::remove_file(&calibration).unwrap();
+    let rerun = run().unwrap();
+    assert_eq!(rerun.ran(), ["campaign-calibration"], "{}", rerun.summary(true));
+    assert_eq!(READS.load(SeqCst), 2, "the stage that runs reads the accepted bytes once");
+    // A corrupted sample: validated again and refused naming file, line and rule.
+    let csv = camp.join("runs/cal-1.csv");
+    let good = std::fs::read_to_string(&csv).unwrap();
+    edit_line(&csv, 7, "0.0100,abc");
+    let before = std::fs::read_dir(&out).unwrap().count();
+    let err = run().unwrap_err();
+    assert!(matches!(err, PipelineError::Campaign(_)), "{err}");
+    let msg = rig_pipeline::describe(&err.into());
+    assert!(msg.starts_with(&format!("campaign refused: {}:7: ", csv.display())), "{msg}");
+    assert!(msg.contains("brake_force_mv") || msg.contains("number"), "names the rule: {msg}");
+    assert_eq!(READS.load(SeqCst), 3);
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), before, "a refusal writes nothing");
+    // Truncated mid-line: refused too.
+    let cut = good[..good.len() / 2].rfind(',').unwrap() + 1;
+    std::fs::write(&csv, &good[..cut]).unwrap();
+    let msg = rig_pipeline::describe(&run().unwrap_err().into());
+    assert!(msg.starts_with(&format!("campaign refused: {}:", csv.display())), "{msg}");
+    // Restored: the record is still that of these bytes (a refusal records nothing).
+    std::fs::write(&csv, &good).unwrap();
+    assert!(run().unwrap().ran().is_empty());
+    assert_eq!(READS.load(SeqCst), 4, "the accepted bytes again: not read");
+}
+
+/// The real runner (`Runner::new`, what `cargo xtask reproduce` runs): after
+/// a run, a CSV line edited by hand is refused at the next run with the
+/// file, the line and the rule, as on the first run.
+#[test]
+fn a_csv_line_edited_after_a_run_is_refused_with_file_line_and_rule() {
+    let dir = tempfile::tempdir().unwrap();
+    let camp = campaign_without(dir.path(), |_| false);
+    let out = dir.path().join("out");
+    let r = runner(&camp, &out).only(&["campaign-calibration"]).run().unwrap();
+    assert_eq!(r.ran(), ["campaign-calibration"]);
+    let csv = camp.join("runs/cal-2.csv");
+    edit_line(&csv, 12, "0.0200,151.75,7");
+    let err = runner(&camp, &out).only(&["campaign-calibration"]).run().unwrap_err();
+    let msg = rig_pipeline::describe(&err.into());
+    assert!(msg.starts_with(&format!("campaign refused: {}:12: ", csv.display())), "{msg}");
+}
