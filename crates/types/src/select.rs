@@ -338,14 +338,7 @@ where
     S: Study<M>,
     M: Clone + Send + Sync,
 {
-    let Layout { units, fold_of, train_sets, set_of_fold } = Layout::of(folds, search)?;
-    if baselines.len() != train_sets.len() {
-        return Err(SelectError(format!(
-            "{} baselines for {} distinct training sets",
-            baselines.len(),
-            train_sets.len()
-        )));
-    }
+    let Layout { units, fold_of, train_sets, set_of_fold } = Layout::of(folds, search, baselines.len())?;
     // Each held-out unit scored with the model of its fold's training set.
     let score_all = |models: &[M]| -> Vec<f64> {
         (0..units.len()).into_par_iter().map(|i| study.score(&models[set_of_fold[fold_of[i]]], units[i])).collect()
@@ -473,7 +466,7 @@ struct Layout {
 }
 
 impl Layout {
-    fn of(folds: &[Fold], search: &Search) -> Result<Layout, SelectError> {
+    fn of(folds: &[Fold], search: &Search, baselines: usize) -> Result<Layout, SelectError> {
         let mut units = Vec::new();
         let mut fold_of = Vec::new();
         let train_sets = train_sets(folds);
@@ -498,6 +491,9 @@ impl Layout {
             let mut order: Vec<(usize, usize)> = units.iter().copied().zip(fold_of.iter().copied()).collect();
             order.sort_unstable();
             (units, fold_of) = order.into_iter().unzip();
+        }
+        if baselines != train_sets.len() {
+            return Err(SelectError(format!("{baselines} baselines for {} distinct training sets", train_sets.len())));
         }
         Ok(Layout { units, fold_of, train_sets, set_of_fold })
     }
@@ -608,14 +604,7 @@ where
     S: ViewStudy<M>,
     M: Clone + Send + Sync,
 {
-    let Layout { units, fold_of, train_sets, set_of_fold } = Layout::of(folds, search)?;
-    if baselines.len() != train_sets.len() {
-        return Err(SelectError(format!(
-            "{} baselines for {} distinct training sets",
-            baselines.len(),
-            train_sets.len()
-        )));
-    }
+    let Layout { units, fold_of, train_sets, set_of_fold } = Layout::of(folds, search, baselines.len())?;
     let views = study.views();
     let score_all = |models: &[M]| -> Vec<Vec<Option<f64>>> {
         let cells: Vec<Option<f64>> = (0..views * units.len())
@@ -879,7 +868,7 @@ mod tests {
         fn score_view(&self, m: &f64, view: usize, u: usize) -> Option<f64> {
             match view {
                 0 => Some((m - self.0[u]).abs() + 0.01),
-                _ => (u % 2 == 0).then(|| (m - self.1[u]).abs() + 0.01),
+                _ => u.is_multiple_of(2).then(|| (m - self.1[u]).abs() + 0.01),
             }
         }
     }
