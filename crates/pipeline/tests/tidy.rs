@@ -484,8 +484,37 @@ fn own_selection_loops(lines: &[(PathBuf, usize, String)]) -> Vec<String> {
 /// its own step loop or ranks candidates by their gain itself.
 #[test]
 fn forward_selection_has_one_engine() {
-    let problems = own_selection_loops(&code_lines());
+    let lines = code_lines();
+    let mut problems = own_selection_loops(&lines);
+    problems.extend(selections_off_the_engine(&lines));
     assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+/// Every selection of the workspace, by the file that runs it, and what it
+/// selects: each must call the engine (`forward_select`,
+/// `forward_select_from` or `select_on_views`, on code lines). The markers of
+/// [`own_selection_loops`] see a step loop or a ranking by gain; this sees a
+/// selection that left the engine in any other spelling (the structural
+/// candidates ranked themselves by a (tier, gain) key and a filter of their own
+/// before they moved onto `select_on_views`).
+const SELECTIONS: [(&str, &str); 4] = [
+    ("crates/diagnose/src/select.rs", "the thesis rig's vocabulary effects"),
+    ("crates/diagnose/src/structure/mod.rs", "the thesis rig's structural candidates (three views)"),
+    ("crates/lavi/src/select.rs", "the LAVI study's candidates"),
+    ("crates/slider/src/study.rs", "the slider's friction laws"),
+];
+
+/// The files of [`SELECTIONS`] with no call to the engine on a code line,
+/// as "file: what".
+fn selections_off_the_engine(lines: &[(PathBuf, usize, String)]) -> Vec<String> {
+    let calls = ["forward_select(", "forward_select_from(", "select_on_views("];
+    SELECTIONS
+        .iter()
+        .filter(|(file, _)| {
+            !lines.iter().any(|(f, _, code)| f.ends_with(file) && calls.iter().any(|c| code.contains(c)))
+        })
+        .map(|(file, what)| format!("{file}: {what} selected without the engine (rig_types::select)"))
+        .collect()
 }
 
 /// The rule sees a planted copy of the loop the diagnosis ran before it
@@ -512,6 +541,13 @@ fn a_planted_selection_loop_is_seen() {
     let caller = "let sel = engine::forward_select_from(&study, &candidates, &baselines, &folds, &rule, &search)?;";
     assert!(own_selection_loops(&squeeze(caller, "crates/diagnose/src/select.rs")).is_empty());
     assert!(own_selection_loops(&squeeze(planted, "crates/types/src/select.rs")).is_empty());
+    // The structure's selection off the engine (its former pick) is seen; on it, not.
+    let off = "let winner = (1..REGISTRY.len()).filter_map(|k| scored[k].as_ref().map(|x| (k, x)));";
+    let seen = selections_off_the_engine(&squeeze(off, "crates/diagnose/src/structure/mod.rs"));
+    assert!(seen.iter().any(|p| p.starts_with("crates/diagnose/src/structure/mod.rs: ")), "{seen:?}");
+    let on = "let sel = select_on_views(&study, &cand_refs, &baselines, &folds, &rule, &search);";
+    let seen = selections_off_the_engine(&squeeze(on, "crates/diagnose/src/structure/mod.rs"));
+    assert!(!seen.iter().any(|p| p.starts_with("crates/diagnose/src/structure/mod.rs")), "{seen:?}");
 }
 
 /// pipeline.toml keys that two stages declare with the same value on purpose:

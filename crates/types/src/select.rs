@@ -338,38 +338,7 @@ where
     S: Study<M>,
     M: Clone + Send + Sync,
 {
-    let mut units = Vec::new();
-    let mut fold_of = Vec::new();
-    let train_sets = train_sets(folds);
-    let mut set_of_fold = Vec::new();
-    for (f, fold) in folds.iter().enumerate() {
-        if fold.train.is_empty() || fold.held_out.is_empty() {
-            return Err(SelectError(format!("fold {f} needs training and held-out units")));
-        }
-        for &u in &fold.held_out {
-            if units.contains(&u) {
-                return Err(SelectError(format!("unit {u} is held out in two folds")));
-            }
-            if fold.train.contains(&u) {
-                return Err(SelectError(format!("unit {u} of fold {f} is both trained on and held out")));
-            }
-            units.push(u);
-            fold_of.push(f);
-        }
-        set_of_fold.push(train_sets.iter().position(|t| *t == fold.train).expect("every fold's set is listed"));
-    }
-    if search.units_ascending {
-        let mut order: Vec<(usize, usize)> = units.iter().copied().zip(fold_of.iter().copied()).collect();
-        order.sort_unstable();
-        (units, fold_of) = order.into_iter().unzip();
-    }
-    if baselines.len() != train_sets.len() {
-        return Err(SelectError(format!(
-            "{} baselines for {} distinct training sets",
-            baselines.len(),
-            train_sets.len()
-        )));
-    }
+    let Layout { units, fold_of, train_sets, set_of_fold } = Layout::of(folds, search, baselines.len())?;
     // Each held-out unit scored with the model of its fold's training set.
     let score_all = |models: &[M]| -> Vec<f64> {
         (0..units.len()).into_par_iter().map(|i| study.score(&models[set_of_fold[fold_of[i]]], units[i])).collect()
@@ -484,6 +453,222 @@ where
         final_models: current,
         final_misfits: cur_ms,
     })
+}
+
+/// The held-out units of `folds` in the order of every misfit vector, the
+/// fold of each, the distinct training sets and each fold's set (the folds
+/// checked: every held-out unit in exactly one fold, never trained on there).
+struct Layout {
+    units: Vec<usize>,
+    fold_of: Vec<usize>,
+    train_sets: Vec<Vec<usize>>,
+    set_of_fold: Vec<usize>,
+}
+
+impl Layout {
+    fn of(folds: &[Fold], search: &Search, baselines: usize) -> Result<Layout, SelectError> {
+        let mut units = Vec::new();
+        let mut fold_of = Vec::new();
+        let train_sets = train_sets(folds);
+        let mut set_of_fold = Vec::new();
+        for (f, fold) in folds.iter().enumerate() {
+            if fold.train.is_empty() || fold.held_out.is_empty() {
+                return Err(SelectError(format!("fold {f} needs training and held-out units")));
+            }
+            for &u in &fold.held_out {
+                if units.contains(&u) {
+                    return Err(SelectError(format!("unit {u} is held out in two folds")));
+                }
+                if fold.train.contains(&u) {
+                    return Err(SelectError(format!("unit {u} of fold {f} is both trained on and held out")));
+                }
+                units.push(u);
+                fold_of.push(f);
+            }
+            set_of_fold.push(train_sets.iter().position(|t| *t == fold.train).expect("every fold's set is listed"));
+        }
+        if search.units_ascending {
+            let mut order: Vec<(usize, usize)> = units.iter().copied().zip(fold_of.iter().copied()).collect();
+            order.sort_unstable();
+            (units, fold_of) = order.into_iter().unzip();
+        }
+        if baselines != train_sets.len() {
+            return Err(SelectError(format!("{baselines} baselines for {} distinct training sets", train_sets.len())));
+        }
+        Ok(Layout { units, fold_of, train_sets, set_of_fold })
+    }
+}
+
+// # One step judged on several views ([`select_on_views`])
+//
+// Added for the thesis rig's structural candidates (issue 26, item 3): a
+// candidate is scored on each held-out unit under several views (the rotor
+// balance teacher-forced, the free run, the balance at the stick↔slip
+// transitions), each view compared with the baseline by [`compare`], and a
+// caller's [`ViewRule`] says from those comparisons whether it is admitted
+// and how it ranks. One step: at most one candidate is chosen.
+
+/// A study that scores a model on several views of each unit; a unit may
+/// have no misfit in a view (`None`: left out of that view's comparison).
+pub trait ViewStudy<M>: Sync {
+    /// The number of views (each misfit vector has one entry per view).
+    fn views(&self) -> usize;
+    /// The misfit of `model` on `unit` in `view` (finite and ≥ 0, lower is better).
+    fn score_view(&self, model: &M, view: usize, unit: usize) -> Option<f64>;
+}
+
+/// Where an admitted candidate ranks: a higher `tier` wins; within a tier,
+/// the larger gain on the view `by_view` (ties: candidate order).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Standing {
+    pub tier: u32,
+    pub by_view: usize,
+}
+
+/// The criterion of a one-step selection on views: from candidate
+/// `candidate`'s comparisons with the baseline (one per view, in view order),
+/// whether it is admitted (`Some`) and where it ranks.
+pub trait ViewRule: Sync {
+    fn standing(&self, candidate: usize, comparisons: &[Comparison]) -> Option<Standing>;
+}
+
+/// One candidate of a one-step selection on views.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ViewTrial<M> {
+    /// Index into the candidates passed to [`select_on_views`].
+    pub candidate: usize,
+    pub id: String,
+    /// The fitted models, one per distinct training set; empty when a fit failed.
+    pub fitted: Vec<M>,
+    pub error: Option<String>,
+    /// `misfits[view][i]`: the held-out unit `units[i]`'s misfit in that view.
+    pub misfits: Vec<Vec<Option<f64>>>,
+    /// Each view's comparison with the baseline over the units both score.
+    pub comparisons: Vec<Comparison>,
+    /// The candidate's admissibility verdict ([`Candidate::inadmissible`],
+    /// asked of every candidate that fitted).
+    pub inadmissible: Option<String>,
+    /// The rule's standing (`None`: not admitted by the rule).
+    pub standing: Option<Standing>,
+    pub accepted: bool,
+}
+
+/// The outcome of [`select_on_views`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ViewSelection<M> {
+    pub units: Vec<usize>,
+    pub fold_of: Vec<usize>,
+    pub train_sets: Vec<Vec<usize>>,
+    /// `baseline_misfits[view][i]`, as a trial's misfits.
+    pub baseline_misfits: Vec<Vec<Option<f64>>>,
+    /// One trial per candidate, in candidate order.
+    pub trials: Vec<ViewTrial<M>>,
+    /// Index into `trials` of the chosen candidate, if any.
+    pub chosen: Option<usize>,
+}
+
+/// The comparison of two views' misfit vectors over the units both score,
+/// in unit order (the step rule, [`compare`]).
+pub fn compare_scored(before: &[Option<f64>], after: &[Option<f64>], fold_of: &[usize], folds: usize) -> Comparison {
+    let (mut b, mut a, mut f) = (Vec::new(), Vec::new(), Vec::new());
+    for ((x, y), g) in before.iter().zip(after).zip(fold_of) {
+        if let (Some(x), Some(y)) = (x, y) {
+            b.push(*x);
+            a.push(*y);
+            f.push(*g);
+        }
+    }
+    compare(&b, &a, &f, folds)
+}
+
+/// One step of selection judged on several views: every candidate is fitted
+/// on each distinct training set on top of that set's baseline
+/// (`baselines[s]` on [`train_sets`]`(folds)[s]`), every held-out unit is
+/// scored in every view with the fit of its fold, each view compared with the
+/// baseline's ([`compare_scored`]); the rule gives each candidate its
+/// standing, every candidate that fitted is asked its admissibility, and the
+/// admissible admitted candidate of the highest standing is chosen (within a
+/// tier the larger gain on the tier's view; ties: candidate order). Fits and
+/// scores run in parallel and are collected in order: the result is the
+/// same on any number of threads. `search.units_ascending` orders the units
+/// as in [`forward_select_from`]; the pair step does not apply.
+pub fn select_on_views<S, M>(
+    study: &S,
+    candidates: &[&dyn Candidate<S, M>],
+    baselines: &[M],
+    folds: &[Fold],
+    rule: &dyn ViewRule,
+    search: &Search,
+) -> Result<ViewSelection<M>, SelectError>
+where
+    S: ViewStudy<M>,
+    M: Clone + Send + Sync,
+{
+    let Layout { units, fold_of, train_sets, set_of_fold } = Layout::of(folds, search, baselines.len())?;
+    let views = study.views();
+    let score_all = |models: &[M]| -> Vec<Vec<Option<f64>>> {
+        let cells: Vec<Option<f64>> = (0..views * units.len())
+            .into_par_iter()
+            .map(|k| {
+                let (v, i) = (k / units.len(), k % units.len());
+                study.score_view(&models[set_of_fold[fold_of[i]]], v, units[i])
+            })
+            .collect();
+        cells.chunks(units.len().max(1)).map(<[Option<f64>]>::to_vec).collect()
+    };
+    let baseline_misfits = score_all(baselines);
+    let tasks: Vec<(usize, usize)> =
+        (0..candidates.len()).flat_map(|c| (0..train_sets.len()).map(move |s| (c, s))).collect();
+    let fits: Vec<Result<M, String>> =
+        tasks.par_iter().map(|&(c, s)| candidates[c].fit(study, &baselines[s], &train_sets[s])).collect();
+    let mut trials: Vec<ViewTrial<M>> = (0..candidates.len())
+        .map(|c| {
+            let set = &fits[c * train_sets.len()..(c + 1) * train_sets.len()];
+            let (fitted, error, misfits) = match set.iter().cloned().collect::<Result<Vec<M>, String>>() {
+                Ok(models) => {
+                    let ms = score_all(&models);
+                    (models, None, ms)
+                }
+                // A failed fit scores an infinite misfit wherever the baseline scores.
+                Err(e) => (
+                    Vec::new(),
+                    Some(e),
+                    baseline_misfits.iter().map(|v| v.iter().map(|m| m.map(|_| f64::INFINITY)).collect()).collect(),
+                ),
+            };
+            let comparisons: Vec<Comparison> =
+                (0..views).map(|v| compare_scored(&baseline_misfits[v], &misfits[v], &fold_of, folds.len())).collect();
+            let inadmissible = match error {
+                None => candidates[c].inadmissible(study, baselines, &fitted),
+                Some(_) => None,
+            };
+            let standing = if error.is_none() { rule.standing(c, &comparisons) } else { None };
+            ViewTrial {
+                candidate: c,
+                id: candidates[c].id().to_string(),
+                fitted,
+                error,
+                misfits,
+                comparisons,
+                inadmissible,
+                standing,
+                accepted: false,
+            }
+        })
+        .collect();
+    let rank = |t: &ViewTrial<M>| t.standing.map(|s| (s.tier, t.comparisons[s.by_view].gain));
+    let mut chosen: Option<usize> = None;
+    for (k, t) in trials.iter().enumerate() {
+        let (Some(r), None) = (rank(t), &t.inadmissible) else { continue };
+        let better = chosen.and_then(|c| rank(&trials[c])).is_none_or(|b| r.0 > b.0 || (r.0 == b.0 && r.1 > b.1));
+        if better {
+            chosen = Some(k);
+        }
+    }
+    if let Some(k) = chosen {
+        trials[k].accepted = true;
+    }
+    Ok(ViewSelection { units, fold_of, train_sets, baseline_misfits, trials, chosen })
 }
 
 #[cfg(test)]
@@ -671,6 +856,87 @@ mod tests {
         assert_eq!(t.comparison, c);
         let b = &by_fold.trials[0].comparison;
         assert!((b.gain - c.gain).abs() < 1e-12 && (b.t - c.t).abs() < 1e-9 && sel.chosen_ids() == ["fit_level"]);
+    }
+
+    /// Two views of a level: view 0 every unit, view 1 only the even units.
+    struct TwoViews(Vec<f64>, Vec<f64>);
+
+    impl ViewStudy<f64> for TwoViews {
+        fn views(&self) -> usize {
+            2
+        }
+        fn score_view(&self, m: &f64, view: usize, u: usize) -> Option<f64> {
+            match view {
+                0 => Some((m - self.0[u]).abs() + 0.01),
+                _ => u.is_multiple_of(2).then(|| (m - self.1[u]).abs() + 0.01),
+            }
+        }
+    }
+
+    impl Candidate<TwoViews, f64> for Shift {
+        fn id(&self) -> &str {
+            self.0
+        }
+        fn fit(&self, _: &TwoViews, cur: &f64, _: &[usize]) -> Result<f64, String> {
+            if self.1.is_infinite() { Err("no fit".into()) } else { Ok(cur + self.1) }
+        }
+        fn inadmissible(&self, _: &TwoViews, _: &[f64], _: &[f64]) -> Option<String> {
+            (self.0 == "inadmissible").then(|| "ruled out".into())
+        }
+    }
+
+    /// Admitted when view 0 passes the step rule; tier 1 (ranked by view 1)
+    /// when view 1 passes too, else tier 0 (ranked by view 0).
+    struct Tiered(SelectionRule);
+
+    impl ViewRule for Tiered {
+        fn standing(&self, _: usize, c: &[Comparison]) -> Option<Standing> {
+            let both = self.0.admits(&c[1]);
+            self.0.admits(&c[0]).then_some(if both {
+                Standing { tier: 1, by_view: 1 }
+            } else {
+                Standing { tier: 0, by_view: 0 }
+            })
+        }
+    }
+
+    #[test]
+    fn one_step_on_views_ranks_by_the_rules_tier_then_its_views_gain() {
+        // View 0 measures 1.0 everywhere; view 1 (even units only) measures 1.0 too, except unit 4 at 0.9.
+        let s = TwoViews(vec![1.0; 6], vec![1.0, 9.0, 1.0, 9.0, 0.9, 9.0]);
+        let folds = Fold::leave_one_out(6);
+        let (to_one, near, bad, broken) =
+            (Shift("to_one", 1.0), Shift("near", 0.9), Shift("inadmissible", 1.0), Shift("broken", f64::INFINITY));
+        let cands: [&dyn Candidate<TwoViews, f64>; 4] = [&near, &bad, &broken, &to_one];
+        let bases = vec![0.0; 6];
+        let rule = Tiered(rule());
+        let sel = select_on_views(&s, &cands, &bases, &folds, &rule, &Search::default()).unwrap();
+        // View 1 is compared over the even units only: the odd ones have no misfit there.
+        let t = &sel.trials[3];
+        assert_eq!(t.misfits[1].iter().filter(|m| m.is_some()).count(), 3);
+        let m = |p: f64, x: f64| (p - x).abs() + 0.01;
+        let c1 =
+            compare(&[m(0.0, 1.0), m(0.0, 1.0), m(0.0, 0.9)], &[m(1.0, 1.0), m(1.0, 1.0), m(1.0, 0.9)], &[0, 2, 4], 6);
+        assert_eq!(t.comparisons[1], c1);
+        // `near` (0.9) gains less on view 0 than `to_one` (1.0), and both pass view 0 ...
+        assert!(sel.trials[0].comparisons[0].gain < t.comparisons[0].gain);
+        // ... and view 1 by the rule: both tier 1, so view 1's gain decides; `to_one` wins.
+        assert_eq!(sel.trials[0].standing, Some(Standing { tier: 1, by_view: 1 }));
+        assert_eq!(sel.chosen, Some(3));
+        assert!(t.accepted && !sel.trials[0].accepted);
+        // The inadmissible one is admitted by the rule and still not chosen; the broken one scores ∞.
+        assert!(sel.trials[1].standing.is_some() && sel.trials[1].inadmissible.as_deref() == Some("ruled out"));
+        assert!(sel.trials[2].error.is_some() && sel.trials[2].standing.is_none());
+        assert!(sel.trials[2].comparisons[0].after.is_infinite());
+        // A higher tier wins over a larger gain: with view 1 measuring 0.5 on the even units
+        // `to_one` gains nothing there (tier 0) and `near` passes it (tier 1): `near` wins.
+        let s = TwoViews(vec![1.0; 6], vec![0.5, 9.0, 0.5, 9.0, 0.5, 9.0]);
+        let sel = select_on_views(&s, &cands, &bases, &folds, &rule, &Search::default()).unwrap();
+        assert_eq!(sel.trials[3].standing, Some(Standing { tier: 0, by_view: 0 }));
+        assert_eq!(sel.chosen, Some(0));
+        // No admitted candidate: nothing chosen.
+        let none = TwoViews(vec![0.0; 6], vec![0.0; 6]);
+        assert_eq!(select_on_views(&none, &cands, &bases, &folds, &rule, &Search::default()).unwrap().chosen, None);
     }
 
     #[test]

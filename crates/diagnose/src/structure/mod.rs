@@ -61,8 +61,12 @@
 //! A candidate is **accepted** when it is admissible on its fit to every run,
 //! with every term it fits at least `min_t` fold-jackknife standard errors
 //! above its bound (a term the records put at ≈ 0 is the baseline again),
-//! when it passes any comparison (the event-locked one alone only when the
-//! held-out balance also gains, gain and t > 0), when neither its held-out balance nor its
+//! when it passes the balance or the event-locked comparison (the latter
+//! alone only when the held-out balance also gains, gain and t ≥ `min_t`/2)
+//! — never on the free run alone: a torque on the rotor shows in the
+//! balance with the measured r·F, and a free-run gain the balance does not
+//! share compensates a friction the model's law lacks (r·F carries it, the
+//! free run does not; [`ThreeViews`]) —, when neither its held-out balance nor its
 //! event-locked balance is significantly worse, and when its free run is not
 //! significantly worse than the extended model's (refuted by a
 //! cross-validated free-run gain < 0 with paired t ≤ −`min_t`; either sign
@@ -80,10 +84,12 @@
 //! one that does not (a channel delay explains a drag's steady-slip torque
 //! about as well, but only a drag is tested by the free run; a drag the free
 //! run does not support is no evidence against a delay), then one that
-//! passes on the balance or the free run over one admitted on the
+//! passes on the balance over one admitted on the
 //! event-locked rows alone, then the larger held-out balance gain (the
 //! larger event-locked gain between two admitted on those rows alone). At
-//! most one wins.
+//! most one wins. The selection runs on the workspace's one engine
+//! ([`rig_types::select::select_on_views`]): the runs are its units, the
+//! three comparisons its views, this rule its [`rig_types::select::ViewRule`].
 //! The free-run test of a drag in a campaign that slides steadily is weak:
 //! in `structural-viscous_brake_friction+damping_rotor_absolute-0` the
 //! right drag's free-run gain is +0.2 % ± 24 % across folds, so that
@@ -111,7 +117,7 @@ use crate::channels::{
     BalanceData, BalanceFit, FreeRunPair, FreeRunSettings, free_run_misfit, free_run_pairs_by, with_run_phases,
 };
 use crate::result::{Finding, ParamAtBound, StructureScore, round_sig};
-use crate::select::{Comparison, compare_folds, overall};
+use crate::select::{Comparison, overall};
 use rig_types::{Campaign, RigParams};
 use std::collections::BTreeMap;
 
@@ -256,109 +262,48 @@ pub struct StructureSelection {
     pub on_events: bool,
 }
 
-/// One candidate's cross-validated comparisons with the baseline structure.
-struct Scored {
-    full: Fitted,
-    se: Vec<f64>,
-    balance: Comparison,
-    free_run: Comparison,
-    events: Comparison,
+/// The views a structural candidate is judged on, per held-out run (module
+/// docs): the rotor balance, the free run, the balance at the transitions.
+const BALANCE: usize = 0;
+const FREE_RUN: usize = 1;
+const EVENTS: usize = 2;
+
+/// A structure fitted on one training set: its [`REGISTRY`] index and fit.
+#[derive(Clone)]
+struct Structured {
+    k: usize,
+    fit: Fitted,
 }
 
-/// Selects the structure on top of `ext` (module docs). `ext_pairs` are the
-/// extended model's free runs (campaign order), `runs` the diagnosis' rows:
-/// each run's cross-validation fold (numbered from 0) and its nuisance
-/// phases, with which its free runs are simulated.
-pub fn select_structure(
-    c: &Campaign,
-    data: &StructureData,
-    ext: &RigParams,
-    ext_pairs: &[FreeRunPair],
-    runs: &[crate::RunRow],
-    s: &FreeRunSettings,
-    opts: &DiagnoseOptions,
-) -> StructureSelection {
-    let fold_of: BTreeMap<&str, usize> = runs.iter().map(|r| (r.id.as_str(), r.fold)).collect();
-    let phases: BTreeMap<&str, (f64, f64)> = runs.iter().map(|r| (r.id.as_str(), r.phases_rad)).collect();
-    let folds = fold_of.values().max().map_or(0, |m| m + 1);
-    let floor = crate::channels::speed_floor_rad_s(c, s);
-    let base_ms: BTreeMap<&str, f64> =
-        ext_pairs.iter().filter_map(|q| free_run_misfit(q, floor).map(|m| (q.id.as_str(), m))).collect();
-    let fold_ref = &fold_of;
-    let held_out = |f: usize| move |id: &str| fold_ref.get(id).is_some_and(|&g| g == f);
-    let trained = |f: usize| move |id: &str| fold_ref.get(id).is_some_and(|&g| g != f);
-    // Each held-out run's balance residual with a candidate fitted without its fold.
-    // (fold fits, every run's held-out balance RMS, its held-out event-locked misfit).
-    type FoldFits = (Vec<Option<Fitted>>, BTreeMap<String, f64>, BTreeMap<String, f64>);
-    let balance_cv = |cand: &dyn StructureCandidate| -> Option<FoldFits> {
-        let fits: Vec<Option<Fitted>> = (0..folds).map(|f| cand.fit(ext, data, &trained(f))).collect();
-        let (mut rms, mut events) = (BTreeMap::new(), BTreeMap::new());
-        for (f, fit) in fits.iter().enumerate() {
-            let fit = fit.as_ref()?;
-            rms.extend(data.of_fit(fit).run_rms(&fit.balance, held_out(f)));
-            events.extend(data.of_fit(fit).run_event_rms(&fit.balance, held_out(f)));
-        }
-        Some((fits, rms, events))
-    };
-    let base = REGISTRY[0];
-    let base_fit = base.fit(ext, data, &|_| true).expect("the baseline's structure fits every balance");
-    let (base_rms, base_events) = balance_cv(base).map(|x| (x.1, x.2)).unwrap_or_default();
-    let no_gain = |m: f64| Comparison { before: m, after: m, gain: 0.0, gain_fold_sd: 0.0, t: 0.0 };
-    let base_fr = overall(&base_ms.values().copied().collect::<Vec<_>>());
-    // A candidate's held-out per-run misfits against the baseline's, paired by run.
-    fn paired<K: Ord>(
-        base: &BTreeMap<K, f64>,
-        cand: &BTreeMap<K, f64>,
-        fold: impl Fn(&K) -> usize,
-        folds: usize,
-    ) -> Comparison {
-        let (mut before, mut after, mut fold_v) = (Vec::new(), Vec::new(), Vec::new());
-        for (id, a) in cand {
-            if let Some(b) = base.get(id) {
-                before.push(*b);
-                after.push(*a);
-                fold_v.push(fold(id));
-            }
-        }
-        compare_folds(&before, &after, &fold_v, folds)
+/// The structure selection as a study of the one engine
+/// ([`rig_types::select::select_on_views`]): the units are the diagnosis'
+/// runs (`runs` order), scored in the three views.
+struct Study<'a> {
+    c: &'a Campaign,
+    data: &'a StructureData,
+    ext: &'a RigParams,
+    runs: &'a [crate::RunRow],
+    /// The extended model's free-run misfit of each run (`None`: no misfit).
+    ext_free_run: Vec<Option<f64>>,
+    floor_rad_s: f64,
+    s: &'a FreeRunSettings,
+    min_t: f64,
+}
+
+impl Study<'_> {
+    /// Whether run `id` is one of the units `train`.
+    fn include<'b>(&'b self, train: &'b [usize]) -> impl Fn(&str) -> bool + 'b {
+        move |id: &str| train.iter().any(|&u| self.runs[u].id == id)
     }
-    let run_fold = |id: &String| fold_of[id.as_str()];
-    let mut scores = vec![score_row(
-        base,
-        &base_fit,
-        &[],
-        [&no_gain(overall_of(&base_rms)), &no_gain(base_fr), &no_gain(overall_of(&base_events))],
-        true,
-    )];
-    let mut at_bounds = Vec::new();
-    let mut scored: Vec<Option<Scored>> = vec![None];
-    for cand in REGISTRY.iter().skip(1) {
-        let (Some(full), Some((fits, rms, event_rms))) = (cand.fit(ext, data, &|_| true), balance_cv(*cand)) else {
-            scored.push(None);
-            continue;
-        };
-        // Teacher-forced: the held-out runs' balance residuals against the
-        // baseline's, over the steady state and at the transitions.
-        let balance = paired(&base_rms, &rms, run_fold, folds);
-        let events = paired(&base_events, &event_rms, run_fold, folds);
-        // Free run: the held-out runs simulated with the candidate fitted without them.
-        let free_run = if cand.moves() {
-            let pairs: Vec<FreeRunPair> = free_run_pairs_by(c, s, |id| {
-                let f = fits.get(*fold_of.get(id)?)?.as_ref()?;
-                Some(with_run_phases(&cand.apply(ext, f), phases.get(id).copied().unwrap_or_default()))
-            });
-            let (mut before, mut after, mut fold_v) = (Vec::new(), Vec::new(), Vec::new());
-            for q in &pairs {
-                if let (Some(b), Some(a)) = (base_ms.get(q.id.as_str()), free_run_misfit(q, floor)) {
-                    before.push(*b);
-                    after.push(a);
-                    fold_v.push(fold_of[q.id.as_str()]);
-                }
-            }
-            compare_folds(&before, &after, &fold_v, folds)
-        } else {
-            no_gain(base_fr)
-        };
+
+    /// The candidate's fit to every run, its fold-jackknife standard errors
+    /// (`fits`: one per fold), the terms the records do not support and the
+    /// parameters pinned at their bounds (module docs: admissible when both
+    /// are empty); `None` when it does not fit every run.
+    fn assess(&self, k: usize, fits: &[Structured]) -> Option<Assessment> {
+        let cand = REGISTRY[k];
+        let full = cand.fit(self.ext, self.data, &|_| true)?;
+        let fits: Vec<Option<Fitted>> = fits.iter().map(|f| Some(f.fit.clone())).collect();
         // Each term must be supported by the balance itself: its fit to every
         // run at least `min_t` fold-jackknife standard errors above its bound.
         let se = jackknife_se(&fits, cand.params().len());
@@ -374,15 +319,226 @@ pub fn select_structure(
             .iter()
             .zip(&support_se)
             .filter(|((_, v, p), se)| {
-                matches!(
-                    (*v - p.lower).partial_cmp(&(opts.selection.min_t * **se)),
-                    Some(std::cmp::Ordering::Less) | None
-                )
+                matches!((*v - p.lower).partial_cmp(&(self.min_t * **se)), Some(std::cmp::Ordering::Less) | None)
             })
             .map(|((name, v, p), se)| format!("{name} = {v:.2e} ± {se:.1e} {}", p.unit))
             .collect();
         let pinned = cand.pinned(&full);
-        for (p, v) in &pinned {
+        Some(Assessment { full, se, weak, pinned })
+    }
+}
+
+/// [`Study::assess`]'s answer.
+struct Assessment {
+    full: Fitted,
+    se: Vec<f64>,
+    weak: Vec<String>,
+    pinned: Vec<(&'static ParamSpec, f64)>,
+}
+
+impl rig_types::select::ViewStudy<Structured> for Study<'_> {
+    fn views(&self) -> usize {
+        3
+    }
+    fn score_view(&self, m: &Structured, view: usize, unit: usize) -> Option<f64> {
+        let id = self.runs[unit].id.as_str();
+        let only = |r: &str| r == id;
+        match view {
+            BALANCE => self.data.of_fit(&m.fit).run_rms(&m.fit.balance, only).first().map(|x| x.1),
+            EVENTS => self.data.of_fit(&m.fit).run_event_rms(&m.fit.balance, only).first().map(|x| x.1),
+            // The baseline and a structure that does not move the model
+            // (a sensor's) have the extended model's free run.
+            _ if m.k == 0 || !REGISTRY[m.k].moves() => self.ext_free_run[unit],
+            _ => {
+                // Compared only where the extended model's free run has a misfit.
+                self.ext_free_run[unit]?;
+                let p = with_run_phases(&REGISTRY[m.k].apply(self.ext, &m.fit), self.runs[unit].phases_rad);
+                let pairs = free_run_pairs_by(self.c, self.s, |r| (r == id).then(|| p.clone()));
+                pairs.first().and_then(|q| free_run_misfit(q, self.floor_rad_s))
+            }
+        }
+    }
+}
+
+/// A structural candidate as the engine's candidate: its [`REGISTRY`] index.
+struct Cand(usize);
+
+impl rig_types::select::Candidate<Study<'_>, Structured> for Cand {
+    fn id(&self) -> &str {
+        REGISTRY[self.0].id()
+    }
+    fn fit(&self, st: &Study<'_>, _: &Structured, train: &[usize]) -> Result<Structured, String> {
+        let fit = REGISTRY[self.0].fit(st.ext, st.data, &st.include(train));
+        fit.map(|fit| Structured { k: self.0, fit }).ok_or_else(|| format!("`{}` does not fit", self.id()))
+    }
+    fn inadmissible(&self, st: &Study<'_>, _: &[Structured], fitted: &[Structured]) -> Option<String> {
+        match st.assess(self.0, fitted) {
+            None => Some("no fit to every run".into()),
+            Some(a) if !a.pinned.is_empty() => Some("a parameter below its bound".into()),
+            Some(a) if !a.weak.is_empty() => Some(format!("not supported by the balance: {}", a.weak.join(", "))),
+            Some(_) => None,
+        }
+    }
+}
+
+/// The structure's criterion on its three views (module docs), the
+/// engine's [`rig_types::select::ViewRule`].
+struct ThreeViews<'a> {
+    rule: &'a rig_types::contract::SelectionRule,
+}
+
+impl rig_types::select::ViewRule for ThreeViews<'_> {
+    fn standing(&self, k: usize, c: &[Comparison]) -> Option<rig_types::select::Standing> {
+        let (balance, free_run, events) = (&c[BALANCE], &c[FREE_RUN], &c[EVENTS]);
+        let passes = |x: &Comparison| self.rule.admits(x);
+        // The free run refutes a candidate it finds significantly worse: a
+        // negative gain with a paired t at or below −min_t; so does the held-out
+        // balance (below). Either sign alone is not evidence: in the full battery's
+        // `structural-velocity_weakening_friction+damping_rotor_absolute-0` the
+        // true structure (drag and shaft damping, fitted C 2.20e-3 and C_r
+        // 3.32e-3 N·m·s/rad; balance gain 38.3 %, t 6.73) moves the free-run misfit
+        // by +0.9 % with t = −2.60 (most runs a little worse, a few better), and
+        // was refused under the former rule (gain < 0 or t ≤ −min_t), leaving a
+        // 8 ms encoder delay, the drag's alias in the balance, to be named.
+        let worse = |x: &Comparison| x.gain < 0.0 && x.t <= -self.rule.min_t;
+        // The held-out rotor balance refutes a candidate by the same rule,
+        // whatever the free run gains: a drag that lowers
+        // the free-run misfit while the balance on held-out runs rises (t ≤ −min_t)
+        // compensates something else (a right velocity-weakening model, seed 9322
+        // of the right-model calibration: balance −62 %, t = −4.1; free run +17 %).
+        // A candidate admitted on the event-locked rows alone needs the held-out
+        // steady windows to move its way too (balance gain > 0 and t > 0): a
+        // right sensor model leaves them as they were or better, a fit to the
+        // training runs' noise loses there. Calibration null seed 9117
+        // (stick-slipping, 8 of 12 runs): a 2 ms force delay gained 9.1 % at
+        // the transitions (t 2.24) and −0.1 % on the balance (t −1.15); every
+        // structural winner of the full battery's cases gains ≥ 0.6 % there
+        // (t ≥ 1.70). t > 0 alone is a coin toss for a candidate that does
+        // nothing on the steady windows, and the full battery (sixth session)
+        // found two such: strong normal-force modulations
+        // (`ladder-normal_force_modulation-1-11`: an encoder coupling at the
+        // grid's 12 Hz, ζ 0.40, events +23.1 % t 4.91, balance +0.0 % t 0.05;
+        // `-1-7`: a 2 ms encoder delay, events +24.8 % t 2.04, balance +1.1 %
+        // t 0.84). The corroboration asks t ≥ min_t/2 (one-sided p ≈ 0.16 on
+        // its own, an independent second test of the event-locked one).
+        let corroborated = |x: &Comparison| x.gain > 0.0 && x.t >= self.rule.min_t / 2.0;
+        // Admitted by the balance (or the event-locked rows it corroborates),
+        // never by the free run alone: every candidate is a term of the rotor
+        // balance with the measured r·F, where a torque on the rotor shows
+        // against a friction the record carries whatever the model's law.
+        // A friction the vocabulary step left out (a weak velocity weakening,
+        // a viscous brake friction: torques that grow with Ω1 in slip like a
+        // drag) is in r·F, so the balance has nothing for a drag to take,
+        // while the free run, simulated with the model's law, lacks it: a
+        // refitted damping then compensates it there. The last full battery's
+        // four spurious `damping_rotor_absolute` (`ladder-velocity_weakening_friction-5-2`,
+        // `-5-18`, `ladder-angle_periodic_friction-5-2`,
+        // `compound-normal_force_modulation+viscous_brake_friction-0`) were
+        // `twist_rate_and_rotor` admitted on the free run alone (gains 5.0–11.9 %,
+        // t 3.37–5.06) with C_r 4e-6–2e-5 N·m·s/rad and a balance gain of 0.0 %
+        // (t 0.16–1.04): the free-run gain was the twist-rate C refitted
+        // through the balance (1–9 % below the estimation's), not the drag.
+        let admitted = !worse(free_run)
+            && !worse(balance)
+            && !worse(events)
+            && (passes(balance) || (passes(events) && corroborated(balance)));
+        // A candidate that moves the model wins over one that does not only when
+        // the motion supports it (its free-run comparison passes the criterion):
+        // a drag and a late rotor encoder both read as C_r ≈ K·delay in the
+        // balance, and a drag whose free run neither gains nor loses
+        // significantly is not evidence against the delay (full battery
+        // `structural-channel_delay-1`: the encoder 10 ms late, the delay fitted
+        // at 10.0 ms with balance gain 22.6 % (t 5.99), the drag 20.5 % (t 5.25)
+        // with free run +7.8 %, t = −0.18, chosen before this rule). Then one
+        // that passes on the balance, by the larger held-out
+        // balance gain; then, among candidates admitted on the event-locked rows
+        // alone, the larger event-locked gain (the statistic they were admitted
+        // on). A force delay and a ringing force sensor both reach the 0.1 s
+        // balance windows as a lag (docs/findings.md): their run-level balance
+        // gains, a few percent each, said nothing between them, and the delay
+        // was named beside a velocity weakening with a ringing sensor
+        // (`structural-velocity_weakening_friction+force_sensor_dynamics-0`).
+        let tier = match (REGISTRY[k].moves() && passes(free_run), passes(balance)) {
+            (true, _) => 2,
+            (false, true) => 1,
+            (false, false) => 0,
+        };
+        admitted.then_some(rig_types::select::Standing { tier, by_view: if tier > 0 { BALANCE } else { EVENTS } })
+    }
+}
+
+/// Selects the structure on top of `ext` (module docs) on the one engine
+/// ([`rig_types::select::select_on_views`]: the runs as units, each run's
+/// fold as the folds, the baseline `twist_rate` fitted per training set, the
+/// three views and [`ThreeViews`]). `ext_pairs` are the extended model's free
+/// runs (campaign order), `runs` the diagnosis' rows: each run's
+/// cross-validation fold (numbered from 0) and its nuisance phases, with
+/// which its free runs are simulated.
+pub fn select_structure(
+    c: &Campaign,
+    data: &StructureData,
+    ext: &RigParams,
+    ext_pairs: &[FreeRunPair],
+    runs: &[crate::RunRow],
+    s: &FreeRunSettings,
+    opts: &DiagnoseOptions,
+) -> StructureSelection {
+    use rig_types::select::{Candidate, Fold, Search, select_on_views};
+    let floor_rad_s = crate::channels::speed_floor_rad_s(c, s);
+    let ext_ms: BTreeMap<&str, f64> =
+        ext_pairs.iter().filter_map(|q| free_run_misfit(q, floor_rad_s).map(|m| (q.id.as_str(), m))).collect();
+    let study = Study {
+        c,
+        data,
+        ext,
+        runs,
+        ext_free_run: runs.iter().map(|r| ext_ms.get(r.id.as_str()).copied()).collect(),
+        floor_rad_s,
+        s,
+        min_t: opts.selection.min_t,
+    };
+    // One fold per cross-validation fold of the diagnosis that holds out a run.
+    let folds_n = runs.iter().map(|r| r.fold + 1).max().unwrap_or(0);
+    let folds: Vec<Fold> = (0..folds_n)
+        .map(|f| Fold {
+            train: (0..runs.len()).filter(|&u| runs[u].fold != f).collect(),
+            held_out: (0..runs.len()).filter(|&u| runs[u].fold == f).collect(),
+        })
+        .filter(|f| !f.held_out.is_empty())
+        .collect();
+    let base = REGISTRY[0];
+    let base_fit = base.fit(ext, data, &|_| true).expect("the baseline's structure fits every balance");
+    let baselines: Vec<Structured> = folds
+        .iter()
+        .map(|f| Structured {
+            k: 0,
+            fit: base.fit(ext, data, &study.include(&f.train)).unwrap_or_else(|| base_fit.clone()),
+        })
+        .collect();
+    let cands: Vec<Cand> = (1..REGISTRY.len()).map(Cand).collect();
+    let cand_refs: Vec<&dyn Candidate<Study<'_>, Structured>> = cands.iter().map(|c| c as _).collect();
+    let search = Search { units_ascending: true, ..Search::default() };
+    let rule = ThreeViews { rule: &opts.selection };
+    let sel = select_on_views(&study, &cand_refs, &baselines, &folds, &rule, &search);
+    let Ok(sel) = sel else {
+        // Fewer than two folds: nothing to hold out, the rig model's structure stays.
+        let scores = vec![score_row(base, &base_fit, &[], [&no_gain(f64::NAN); 3], true)];
+        return finish(ext, base, 0, base_fit, vec![f64::NAN], scores, Vec::new(), runs, false);
+    };
+    let overall_view = |v: usize| overall(&sel.baseline_misfits[v].iter().flatten().copied().collect::<Vec<_>>());
+    let mut scores = vec![score_row(
+        base,
+        &base_fit,
+        &[],
+        [&no_gain(overall_view(BALANCE)), &no_gain(overall_view(FREE_RUN)), &no_gain(overall_view(EVENTS))],
+        true,
+    )];
+    let mut at_bounds = Vec::new();
+    let mut winner = None;
+    for t in sel.trials.iter().filter(|t| t.error.is_none()) {
+        let k = t.candidate + 1;
+        let Some(a) = study.assess(k, &t.fitted) else { continue };
+        for (p, v) in &a.pinned {
             at_bounds.push(ParamAtBound {
                 parameter: p.name.into(),
                 bound: p.lower,
@@ -390,96 +546,58 @@ pub fn select_structure(
                 meaning: format!(
                     "structure `{}`'s rotor-balance fit wants {} below its bound ({}): the records do not support \
                      that term; the candidate is inadmissible",
-                    cand.id(),
+                    REGISTRY[k].id(),
                     p.meaning,
                     p.unit
                 ),
             });
         }
-        let admissible = pinned.is_empty() && weak.is_empty();
-        scores.push(score_row(*cand, &full, &weak, [&balance, &free_run, &events], admissible));
-        scored.push(Some(Scored { full, se, balance, free_run, events }));
-    }
-    let passes = |x: &Comparison| opts.selection.admits(x);
-    // The free run refutes a candidate it finds significantly worse: a
-    // negative gain with a paired t at or below −min_t; so does the held-out
-    // balance (below). Either sign alone is not evidence: in the full battery's
-    // `structural-velocity_weakening_friction+damping_rotor_absolute-0` the
-    // true structure (drag and shaft damping, fitted C 2.20e-3 and C_r
-    // 3.32e-3 N·m·s/rad; balance gain 38.3 %, t 6.73) moves the free-run misfit
-    // by +0.9 % with t = −2.60 (most runs a little worse, a few better), and
-    // was refused under the former rule (gain < 0 or t ≤ −min_t), leaving a
-    // 8 ms encoder delay, the drag's alias in the balance, to be named.
-    let worse = |x: &Comparison| x.gain < 0.0 && x.t <= -opts.selection.min_t;
-    // The held-out rotor balance refutes a candidate by the same rule,
-    // whatever the free run gains: a drag that lowers
-    // the free-run misfit while the balance on held-out runs rises (t ≤ −min_t)
-    // compensates something else (a right velocity-weakening model, seed 9322
-    // of the right-model calibration: balance −62 %, t = −4.1; free run +17 %).
-    // A candidate that moves the model wins over one that does not only when
-    // the motion supports it (its free-run comparison passes the criterion):
-    // a drag and a late rotor encoder both read as C_r ≈ K·delay in the
-    // balance, and a drag whose free run neither gains nor loses
-    // significantly is not evidence against the delay (full battery
-    // `structural-channel_delay-1`: the encoder 10 ms late, the delay fitted
-    // at 10.0 ms with balance gain 22.6 % (t 5.99), the drag 20.5 % (t 5.25)
-    // with free run +7.8 %, t = −0.18, chosen before this rule). Otherwise the
-    // larger held-out balance gain decides.
-    // A candidate admitted on the event-locked rows alone needs the held-out
-    // steady windows to move its way too (balance gain > 0 and t > 0): a
-    // right sensor model leaves them as they were or better, a fit to the
-    // training runs' noise loses there. Calibration null seed 9117
-    // (stick-slipping, 8 of 12 runs): a 2 ms force delay gained 9.1 % at
-    // the transitions (t 2.24) and −0.1 % on the balance (t −1.15); every
-    // structural winner of the full battery's cases gains ≥ 0.6 % there
-    // (t ≥ 1.70). t > 0 alone is a coin toss for a candidate that does
-    // nothing on the steady windows, and the full battery (sixth session)
-    // found two such: strong normal-force modulations
-    // (`ladder-normal_force_modulation-1-11`: an encoder coupling at the
-    // grid's 12 Hz, ζ 0.40, events +23.1 % t 4.91, balance +0.0 % t 0.05;
-    // `-1-7`: a 2 ms encoder delay, events +24.8 % t 2.04, balance +1.1 %
-    // t 0.84). The corroboration asks t ≥ min_t/2 (one-sided p ≈ 0.16 on
-    // its own, an independent second test of the event-locked one).
-    let corroborated = |x: &Comparison| x.gain > 0.0 && x.t >= opts.selection.min_t / 2.0;
-    // Among candidates admitted on the event-locked rows alone, the larger
-    // event-locked gain decides (the statistic they were admitted on); one
-    // that passes on the balance or the free run ranks above them. A force
-    // delay and a ringing force sensor both reach the 0.1 s balance windows
-    // as a lag (docs/findings.md): their run-level balance gains, a few
-    // percent each, said nothing between them, and the delay was named
-    // beside a velocity weakening with a ringing sensor
-    // (`structural-velocity_weakening_friction+force_sensor_dynamics-0`).
-    let key = |k: usize, x: &Scored| {
-        (
-            REGISTRY[k].moves() && passes(&x.free_run),
-            if passes(&x.balance) || passes(&x.free_run) { 1.0 + x.balance.gain } else { x.events.gain },
-        )
-    };
-    let winner = (1..REGISTRY.len())
-        .filter_map(|k| scored[k].as_ref().map(|x| (k, x)))
-        .filter(|(k, x)| {
-            scores[*k].admissible
-                && !worse(&x.free_run)
-                && !worse(&x.balance)
-                && !worse(&x.events)
-                && (passes(&x.balance) || passes(&x.free_run) || (passes(&x.events) && corroborated(&x.balance)))
-        })
-        .max_by(|(a, x), (b, y)| {
-            let (ka, kb) = (key(*a, x), key(*b, y));
-            ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
-        })
-        .map(|(k, _)| k);
-    let (k, fitted, stderr, on_events) = match winner {
-        Some(k) => {
-            let x = scored[k].as_ref().expect("a scored winner");
-            let on_events = !passes(&x.balance) && !passes(&x.free_run);
-            (k, x.full.clone(), x.se.clone(), on_events)
+        let cmp = &t.comparisons;
+        let admissible = a.pinned.is_empty() && a.weak.is_empty();
+        scores.push(score_row(
+            REGISTRY[k],
+            &a.full,
+            &a.weak,
+            [&cmp[BALANCE], &cmp[FREE_RUN], &cmp[EVENTS]],
+            admissible,
+        ));
+        if t.accepted {
+            let on_events = t.standing.is_some_and(|s| s.by_view == EVENTS);
+            winner = Some((k, scores.len() - 1, a.full, a.se, on_events));
         }
-        None => (0, base_fit, vec![f64::NAN; base.params().len()], false),
-    };
-    scores[k].accepted = true;
-    let winner = REGISTRY[k];
-    let notes = notes(winner, &fitted, k, &scores);
+    }
+    match winner {
+        Some((k, row, full, se, on_events)) => {
+            scores[row].accepted = true;
+            finish(ext, REGISTRY[k], row, full, se, scores, at_bounds, runs, on_events)
+        }
+        None => {
+            scores[0].accepted = true;
+            finish(ext, base, 0, base_fit, vec![f64::NAN; base.params().len()], scores, at_bounds, runs, false)
+        }
+    }
+}
+
+/// A comparison of a model with itself (the baseline's row).
+fn no_gain(m: f64) -> Comparison {
+    Comparison { before: m, after: m, gain: 0.0, gain_fold_sd: 0.0, t: 0.0 }
+}
+
+/// The selection from its winner (`row`: its row of `scores`).
+#[allow(clippy::too_many_arguments)]
+fn finish(
+    ext: &RigParams,
+    winner: &'static dyn StructureCandidate,
+    row: usize,
+    fitted: Fitted,
+    stderr: Vec<f64>,
+    mut scores: Vec<StructureScore>,
+    at_bounds: Vec<ParamAtBound>,
+    runs: &[crate::RunRow],
+    on_events: bool,
+) -> StructureSelection {
+    scores[row].accepted = true;
+    let notes = notes(winner, &fitted, row, &scores);
     StructureSelection {
         damping: winner.damping(),
         model: winner.apply(ext, &fitted),
@@ -492,11 +610,6 @@ pub fn select_structure(
         heldout_runs: runs.iter().map(|r| r.id.clone()).collect(),
         on_events,
     }
-}
-
-/// RMS over runs of per-run misfits (the crate's `overall`).
-fn overall_of(m: &BTreeMap<String, f64>) -> f64 {
-    overall(&m.values().copied().collect::<Vec<_>>())
 }
 
 /// One candidate's row; `cmp` is its balance, free-run and event-locked comparison.
