@@ -38,7 +38,7 @@ mod step;
 mod twist;
 
 pub use balance::{
-    BalanceData, BalanceFit, Channels, Recorded, RecordedRun, TICK_LOSS_CHECK, advanced, balance_data,
+    BalanceData, BalanceFit, Channels, MIN_EVENTS, Recorded, RecordedRun, TICK_LOSS_CHECK, advanced, balance_data,
     tick_loss_check_of, torque_balance_check, torque_balance_check_of,
 };
 pub use drive_balance::drive_balance_check;

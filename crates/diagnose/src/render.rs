@@ -391,16 +391,18 @@ pub fn markdown(d: &Diagnosis) -> String {
              (a damping placement, a delay between recorded channels, a sensor's resonance) is fitted teacher-forced through the rotor \
              torque balance on the training folds and scored on the held-out runs by that balance's misfit and by \
              the free-run misfit of the extended model, and by the balance at the stick↔slip transitions alone \
-             (event-locked rows; rig-diagnose `structure` docs).\n\n| structure | fitted (every run) | balance \
-             misfit [N·m] | balance gain | balance t | event misfit [N·m] | event gain | event t | free-run misfit \
-             | gain | gain sd (folds) | paired t | admissible | chosen |\n|---|---|---|---|---|---|---|---|---|---|---|\
-             ---|---|---|",
+             (event-locked rows), and by the force's ring after the break-aways at full rate (rig-diagnose \
+             `structure` docs).\n\n| structure | fitted (every run) | balance misfit [N·m] | balance gain | balance t \
+             | event misfit [N·m] | event gain | event t | ring misfit [N·m] | ring gain | ring t | free-run misfit | gain \
+             | gain sd (folds) | paired t | admissible | chosen |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\
+             ---|---|---|---|",
             d.structure.damping, d.structure.notes
         );
         for r in &det.structure_scores {
             let _ = writeln!(
                 s,
-                "| {} | {} | {:.3e} | {:.3} | {:.2} | {:.3e} | {:.3} | {:.2} | {:.3} | {:.3} | {:.3} | {:.2} | {} | {} |",
+                "| {} | {} | {:.3e} | {:.3} | {:.2} | {:.3e} | {:.3} | {:.2} | {:.3e} | {:.3} | {:.2} | {:.3} | {:.3} | \
+                 {:.3} | {:.2} | {} | {} |",
                 r.id,
                 r.description,
                 r.balance_misfit,
@@ -409,6 +411,9 @@ pub fn markdown(d: &Diagnosis) -> String {
                 r.event_misfit,
                 r.event_gain,
                 r.event_t,
+                r.ring_misfit,
+                r.ring_gain,
+                r.ring_t,
                 r.free_run_misfit,
                 r.relative_gain,
                 r.relative_gain_fold_sd,

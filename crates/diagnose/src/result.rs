@@ -164,6 +164,15 @@ pub struct StructureScore {
     pub event_gain: f64,
     pub event_gain_fold_sd: f64,
     pub event_t: f64,
+    /// The force's ring after the break-aways, at full rate
+    /// ([`crate::structure`]'s `sensor_dynamics`: each run's event-averaged
+    /// force fitted with the true drop through the candidate's sensor):
+    /// cross-validated misfit, N·m at the disc, its gain over the records as recorded, the
+    /// gain's spread across folds and the paired run-level t.
+    pub ring_misfit: f64,
+    pub ring_gain: f64,
+    pub ring_gain_fold_sd: f64,
+    pub ring_t: f64,
     pub admissible: bool,
     pub accepted: bool,
 }

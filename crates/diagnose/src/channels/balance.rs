@@ -199,6 +199,19 @@ pub struct RecordedRun {
     force_noise_n: f64,
 }
 
+impl RecordedRun {
+    /// The run's stick→slip transitions in its steady state, each with the
+    /// sample of the transition that follows it (the record's end when
+    /// none): located on the rotor encoder as recorded, as the balance's
+    /// event-locked rows are (the force sensor's ring after each
+    /// break-away, [`crate::structure`]).
+    pub fn breakaways(&self) -> Vec<(usize, usize)> {
+        let end = self.rotor_rad.len();
+        let t = &self.transitions;
+        (0..t.len()).filter(|&i| t[i].0 == 1).map(|i| (t[i].1, t.get(i + 1).map_or(end, |x| x.1))).collect()
+    }
+}
+
 /// Every operating point's channels, read once per campaign: the balance
 /// as recorded ([`Recorded::balance`]) and through any realignment or
 /// sensor model ([`Recorded::balance_with`]) are built from it, so the
@@ -255,6 +268,11 @@ impl Recorded {
             kernel_gain,
             j1_kgm2: cal.rotor_inertia_kgm2,
         }
+    }
+
+    /// The brake disc's radius, m (the force's lever arm, Eq. 4-10's r).
+    pub fn disc_radius_m(&self) -> f64 {
+        self.r_m
     }
 
     /// The balance of the channels as recorded.

@@ -56,18 +56,19 @@
 //!   besides every fitted term `min_t` jackknife errors above its bound.
 //!   Measured: module [`sensor_dynamics`] and docs/findings.md.
 //!
-//! The three comparisons use the crate's criterion (relative gain ≥
+//! The comparisons (these three and the force's ring after the break-aways,
+//! [`sensor_dynamics::Ring`]) use the crate's criterion (relative gain ≥
 //! `min_relative_gain` and paired run-level t ≥ `min_t`, [`crate::select`]).
 //! A candidate is **accepted** when it is admissible on its fit to every run,
 //! with every term it fits at least `min_t` fold-jackknife standard errors
 //! above its bound (a term the records put at ≈ 0 is the baseline again),
-//! when it passes the balance or the event-locked comparison (the latter
+//! when it passes the balance, the ring or the event-locked comparison (the latter
 //! alone only when the held-out balance also gains, gain and t ≥ `min_t`/2)
 //! — never on the free run alone: a torque on the rotor shows in the
 //! balance with the measured r·F, and a free-run gain the balance does not
 //! share compensates a friction the model's law lacks (r·F carries it, the
-//! free run does not; [`ThreeViews`]) —, when neither its held-out balance nor its
-//! event-locked balance is significantly worse, and when its free run is not
+//! free run does not; [`FourViews`]) —, when neither its held-out balance nor its
+//! event-locked balance nor its ring is significantly worse, and when its free run is not
 //! significantly worse than the extended model's (refuted by a
 //! cross-validated free-run gain < 0 with paired t ≤ −`min_t`; either sign
 //! alone is not evidence): the motion refutes a fitted structure that makes it worse,
@@ -83,13 +84,14 @@
 //! changes the motion *and whose free run passes the criterion* wins over
 //! one that does not (a channel delay explains a drag's steady-slip torque
 //! about as well, but only a drag is tested by the free run; a drag the free
-//! run does not support is no evidence against a delay), then one that
+//! run does not support is no evidence against a delay), then (within each)
+//! one that passes on the ring (only a ringing sensor gains there), then one that
 //! passes on the balance over one admitted on the
 //! event-locked rows alone, then the larger held-out balance gain (the
 //! larger event-locked gain between two admitted on those rows alone). At
 //! most one wins. The selection runs on the workspace's one engine
 //! ([`rig_types::select::select_on_views`]): the runs are its units, the
-//! three comparisons its views, this rule its [`rig_types::select::ViewRule`].
+//! four comparisons its views, this rule its [`rig_types::select::ViewRule`].
 //! The free-run test of a drag in a campaign that slides steadily is weak:
 //! in `structural-viscous_brake_friction+damping_rotor_absolute-0` the
 //! right drag's free-run gain is +0.2 % ± 24 % across folds, so that
@@ -156,6 +158,8 @@ pub struct StructureData {
     pub tick_loss: bool,
     /// The balance through every sensor model of the grid ([`sensor_dynamics`]).
     pub sensors: Vec<sensor_dynamics::SensorPoint>,
+    /// The force's ring after each break-away ([`sensor_dynamics::Ring`]).
+    pub ring: sensor_dynamics::Ring,
 }
 
 /// The balance with `channel` advanced by `samples` (recorded that late).
@@ -176,7 +180,8 @@ impl StructureData {
         let tick_loss = crate::channels::tick_loss_check_of(&balance, o).flagged;
         let rate = c.rig.sample_rate_hz;
         let (aligned, sensors) = rayon::join(|| channel_delay::grid(rec, rate), || sensor_dynamics::grid(rec, rate));
-        StructureData { balance, aligned, tick_loss, sensors }
+        let ring = sensor_dynamics::ring(rec, rate, &sensors);
+        StructureData { balance, aligned, tick_loss, sensors, ring }
     }
 
     /// The balance data a fit was made on.
@@ -206,6 +211,12 @@ pub trait StructureCandidate: Sync {
     /// its free run is the extended model's).
     fn moves(&self) -> bool {
         true
+    }
+    /// Each run's ring misfit after its break-aways with this fit, N·m, over
+    /// the runs `include` accepts ([`sensor_dynamics::Ring`]): the records'
+    /// as recorded unless the candidate models the force sensor.
+    fn ring_rms(&self, data: &StructureData, _fitted: &Fitted, include: &dyn Fn(&str) -> bool) -> Vec<(String, f64)> {
+        data.ring.run_rms(None, include)
     }
     /// The finding's effect id when it wins (`None`: the baseline).
     fn finding_id(&self) -> Option<&'static str> {
@@ -260,13 +271,18 @@ pub struct StructureSelection {
     /// The winner passed the criterion on the event-locked rows alone: its
     /// finding's misfits are theirs.
     pub on_events: bool,
+    /// The winner passed on the force's ring and not on the balance or the
+    /// free run: its finding's misfits are the ring's (N·m).
+    pub on_ring: bool,
 }
 
 /// The views a structural candidate is judged on, per held-out run (module
-/// docs): the rotor balance, the free run, the balance at the transitions.
+/// docs): the rotor balance, the free run, the balance at the transitions,
+/// the force's ring after the break-aways.
 const BALANCE: usize = 0;
 const FREE_RUN: usize = 1;
 const EVENTS: usize = 2;
+const RING: usize = 3;
 
 /// A structure fitted on one training set: its [`REGISTRY`] index and fit.
 #[derive(Clone)]
@@ -338,7 +354,7 @@ struct Assessment {
 
 impl rig_types::select::ViewStudy<Structured> for Study<'_> {
     fn views(&self) -> usize {
-        3
+        4
     }
     fn score_view(&self, m: &Structured, view: usize, unit: usize) -> Option<f64> {
         let id = self.runs[unit].id.as_str();
@@ -346,6 +362,9 @@ impl rig_types::select::ViewStudy<Structured> for Study<'_> {
         match view {
             BALANCE => self.data.of_fit(&m.fit).run_rms(&m.fit.balance, only).first().map(|x| x.1),
             EVENTS => self.data.of_fit(&m.fit).run_event_rms(&m.fit.balance, only).first().map(|x| x.1),
+            // The baseline reads the ring as recorded (no sensor model).
+            RING if m.k == 0 => self.data.ring.run_rms(None, &only).first().map(|x| x.1),
+            RING => REGISTRY[m.k].ring_rms(self.data, &m.fit, &only).first().map(|x| x.1),
             // The baseline and a structure that does not move the model
             // (a sensor's) have the extended model's free run.
             _ if m.k == 0 || !REGISTRY[m.k].moves() => self.ext_free_run[unit],
@@ -383,13 +402,13 @@ impl rig_types::select::Candidate<Study<'_>, Structured> for Cand {
 
 /// The structure's criterion on its three views (module docs), the
 /// engine's [`rig_types::select::ViewRule`].
-struct ThreeViews<'a> {
+struct FourViews<'a> {
     rule: &'a rig_types::contract::SelectionRule,
 }
 
-impl rig_types::select::ViewRule for ThreeViews<'_> {
+impl rig_types::select::ViewRule for FourViews<'_> {
     fn standing(&self, k: usize, c: &[Comparison]) -> Option<rig_types::select::Standing> {
-        let (balance, free_run, events) = (&c[BALANCE], &c[FREE_RUN], &c[EVENTS]);
+        let (balance, free_run, events, ring) = (&c[BALANCE], &c[FREE_RUN], &c[EVENTS], &c[RING]);
         let passes = |x: &Comparison| self.rule.admits(x);
         // The free run refutes a candidate it finds significantly worse: a
         // negative gain with a paired t at or below −min_t; so does the held-out
@@ -438,10 +457,15 @@ impl rig_types::select::ViewRule for ThreeViews<'_> {
         // t 3.37–5.06) with C_r 4e-6–2e-5 N·m·s/rad and a balance gain of 0.0 %
         // (t 0.16–1.04): the free-run gain was the twist-rate C refitted
         // through the balance (1–9 % below the estimation's), not the drag.
+        // The force's ring after the break-aways (sensor_dynamics) admits on
+        // its own: only a sensor that rings can gain there (a delay is a
+        // shift, which the ring's fit absorbs); a candidate it finds
+        // significantly worse is refuted like the other views'.
         let admitted = !worse(free_run)
             && !worse(balance)
             && !worse(events)
-            && (passes(balance) || (passes(events) && corroborated(balance)));
+            && !worse(ring)
+            && (passes(balance) || passes(ring) || (passes(events) && corroborated(balance)));
         // A candidate that moves the model wins over one that does not only when
         // the motion supports it (its free-run comparison passes the criterion):
         // a drag and a late rotor encoder both read as C_r ≈ K·delay in the
@@ -458,19 +482,20 @@ impl rig_types::select::ViewRule for ThreeViews<'_> {
         // gains, a few percent each, said nothing between them, and the delay
         // was named beside a velocity weakening with a ringing sensor
         // (`structural-velocity_weakening_friction+force_sensor_dynamics-0`).
-        let tier = match (REGISTRY[k].moves() && passes(free_run), passes(balance)) {
-            (true, _) => 2,
-            (false, true) => 1,
-            (false, false) => 0,
-        };
-        admitted.then_some(rig_types::select::Standing { tier, by_view: if tier > 0 { BALANCE } else { EVENTS } })
+        // One that passes on the ring ranks next within each of those: where
+        // the force rings, the lag a force delay and a ringing sensor share
+        // in the balance is the sensor's.
+        let moves_free = REGISTRY[k].moves() && passes(free_run);
+        let on_balance = passes(balance) || moves_free;
+        let tier = 4 * u32::from(moves_free) + 2 * u32::from(passes(ring)) + u32::from(on_balance);
+        admitted.then_some(rig_types::select::Standing { tier, by_view: if on_balance { BALANCE } else { EVENTS } })
     }
 }
 
 /// Selects the structure on top of `ext` (module docs) on the one engine
 /// ([`rig_types::select::select_on_views`]: the runs as units, each run's
 /// fold as the folds, the baseline `twist_rate` fitted per training set, the
-/// three views and [`ThreeViews`]). `ext_pairs` are the extended model's free
+/// three views and [`FourViews`]). `ext_pairs` are the extended model's free
 /// runs (campaign order), `runs` the diagnosis' rows: each run's
 /// cross-validation fold (numbered from 0) and its nuisance phases, with
 /// which its free runs are simulated.
@@ -518,19 +543,24 @@ pub fn select_structure(
     let cands: Vec<Cand> = (1..REGISTRY.len()).map(Cand).collect();
     let cand_refs: Vec<&dyn Candidate<Study<'_>, Structured>> = cands.iter().map(|c| c as _).collect();
     let search = Search { units_ascending: true, ..Search::default() };
-    let rule = ThreeViews { rule: &opts.selection };
+    let rule = FourViews { rule: &opts.selection };
     let sel = select_on_views(&study, &cand_refs, &baselines, &folds, &rule, &search);
     let Ok(sel) = sel else {
         // Fewer than two folds: nothing to hold out, the rig model's structure stays.
-        let scores = vec![score_row(base, &base_fit, &[], [&no_gain(f64::NAN); 3], true)];
-        return finish(ext, base, 0, base_fit, vec![f64::NAN], scores, Vec::new(), runs, false);
+        let scores = vec![score_row(base, &base_fit, &[], [&no_gain(f64::NAN); 4], true)];
+        return finish(ext, base, 0, base_fit, vec![f64::NAN], scores, Vec::new(), runs, (false, false));
     };
     let overall_view = |v: usize| overall(&sel.baseline_misfits[v].iter().flatten().copied().collect::<Vec<_>>());
     let mut scores = vec![score_row(
         base,
         &base_fit,
         &[],
-        [&no_gain(overall_view(BALANCE)), &no_gain(overall_view(FREE_RUN)), &no_gain(overall_view(EVENTS))],
+        [
+            &no_gain(overall_view(BALANCE)),
+            &no_gain(overall_view(FREE_RUN)),
+            &no_gain(overall_view(EVENTS)),
+            &no_gain(overall_view(RING)),
+        ],
         true,
     )];
     let mut at_bounds = Vec::new();
@@ -558,22 +588,26 @@ pub fn select_structure(
             REGISTRY[k],
             &a.full,
             &a.weak,
-            [&cmp[BALANCE], &cmp[FREE_RUN], &cmp[EVENTS]],
+            [&cmp[BALANCE], &cmp[FREE_RUN], &cmp[EVENTS], &cmp[RING]],
             admissible,
         ));
         if t.accepted {
-            let on_events = t.standing.is_some_and(|s| s.by_view == EVENTS);
-            winner = Some((k, scores.len() - 1, a.full, a.se, on_events));
+            // Admitted on neither the balance nor the free run: on the ring
+            // (tier's ring bit) or else on the event-locked rows.
+            let off_balance = t.standing.filter(|s| s.by_view == EVENTS);
+            let on_ring = off_balance.is_some_and(|s| s.tier & 2 != 0);
+            let on_events = off_balance.is_some() && !on_ring;
+            winner = Some((k, scores.len() - 1, a.full, a.se, (on_events, on_ring)));
         }
     }
     match winner {
-        Some((k, row, full, se, on_events)) => {
+        Some((k, row, full, se, on)) => {
             scores[row].accepted = true;
-            finish(ext, REGISTRY[k], row, full, se, scores, at_bounds, runs, on_events)
+            finish(ext, REGISTRY[k], row, full, se, scores, at_bounds, runs, on)
         }
         None => {
             scores[0].accepted = true;
-            finish(ext, base, 0, base_fit, vec![f64::NAN; base.params().len()], scores, at_bounds, runs, false)
+            finish(ext, base, 0, base_fit, vec![f64::NAN; base.params().len()], scores, at_bounds, runs, (false, false))
         }
     }
 }
@@ -594,7 +628,7 @@ fn finish(
     mut scores: Vec<StructureScore>,
     at_bounds: Vec<ParamAtBound>,
     runs: &[crate::RunRow],
-    on_events: bool,
+    (on_events, on_ring): (bool, bool),
 ) -> StructureSelection {
     scores[row].accepted = true;
     let notes = notes(winner, &fitted, row, &scores);
@@ -609,6 +643,7 @@ fn finish(
         notes,
         heldout_runs: runs.iter().map(|r| r.id.clone()).collect(),
         on_events,
+        on_ring,
     }
 }
 
@@ -617,10 +652,10 @@ fn score_row(
     cand: &dyn StructureCandidate,
     full: &Fitted,
     weak: &[String],
-    cmp: [&Comparison; 3],
+    cmp: [&Comparison; 4],
     admissible: bool,
 ) -> StructureScore {
-    let [balance, free_run, events] = cmp;
+    let [balance, free_run, events, ring] = cmp;
     StructureScore {
         id: cand.id().into(),
         description: if weak.is_empty() {
@@ -640,6 +675,10 @@ fn score_row(
         event_gain: events.gain,
         event_gain_fold_sd: events.gain_fold_sd,
         event_t: events.t,
+        ring_misfit: ring.after,
+        ring_gain: ring.gain,
+        ring_gain_fold_sd: ring.gain_fold_sd,
+        ring_t: ring.t,
         admissible,
         accepted: false,
     }
@@ -659,13 +698,15 @@ fn notes(winner: &dyn StructureCandidate, fitted: &Fitted, k: usize, scores: &[S
             sc.balance_misfit,
             sc.free_run_misfit,
             runner.map_or(String::new(), |r| format!(
-                " (best: {}, balance gain {:.1} %, t = {:.2}; event-locked gain {:.1} %, t = {:.2}; free-run gain \
-                 {:.1} %, t = {:.2}{})",
+                " (best: {}, balance gain {:.1} %, t = {:.2}; event-locked gain {:.1} %, t = {:.2}; ring gain {:.1} \
+                 %, t = {:.2}; free-run gain {:.1} %, t = {:.2}{})",
                 r.id,
                 100.0 * r.balance_gain,
                 r.balance_t,
                 100.0 * r.event_gain,
                 r.event_t,
+                100.0 * r.ring_gain,
+                r.ring_t,
                 100.0 * r.relative_gain,
                 r.t,
                 if r.admissible { "" } else { ", inadmissible" }
@@ -675,8 +716,9 @@ fn notes(winner: &dyn StructureCandidate, fitted: &Fitted, k: usize, scores: &[S
         format!(
             "{} (fitted through the rotor torque balance) lowers the cross-validated balance misfit from {:.3e} to \
              {:.3e} N·m (gain {:.1} %, paired t = {:.2}), at the stick↔slip transitions from {:.3e} to {:.3e} N·m \
-             (event-locked rows: gain {:.1} %, paired t = {:.2}); the extended model's free-run misfit goes from \
-             {:.3} to {:.3} (gain {:.1} % ± {:.1} % across folds, paired t = {:.2}).",
+             (event-locked rows: gain {:.1} %, paired t = {:.2}), the force's ring after the break-aways from {:.3e} \
+             to {:.3e} N·m (gain {:.1} %, paired t = {:.2}); the extended model's free-run misfit goes from {:.3} to \
+             {:.3} (gain {:.1} % ± {:.1} % across folds, paired t = {:.2}).",
             capitalise(&winner.describe(fitted)),
             scores[0].balance_misfit,
             sc.balance_misfit,
@@ -686,6 +728,10 @@ fn notes(winner: &dyn StructureCandidate, fitted: &Fitted, k: usize, scores: &[S
             sc.event_misfit,
             100.0 * sc.event_gain,
             sc.event_t,
+            scores[0].ring_misfit,
+            sc.ring_misfit,
+            100.0 * sc.ring_gain,
+            sc.ring_t,
             scores[0].free_run_misfit,
             sc.free_run_misfit,
             100.0 * sc.relative_gain,
@@ -701,20 +747,25 @@ pub fn finding(sel: &StructureSelection) -> Option<Finding> {
     let sc = sel.scores.iter().find(|s| s.accepted)?;
     let base = &sel.scores[0];
     let names = sel.candidate.params().iter().map(|p| p.name.to_string());
+    // (baseline misfit, misfit, gain, its fold sd, t) of the statistic it was admitted on.
+    let (before, after, gain, sd, t) = if sel.on_ring {
+        (base.ring_misfit, sc.ring_misfit, sc.ring_gain, sc.ring_gain_fold_sd, sc.ring_t)
+    } else if sel.on_events {
+        (base.event_misfit, sc.event_misfit, sc.event_gain, sc.event_gain_fold_sd, sc.event_t)
+    } else {
+        (base.balance_misfit, sc.balance_misfit, sc.balance_gain, sc.balance_gain_fold_sd, sc.balance_t)
+    };
     Some(Finding {
         effect: id.into(),
         params: names.clone().zip(&sel.fitted.values).map(|(n, v)| (n, round_sig(*v, 4))).collect(),
         params_stderr: names.zip(&sel.stderr).map(|(n, v)| (n, round_sig(*v, 2))).collect(),
         evidence: format!("Structure `{}`: {}", sel.candidate.id(), sel.notes),
         heldout_runs: sel.heldout_runs.clone(),
-        heldout_misfit_baseline: round_sig(if sel.on_events { base.event_misfit } else { base.balance_misfit }, 4),
-        heldout_misfit_extended: round_sig(if sel.on_events { sc.event_misfit } else { sc.balance_misfit }, 4),
-        relative_gain: round_sig(if sel.on_events { sc.event_gain } else { sc.balance_gain }, 3),
-        relative_gain_fold_sd: round_sig(
-            if sel.on_events { sc.event_gain_fold_sd } else { sc.balance_gain_fold_sd },
-            2,
-        ),
-        criterion: Some(round_sig(-(if sel.on_events { sc.event_t } else { sc.balance_t }), 4)),
+        heldout_misfit_baseline: round_sig(before, 4),
+        heldout_misfit_extended: round_sig(after, 4),
+        relative_gain: round_sig(gain, 3),
+        relative_gain_fold_sd: round_sig(sd, 2),
+        criterion: Some(round_sig(-t, 4)),
         ..Finding::default()
     })
 }
