@@ -293,7 +293,7 @@ struct Structured {
 
 /// The structure selection as a study of the one engine
 /// ([`rig_types::select::select_on_views`]): the units are the diagnosis'
-/// runs (`runs` order), scored in the three views.
+/// runs (`runs` order), scored in the four views.
 struct Study<'a> {
     c: &'a Campaign,
     data: &'a StructureData,
@@ -362,8 +362,7 @@ impl rig_types::select::ViewStudy<Structured> for Study<'_> {
         match view {
             BALANCE => self.data.of_fit(&m.fit).run_rms(&m.fit.balance, only).first().map(|x| x.1),
             EVENTS => self.data.of_fit(&m.fit).run_event_rms(&m.fit.balance, only).first().map(|x| x.1),
-            // The baseline reads the ring as recorded (no sensor model).
-            RING if m.k == 0 => self.data.ring.run_rms(None, &only).first().map(|x| x.1),
+            // As recorded unless the candidate models the force sensor (the baseline's too).
             RING => REGISTRY[m.k].ring_rms(self.data, &m.fit, &only).first().map(|x| x.1),
             // The baseline and a structure that does not move the model
             // (a sensor's) have the extended model's free run.
@@ -400,7 +399,7 @@ impl rig_types::select::Candidate<Study<'_>, Structured> for Cand {
     }
 }
 
-/// The structure's criterion on its three views (module docs), the
+/// The structure's criterion on its four views (module docs), the
 /// engine's [`rig_types::select::ViewRule`].
 struct FourViews<'a> {
     rule: &'a rig_types::contract::SelectionRule,
@@ -495,7 +494,7 @@ impl rig_types::select::ViewRule for FourViews<'_> {
 /// Selects the structure on top of `ext` (module docs) on the one engine
 /// ([`rig_types::select::select_on_views`]: the runs as units, each run's
 /// fold as the folds, the baseline `twist_rate` fitted per training set, the
-/// three views and [`FourViews`]). `ext_pairs` are the extended model's free
+/// four views and [`FourViews`]). `ext_pairs` are the extended model's free
 /// runs (campaign order), `runs` the diagnosis' rows: each run's
 /// cross-validation fold (numbered from 0) and its nuisance phases, with
 /// which its free runs are simulated.
@@ -592,11 +591,12 @@ pub fn select_structure(
             admissible,
         ));
         if t.accepted {
-            // Admitted on neither the balance nor the free run: on the ring
-            // (tier's ring bit) or else on the event-locked rows.
-            let off_balance = t.standing.filter(|s| s.by_view == EVENTS);
-            let on_ring = off_balance.is_some_and(|s| s.tier & 2 != 0);
-            let on_events = off_balance.is_some() && !on_ring;
+            // Admitted on neither the balance nor the free run ([`FourViews`]
+            // ranks those by the event-locked gain): on the ring where it
+            // passes, else on the event-locked rows.
+            let off_balance = t.standing.is_some_and(|s| s.by_view == EVENTS);
+            let on_ring = off_balance && opts.selection.admits(&cmp[RING]);
+            let on_events = off_balance && !on_ring;
             winner = Some((k, scores.len() - 1, a.full, a.se, (on_events, on_ring)));
         }
     }
