@@ -193,7 +193,9 @@ fn main() -> ExitCode {
 #[cfg(unix)]
 fn run(binary: &Path, args: &[OsString]) -> ExitCode {
     use std::os::unix::process::CommandExt;
-    let e = Command::new(binary).args(args).exec();
+    // This process's own name as argv[0]: usage lines say `xtask` as before.
+    let name = std::env::args_os().next().unwrap_or_else(|| BINARY.into());
+    let e = Command::new(binary).arg0(name).args(args).exec();
     eprintln!("error: running {}: {e}", binary.display());
     ExitCode::FAILURE
 }
