@@ -1,5 +1,6 @@
 //! Stages from `pipeline.toml`, content hashes, an atomic artifact store and the
-//! manifest. A library so it can be tested; `xtask` is a thin front door.
+//! manifest. A library so it can be tested; its binary `rig-lab` (`src/bin/rig-lab`)
+//! is the command line, which `cargo xtask` builds and runs.
 //!
 //! CONTRACT for stage authors (one module each in `stages/`): a stage is a
 //! [`StageFn`] that reads its inputs through [`StageCtx`] and writes every
@@ -20,6 +21,8 @@ mod config;
 mod ctx;
 mod error;
 pub mod fingerprint;
+#[cfg(test)]
+mod fingerprint_tests;
 pub mod graph;
 mod hash;
 mod manifest;
@@ -36,7 +39,7 @@ pub use error::{PipelineError, describe};
 pub use runner::{CampaignReader, Outcome, RunReport, Runner, StageReport};
 pub use store::{CacheRecord, FileHash};
 pub mod shards;
-/// `cargo xtask diff` (xtask's one door is this crate): the comparison lives in rig-report.
+/// `cargo xtask diff` (the `rig-lab` binary's one door is this crate): the comparison lives in rig-report.
 pub use rig_report::diff;
 pub mod testing;
 

@@ -150,10 +150,11 @@ fn dependencies_point_the_right_way() {
             problems.push(format!("{pkg} depends on plotters; only rig-figures may draw"));
         }
     }
-    let allowed: BTreeSet<String> = ["rig-pipeline", "clap", "anyhow"].map(String::from).into();
-    let extra: Vec<String> = g.direct("xtask").difference(&allowed).cloned().collect();
+    // xtask builds and runs the `rig-lab` binary; with no dependency its
+    // freshness check (part of every `cargo xtask` call) walks one crate.
+    let extra = g.direct("xtask");
     if !extra.is_empty() {
-        problems.push(format!("xtask depends on {extra:?}; it may depend only on rig-pipeline, clap, anyhow"));
+        problems.push(format!("xtask depends on {extra:?}; it uses the standard library only"));
     }
     assert!(problems.is_empty(), "{}", problems.join("\n"));
 }

@@ -1,4 +1,4 @@
-//! `cargo xtask reproduce`: runs the DAG through `rig_pipeline::Runner`.
+//! `rig-lab reproduce` (`cargo xtask reproduce`): runs the DAG through `rig_pipeline::Runner`.
 
 use anyhow::{Context, Result};
 use rig_pipeline::Runner;

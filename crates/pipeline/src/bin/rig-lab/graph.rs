@@ -1,4 +1,4 @@
-//! `cargo xtask graph [--dot]`: the stage DAG of pipeline.toml.
+//! `rig-lab graph [--dot]` (`cargo xtask graph`): the stage DAG of pipeline.toml.
 
 use anyhow::Result;
 use rig_pipeline::{Runner, graph};

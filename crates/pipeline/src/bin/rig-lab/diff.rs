@@ -1,4 +1,4 @@
-//! `cargo xtask diff --baseline REV`: calls `rig_pipeline::diff::run`.
+//! `rig-lab diff --baseline REV` (`cargo xtask diff`): calls `rig_pipeline::diff::run`.
 
 use anyhow::Result;
 

@@ -1,4 +1,4 @@
-//! `cargo xtask merge-shards`: joins the severity-map and battery slices of
+//! `rig-lab merge-shards` (`cargo xtask merge-shards`): joins the severity-map and battery slices of
 //! a job array (see `rig_pipeline::shards`).
 
 use anyhow::Result;
