@@ -10,7 +10,8 @@
 //! not only k/J and c/J.
 
 use crate::LaviError;
-use crate::lsq::least_squares;
+use crate::lsq::{least_squares, sse};
+use rig_estimate::linear::Normal;
 use rig_model::one_dof::integrated_twist_rad;
 use serde::Serialize;
 
@@ -65,12 +66,7 @@ pub fn fit_equation_of_motion(
         });
     }
     let dphi = integrated_twist_rad(time_s, top_rad_s, bit_rad_s);
-    let (with_c, with_ca) = match damping {
-        Damping::TwistRate => (true, false),
-        Damping::Absolute => (false, true),
-        Damping::Both => (true, true),
-        Damping::Fixed0 => (false, false),
-    };
+    let (with_c, with_ca) = columns(damping);
     // Column order: Δφ, [Ω_top − Ω], [−Ω], −T, 1.
     let row = |i: usize| -> Vec<f64> {
         let mut r = Vec::with_capacity(5);
@@ -121,6 +117,114 @@ pub fn fit_equation_of_motion(
     })
 }
 
+/// The equation of motion's least squares of one window for many torque
+/// columns (the torque channel read at each delay of a scan): everything but
+/// the torque's column is the same for every delay, so the twist, the
+/// design's fixed columns and their sums in the normal equations are made
+/// once, and a delay costs its torque column's sums, a 5 × 5 solve and the
+/// residual pass. The sums are the products [`fit_equation_of_motion`]'s rows
+/// add, in the same row order: the same normal equations to the last bit, so
+/// the same R² ([`TorqueScan::r_squared`]).
+pub struct TorqueScan<'a> {
+    acc: &'a [f64],
+    /// The fixed columns per row, in [`fit_equation_of_motion`]'s order with the torque's slot 0.
+    rows: Vec<[f64; 5]>,
+    p: usize,
+    ij: usize,
+    /// AᵀA (row-major, p × p) and Aᵀy of the fixed columns; the torque's row and column 0.
+    ata: Vec<f64>,
+    atb: Vec<f64>,
+    sst: f64,
+}
+
+impl<'a> TorqueScan<'a> {
+    /// The fixed part of [`fit_equation_of_motion`]'s design on these samples.
+    pub fn new(
+        time_s: &[f64],
+        top_rad_s: &[f64],
+        bit_rad_s: &[f64],
+        bit_accel_rad_s2: &'a [f64],
+        damping: Damping,
+    ) -> Self {
+        let n = time_s.len();
+        let dphi = integrated_twist_rad(time_s, top_rad_s, bit_rad_s);
+        let (with_c, with_ca) = columns(damping);
+        let p = 3 + with_c as usize + with_ca as usize;
+        let ij = p - 2;
+        let rows: Vec<[f64; 5]> = (0..n)
+            .map(|i| {
+                let mut r = [0.0; 5];
+                let mut k = 0;
+                r[k] = dphi[i];
+                k += 1;
+                if with_c {
+                    r[k] = top_rad_s[i] - bit_rad_s[i];
+                    k += 1;
+                }
+                if with_ca {
+                    r[k] = -bit_rad_s[i];
+                }
+                r[p - 1] = 1.0;
+                r
+            })
+            .collect();
+        let (mut ata, mut atb) = (vec![0.0; p * p], vec![0.0; p]);
+        for (r, y) in rows.iter().zip(bit_accel_rad_s2) {
+            for a in (0..p).filter(|&a| a != ij) {
+                atb[a] += r[a] * y;
+                for b in (0..p).filter(|&b| b != ij) {
+                    ata[a * p + b] += r[a] * r[b];
+                }
+            }
+        }
+        let mean = bit_accel_rad_s2.iter().sum::<f64>() / n as f64;
+        let sst: f64 = bit_accel_rad_s2.iter().map(|a| (a - mean).powi(2)).sum();
+        TorqueScan { acc: bit_accel_rad_s2, rows, p, ij, ata, atb, sst }
+    }
+
+    /// R² of [`fit_equation_of_motion`] with `torque_nm` (bit for bit); None where it
+    /// errs (a singular design, or an inverse inertia not above 0).
+    pub fn r_squared(&self, torque_nm: &[f64]) -> Option<f64> {
+        let (p, ij) = (self.p, self.ij);
+        let (mut ata, mut atb) = (self.ata.clone(), self.atb.clone());
+        // The torque's entries: −T times each column (itself included), summed in row order.
+        let mut col = [0.0; 5];
+        let mut ty = 0.0;
+        for ((r, t), y) in self.rows.iter().zip(torque_nm).zip(self.acc) {
+            let v = -t;
+            ty += v * y;
+            for b in 0..p {
+                col[b] += v * if b == ij { v } else { r[b] };
+            }
+        }
+        atb[ij] = ty;
+        for b in 0..p {
+            ata[ij * p + b] = col[b];
+            ata[b * p + ij] = col[b];
+        }
+        let normal = Normal::from_row_major(p, &ata, atb);
+        let coef = normal.solve()?;
+        if coef[ij] <= 0.0 {
+            return None;
+        }
+        let sse = sse(self.acc, &coef, |i, x| {
+            x.copy_from_slice(&self.rows[i][..p]);
+            x[ij] = -torque_nm[i];
+        });
+        Some(1.0 - sse / self.sst)
+    }
+}
+
+/// Which damping columns a structure's design carries: (on the twist rate, on the bit speed).
+fn columns(damping: Damping) -> (bool, bool) {
+    match damping {
+        Damping::TwistRate => (true, false),
+        Damping::Absolute => (false, true),
+        Damping::Both => (true, true),
+        Damping::Fixed0 => (false, false),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -168,5 +272,25 @@ mod tests {
         // Fitted with the damping on the twist rate only, the drag is not representable: a worse fit.
         let wrong = fit_equation_of_motion(&t, &u, &om, &acc, &tq, Damping::TwistRate).unwrap();
         assert!(wrong.r_squared < f.r_squared, "{wrong:?} vs {f:?}");
+    }
+
+    #[test]
+    fn the_scan_gives_each_delays_r_squared_bit_for_bit() {
+        let (t, u, om, acc, tq) = record(0.02, 0.01);
+        for damping in [Damping::TwistRate, Damping::Absolute, Damping::Both, Damping::Fixed0] {
+            let scan = TorqueScan::new(&t, &u, &om, &acc, damping);
+            for k in [0usize, 7, 30] {
+                // The torque read k samples later (the record's end standing in beyond it).
+                let late: Vec<f64> = (0..tq.len()).map(|i| tq[(i + k).min(tq.len() - 1)]).collect();
+                let one = fit_equation_of_motion(&t, &u, &om, &acc, &late, damping).unwrap();
+                assert_eq!(scan.r_squared(&late).map(f64::to_bits), Some(one.r_squared.to_bits()), "{damping:?} {k}");
+            }
+            // A torque of the wrong sign gives a negative inverse inertia: refused like the fit refuses it.
+            let neg: Vec<f64> = tq.iter().map(|x| -x).collect();
+            assert_eq!(
+                scan.r_squared(&neg).is_some(),
+                fit_equation_of_motion(&t, &u, &om, &acc, &neg, damping).is_ok()
+            );
+        }
     }
 }

@@ -4,7 +4,7 @@
 //! feature misfit, starting from the current model.
 
 use crate::data::{Prepared, RPM_TO_RAD_S, WindowSpec, derivative};
-use crate::eom::{Damping, EomFit, fit_equation_of_motion};
+use crate::eom::{Damping, EomFit, TorqueScan, fit_equation_of_motion};
 use crate::score::{ERROR_CAP, Evaluator};
 use crate::sim::{Drive, FrictionLaw, MidDof, Model};
 use crate::{Candidate, LaviError};
@@ -209,14 +209,21 @@ pub fn best_delay_s(d: &Prepared, cal: &WindowSpec, st: Structure, max_s: f64) -
     let top = top_rad_s(d, r.clone(), st.top_delay_s);
     let acc = derivative(&bit, d.fs_hz);
     let m = (max_s * d.fs_hz).round() as isize;
+    // The design's columns but the torque's are the same at every delay: made once
+    // (the same R² as a fit per delay, bit for bit: eom::TorqueScan).
+    let scan = TorqueScan::new(t, &top, &bit, &acc, st.damping);
+    let mut tf = vec![0.0; acc.len()];
     let mut best = (f64::NEG_INFINITY, 0.0);
     for k in -m..=m {
         let at = |i: usize| d.torque_nm[(i as isize + k).clamp(0, d.len() as isize - 1) as usize];
-        let tf: Vec<f64> = r.clone().zip(&acc).map(|(i, a)| at(i) - st.sensor_inertia_kgm2 * a).collect();
-        if let Ok(f) = fit_equation_of_motion(t, &top, &bit, &acc, &tf, st.damping)
-            && f.r_squared > best.0
+        for ((x, i), a) in tf.iter_mut().zip(r.clone()).zip(&acc) {
+            *x = at(i) - st.sensor_inertia_kgm2 * a;
+        }
+        if acc.len() >= 8
+            && let Some(r2) = scan.r_squared(&tf)
+            && r2 > best.0
         {
-            best = (f.r_squared, k as f64 / d.fs_hz);
+            best = (r2, k as f64 / d.fs_hz);
         }
     }
     best.1

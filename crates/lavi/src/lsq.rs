@@ -41,15 +41,28 @@ pub fn least_squares(y: &[f64], p: usize, row: impl Fn(usize) -> Vec<f64>) -> Op
     let coef = normal.solve()?;
     let flat = normal.inverse()?;
     let inverse = flat.chunks(p).map(<[f64]>::to_vec).collect();
-    let sse = y
-        .iter()
+    let sse = sse(y, &coef, |i, x: &mut [f64]| x.copy_from_slice(&row(i)));
+    Some(LeastSquares { coef, inverse, sse, points: y.len() })
+}
+
+/// The most columns [`sse`] takes (the study's fits have at most 6).
+pub const MAX_COLUMNS: usize = 8;
+
+/// Σ (y − X β)² of the rows `row(i, x)` writes into `x` (p = β's length), summed
+/// in row order: what [`least_squares`] reports, for a caller that summed the
+/// normal equations itself ([`Normal::from_row_major`]) and solved them.
+pub fn sse(y: &[f64], coef: &[f64], row: impl Fn(usize, &mut [f64])) -> f64 {
+    assert!(coef.len() <= MAX_COLUMNS, "at most {MAX_COLUMNS} columns");
+    let mut x = [0.0; MAX_COLUMNS];
+    let x = &mut x[..coef.len()];
+    y.iter()
         .enumerate()
         .map(|(i, yi)| {
-            let pred: f64 = row(i).iter().zip(&coef).map(|(x, b)| x * b).sum();
+            row(i, x);
+            let pred: f64 = x.iter().zip(coef).map(|(x, b)| x * b).sum();
             (yi - pred).powi(2)
         })
-        .sum();
-    Some(LeastSquares { coef, inverse, sse, points: y.len() })
+        .sum()
 }
 
 #[cfg(test)]
