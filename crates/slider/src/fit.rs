@@ -78,12 +78,8 @@ const fn p(name: &'static str, lo: f64, hi: f64, log: bool) -> ParamSpec {
 /// The rate-and-state laws' parameters (the ageing law's and, the same
 /// friction, the slip law's: [`crate::slip::PARAMS`]), with the bounds of
 /// paper on paper and a decade or more about them (Heslot et al. 1994).
-pub const RATE_STATE_PARAMS: &[ParamSpec] = &[
-    p("mu0", 0.2, 0.8, false),
-    p("a", 1e-3, 0.1, true),
-    p("b_minus_a", 1e-4, 0.1, true),
-    p("dc_m", 1e-7, 1e-4, true),
-];
+pub const RATE_STATE_PARAMS: &[ParamSpec] =
+    &[p("mu0", 0.2, 0.8, false), p("a", 1e-3, 0.1, true), p("b_minus_a", 1e-4, 0.1, true), p("dc_m", 1e-7, 1e-4, true)];
 
 /// Reference speed of the rate-and-state law, m/s (μ0 is the steady friction there).
 pub const V_REF_M_S: f64 = 1e-4;

@@ -413,7 +413,8 @@ fn causes(s: &Study) -> String {
             100.0 * f.period_s.sd / f.period_s.median
         );
     }
-    for c in s.candidates.iter().filter(|c| matches!(c.model.friction, Candidate::RateState | Candidate::RateStateSlip)) {
+    for c in s.candidates.iter().filter(|c| matches!(c.model.friction, Candidate::RateState | Candidate::RateStateSlip))
+    {
         let kc: Vec<String> = c
             .fold_fits
             .iter()

@@ -145,7 +145,8 @@ mod tests {
     fn cycle(f: &[f64], fs: f64) -> (f64, f64, f64) {
         let h = &f[f.len() / 2..];
         let mean = h.iter().sum::<f64>() / h.len() as f64;
-        let peaks: Vec<usize> = (1..h.len() - 1).filter(|&i| h[i] >= h[i - 1] && h[i] > h[i + 1] && h[i] > mean).collect();
+        let peaks: Vec<usize> =
+            (1..h.len() - 1).filter(|&i| h[i] >= h[i - 1] && h[i] > h[i + 1] && h[i] > mean).collect();
         let period = (peaks[peaks.len() - 1] - peaks[0]) as f64 / (peaks.len() - 1) as f64 / fs;
         let (lo, hi) = h.iter().fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
         (period, mean, hi - lo)
