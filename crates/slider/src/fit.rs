@@ -45,14 +45,22 @@ pub enum Candidate {
     StaticAgeing,
     /// Dieterich–Ruina rate-and-state friction with the ageing law.
     RateState,
+    /// The same friction with Ruina's slip law ([`crate::slip`]).
+    RateStateSlip,
     /// Heslot et al. 1994's law: rate and state cut off at small speeds and ages ([`crate::heslot`]).
     Heslot,
     /// Coulomb with a threshold that varies along the track ([`crate::track`]).
     Track,
 }
 
-pub const CANDIDATES: [Candidate; 5] =
-    [Candidate::Coulomb, Candidate::StaticAgeing, Candidate::RateState, Candidate::Heslot, Candidate::Track];
+pub const CANDIDATES: [Candidate; 6] = [
+    Candidate::Coulomb,
+    Candidate::StaticAgeing,
+    Candidate::RateState,
+    Candidate::RateStateSlip,
+    Candidate::Heslot,
+    Candidate::Track,
+];
 
 /// A fitted parameter's name (with unit), bounds and whether it is searched in log.
 #[derive(Debug, Clone, Copy)]
@@ -67,6 +75,12 @@ const fn p(name: &'static str, lo: f64, hi: f64, log: bool) -> ParamSpec {
     ParamSpec { name, lo, hi, log }
 }
 
+/// The rate-and-state laws' parameters (the ageing law's and, the same
+/// friction, the slip law's: [`crate::slip::PARAMS`]), with the bounds of
+/// paper on paper and a decade or more about them (Heslot et al. 1994).
+pub const RATE_STATE_PARAMS: &[ParamSpec] =
+    &[p("mu0", 0.2, 0.8, false), p("a", 1e-3, 0.1, true), p("b_minus_a", 1e-4, 0.1, true), p("dc_m", 1e-7, 1e-4, true)];
+
 /// Reference speed of the rate-and-state law, m/s (μ0 is the steady friction there).
 pub const V_REF_M_S: f64 = 1e-4;
 /// Speed scale of the velocity-strengthening kinetic law, m/s.
@@ -78,6 +92,7 @@ impl Candidate {
             Candidate::Coulomb => "coulomb",
             Candidate::StaticAgeing => "static_ageing",
             Candidate::RateState => "rate_state_ageing",
+            Candidate::RateStateSlip => crate::slip::ID,
             Candidate::Heslot => crate::heslot::ID,
             Candidate::Track => crate::track::ID,
         }
@@ -93,16 +108,11 @@ impl Candidate {
             p("mu_drop", 0.001, 0.3, true),
             p("alpha", 1e-4, 0.1, true),
         ];
-        const RATE_STATE: &[ParamSpec] = &[
-            p("mu0", 0.2, 0.8, false),
-            p("a", 1e-3, 0.1, true),
-            p("b_minus_a", 1e-4, 0.1, true),
-            p("dc_m", 1e-7, 1e-4, true),
-        ];
         match self {
             Candidate::Coulomb => COULOMB,
             Candidate::StaticAgeing => AGEING,
-            Candidate::RateState => RATE_STATE,
+            Candidate::RateState => RATE_STATE_PARAMS,
+            Candidate::RateStateSlip => crate::slip::PARAMS,
             Candidate::Heslot => crate::heslot::PARAMS,
             Candidate::Track => crate::track::PARAMS,
         }
@@ -122,6 +132,7 @@ impl Candidate {
             Candidate::RateState => {
                 Law::RateState { mu0: x[0], a: x[1], b: x[1] + x[2], dc_m: x[3], v_ref_m_s: V_REF_M_S }
             }
+            Candidate::RateStateSlip => Law::RateStateSlip(crate::slip::Slip::of(x, V_REF_M_S)),
             Candidate::Heslot => Law::Heslot(crate::heslot::Heslot::of(x)),
             Candidate::Track => Law::Track(crate::track::Track::of(x)),
         }
@@ -145,7 +156,9 @@ impl Candidate {
                 .iter()
                 .map(|&(beta, tau)| vec![mu, beta, tau, 0.03, 0.005])
                 .collect(),
-            Candidate::RateState => {
+            // The slip law shares the ageing law's friction, its linearisation and so its
+            // starts: on the boundary and on a creeping run's Hopf point.
+            Candidate::RateState | Candidate::RateStateSlip => {
                 let mut v: Vec<Vec<f64>> = [0.003, 0.01]
                     .iter()
                     .flat_map(|&bma| [0.3e-6, 1e-6, 3e-6].map(|dc| vec![mu, 0.01, bma, dc]))

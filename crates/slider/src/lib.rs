@@ -19,6 +19,7 @@
 //! | `coulomb` | the baseline: one static and one kinetic coefficient | stick below μs, slip at μk | `mu_static`, `mu_drop` (μs − μk) |
 //! | `static_ageing` | the static threshold grows with the time stuck (contacts age), the kinetic friction grows with speed | μs(t) = μs0 + β ln(1 + t/τ); μk(v) = μk0 + α ln(1 + v/v1), v1 = 100 µm/s | `mu_static0`, `ageing_beta`, `ageing_time_s`, `mu_drop`, `alpha` |
 //! | `rate_state_ageing` | friction with a memory of the contact's age θ (Dieterich–Ruina) | μ = μ0 + a ln(v/v*) + b ln(v*θ/Dc), dθ/dt = 1 − vθ/Dc, v* = 100 µm/s | `mu0`, `a`, `b_minus_a`, `dc_m` |
+//! | `rate_state_slip` | the same friction with Ruina's slip law: the state evolves only while sliding, symmetric after a jump in speed ([`slip`]) | μ = μ0 + a ln(v/v*) + b ln(v*θ/Dc), dθ/dt = −(vθ/Dc) ln(vθ/Dc), v* = 100 µm/s | `mu0`, `a`, `b_minus_a`, `dc_m` |
 //! | `heslot_creep` | rate and state with the speed and the age cut off at small values (Heslot et al. 1994): a static threshold that ages, a steady friction weakening below B V0/A and strengthening above ([`heslot`]) | μ = μ0 + A ln(1 + v/V0) + B ln(1 + θ/θ0), dθ/dt = 1 − vθ/D0, θ0 = D0/V0 | `mu0`, `a`, `b_minus_a`, `d0_m`, `v0_m_s` |
 //! | `track_threshold` | Coulomb whose threshold varies along the paper: a stiff spring follows it (creep), a soft one stick-slips over it ([`track`]) | μs(x) = μs0 + σ z(x/ℓ), μk = μs − Δμ, z smooth random of unit deviation | `mu_static0`, `mu_drop`, `track_sd`, `track_length_m` |
 //! | `effective_mass` | the mass that oscillates is not the slider's weighed mass (a spring's own mass adds m_s/3) | m_eff = r m in m_eff ẍ = k (V t − x) − m g μ | `mass_ratio` |
@@ -36,6 +37,7 @@ pub mod heslot;
 pub mod level;
 pub mod render;
 pub mod sim;
+pub mod slip;
 pub mod study;
 pub mod track;
 

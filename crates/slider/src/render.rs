@@ -413,7 +413,8 @@ fn causes(s: &Study) -> String {
             100.0 * f.period_s.sd / f.period_s.median
         );
     }
-    for c in s.candidates.iter().filter(|c| c.model.friction == Candidate::RateState) {
+    for c in s.candidates.iter().filter(|c| matches!(c.model.friction, Candidate::RateState | Candidate::RateStateSlip))
+    {
         let kc: Vec<String> = c
             .fold_fits
             .iter()
@@ -1496,10 +1497,11 @@ fn markdown(s: &Study) -> String {
     );
     let _ = writeln!(
         md,
-        "Ids (crate docs of `rig_slider`): friction laws `{}`, `{}`, `{}`, `{}`, `{}`; set-ups `{}`, `{}`, `{}`, `{}`; a model is `law+set-up`.",
+        "Ids (crate docs of `rig_slider`): friction laws `{}`, `{}`, `{}`, `{}`, `{}`, `{}`; set-ups `{}`, `{}`, `{}`, `{}`; a model is `law+set-up`.",
         Candidate::Coulomb.id(),
         Candidate::StaticAgeing.id(),
         Candidate::RateState.id(),
+        Candidate::RateStateSlip.id(),
         Candidate::Heslot.id(),
         Candidate::Track.id(),
         SetupCandidate::Stated.id(),

@@ -26,6 +26,8 @@
 //! - Rate and state (Dieterich–Ruina, ageing law; Baumberger & Caroli 2006):
 //!   `one_dof::RateStateAgeing`, μ = μ0 + a ln(v/v*) + b ln(v* θ/Dc),
 //!   dθ/dt = 1 − v θ/Dc, regularised at v = 0 (Rice, Lapusta & Ranjith 2001).
+//! - Rate and state with Ruina's slip law ([`crate::slip`]): the same
+//!   friction, dθ/dt = −(v θ/Dc) ln(v θ/Dc).
 
 use rig_model::ModelError;
 use rig_model::one_dof::{
@@ -40,6 +42,8 @@ pub enum Law {
     StaticAgeing { mu_static0: f64, ageing_beta: f64, ageing_time_s: f64, mu_kinetic0: f64, alpha: f64, v1_m_s: f64 },
     /// Dieterich–Ruina with the ageing law; μ0 at the reference speed v*.
     RateState { mu0: f64, a: f64, b: f64, dc_m: f64, v_ref_m_s: f64 },
+    /// Dieterich–Ruina with Ruina's slip law ([`crate::slip`]).
+    RateStateSlip(crate::slip::Slip),
     /// Heslot et al. 1994's law, the velocity and the age cut off at small
     /// values ([`crate::heslot`]).
     Heslot(crate::heslot::Heslot),
@@ -122,6 +126,7 @@ impl Law {
             Law::Coulomb { mu_kinetic, .. } => mu_kinetic,
             Law::StaticAgeing { mu_kinetic0, .. } => mu_kinetic0,
             Law::RateState { mu0, .. } => mu0,
+            Law::RateStateSlip(l) => l.mu0,
             Law::Heslot(h) => h.mu0,
             Law::Track(t) => t.mu_static0 - t.mu_drop,
         }
@@ -193,8 +198,12 @@ impl Contact {
 }
 
 impl ImplicitFriction for Contact {
-    /// Coulomb: none; static ageing: the time stuck (0); rate and state: θ = Dc/V; a track: the travel (0).
+    /// Coulomb: none; static ageing: the time stuck (0); rate and state: θ = Dc/V (the slip law: its
+    /// logarithm); a track: the travel (0).
     fn initial_state(&self, drive_m_s: f64) -> [f64; MAX_FRICTION_STATES] {
+        if let Law::RateStateSlip(law) = self.law {
+            return crate::slip::Contact { law, weight_n: self.weight_n }.initial_state(drive_m_s);
+        }
         if let Law::Heslot(law) = self.law {
             return crate::heslot::Contact { law, weight_n: self.weight_n }.initial_state(drive_m_s);
         }
@@ -227,6 +236,9 @@ impl ImplicitFriction for Contact {
             }
             Law::RateState { .. } => {
                 self.rate_state().expect("a rate-and-state law").implicit_step(state, stuck, p, h_over_mass, h_s)
+            }
+            Law::RateStateSlip(law) => {
+                crate::slip::Contact { law, weight_n: w }.implicit_step(state, stuck, p, h_over_mass, h_s)
             }
             Law::Heslot(law) => {
                 crate::heslot::Contact { law, weight_n: w }.implicit_step(state, stuck, p, h_over_mass, h_s)

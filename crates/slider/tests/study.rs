@@ -94,7 +94,7 @@ fn study_on_the_shipped_folder() {
     // The forward selection starts from Coulomb on the stated set-up and tries every memory law and every set-up.
     assert_eq!(s.candidates[0].model, Model::BASELINE);
     let first: Vec<Model> = s.steps[0].tried.iter().map(|&i| s.candidates[i].model).collect();
-    assert_eq!(first.len(), 7, "{first:?}");
+    assert_eq!(first.len(), 8, "{first:?}");
     let out = render(&s);
     let verdict = out.diagnosis["verdict"].as_str().unwrap();
     let ids = [
@@ -102,6 +102,7 @@ fn study_on_the_shipped_folder() {
         "unexplained",
         "static_ageing",
         "rate_state_ageing",
+        "rate_state_slip",
         "heslot_creep",
         "track_threshold",
         "effective_mass",
