@@ -604,7 +604,7 @@ mod tests {
     /// A force of the stick-slip's band (1 and 4 Hz) recorded through a
     /// lightly damped sensor (11.5 Hz, ζ 0.09: |H| = 1.13 at 4 Hz, a ring of
     /// 5.6× at resonance) is given back by the inverse, after the bilinear
-    /// filter's start-up ring has decayed (e^{−ζωt}: 2.4e-3 at 5 s). The
+    /// filter's start-up ring has decayed (e^{−ζωt}: 1e-14 at 5 s). The
     /// two discretisations differ by O(ω²Δt²) at the signal's frequencies
     /// (central differences ω²Δt²/12 = 8.4e-5 relative at 4 Hz, 500 Hz): 2e-3 N of an 8 N
     /// swing bounds both; as recorded it is off by ≈ 0.15 N (|H| = 1.13 at 4 Hz).
