@@ -107,6 +107,20 @@ pub(super) fn training_cost(
     Some((sq(data.run_rms(&fit, include)) + sq(data.run_event_rms(&fit, include)), fit))
 }
 
+/// The edge of `channel`'s delay grid when `fitted` is there: its delay
+/// within half a sample of [`MAX_DELAY_S`] (the grid's last whole sample).
+fn at_longest_delay(channel: DelayedChannel, fitted: &Fitted) -> Option<super::GridEdge> {
+    let i = usize::from(channel == DelayedChannel::Force);
+    let d = fitted.values[i];
+    // The grid's whole samples: its last is MAX_DELAY_S rounded at the rate, so
+    // a delay within 0.5 ms of it (a sample at up to 1 kHz) is that last point.
+    (d > 0.0 && (d - MAX_DELAY_S).abs() < 5e-4).then(|| super::GridEdge {
+        param: &PARAMS[i],
+        edge: d,
+        what: format!("the {} {:.1} ms late, the longest delay tried", channel.name(), 1e3 * d),
+    })
+}
+
 impl StructureCandidate for ChannelDelay {
     fn id(&self) -> &'static str {
         ID
@@ -141,6 +155,12 @@ impl StructureCandidate for ChannelDelay {
     /// The rig is the model's: only the record is late.
     fn apply(&self, model: &RigParams, _fitted: &Fitted) -> RigParams {
         model.clone()
+    }
+    /// At [`MAX_DELAY_S`], the grid's longest delay (module docs of
+    /// [`super`], "A fit at its grid's edge").
+    fn at_grid_edge(&self, fitted: &Fitted) -> Option<super::GridEdge> {
+        let longest = |c: DelayedChannel| at_longest_delay(c, fitted);
+        longest(DelayedChannel::RotorEncoder).or_else(|| longest(DelayedChannel::Force))
     }
     fn describe(&self, fitted: &Fitted) -> String {
         let (r, f) = (fitted.values[0], fitted.values[1]);
