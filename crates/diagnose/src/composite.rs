@@ -623,14 +623,18 @@ pub fn heldout_phases(m: &Composite, d: &SlipData) -> Phases {
     if d.is_empty() || (m.time_mod.is_none() && m.angle_mod.is_none()) {
         return ph;
     }
+    // One copy of the run, its target replaced in place per block (as
+    // fit_composite_with's `work`): not a fresh copy of every column twice
+    // per iteration.
+    let mut work = d.clone();
     for _ in 0..3 {
         if let Some((a, f_hz)) = m.time_mod {
-            let dt = with_mu(d, |i| d.mu[i] / (m.speed_mu(d.omega[i]) * m.angle_factor(d.phi[i], ph.1)));
-            ph.0 = friction::heldout_phase(&FrictionModel::TimeSine { mu_k: 1.0, a, f_hz }, &dt);
+            set_mu(&mut work, |i| d.mu[i] / (m.speed_mu(d.omega[i]) * m.angle_factor(d.phi[i], ph.1)));
+            ph.0 = friction::heldout_phase(&FrictionModel::TimeSine { mu_k: 1.0, a, f_hz }, &work);
         }
         if let Some((a, order)) = m.angle_mod {
-            let da = with_mu(d, |i| d.mu[i] / (m.speed_mu(d.omega[i]) * m.time_factor(d.t[i], ph.0)));
-            ph.1 = friction::heldout_phase(&FrictionModel::AngleSine { mu_k: 1.0, a, order }, &da);
+            set_mu(&mut work, |i| d.mu[i] / (m.speed_mu(d.omega[i]) * m.time_factor(d.t[i], ph.0)));
+            ph.1 = friction::heldout_phase(&FrictionModel::AngleSine { mu_k: 1.0, a, order }, &work);
         }
         if m.time_mod.is_none() || m.angle_mod.is_none() {
             break;

@@ -287,49 +287,64 @@ impl Recorded {
     /// each run with its index and returns the run's [`Channels`], whole
     /// records. The event-locked rows stay at the recorded transitions.
     pub fn balance_with<'a>(&'a self, transform: impl Fn(usize, &'a RecordedRun) -> Channels<'a>) -> BalanceData {
+        let [data] = self.balance_lanes(|i, run| [transform(i, run)]);
+        data
+    }
+
+    /// `L` balances at once, [`Recorded::balance_with`] of each of the `L`
+    /// channel sets `transform` gives a run: one call per run (a sensor
+    /// grid's points filter a run's channels together, `crate::structure`),
+    /// each lane's rows and sums built exactly as `balance_with` builds
+    /// them, so each lane is that balance to the bit.
+    pub fn balance_lanes<'a, const L: usize>(
+        &'a self,
+        transform: impl Fn(usize, &'a RecordedRun) -> [Channels<'a>; L],
+    ) -> [BalanceData; L] {
+        let mut lanes: [Vec<RunRows>; L] = std::array::from_fn(|_| Vec::with_capacity(self.runs.len()));
+        for (i, run) in self.runs.iter().enumerate() {
+            for (lane, channels) in lanes.iter_mut().zip(transform(i, run)) {
+                lane.push(self.run_rows(run, channels));
+            }
+        }
+        lanes.map(|runs| BalanceData { runs, j1_kgm2: self.j1_kgm2 })
+    }
+
+    /// One run's [`RunRows`] from its channels `(phi1, phi2, f)`.
+    fn run_rows(&self, run: &RecordedRun, (phi1, phi2, f): Channels<'_>) -> RunRows {
         let (w, dt, r_m) = (self.w, self.dt, self.r_m);
-        let runs = self
-            .runs
+        let grid = rows(&phi1, &phi2, &f, dt, w, r_m, run.from);
+        let angle_rad = (0..grid.len()).map(|j| phi1[run.from.max(w) + j * w]).collect();
+        let events = run
+            .transitions
             .iter()
-            .enumerate()
-            .map(|(i, run)| {
-                let (phi1, phi2, f) = transform(i, run);
-                let grid = rows(&phi1, &phi2, &f, dt, w, r_m, run.from);
-                let angle_rad = (0..grid.len()).map(|j| phi1[run.from.max(w) + j * w]).collect();
-                let events = run
-                    .transitions
-                    .iter()
-                    .filter_map(|&(kind, e)| {
-                        let rows: Option<Vec<Row>> =
-                            (0..EVENT_ROWS).map(|j| row_at(&phi1, &phi2, &f, dt, w, r_m, e + j * w)).collect();
-                        rows.map(|r| (kind, r))
-                    })
-                    .collect();
-                let (mut ata, mut atb, mut yty) = ([0.0; 25], [0.0; 5], 0.0);
-                for (x, y) in &grid {
-                    let y = y + self.j1_kgm2 * x[0];
-                    yty += y * y;
-                    for i in 0..5 {
-                        atb[i] += x[i] * y;
-                        for j in 0..5 {
-                            ata[5 * i + j] += x[i] * x[j];
-                        }
-                    }
-                }
-                RunRows {
-                    id: run.id.clone(),
-                    rows: grid,
-                    angle_rad,
-                    events,
-                    force_noise_n: run.force_noise_n,
-                    kernel_gain: self.kernel_gain,
-                    ata,
-                    atb,
-                    yty,
-                }
+            .filter_map(|&(kind, e)| {
+                let rows: Option<Vec<Row>> =
+                    (0..EVENT_ROWS).map(|j| row_at(&phi1, &phi2, &f, dt, w, r_m, e + j * w)).collect();
+                rows.map(|r| (kind, r))
             })
             .collect();
-        BalanceData { runs, j1_kgm2: self.j1_kgm2 }
+        let (mut ata, mut atb, mut yty) = ([0.0; 25], [0.0; 5], 0.0);
+        for (x, y) in &grid {
+            let y = y + self.j1_kgm2 * x[0];
+            yty += y * y;
+            for i in 0..5 {
+                atb[i] += x[i] * y;
+                for j in 0..5 {
+                    ata[5 * i + j] += x[i] * x[j];
+                }
+            }
+        }
+        RunRows {
+            id: run.id.clone(),
+            rows: grid,
+            angle_rad,
+            events,
+            force_noise_n: run.force_noise_n,
+            kernel_gain: self.kernel_gain,
+            ata,
+            atb,
+            yty,
+        }
     }
 }
 

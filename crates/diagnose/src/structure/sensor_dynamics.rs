@@ -175,28 +175,40 @@ impl Biquad {
     }
 }
 
-/// Two channels through one filter as corrections, x + (F − 1)[x̃] with x̃
+/// Two channels through `L` filters as corrections, x + (F − 1)[x̃] with x̃
 /// the smoothed channel (module docs), each recursion from rest at x̃[0]
-/// (unit DC gain): one pass, the two recursions
-/// interleaved (independent, so they overlap in the processor; one
-/// campaign's grid runs 120 points × 2 channels × every run through it).
-fn corrected_pair(a: (&[f64], &[f64]), b: (&[f64], &[f64]), q: Biquad) -> (Vec<f64>, Vec<f64>) {
+/// (unit DC gain): one pass over the channels, the 2·L recursions
+/// interleaved. Each recursion is latency-bound (its last output enters
+/// its next), and they are independent, so the processor overlaps them: one
+/// campaign's grid runs 120 points × 2 channels × every run through it, and
+/// a lane is its own filter's result to the bit (the same operations in the
+/// same order as one recursion alone).
+fn corrected_pairs<const L: usize>(
+    a: (&[f64], &[f64]),
+    b: (&[f64], &[f64]),
+    q: [Biquad; L],
+) -> [(Vec<f64>, Vec<f64>); L] {
     let n = a.0.len().min(a.1.len()).min(b.0.len()).min(b.1.len());
-    let (Some(&sa), Some(&sb)) = (a.1.first(), b.1.first()) else { return (Vec::new(), Vec::new()) };
-    let Biquad { c: [c0, c1, c2], e: [e1, e2] } = q;
-    let (mut out_a, mut out_b) = (Vec::with_capacity(n), Vec::with_capacity(n));
-    let (mut ua, mut ub) = ([sa; 2], [sb; 2]);
-    let (mut ya, mut yb) = ([sa; 2], [sb; 2]);
-    for (((&ra, &xa), &rb), &xb) in a.0[..n].iter().zip(&a.1[..n]).zip(&b.0[..n]).zip(&b.1[..n]) {
-        // The last sample's output enters last: one product and one
-        // subtraction on the recursion's critical path.
-        let na = (c0 * xa + c1 * ua[0] + c2 * ua[1] - e2 * ya[1]) - e1 * ya[0];
-        let nb = (c0 * xb + c1 * ub[0] + c2 * ub[1] - e2 * yb[1]) - e1 * yb[0];
-        out_a.push(ra + (na - xa));
-        out_b.push(rb + (nb - xb));
-        (ua, ub, ya, yb) = ([xa, ua[0]], [xb, ub[0]], [na, ya[0]], [nb, yb[0]]);
+    let (Some(&sa), Some(&sb)) = (a.1.first(), b.1.first()) else {
+        return std::array::from_fn(|_| (Vec::new(), Vec::new()));
+    };
+    let mut out: [(Vec<f64>, Vec<f64>); L] = std::array::from_fn(|_| (vec![0.0; n], vec![0.0; n]));
+    let (mut ua, mut ub) = ([[sa; 2]; L], [[sb; 2]; L]);
+    let (mut ya, mut yb) = ([[sa; 2]; L], [[sb; 2]; L]);
+    for k in 0..n {
+        let (ra, xa, rb, xb) = (a.0[k], a.1[k], b.0[k], b.1[k]);
+        for l in 0..L {
+            let Biquad { c: [c0, c1, c2], e: [e1, e2] } = q[l];
+            // The last sample's output enters last: one product and one
+            // subtraction on the recursion's critical path.
+            let na = (c0 * xa + c1 * ua[l][0] + c2 * ua[l][1] - e2 * ya[l][1]) - e1 * ya[l][0];
+            let nb = (c0 * xb + c1 * ub[l][0] + c2 * ub[l][1] - e2 * yb[l][1]) - e1 * yb[l][0];
+            out[l].0[k] = ra + (na - xa);
+            out[l].1[k] = rb + (nb - xb);
+            (ua[l], ub[l], ya[l], yb[l]) = ([xa, ua[l][0]], [xb, ub[l][0]], [na, ya[l][0]], [nb, yb[l][0]]);
+        }
     }
-    (out_a, out_b)
+    out
 }
 
 /// The force the load cell was pulled by, from its record (module docs):
@@ -221,41 +233,48 @@ fn force_through_inverse(force_n: &[f64], rate_hz: f64, f_n_hz: f64, zeta: f64) 
 
 /// The balance of the records at every point of the grid, for both
 /// sensors: the force sensor's from the force through its inverse
-/// ([`force_through_inverse`]), the coupling's from the channels it
-/// touches, smoothed once per run ([`SMOOTH_HALF_S`]), through its filter
-/// as a correction.
+/// ([`force_through_inverse`], the angles as recorded), the coupling's from
+/// the channels it touches, smoothed once per run ([`SMOOTH_HALF_S`]),
+/// through its filter as a correction; the points of one sensor and natural
+/// frequency (every damping ratio) are built together
+/// ([`corrected_pairs`], [`Recorded::balance_lanes`]).
 pub(super) fn grid(rec: &Recorded, rate_hz: f64) -> Vec<SensorPoint> {
     let half = nominal_window_samples(SMOOTH_HALF_S, rate_hz);
     let smooth: Vec<[Vec<f64>; 2]> =
         rec.runs.iter().map(|r| [&r.motor_rad, &r.force_n].map(|x| centred_moving_average(x, half))).collect();
-    // Every grid point's balance is independent: built in parallel, in grid order.
-    let points: Vec<(Sensor, f64, f64)> = [Sensor::Force, Sensor::EncoderCoupling]
+    // Every (sensor, f_n)'s balances are independent: built in parallel, in grid order.
+    let groups: Vec<(Sensor, f64)> = [Sensor::Force, Sensor::EncoderCoupling]
         .into_iter()
-        .flat_map(|sensor| {
-            FREQUENCIES_HZ.iter().flat_map(move |&f_n| DAMPING_RATIOS.iter().map(move |&zeta| (sensor, f_n, zeta)))
-        })
+        .flat_map(|sensor| FREQUENCIES_HZ.iter().map(move |&f_n| (sensor, f_n)))
         .collect();
-    points
+    let per_group: Vec<Vec<SensorPoint>> = groups
         .into_par_iter()
-        .map(|(sensor, f_n, zeta)| {
-            let data = rec.balance_with(|i, r| {
+        .map(|(sensor, f_n)| {
+            let data = rec.balance_lanes(|i, r| {
                 let [s2, sf] = &smooth[i];
                 match sensor {
-                    Sensor::Force => (
-                        r.rotor_rad.as_slice().into(),
-                        r.motor_rad.as_slice().into(),
-                        force_through_inverse(&r.force_n, rate_hz, f_n, zeta).into(),
-                    ),
+                    Sensor::Force => DAMPING_RATIOS.map(|zeta| {
+                        (
+                            r.rotor_rad.as_slice().into(),
+                            r.motor_rad.as_slice().into(),
+                            force_through_inverse(&r.force_n, rate_hz, f_n, zeta).into(),
+                        )
+                    }),
                     Sensor::EncoderCoupling => {
-                        let q = Biquad::new(rate_hz, f_n, zeta, true);
-                        let (phi2, f) = corrected_pair((&r.motor_rad, s2), (&r.force_n, sf), q);
-                        (r.rotor_rad.as_slice().into(), phi2.into(), f.into())
+                        let q = DAMPING_RATIOS.map(|zeta| Biquad::new(rate_hz, f_n, zeta, true));
+                        corrected_pairs((&r.motor_rad, s2), (&r.force_n, sf), q)
+                            .map(|(phi2, f)| (r.rotor_rad.as_slice().into(), phi2.into(), f.into()))
                     }
                 }
             });
-            SensorPoint { sensor, natural_frequency_hz: f_n, damping_ratio: zeta, data }
+            DAMPING_RATIOS
+                .iter()
+                .zip(data)
+                .map(|(&zeta, data)| SensorPoint { sensor, natural_frequency_hz: f_n, damping_ratio: zeta, data })
+                .collect()
         })
-        .collect()
+        .collect();
+    per_group.into_iter().flatten().collect()
 }
 
 const FORCE_PARAMS: &[ParamSpec] = &[
@@ -598,7 +617,7 @@ impl StructureCandidate for SensorCandidate {
 
 #[cfg(test)]
 mod tests {
-    use super::{Biquad, corrected_pair, filtered, force_through_inverse, ring_misfits};
+    use super::{Biquad, corrected_pairs, filtered, force_through_inverse, ring_misfits};
     use std::f64::consts::PI;
 
     /// A force of the stick-slip's band (1 and 4 Hz) recorded through a
@@ -626,7 +645,29 @@ mod tests {
 
     /// u through F: the correction of u by itself, u + (F − 1)[u] = F[u].
     fn second_order(u: &[f64], rate: f64, f_n: f64, zeta: f64, rate_term: bool) -> Vec<f64> {
-        corrected_pair((u, u), (u, u), Biquad::new(rate, f_n, zeta, rate_term)).0
+        let [(y, _)] = corrected_pairs((u, u), (u, u), [Biquad::new(rate, f_n, zeta, rate_term)]);
+        y
+    }
+
+    /// Filters run side by side are each the filter run alone, to the bit
+    /// (the grid's lanes, [`super::grid`]): two different records and
+    /// corrections through five filters at once and one at a time.
+    #[test]
+    fn lanes_are_each_filter_alone() {
+        let rate = 500.0;
+        let x = |k: usize, f: f64| (2.0 * PI * f * k as f64 / rate).sin() + 0.01 * (k % 7) as f64;
+        let (r1, s1): (Vec<f64>, Vec<f64>) = (0..900).map(|k| (x(k, 1.3), x(k, 1.31))).unzip();
+        let (r2, s2): (Vec<f64>, Vec<f64>) = (0..900).map(|k| (x(k, 0.7) + 3.0, x(k, 0.69) + 3.0)).unzip();
+        let q: [Biquad; 5] =
+            std::array::from_fn(|l| Biquad::new(rate, 2.0 + 3.0 * l as f64, 0.05 + 0.08 * l as f64, l % 2 == 1));
+        let lanes = corrected_pairs((&r1, &s1), (&r2, &s2), q);
+        for (l, (a, b)) in lanes.iter().enumerate() {
+            let [(a1, b1)] = corrected_pairs((&r1, &s1), (&r2, &s2), [q[l]]);
+            assert_eq!((a.len(), b.len()), (900, 900));
+            assert!(a.iter().zip(&a1).chain(b.iter().zip(&b1)).all(|(u, v)| u.to_bits() == v.to_bits()), "lane {l}");
+        }
+        // The lanes are different filters, not one copied.
+        assert!(lanes[0].0 != lanes[1].0 && lanes[0].1 != lanes[4].1);
     }
 
     /// A sine through the filter, after its transient: the amplitude of the
