@@ -88,6 +88,7 @@ use rig_estimate::friction::stick_episodes;
 use rig_model::extension::{BREAKAWAY_TIME_S, DWELL_TIME_S, slip_signals, static_signals};
 use rig_model::friction::{normal_force_n, slip_mu, static_mu};
 use rig_types::minimize::brent_min;
+use rig_types::select::Comparison;
 use rig_types::{Campaign, Effect, RigParams};
 use std::collections::BTreeMap;
 
@@ -230,71 +231,34 @@ pub fn extend(x: &Inputs) -> Option<ExtensionResult> {
         (coef[2], coef[3]) = (level_at(cd), cd);
         Some(coef)
     };
-    // Cross-validated free runs of a set and its comparison with the model.
+    // Cross-validated free runs of a set: each run's misfit (runs order,
+    // NaN where the run has no free-run misfit), its free runs and fits.
     let score = |set: &[usize]| {
         let fits: Vec<Option<[f64; 4]>> = (0..folds).map(|f| fit(set, Some(f))).collect();
         let pairs = free_run_pairs_by(c, s, |id| {
             let coef = (*fits.get(*fold_of.get(id)?)?)?;
             Some(with_ext(coef, id))
         });
-        let (mut b, mut a, mut fv) = (Vec::new(), Vec::new(), Vec::new());
-        for q in &pairs {
-            if let (Some(x), Some(y)) = (base.get(q.id.as_str()), free_run_misfit_channels(q, floor)) {
-                b.push(*x);
-                a.push(y);
-                fv.push(fold_of[q.id.as_str()]);
-            }
-        }
-        (compare_folds(&b, &a, &fv, folds), pairs, fits)
+        let misfits = runs
+            .iter()
+            .map(|r| {
+                let q = pairs.iter().find(|q| q.id == r.id);
+                q.and_then(|q| free_run_misfit_channels(q, floor)).unwrap_or(f64::NAN)
+            })
+            .collect();
+        (misfits, (pairs, fits))
     };
     if folds == 0 || base.is_empty() {
         return None;
     }
-    let passes = |g: f64, t: f64| g >= opts.selection.min_relative_gain && t >= opts.selection.min_t;
-    let mut chosen: Vec<usize> = Vec::new();
-    let mut steps = Vec::new();
-    let mut best_single = None;
-    let mut kept = None;
-    for step in 1..=SIGNALS.len() {
-        let mut tried = Vec::new();
-        for j in (0..SIGNALS.len()).filter(|j| !chosen.contains(j)) {
-            let mut set: Vec<usize> = chosen.iter().copied().chain([j]).collect();
-            // The ageing law carries its own level (μs0 of module docs).
-            if j == DWELL && !set.contains(&LEVEL) {
-                set.push(LEVEL);
-                set.sort_unstable();
-            }
-            let (cmp, pairs, fits) = score(&set);
-            tried.push((j, set, cmp, pairs, fits));
-        }
-        let key = |i: usize| if tried[i].2.gain.is_finite() { tried[i].2.gain } else { f64::NEG_INFINITY };
-        let Some(bi) = (0..tried.len()).max_by(|&a, &b| key(a).total_cmp(&key(b))) else { break };
-        let ok = passes(tried[bi].2.gain, tried[bi].2.t);
-        for (i, (j, _, cmp, _, _)) in tried.iter().enumerate() {
-            steps.push(StepRow {
-                step,
-                effect: SIGNALS[*j].into(),
-                misfit_before: cmp.before,
-                misfit_after: cmp.after,
-                gain: cmp.gain,
-                gain_fold_sd: cmp.gain_fold_sd,
-                t: cmp.t,
-                accepted: i == bi && ok,
-                inadmissible: None,
-            });
-        }
-        let (j, set, cmp, pairs, fits) = tried.swap_remove(bi);
-        if step == 1 {
-            best_single = Some((set.clone(), cmp, pairs.clone(), fits.clone()));
-        }
-        if !ok {
-            break;
-        }
-        let _ = j;
-        chosen = set.clone();
-        kept = Some((set, cmp, pairs, fits));
-    }
-    let (set, cmp, pairs, fits) = kept.or(best_single)?;
+    let base_ms: Vec<f64> = runs.iter().map(|r| base.get(r.id.as_str()).copied().unwrap_or(f64::NAN)).collect();
+    let run_folds: Vec<usize> = runs.iter().map(|r| r.fold).collect();
+    let passes = |k: &Comparison| k.gain >= opts.selection.min_relative_gain && k.t >= opts.selection.min_t;
+    let (steps, found, selected) = forward_signals(&base_ms, &run_folds, folds, passes, score);
+    let Tried { set, misfits, extra: (pairs, fits), .. } = found?;
+    // The extension's gain over the final model (every step was judged
+    // against the step before it).
+    let cmp = compare_runs(&base_ms, &misfits, &run_folds, folds);
     let full = fit(&set, None)?;
     // The extended model's free-run checks (held-out runs, each simulated
     // with the coefficients fitted without its fold): does it now match?
@@ -330,7 +294,7 @@ pub fn extend(x: &Inputs) -> Option<ExtensionResult> {
         .collect();
     Some(ExtensionResult {
         extension: Extension {
-            formula: formula(&set, &full, static_mu(&model.friction), !chosen.is_empty()),
+            formula: formula(&set, &full, static_mu(&model.friction), selected),
             terms,
             free_run_misfit_before: round_sig(cmp.before, 4),
             free_run_misfit_after: round_sig(cmp.after, 4),
@@ -342,6 +306,93 @@ pub fn extend(x: &Inputs) -> Option<ExtensionResult> {
         traces,
         checks,
     })
+}
+
+/// A signal set tried at a step: its runs' held-out misfits (runs order,
+/// NaN where a run has no free-run misfit), their comparison with the step's
+/// starting model, and what the caller keeps of it.
+struct Tried<T> {
+    set: Vec<usize>,
+    misfits: Vec<f64>,
+    cmp: Comparison,
+    extra: T,
+}
+
+/// The comparison of per-run misfits over the runs both score (a NaN on
+/// either side, a free run with no misfit, leaves the run out).
+fn compare_runs(before: &[f64], after: &[f64], fold_of: &[usize], folds: usize) -> Comparison {
+    let (mut b, mut a, mut fv) = (Vec::new(), Vec::new(), Vec::new());
+    for ((x, y), f) in before.iter().zip(after).zip(fold_of) {
+        if !x.is_nan() && !y.is_nan() {
+            b.push(*x);
+            a.push(*y);
+            fv.push(*f);
+        }
+    }
+    compare_folds(&b, &a, &fv, folds)
+}
+
+/// Forward selection over the library's signals (module docs): at each step
+/// every signal not yet chosen is added to the chosen set (`log_dwell` with
+/// its `static_level`), `score`d, and compared with the set the step starts
+/// from (the final model at step 1, then the last accepted set); the best
+/// is accepted while it `passes`. Returns the step rows, the selected set or
+/// else the best single signal, and whether it was selected.
+fn forward_signals<T: Clone>(
+    base: &[f64],
+    fold_of: &[usize],
+    folds: usize,
+    passes: impl Fn(&Comparison) -> bool,
+    score: impl Fn(&[usize]) -> (Vec<f64>, T),
+) -> (Vec<StepRow>, Option<Tried<T>>, bool) {
+    let mut chosen: Vec<usize> = Vec::new();
+    let mut current = base.to_vec();
+    let mut steps = Vec::new();
+    let mut best_single = None;
+    let mut kept = None;
+    for step in 1..=SIGNALS.len() {
+        let mut tried = Vec::new();
+        for j in (0..SIGNALS.len()).filter(|j| !chosen.contains(j)) {
+            let mut set: Vec<usize> = chosen.iter().copied().chain([j]).collect();
+            // The ageing law carries its own level (μs0 of module docs).
+            if j == DWELL && !set.contains(&LEVEL) {
+                set.push(LEVEL);
+                set.sort_unstable();
+            }
+            let (misfits, extra) = score(&set);
+            let cmp = compare_runs(&current, &misfits, fold_of, folds);
+            tried.push((j, Tried { set, misfits, cmp, extra }));
+        }
+        let key = |i: usize| if tried[i].1.cmp.gain.is_finite() { tried[i].1.cmp.gain } else { f64::NEG_INFINITY };
+        let Some(bi) = (0..tried.len()).max_by(|&a, &b| key(a).total_cmp(&key(b))) else { break };
+        let ok = passes(&tried[bi].1.cmp);
+        for (i, (j, t)) in tried.iter().enumerate() {
+            steps.push(StepRow {
+                step,
+                effect: SIGNALS[*j].into(),
+                misfit_before: t.cmp.before,
+                misfit_after: t.cmp.after,
+                gain: t.cmp.gain,
+                gain_fold_sd: t.cmp.gain_fold_sd,
+                t: t.cmp.t,
+                accepted: i == bi && ok,
+                inadmissible: None,
+            });
+        }
+        let (_, t) = tried.swap_remove(bi);
+        if step == 1 {
+            best_single =
+                Some(Tried { set: t.set.clone(), misfits: t.misfits.clone(), cmp: t.cmp, extra: t.extra.clone() });
+        }
+        if !ok {
+            break;
+        }
+        chosen = t.set.clone();
+        current = t.misfits.clone();
+        kept = Some(t);
+    }
+    let selected = kept.is_some();
+    (steps, kept.or(best_single), selected)
 }
 
 /// The extended law in words and symbols, with the coefficients fitted on
@@ -510,4 +561,48 @@ pub fn vocabulary_bounds(baseline: &RigParams, findings: &[crate::Finding]) -> V
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Six runs in two folds; the final model misfits 10 on each. Either
+    /// slip signal alone brings every run to about 5 and the two together
+    /// to the same 5 (the second explains what the first already did); the
+    /// break-away signals change nothing.
+    fn score(set: &[usize]) -> (Vec<f64>, ()) {
+        let ms = (0..6)
+            .map(|r| {
+                let r = r as f64;
+                match set {
+                    [0] => 5.0 + 0.1 * r,
+                    [1] => 6.0 + 0.1 * r,
+                    [0, 1] => 4.99 + 0.1 * r,
+                    _ => 10.0 + 0.01 * r,
+                }
+            })
+            .collect();
+        (ms, ())
+    }
+
+    #[test]
+    fn a_second_signal_is_judged_against_the_first() {
+        let base = vec![10.0; 6];
+        let fold_of = [0, 1, 0, 1, 0, 1];
+        let passes = |k: &Comparison| k.gain >= 0.05 && k.t >= 2.0;
+        let (steps, found, selected) = forward_signals(&base, &fold_of, 2, passes, score);
+        let found = found.expect("a set");
+        assert!(selected);
+        // Step 1 takes `slip_speed_rad_s` (gain ≈ 0.48 over the final model) ...
+        let first: Vec<&StepRow> = steps.iter().filter(|s| s.step == 1 && s.accepted).collect();
+        assert_eq!(first.len(), 1);
+        assert_eq!(first[0].effect, SIGNALS[0]);
+        // ... and step 2 judges `breakaway_transient` on top of it against it,
+        // not against the final model (where it would gain 0.48 again): refused.
+        let second = steps.iter().find(|s| s.step == 2 && s.effect == SIGNALS[1]).expect("step 2");
+        assert!(second.gain.abs() < 0.01 && !second.accepted, "{second:?}");
+        assert!((second.misfit_before - first[0].misfit_after).abs() < 1e-12);
+        assert_eq!(found.set, [0]);
+    }
 }
