@@ -194,21 +194,7 @@ pub fn extend(x: &Inputs) -> Option<ExtensionResult> {
         })
         .collect();
     let sel = select_signals(&library, &run_folds, &opts.selection).ok()?;
-    let steps: Vec<StepRow> = sel
-        .trials
-        .iter()
-        .map(|t| StepRow {
-            step: t.step,
-            effect: t.id.clone(),
-            misfit_before: t.comparison.before,
-            misfit_after: t.comparison.after,
-            gain: t.comparison.gain,
-            gain_fold_sd: t.comparison.gain_fold_sd,
-            t: t.comparison.t,
-            accepted: t.accepted,
-            inadmissible: t.inadmissible.clone(),
-        })
-        .collect();
+    let steps: Vec<StepRow> = sel.trials.iter().map(StepRow::from).collect();
     // The selected set, or else the first step's best single signal (module docs).
     let reported = sel.chosen.last().map(|&i| &sel.trials[i]).or_else(|| sel.step(1).find(|t| t.best))?;
     let set = reported.fitted.first()?.set.clone();
