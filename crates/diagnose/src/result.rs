@@ -381,6 +381,24 @@ pub struct StepRow {
     pub inadmissible: Option<String>,
 }
 
+impl<M> From<&rig_types::select::Trial<M>> for StepRow {
+    /// One trial of the engine's trace as the report prints it (the
+    /// vocabulary's selection and the extension's).
+    fn from(t: &rig_types::select::Trial<M>) -> Self {
+        StepRow {
+            step: t.step,
+            effect: t.id.clone(),
+            misfit_before: t.comparison.before,
+            misfit_after: t.comparison.after,
+            gain: t.comparison.gain,
+            gain_fold_sd: t.comparison.gain_fold_sd,
+            t: t.comparison.t,
+            accepted: t.accepted,
+            inadmissible: t.inadmissible.clone(),
+        }
+    }
+}
+
 /// One slip-speed bin of the friction-vs-slip evidence: the sample means of
 /// measured μ and of both models over the bin's slip samples, and the 95 %
 /// half-width of the measured mean with the run as the independent unit.

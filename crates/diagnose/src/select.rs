@@ -571,21 +571,7 @@ pub(crate) fn select_over<'a>(
 
     // The trace, as the report prints it.
     let effect = |t: &engine::Trial<FoldModel>| EffectId(registry[t.candidate]);
-    let steps: Vec<StepRow> = sel
-        .trials
-        .iter()
-        .map(|t| StepRow {
-            step: t.step,
-            effect: t.id.clone(),
-            misfit_before: t.comparison.before,
-            misfit_after: t.comparison.after,
-            gain: t.comparison.gain,
-            gain_fold_sd: t.comparison.gain_fold_sd,
-            t: t.comparison.t,
-            accepted: t.accepted,
-            inadmissible: t.inadmissible.clone(),
-        })
-        .collect();
+    let steps: Vec<StepRow> = sel.trials.iter().map(StepRow::from).collect();
     let first_step: Vec<(EffectId, Comparison, Vec<f64>)> =
         sel.step(1).map(|t| (effect(t), t.comparison, t.misfits.clone())).collect();
     let accepted: Vec<(EffectId, Comparison)> =

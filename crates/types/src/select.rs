@@ -30,12 +30,16 @@
 //! against the model the step started from; admitted, both are added.
 //! [`Search::units_ascending`] orders the held-out units ascending in every
 //! misfit vector instead of fold by fold (a campaign's runs in campaign order
-//! under interleaved folds).
+//! under interleaved folds). A candidate whose fit brings a companion term
+//! (the ageing law its static level) makes the candidate of that term no
+//! longer apply ([`Candidate::applies`]): it leaves the selection.
 //!
 //! Who runs on it: the thesis rig's diagnosis (runs as units, k folds over
 //! runs, the vocabulary's effects as candidates: `rig_diagnose::select`), the
-//! LAVI study (held-out windows, one calibration window) and the slider study
-//! (stiffnesses). A crate writes no selection loop of its own (tidy test
+//! LAVI study (held-out windows, one calibration window), the slider study
+//! (stiffnesses) and the thesis rig's extension of an `unexplained` answer
+//! (runs, the library's signals as candidates, scored in free run:
+//! `rig_diagnose::extension`). A crate writes no selection loop of its own (tidy test
 //! `forward_selection_has_one_engine`).
 //!
 //! # The step rule ([`compare`], the thesis rig's since issue 19)
@@ -47,6 +51,10 @@
 //! d_u = ln(M_u,before/M_u,after) over the units (units with a non-positive or
 //! non-finite misfit left out). It is admitted when g ≥ `min_relative_gain`,
 //! t ≥ `min_t` and M_after is finite (pipeline.toml's `[shared.selection]`).
+//! A unit the study scores NaN on either side (no misfit: a free run that
+//! gives no features) is left out of that comparison
+//! ([`compare_where_scored`]); a failed fit scores ∞ on every unit and is
+//! never admitted.
 //!
 //! # Example: the slider's stiffnesses as folds
 //!
@@ -97,7 +105,10 @@ impl Fold {
 }
 
 /// What the engine asks of a study: the misfit of a model on one unit
-/// (finite and ≥ 0; lower is better; a failed run should score a finite cap).
+/// (finite and ≥ 0; lower is better; a failed run should score a finite cap),
+/// or NaN where the study has no misfit for the unit (a free run that gives
+/// no features): the unit is then left out of that comparison
+/// ([`compare_where_scored`]).
 pub trait Study<M>: Sync {
     fn score(&self, model: &M, unit: usize) -> f64;
 }
@@ -122,6 +133,14 @@ pub trait Candidate<S: ?Sized, M>: Sync {
     /// group are no longer tried, and a pair step pairs two groups.
     fn group(&self) -> Option<&str> {
         None
+    }
+    /// Whether this candidate is tried on top of the `current` models (one
+    /// per training set). A candidate whose term the current model already
+    /// holds — brought as a companion by another candidate's fit (the
+    /// ageing law brings its static level) — does not apply, and leaves the
+    /// selection (models only grow). Default: always.
+    fn applies(&self, _study: &S, _current: &[M]) -> bool {
+        true
     }
 }
 
@@ -360,7 +379,7 @@ where
             }
             Err(e) => (Vec::new(), Some(e), vec![f64::INFINITY; units.len()]),
         };
-        let comparison = compare(cur_ms, &misfits, &fold_of, folds.len());
+        let comparison = compare_where_scored(cur_ms, &misfits, &fold_of, folds.len());
         Trial {
             step,
             candidate: c,
@@ -380,7 +399,12 @@ where
             accepted: false,
         }
     };
-    while !left.is_empty() {
+    loop {
+        // A candidate the current model already holds leaves ([`Candidate::applies`]).
+        left.retain(|&c| candidates[c].applies(study, &current));
+        if left.is_empty() {
+            break;
+        }
         // Every (candidate, training set) fit is a task of its own, collected in order.
         let tasks: Vec<(usize, usize)> =
             left.iter().flat_map(|&c| (0..train_sets.len()).map(move |s| (c, s))).collect();
@@ -404,7 +428,8 @@ where
                 .iter()
                 .map(|t| {
                     let apart = t.candidate != trials[best].candidate
-                        && (group(t.candidate).is_none() || group(t.candidate) != group(trials[best].candidate));
+                        && (group(t.candidate).is_none() || group(t.candidate) != group(trials[best].candidate))
+                        && candidates[t.candidate].applies(study, &trials[best].fitted);
                     if apart && t.error.is_none() {
                         t.comparison
                     } else {
@@ -579,6 +604,16 @@ pub fn compare_scored(before: &[Option<f64>], after: &[Option<f64>], fold_of: &[
         }
     }
     compare(&b, &a, &f, folds)
+}
+
+/// [`compare`] over the units scored on both sides: a unit whose misfit is
+/// NaN in `before` or `after` (the study has none for it, [`Study::score`])
+/// is left out, as [`compare_scored`] leaves out a view's unscored units.
+/// The comparison [`forward_select_from`] makes at every step; with no NaN it
+/// is [`compare`] itself.
+pub fn compare_where_scored(before: &[f64], after: &[f64], fold_of: &[usize], folds: usize) -> Comparison {
+    let scored = |v: &[f64]| v.iter().map(|m| (!m.is_nan()).then_some(*m)).collect::<Vec<_>>();
+    compare_scored(&scored(before), &scored(after), fold_of, folds)
 }
 
 /// One step of selection judged on several views: every candidate is fitted
@@ -937,6 +972,93 @@ mod tests {
         // No admitted candidate: nothing chosen.
         let none = TwoViews(vec![0.0; 6], vec![0.0; 6]);
         assert_eq!(select_on_views(&none, &cands, &bases, &folds, &rule, &Search::default()).unwrap().chosen, None);
+    }
+
+    /// A level whose free run fails (NaN) on unit 2 once it moves above 1.05.
+    struct FailsHigh(Vec<f64>);
+
+    impl Study<f64> for FailsHigh {
+        fn score(&self, m: &f64, u: usize) -> f64 {
+            if u == 2 && *m > 1.05 { f64::NAN } else { (m - self.0[u]).abs() + 0.01 }
+        }
+    }
+
+    impl Candidate<FailsHigh, f64> for Shift {
+        fn id(&self) -> &str {
+            self.0
+        }
+        fn fit(&self, _: &FailsHigh, cur: &f64, _: &[usize]) -> Result<f64, String> {
+            Ok(cur + self.1)
+        }
+    }
+
+    #[test]
+    fn a_unit_scored_nan_is_left_out_of_the_comparison() {
+        let s = FailsHigh(vec![1.1, 1.1, 1.1, 1.1, 1.1]);
+        let to_high = Shift("to_high", 1.1);
+        let cands: [&dyn Candidate<FailsHigh, f64>; 1] = [&to_high];
+        let sel = forward_select(&s, &cands, &0.0, &Fold::leave_one_out(5), &rule()).unwrap();
+        let t = &sel.trials[0];
+        assert!(t.misfits[2].is_nan());
+        // Compared over the four units it scores: NaN no longer poisons the
+        // overall misfit, the step is admitted, the comparison is `compare`'s over them.
+        let keep = [0, 1, 3, 4];
+        let pick = |v: &[f64]| keep.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+        let plain = compare(&pick(&sel.baseline_misfits), &pick(&t.misfits), &keep, 5);
+        assert_eq!(t.comparison, plain);
+        assert!(t.comparison.after.is_finite() && t.accepted, "{:?}", t.comparison);
+        assert_eq!(sel.chosen_ids(), ["to_high"]);
+        // `compare` itself would have no overall misfit after.
+        assert!(compare(&sel.baseline_misfits, &t.misfits, &[0, 1, 2, 3, 4], 5).after.is_nan());
+        // With no NaN, the two comparisons are the same bits.
+        let (b, a) = ([2.0, 4.0, 6.0, 8.0], [1.0, 2.5, 3.0, 4.5]);
+        assert_eq!(compare_where_scored(&b, &a, &[0, 0, 1, 1], 2), compare(&b, &a, &[0, 0, 1, 1], 2));
+    }
+
+    /// Switches both `a` and `b` on: a candidate that brings a companion term.
+    struct Both;
+
+    impl Candidate<Gated, Gate> for Both {
+        fn id(&self) -> &str {
+            "both"
+        }
+        fn fit(&self, s: &Gated, _: &Gate, train: &[usize]) -> Result<Gate, String> {
+            let level = train.iter().map(|&u| s.0[u]).sum::<f64>() / train.len() as f64;
+            Ok(Gate { a: true, b: true, level })
+        }
+    }
+
+    /// Switches `b` on (fits the level); applies only to a model without `b`.
+    struct OnlyB;
+
+    impl Candidate<Gated, Gate> for OnlyB {
+        fn id(&self) -> &str {
+            "only_b"
+        }
+        fn fit(&self, s: &Gated, cur: &Gate, train: &[usize]) -> Result<Gate, String> {
+            let level = train.iter().map(|&u| s.0[u]).sum::<f64>() / train.len() as f64;
+            Ok(Gate { b: true, level, ..*cur })
+        }
+        fn applies(&self, _: &Gated, current: &[Gate]) -> bool {
+            !current.iter().any(|m| m.b)
+        }
+    }
+
+    #[test]
+    fn a_candidate_the_model_already_holds_no_longer_applies() {
+        let s = Gated(vec![1.0, 1.1, 0.9, 1.05, 0.95]);
+        let cands: [&dyn Candidate<Gated, Gate>; 2] = [&OnlyB, &Both];
+        let base = Gate { a: false, b: false, level: 0.0 };
+        let sel = forward_select(&s, &cands, &base, &Fold::leave_one_out(5), &rule()).unwrap();
+        // Step 1: `only_b` alone predicts nothing, `both` brings `b` with `a` and is chosen ...
+        assert_eq!(sel.chosen_ids(), ["both"]);
+        assert_eq!(sel.step(1).count(), 2);
+        // ... and `only_b` no longer applies: no step 2 (without the hook it would be tried again).
+        assert_eq!(sel.trials.len(), 2, "{:?}", sel.trials.iter().map(|t| &t.id).collect::<Vec<_>>());
+        // From a model that already holds `b`, it is never tried.
+        let with_b = Gate { b: true, ..base };
+        let sel = forward_select(&s, &cands, &with_b, &Fold::leave_one_out(5), &rule()).unwrap();
+        assert!(sel.trials.iter().all(|t| t.id == "both"));
     }
 
     #[test]

@@ -55,12 +55,23 @@
 //! solver, no intercept: the signals' coefficients are relative changes of the
 //! model's coefficients) on the training folds, and every held-out run is then
 //! **simulated free** with the model fitted without it; its free-run misfit
-//! ([`crate::channels::free_run_misfit_channels`], every channel) is compared with the
-//! final model's on the same run by the selection's rule (gain ≥ the minimum
-//! and paired run-level t ≥ `min_t`, [`crate::select`]'s comparison). Forward
-//! selection adds the best signal while it passes; the reported extension is
-//! the selected set, or, when no signal passes, the best single signal (its
-//! gain then says it explains nothing). Coefficients are fitted on every run;
+//! ([`crate::channels::free_run_misfit_channels`], every channel) is the
+//! run's score. The selection is the one engine's
+//! ([`rig_types::select::forward_select_from`], issue 26, item 3): the runs
+//! are the units in campaign order, the diagnosis' folds over runs, the final
+//! model the baseline, each signal a candidate ([`Signal`]: its fit refits
+//! the current set with it), and each step judged by the selection's rule
+//! (gain ≥ the minimum, paired run-level t ≥ `min_t`) against the model the
+//! step starts from: the final model at step 1, then the last accepted set.
+//! Until this moved onto the engine every step was compared with the final
+//! model, so a second signal was accepted on the first one's gain. A run
+//! whose free run gives no misfit (NaN) is left out of a comparison
+//! ([`rig_types::select::compare_where_scored`]); ties go to the first
+//! signal in library order; `log_dwell` brings `static_level`, which then no
+//! longer applies ([`rig_types::select::Candidate::applies`]). The reported
+//! extension is the selected set, or, when no signal passes, the first
+//! step's best single signal (its gain then says it explains nothing), with
+//! its gain over the final model. Coefficients are fitted on every run;
 //! their standard errors are the jackknife over the folds (the run, not the
 //! sample, is the independent unit).
 //!
@@ -68,7 +79,8 @@
 //!
 //! One free-run simulation of every operating point per candidate set: at
 //! most 4 + 3 + 2 + 1 = 10 sets (the library has four signals), each one
-//! rayon-parallel over runs (campaign order kept; deterministic), and the
+//! rayon-parallel over runs (the engine collects in order; deterministic),
+//! the reported set's read back from the study's cache, and the
 //! teacher-forced rows are built once; a set with the ageing law adds its
 //! free-run fit, (folds + 1) × at most [`DWELL_FIT_EVALS`] free runs of the
 //! training runs (the CI ageing case: 2.4 → 14 s on a loaded 2-core
@@ -83,13 +95,17 @@ use crate::channels::{
 };
 use crate::prepare::RunSignals;
 use crate::result::{Extension, ExtensionTerm, SpeedTraces, StepRow, round_sig};
-use crate::select::compare_folds;
 use rig_estimate::friction::stick_episodes;
 use rig_model::extension::{BREAKAWAY_TIME_S, DWELL_TIME_S, slip_signals, static_signals};
 use rig_model::friction::{normal_force_n, slip_mu, static_mu};
+use rig_types::contract::SelectionRule;
 use rig_types::minimize::brent_min;
+use rig_types::select::{
+    Candidate, Fold, Search, SelectError, Selection, Study, compare_where_scored, forward_select_from, train_sets,
+};
 use rig_types::{Campaign, Effect, RigParams};
 use std::collections::BTreeMap;
+use std::sync::Mutex;
 
 /// The library's signals, in the order of [`Effect::FrictionExtension`]'s
 /// coefficients; the first two act in slip, the last two at break-away.
@@ -152,152 +168,48 @@ pub struct Inputs<'a> {
 /// Fits, selects and simulates the extension on top of the final model
 /// (module docs). `None` without operating points to fit.
 pub fn extend(x: &Inputs) -> Option<ExtensionResult> {
-    let Inputs { c, runs, model, before, phases, s, opts } = *x;
-    let phase = |id: &str| phases.get(id).copied().unwrap_or_default();
-    let rows: Vec<RunRows> = {
-        use rayon::prelude::*;
-        runs.par_iter().map(|r| run_rows(r, &with_run_phases(model, phase(&r.id)), s)).collect()
-    };
-    let fold_of: BTreeMap<&str, usize> = runs.iter().map(|r| (r.id.as_str(), r.fold)).collect();
+    let Inputs { c, runs, model, before, s, opts, .. } = *x;
     let folds = runs.iter().map(|r| r.fold + 1).max().unwrap_or(0);
     let floor = speed_floor_rad_s(c, s);
-    let base: BTreeMap<&str, f64> =
-        before.iter().filter_map(|q| free_run_misfit_channels(q, floor).map(|m| (q.id.as_str(), m))).collect();
-    // Coefficients of a signal set fitted teacher-forced without fold `f` (None: every run).
-    let teacher_forced = |set: &[usize], f: Option<usize>| -> Option<[f64; 4]> {
-        let keep = |r: usize| f.is_none_or(|f| runs[r].fold != f);
-        let mut coef = [0.0; 4];
-        for (part, offset) in [(0usize, 0usize), (1, 2)] {
-            let cols: Vec<usize> = set.iter().filter(|&&j| j / 2 == part).map(|&j| j - offset).collect();
-            if cols.is_empty() {
-                continue;
-            }
-            let (mut x, mut y) = (Vec::new(), Vec::new());
-            for (_, rr) in rows.iter().enumerate().filter(|(r, _)| keep(*r)) {
-                for (sig, e) in if part == 0 { &rr.slip } else { &rr.breakaway } {
-                    x.push(cols.iter().map(|&j| sig[j]).collect::<Vec<f64>>());
-                    y.push(*e);
-                }
-            }
-            let b = rig_estimate::linear::ols(&x, &y, "friction extension").ok()?.beta;
-            for (k, &j) in cols.iter().enumerate() {
-                coef[j + offset] = b[k];
-            }
-        }
-        Some(coef)
-    };
-    let with_ext = |coef: [f64; 4], id: &str| {
-        let mut p = model.clone();
-        p.effects.push(Effect::FrictionExtension {
-            slip_speed_per_rad_s: coef[0],
-            breakaway_transient: coef[1],
-            static_level: coef[2],
-            dwell_per_efold: coef[3],
-        });
-        with_run_phases(&p, phase(id))
-    };
-    // The ageing law (`log_dwell` with its `static_level`, module docs "The
-    // ageing law"): the slope c_d fitted by free-run simulation of the
-    // training runs, the level c_0 the break-aways' least squares at that slope.
-    let fit = |set: &[usize], f: Option<usize>| -> Option<[f64; 4]> {
-        let mut coef = teacher_forced(set, f)?;
-        if !set.contains(&DWELL) {
-            return Some(coef);
-        }
-        let train = |r: usize| f.is_none_or(|f| runs[r].fold != f);
-        let rows_b: Vec<(f64, f64)> = rows
-            .iter()
-            .enumerate()
-            .filter(|(r, _)| train(*r))
-            .flat_map(|(_, rr)| rr.breakaway.iter().map(|(sig, e)| (sig[1], *e)))
-            .collect();
-        if rows_b.is_empty() {
-            return Some(coef);
-        }
-        let n = rows_b.len() as f64;
-        let level_at = |cd: f64| rows_b.iter().map(|(x, e)| e - cd * x).sum::<f64>() / n;
-        let training: BTreeMap<&str, ()> =
-            runs.iter().enumerate().filter(|(r, _)| train(*r)).map(|(_, r)| (r.id.as_str(), ())).collect();
-        let misfit = |cd: f64| {
-            let mut k = coef;
-            (k[2], k[3]) = (level_at(cd), cd);
-            let pairs = free_run_pairs_by(c, s, |id| training.contains_key(id).then(|| with_ext(k, id)));
-            let m2: Vec<f64> =
-                pairs.iter().map(|q| free_run_misfit_channels(q, floor).map_or(FAILED_RUN_MISFIT, |m| m * m)).collect();
-            m2.iter().sum::<f64>() / m2.len().max(1) as f64
-        };
-        let cd = brent_min(0.0, DWELL_SLOPE_MAX, DWELL_SLOPE_TOL, DWELL_FIT_EVALS, misfit);
-        (coef[2], coef[3]) = (level_at(cd), cd);
-        Some(coef)
-    };
-    // Cross-validated free runs of a set and its comparison with the model.
-    let score = |set: &[usize]| {
-        let fits: Vec<Option<[f64; 4]>> = (0..folds).map(|f| fit(set, Some(f))).collect();
-        let pairs = free_run_pairs_by(c, s, |id| {
-            let coef = (*fits.get(*fold_of.get(id)?)?)?;
-            Some(with_ext(coef, id))
-        });
-        let (mut b, mut a, mut fv) = (Vec::new(), Vec::new(), Vec::new());
-        for q in &pairs {
-            if let (Some(x), Some(y)) = (base.get(q.id.as_str()), free_run_misfit_channels(q, floor)) {
-                b.push(*x);
-                a.push(y);
-                fv.push(fold_of[q.id.as_str()]);
-            }
-        }
-        (compare_folds(&b, &a, &fv, folds), pairs, fits)
-    };
-    if folds == 0 || base.is_empty() {
+    let base: Vec<f64> = runs
+        .iter()
+        .map(|r| {
+            let q = before.iter().find(|q| q.id == r.id);
+            q.and_then(|q| free_run_misfit_channels(q, floor)).unwrap_or(f64::NAN)
+        })
+        .collect();
+    if folds == 0 || base.iter().all(|m| m.is_nan()) {
         return None;
     }
-    let passes = |g: f64, t: f64| g >= opts.selection.min_relative_gain && t >= opts.selection.min_t;
-    let mut chosen: Vec<usize> = Vec::new();
-    let mut steps = Vec::new();
-    let mut best_single = None;
-    let mut kept = None;
-    for step in 1..=SIGNALS.len() {
-        let mut tried = Vec::new();
-        for j in (0..SIGNALS.len()).filter(|j| !chosen.contains(j)) {
-            let mut set: Vec<usize> = chosen.iter().copied().chain([j]).collect();
-            // The ageing law carries its own level (μs0 of module docs).
-            if j == DWELL && !set.contains(&LEVEL) {
-                set.push(LEVEL);
-                set.sort_unstable();
-            }
-            let (cmp, pairs, fits) = score(&set);
-            tried.push((j, set, cmp, pairs, fits));
-        }
-        let key = |i: usize| if tried[i].2.gain.is_finite() { tried[i].2.gain } else { f64::NEG_INFINITY };
-        let Some(bi) = (0..tried.len()).max_by(|&a, &b| key(a).total_cmp(&key(b))) else { break };
-        let ok = passes(tried[bi].2.gain, tried[bi].2.t);
-        for (i, (j, _, cmp, _, _)) in tried.iter().enumerate() {
-            steps.push(StepRow {
-                step,
-                effect: SIGNALS[*j].into(),
-                misfit_before: cmp.before,
-                misfit_after: cmp.after,
-                gain: cmp.gain,
-                gain_fold_sd: cmp.gain_fold_sd,
-                t: cmp.t,
-                accepted: i == bi && ok,
-                inadmissible: None,
-            });
-        }
-        let (j, set, cmp, pairs, fits) = tried.swap_remove(bi);
-        if step == 1 {
-            best_single = Some((set.clone(), cmp, pairs.clone(), fits.clone()));
-        }
-        if !ok {
-            break;
-        }
-        let _ = j;
-        chosen = set.clone();
-        kept = Some((set, cmp, pairs, fits));
-    }
-    let (set, cmp, pairs, fits) = kept.or(best_single)?;
-    let full = fit(&set, None)?;
-    // The extended model's free-run checks (held-out runs, each simulated
-    // with the coefficients fitted without its fold): does it now match?
+    let rows: Vec<RunRows> = {
+        use rayon::prelude::*;
+        runs.par_iter().map(|r| run_rows(r, &with_run_phases(model, x.phase(&r.id)), s)).collect()
+    };
+    let library = Library { x, rows, floor, base, pairs: Mutex::default() };
+    // Fold f holds out fold f's runs and trains on the others (the vocabulary's folds).
+    let run_folds: Vec<Fold> = (0..folds)
+        .map(|f| {
+            let (held_out, train): (Vec<usize>, Vec<usize>) = (0..runs.len()).partition(|&r| runs[r].fold == f);
+            Fold { train, held_out }
+        })
+        .collect();
+    let sel = select_signals(&library, &run_folds, &opts.selection).ok()?;
+    let steps: Vec<StepRow> = sel.trials.iter().map(StepRow::from).collect();
+    // The selected set, or else the first step's best single signal (module docs).
+    let reported = sel.chosen.last().map(|&i| &sel.trials[i]).or_else(|| sel.step(1).find(|t| t.best))?;
+    let set = reported.fitted.first()?.set.clone();
+    // Its gain over the final model (each step was judged against the step before it).
+    let cmp = compare_where_scored(&sel.baseline_misfits, &reported.misfits, &sel.fold_of, folds);
+    let all: Vec<usize> = (0..runs.len()).collect();
+    let full = library.fit_set(&set, &all)?;
+    // The extended model's held-out free runs (each run simulated with the
+    // coefficients fitted without its fold: the ones its score was read from).
+    let model_of = |r: usize| {
+        let s = sel.train_sets.iter().position(|t| *t == run_folds[runs[r].fold].train)?;
+        Some(reported.fitted.get(s)?.coef)
+    };
+    let pairs: Vec<FreeRunPair> = (0..runs.len()).filter_map(|r| library.pair(r, model_of(r)?)).collect::<Vec<_>>();
+    // The extended model's free-run checks (held-out runs): does it now match?
     let checks = free_run_checks_of(c, &pairs, s, &opts.channels);
     let free_run_flagged = checks
         .iter()
@@ -307,7 +219,7 @@ pub fn extend(x: &Inputs) -> Option<ExtensionResult> {
     let terms = set
         .iter()
         .map(|&j| {
-            let v: Vec<f64> = fits.iter().flatten().map(|c| c[j]).collect();
+            let v: Vec<f64> = reported.fitted.iter().map(|m| m.coef[j]).collect();
             let k = v.len() as f64;
             let m = v.iter().sum::<f64>() / k.max(1.0);
             let se = if v.len() == folds && folds > 1 {
@@ -330,7 +242,7 @@ pub fn extend(x: &Inputs) -> Option<ExtensionResult> {
         .collect();
     Some(ExtensionResult {
         extension: Extension {
-            formula: formula(&set, &full, static_mu(&model.friction), !chosen.is_empty()),
+            formula: formula(&set, &full, static_mu(&model.friction), !sel.chosen.is_empty()),
             terms,
             free_run_misfit_before: round_sig(cmp.before, 4),
             free_run_misfit_after: round_sig(cmp.after, 4),
@@ -342,6 +254,190 @@ pub fn extend(x: &Inputs) -> Option<ExtensionResult> {
         traces,
         checks,
     })
+}
+
+impl Inputs<'_> {
+    /// Run `id`'s nuisance phases (θ of the time and angle modulations).
+    fn phase(&self, id: &str) -> (f64, f64) {
+        self.phases.get(id).copied().unwrap_or_default()
+    }
+
+    /// The final model with the extension's coefficients `coef`, run `id`'s phases set.
+    fn with_extension(&self, coef: [f64; 4], id: &str) -> RigParams {
+        let mut p = self.model.clone();
+        p.effects.push(Effect::FrictionExtension {
+            slip_speed_per_rad_s: coef[0],
+            breakaway_transient: coef[1],
+            static_level: coef[2],
+            dwell_per_efold: coef[3],
+        });
+        with_run_phases(&p, self.phase(id))
+    }
+}
+
+/// An extension fitted on one training set: the library's signals it holds
+/// (indices into [`SIGNALS`], ascending) and their coefficients, relative
+/// changes of the final model's (0 for a signal it does not hold). The
+/// empty set is the final model.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Terms {
+    pub set: Vec<usize>,
+    pub coef: [f64; 4],
+}
+
+/// What the extension's selection asks of its study beside the misfit
+/// ([`Study::score`]: a run's held-out free-run misfit, NaN where it has none):
+/// the coefficients of a signal set fitted on the `train` runs.
+trait SignalFits: Study<Terms> {
+    fn fit_set(&self, set: &[usize], train: &[usize]) -> Option<[f64; 4]>;
+}
+
+/// One library signal as a candidate of the engine: its fit refits every
+/// coefficient of the current set with it (the ageing law `log_dwell`
+/// brings its level `static_level`, module docs); it no longer applies once
+/// the current model holds it (brought as that companion).
+struct Signal(usize);
+
+impl<S: SignalFits> Candidate<S, Terms> for Signal {
+    fn id(&self) -> &str {
+        SIGNALS[self.0]
+    }
+
+    fn fit(&self, study: &S, current: &Terms, train: &[usize]) -> Result<Terms, String> {
+        let mut set: Vec<usize> = current.set.iter().copied().chain([self.0]).collect();
+        if self.0 == DWELL && !set.contains(&LEVEL) {
+            set.push(LEVEL);
+        }
+        set.sort_unstable();
+        let coef = study.fit_set(&set, train).ok_or_else(|| format!("{}: no least-squares fit", SIGNALS[self.0]))?;
+        Ok(Terms { set, coef })
+    }
+
+    fn applies(&self, _: &S, current: &[Terms]) -> bool {
+        !current.iter().any(|m| m.set.contains(&self.0))
+    }
+}
+
+/// Forward selection over the library's signals on the one engine
+/// ([`rig_types::select::forward_select_from`]): the runs are the units in
+/// campaign order, `folds` the diagnosis' folds over runs, the baseline the
+/// final model (the empty set) on every training set, each signal a
+/// candidate, judged by the selection's rule against the step's starting
+/// model (a unit scored NaN, a run with no free-run misfit, left out).
+fn select_signals<S: SignalFits>(
+    study: &S,
+    folds: &[Fold],
+    rule: &SelectionRule,
+) -> Result<Selection<Terms>, SelectError> {
+    let signals: Vec<Signal> = (0..SIGNALS.len()).map(Signal).collect();
+    let candidates: Vec<&dyn Candidate<S, Terms>> = signals.iter().map(|c| c as &dyn Candidate<S, Terms>).collect();
+    let baselines = vec![Terms::default(); train_sets(folds).len()];
+    let search = Search { units_ascending: true, ..Search::default() };
+    forward_select_from(study, &candidates, &baselines, folds, rule, &search)
+}
+
+/// The extension's study: the runs' teacher-forced rows, the final model's
+/// free-run misfits, and every held-out free run simulated so far (by run
+/// and coefficients: the reported set's are read back, not simulated twice).
+struct Library<'a> {
+    x: &'a Inputs<'a>,
+    rows: Vec<RunRows>,
+    floor: f64,
+    /// The final model's free-run misfit of every run (NaN: none).
+    base: Vec<f64>,
+    pairs: Mutex<BTreeMap<(usize, [u64; 4]), Option<FreeRunPair>>>,
+}
+
+impl Library<'_> {
+    /// Run `r`'s free run with the extension's coefficients `coef` (`None`: no features to compare).
+    fn pair(&self, r: usize, coef: [f64; 4]) -> Option<FreeRunPair> {
+        let key = (r, coef.map(f64::to_bits));
+        if let Some(q) = self.pairs.lock().expect("free-run cache").get(&key) {
+            return q.clone();
+        }
+        let Inputs { c, runs, s, .. } = *self.x;
+        let id = runs[r].id.as_str();
+        let q = free_run_pairs_by(c, s, |k| (k == id).then(|| self.x.with_extension(coef, id))).pop();
+        self.pairs.lock().expect("free-run cache").insert(key, q.clone());
+        q
+    }
+
+    /// Coefficients of a signal set fitted teacher-forced on the `train` runs.
+    fn teacher_forced(&self, set: &[usize], train: &[bool]) -> Option<[f64; 4]> {
+        let mut coef = [0.0; 4];
+        for (part, offset) in [(0usize, 0usize), (1, 2)] {
+            let cols: Vec<usize> = set.iter().filter(|&&j| j / 2 == part).map(|&j| j - offset).collect();
+            if cols.is_empty() {
+                continue;
+            }
+            let (mut x, mut y) = (Vec::new(), Vec::new());
+            for (_, rr) in self.rows.iter().enumerate().filter(|(r, _)| train[*r]) {
+                for (sig, e) in if part == 0 { &rr.slip } else { &rr.breakaway } {
+                    x.push(cols.iter().map(|&j| sig[j]).collect::<Vec<f64>>());
+                    y.push(*e);
+                }
+            }
+            let b = rig_estimate::linear::ols(&x, &y, "friction extension").ok()?.beta;
+            for (k, &j) in cols.iter().enumerate() {
+                coef[j + offset] = b[k];
+            }
+        }
+        Some(coef)
+    }
+}
+
+impl Study<Terms> for Library<'_> {
+    /// Run `r`'s held-out free-run misfit, every channel
+    /// ([`free_run_misfit_channels`]); the final model's for the empty set;
+    /// NaN where the free run gives none.
+    fn score(&self, m: &Terms, r: usize) -> f64 {
+        if m.set.is_empty() {
+            return self.base[r];
+        }
+        self.pair(r, m.coef).and_then(|q| free_run_misfit_channels(&q, self.floor)).unwrap_or(f64::NAN)
+    }
+}
+
+impl SignalFits for Library<'_> {
+    /// The set fitted teacher-forced, and the ageing law (`log_dwell` with
+    /// its `static_level`, module docs "The ageing law") by free-run
+    /// simulation of the training runs: the slope c_d by Brent, the level c_0
+    /// the break-aways' least squares at that slope.
+    fn fit_set(&self, set: &[usize], train: &[usize]) -> Option<[f64; 4]> {
+        let Inputs { c, runs, s, .. } = *self.x;
+        let mut mask = vec![false; runs.len()];
+        train.iter().for_each(|&r| mask[r] = true);
+        let mut coef = self.teacher_forced(set, &mask)?;
+        if !set.contains(&DWELL) {
+            return Some(coef);
+        }
+        let rows_b: Vec<(f64, f64)> = self
+            .rows
+            .iter()
+            .enumerate()
+            .filter(|(r, _)| mask[*r])
+            .flat_map(|(_, rr)| rr.breakaway.iter().map(|(sig, e)| (sig[1], *e)))
+            .collect();
+        if rows_b.is_empty() {
+            return Some(coef);
+        }
+        let n = rows_b.len() as f64;
+        let level_at = |cd: f64| rows_b.iter().map(|(x, e)| e - cd * x).sum::<f64>() / n;
+        let training: BTreeMap<&str, ()> = train.iter().map(|&r| (runs[r].id.as_str(), ())).collect();
+        let misfit = |cd: f64| {
+            let mut k = coef;
+            (k[LEVEL], k[DWELL]) = (level_at(cd), cd);
+            let pairs = free_run_pairs_by(c, s, |id| training.contains_key(id).then(|| self.x.with_extension(k, id)));
+            let m2: Vec<f64> = pairs
+                .iter()
+                .map(|q| free_run_misfit_channels(q, self.floor).map_or(FAILED_RUN_MISFIT, |m| m * m))
+                .collect();
+            m2.iter().sum::<f64>() / m2.len().max(1) as f64
+        };
+        let cd = brent_min(0.0, DWELL_SLOPE_MAX, DWELL_SLOPE_TOL, DWELL_FIT_EVALS, misfit);
+        (coef[LEVEL], coef[DWELL]) = (level_at(cd), cd);
+        Some(coef)
+    }
 }
 
 /// The extended law in words and symbols, with the coefficients fitted on
@@ -510,4 +606,92 @@ pub fn vocabulary_bounds(baseline: &RigParams, findings: &[crate::Finding]) -> V
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Six runs in two folds; the final model misfits 10 on each. Either
+    /// slip signal alone brings every run to about 5 and the two together
+    /// to the same 5 (the second explains what the first already did); the
+    /// break-away signals change nothing. A set's "fit" marks its signals.
+    struct Table;
+
+    impl Study<Terms> for Table {
+        fn score(&self, m: &Terms, r: usize) -> f64 {
+            let r = r as f64;
+            match m.set.as_slice() {
+                [] => 10.0,
+                [0] => 5.0 + 0.1 * r,
+                [1] => 6.0 + 0.1 * r,
+                [0, 1] => 4.99 + 0.1 * r,
+                _ => 10.0 + 0.01 * r,
+            }
+        }
+    }
+
+    impl SignalFits for Table {
+        fn fit_set(&self, set: &[usize], _: &[usize]) -> Option<[f64; 4]> {
+            let mut coef = [0.0; 4];
+            set.iter().for_each(|&j| coef[j] = 1.0);
+            Some(coef)
+        }
+    }
+
+    fn folds() -> Vec<Fold> {
+        vec![
+            Fold { train: vec![1, 3, 5], held_out: vec![0, 2, 4] },
+            Fold { train: vec![0, 2, 4], held_out: vec![1, 3, 5] },
+        ]
+    }
+
+    fn rule() -> SelectionRule {
+        SelectionRule { min_relative_gain: 0.05, min_t: 2.0 }
+    }
+
+    #[test]
+    fn a_second_signal_is_judged_against_the_first() {
+        let sel = select_signals(&Table, &folds(), &rule()).unwrap();
+        // Step 1 takes `slip_speed_rad_s` (gain ≈ 0.48 over the final model) ...
+        assert_eq!(sel.chosen_ids(), [SIGNALS[0]]);
+        let first = &sel.trials[sel.chosen[0]];
+        // ... and step 2 judges `breakaway_transient` on top of it against it,
+        // not against the final model (where it would gain 0.48 again): refused.
+        let second = sel.step(2).find(|t| t.id == SIGNALS[1]).expect("step 2");
+        assert!(second.comparison.gain.abs() < 0.01 && !second.accepted, "{:?}", second.comparison);
+        assert_eq!(second.comparison.before, first.comparison.after);
+        assert_eq!(second.fitted[0].set, [0, 1]);
+    }
+
+    #[test]
+    fn the_ageing_law_brings_its_level_and_the_level_then_leaves() {
+        let sel = select_signals(&Aged, &folds(), &rule()).unwrap();
+        // `log_dwell` is fitted with `static_level` and chosen ...
+        assert_eq!(sel.chosen_ids(), [SIGNALS[DWELL]]);
+        assert_eq!(sel.trials[sel.chosen[0]].fitted[0].set, [LEVEL, DWELL]);
+        // ... and step 2 tries the two slip signals only: the level is held.
+        let step2: Vec<&str> = sel.step(2).map(|t| t.id.as_str()).collect();
+        assert_eq!(step2, [SIGNALS[0], SIGNALS[1]]);
+    }
+
+    /// Only the ageing law (with its level) gains; a run whose free run
+    /// fails under the level alone scores NaN and is left out.
+    struct Aged;
+
+    impl Study<Terms> for Aged {
+        fn score(&self, m: &Terms, r: usize) -> f64 {
+            match m.set.as_slice() {
+                [LEVEL] if r == 3 => f64::NAN,
+                s if s.contains(&DWELL) => 3.0 + 0.1 * r as f64,
+                _ => 10.0 + 0.01 * r as f64,
+            }
+        }
+    }
+
+    impl SignalFits for Aged {
+        fn fit_set(&self, set: &[usize], train: &[usize]) -> Option<[f64; 4]> {
+            Table.fit_set(set, train)
+        }
+    }
 }
