@@ -345,8 +345,12 @@ struct Library<'a> {
     floor: f64,
     /// The final model's free-run misfit of every run (NaN: none).
     base: Vec<f64>,
-    pairs: Mutex<BTreeMap<(usize, [u64; 4]), Option<FreeRunPair>>>,
+    pairs: FreeRuns,
 }
+
+/// The held-out free runs a [`Library`] has simulated, by run and the bits of
+/// the extension's coefficients (`None`: no features to compare).
+type FreeRuns = Mutex<BTreeMap<(usize, [u64; 4]), Option<FreeRunPair>>>;
 
 impl Library<'_> {
     /// Run `r`'s free run with the extension's coefficients `coef` (`None`: no features to compare).
