@@ -554,6 +554,33 @@ pub fn simulate_implicit_into<F: ImplicitFriction>(
     substeps: usize,
     out: &mut OneDofRun,
 ) -> Result<(), ModelError> {
+    for ch in [&mut out.bit_rad_s, &mut out.top_rad_s, &mut out.twist_rad, &mut out.friction_nm, &mut out.accel_rad_s2]
+    {
+        ch.clear();
+    }
+    out.stuck.clear();
+    let mut s = start;
+    simulate_implicit_extend(shaft, law, drive, &mut s, fs_hz, samples, substeps, out)
+}
+
+/// [`simulate_implicit_into`] continued: `out` (a run this made or left
+/// empty) grows to `samples` samples from `state`, the state at its last
+/// sample as the previous call left it (an empty run starts at `state`, as
+/// [`simulate_implicit_into`] from it). Every step is the one the longer
+/// run from the start would take, so a run made in pieces is bit for bit
+/// the run made at once (a caller that lengthens a simulated stretch pays
+/// only for the added samples).
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_implicit_extend<F: ImplicitFriction>(
+    shaft: &Shaft,
+    law: &F,
+    drive: Drive,
+    state: &mut OneDofState,
+    fs_hz: f64,
+    samples: usize,
+    substeps: usize,
+    out: &mut OneDofRun,
+) -> Result<(), ModelError> {
     if samples < 2 {
         return Err(invalid("samples", samples as f64, "at least 2"));
     }
@@ -582,18 +609,14 @@ pub fn simulate_implicit_into<F: ImplicitFriction>(
     let (k, c, ca, j) =
         (shaft.stiffness_nm_rad, shaft.twist_damping_nm_s_rad, shaft.absolute_damping_nm_s_rad, shaft.inertia_kgm2);
     let h_j = h / j;
-    let mut s = start;
-    s.top_rad_s = top_at(0, 0.0)?;
-    if s.stuck {
-        s.bit_rad_s = 0.0;
-    }
+    let s = state;
+    let first = out.stuck.len();
+    let more = samples.saturating_sub(first);
     for ch in [&mut out.bit_rad_s, &mut out.top_rad_s, &mut out.twist_rad, &mut out.friction_nm, &mut out.accel_rad_s2]
     {
-        ch.clear();
-        ch.reserve(samples);
+        ch.reserve(more);
     }
-    out.stuck.clear();
-    out.stuck.reserve(samples);
+    out.stuck.reserve(more);
     let push = |out: &mut OneDofRun, s: &OneDofState, fric: f64, acc: f64| {
         out.bit_rad_s.push(s.bit_rad_s);
         out.top_rad_s.push(s.top_rad_s);
@@ -602,9 +625,15 @@ pub fn simulate_implicit_into<F: ImplicitFriction>(
         out.accel_rad_s2.push(acc);
         out.stuck.push(s.stuck);
     };
-    // At sample 0 the contact is taken to balance the shaft (quasi-static start).
-    push(out, &s, k * s.twist_rad + c * (s.top_rad_s - s.bit_rad_s) - ca * s.bit_rad_s, 0.0);
-    for i in 1..samples {
+    if first == 0 {
+        s.top_rad_s = top_at(0, 0.0)?;
+        if s.stuck {
+            s.bit_rad_s = 0.0;
+        }
+        // At sample 0 the contact is taken to balance the shaft (quasi-static start).
+        push(out, s, k * s.twist_rad + c * (s.top_rad_s - s.bit_rad_s) - ca * s.bit_rad_s, 0.0);
+    }
+    for i in first.max(1)..samples {
         let (mut acc, mut fric) = (0.0, 0.0);
         for sub in 0..steps {
             let top = top_at(i, (sub as f64 + 0.5) / steps as f64)?;
@@ -623,7 +652,7 @@ pub fn simulate_implicit_into<F: ImplicitFriction>(
             });
         }
         s.top_rad_s = top_at(i, 0.0)?;
-        push(out, &s, fric, acc);
+        push(out, s, fric, acc);
     }
     Ok(())
 }
@@ -748,5 +777,31 @@ mod tests {
         assert!((min - (1.0 - amplitude)).abs() < 1e-3, "end of slip {min} vs {}", 1.0 - amplitude);
         let bad = Shaft { mid: Some(MidInertia { inertia_kgm2: 0.02, split: 0.5 }), ..shaft() };
         assert!(simulate_implicit(&bad, &LAW, Drive::ConstantSpeed(0.2), start, FS, 10, 1).is_err());
+    }
+
+    #[test]
+    fn an_implicit_run_made_in_pieces_is_the_run_made_at_once() {
+        // Stick-slip with rate and state (a friction state carried across the
+        // pieces) and with Coulomb (the stuck flag): every channel bit for bit.
+        let sh = Shaft { twist_damping_nm_s_rad: 0.0, ..shaft() };
+        let rs = RateStateAgeing { normal_nm: 1.0, mu0: 1.0, a: 0.01, b: 0.015, dc_rad: 1e-3, v_ref_rad_s: 0.1 };
+        let drive = Drive::ConstantSpeed(0.2);
+        let start =
+            OneDofState { stuck: true, twist_rad: 0.5, friction_state: rs.initial_state(0.2), ..Default::default() };
+        let whole = simulate_implicit(&sh, &rs, drive, start, FS, 9_000, 4).unwrap();
+        let (mut run, mut state) = (OneDofRun::default(), start);
+        for n in [2, 1_000, 1_001, 5_000, 9_000] {
+            simulate_implicit_extend(&sh, &rs, drive, &mut state, FS, n, 4, &mut run).unwrap();
+            assert_eq!(run.twist_rad.len(), n);
+        }
+        assert_eq!(run, whole);
+        let (lo, hi) = whole.bit_rad_s.iter().fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(*v), h.max(*v)));
+        assert!(hi - lo > 0.1, "the bit's speed moves: {lo}..{hi}");
+        let whole = simulate_implicit(&sh, &LAW, drive, start, FS, 6_000, 4).unwrap();
+        let (mut run, mut state) = (OneDofRun::default(), start);
+        for n in [3_000, 6_000] {
+            simulate_implicit_extend(&sh, &LAW, drive, &mut state, FS, n, 4, &mut run).unwrap();
+        }
+        assert_eq!(run, whole);
     }
 }

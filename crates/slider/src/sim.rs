@@ -148,8 +148,29 @@ pub fn simulate(law: &Law, s: &Setup) -> Result<Vec<f64>, ModelError> {
 /// An error is one_dof's refusal: a set-up out of range, or a law whose
 /// simulation left the physical range.
 pub fn simulate_into(law: &Law, s: &Setup, run: &mut OneDofRun, out: &mut Vec<f64>) -> Result<(), ModelError> {
-    let n_out = (s.duration_s * s.sample_rate_hz).floor() as usize;
     out.clear();
+    simulate_more(law, s, run, &mut OneDofState::default(), out)
+}
+
+/// [`simulate_into`] continued: `out` and `run` (as a call of this with the
+/// same law and set-up but a shorter `duration_s` left them, or empty: a
+/// run from the start) grow to `s.duration_s` from `state` (the state at
+/// their last sample, which this keeps). The steps do not depend on the
+/// duration (an integer number per sample, from the natural period and the
+/// rate), so a stretch lengthened piece by piece is bit for bit the one
+/// simulated at once (`one_dof::simulate_implicit_extend`): a caller that
+/// lengthens a stretch pays for the added samples only.
+pub fn simulate_more(
+    law: &Law,
+    s: &Setup,
+    run: &mut OneDofRun,
+    state: &mut OneDofState,
+    out: &mut Vec<f64>,
+) -> Result<(), ModelError> {
+    let n_out = (s.duration_s * s.sample_rate_hz).floor() as usize;
+    if n_out < 2 || out.len() < 2 {
+        out.clear();
+    }
     if n_out < 2 {
         out.extend(std::iter::repeat_n(s.initial_force_over_weight, n_out));
         return Ok(());
@@ -167,16 +188,25 @@ pub fn simulate_into(law: &Law, s: &Setup, run: &mut OneDofRun, out: &mut Vec<f6
         mid: None,
     };
     let contact = Contact { law: *law, weight_n };
-    let start = OneDofState {
-        twist_rad: s.initial_force_over_weight * weight_n / chain_n_m,
-        stuck: true,
-        friction_state: contact.initial_state(s.drive_speed_m_s),
-        ..OneDofState::default()
-    };
+    if out.is_empty() {
+        *state = OneDofState {
+            twist_rad: s.initial_force_over_weight * weight_n / chain_n_m,
+            stuck: true,
+            friction_state: contact.initial_state(s.drive_speed_m_s),
+            ..OneDofState::default()
+        };
+        for ch in
+            [&mut run.bit_rad_s, &mut run.top_rad_s, &mut run.twist_rad, &mut run.friction_nm, &mut run.accel_rad_s2]
+        {
+            ch.clear();
+        }
+        run.stuck.clear();
+    }
     let drive = Drive::ConstantSpeed(s.drive_speed_m_s);
-    one_dof::simulate_implicit_into(&shaft, &contact, drive, start, s.sample_rate_hz, n_out, sub, run)?;
+    let from = out.len();
+    one_dof::simulate_implicit_extend(&shaft, &contact, drive, state, s.sample_rate_hz, n_out, sub, run)?;
     let to_fw = chain_n_m / weight_n;
-    out.extend(run.twist_rad.iter().map(|x| to_fw * x));
+    out.extend(run.twist_rad[from..].iter().map(|x| to_fw * x));
     Ok(())
 }
 

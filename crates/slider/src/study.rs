@@ -18,10 +18,10 @@ use crate::features::{FeatureOptions, Features, Regime, RunConstants, Spread, fe
 use crate::fit::{
     CANDIDATES, Candidate, Model, SETUPS, SetupCandidate, StartHints, critical_stiffness_guess_n_m, fit, run_misfit,
 };
-use crate::sim::{Setup, simulate_into};
+use crate::sim::{Setup, simulate_more};
 use rayon::prelude::*;
 use rig_ingest::slider::{SliderRun, read_slider_folder};
-use rig_model::one_dof::OneDofRun;
+use rig_model::one_dof::{OneDofRun, OneDofState};
 use rig_types::select::{self as engine, Comparison, Fold};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -373,10 +373,13 @@ pub fn predict(model: Model, x: &[f64], m: &Measured, p: &StudyParams) -> Featur
     if let (crate::sim::Law::Track(t), _) = model.law(x) {
         window = window.max(t.min_window_s(m.drive_speed_um_s * 1e-6)).min(cap);
     }
+    // The first stretch from the start; a longer one continues it (bit for
+    // bit the stretch simulated at once: `sim::simulate_more`).
+    SCRATCH.with_borrow_mut(|(_, _, force, _)| force.clear());
     loop {
-        let f = SCRATCH.with_borrow_mut(|(run, force, time)| {
+        let f = SCRATCH.with_borrow_mut(|(run, state, force, time)| {
             // A law whose simulation leaves the physical range predicts nothing: no slip.
-            let Ok(skip) = simulate_window(model, x, m, p, window, run, force) else {
+            let Ok(skip) = simulate_window(model, x, m, p, window, run, state, force) else {
                 return Features::default_steady();
             };
             time.clear();
@@ -397,14 +400,15 @@ pub fn predict(model: Model, x: &[f64], m: &Measured, p: &StudyParams) -> Featur
 }
 
 thread_local! {
-    /// Each thread's simulation buffers (one_dof run, force over weight, time), reused across evaluations.
-    static SCRATCH: std::cell::RefCell<(OneDofRun, Vec<f64>, Vec<f64>)> = Default::default();
+    /// Each thread's simulation buffers (one_dof run, its state at the last
+    /// sample, force over weight, time), reused across evaluations.
+    static SCRATCH: std::cell::RefCell<(OneDofRun, OneDofState, Vec<f64>, Vec<f64>)> = Default::default();
 }
 
 /// The simulated force of `cand` at run `m` after its warm-up, thinned to about `points` (for figures).
 pub fn predict_trace(model: Model, x: &[f64], m: &Measured, p: &StudyParams, points: usize) -> (Vec<f64>, Vec<f64>) {
-    let (mut run, mut f) = (OneDofRun::default(), Vec::new());
-    let Ok(skip) = simulate_window(model, x, m, p, window_s(m, p), &mut run, &mut f) else {
+    let (mut run, mut state, mut f) = (OneDofRun::default(), OneDofState::default(), Vec::new());
+    let Ok(skip) = simulate_window(model, x, m, p, window_s(m, p), &mut run, &mut state, &mut f) else {
         return (Vec::new(), Vec::new());
     };
     let step = ((f.len() - skip) / points.max(1)).max(1);
@@ -413,7 +417,10 @@ pub fn predict_trace(model: Model, x: &[f64], m: &Measured, p: &StudyParams, poi
 }
 
 /// Simulates `window` s of run `m` after a warm-up of `warmup_fraction` of it
-/// into `force`; returns the number of warm-up samples at its start.
+/// into `force`; returns the number of warm-up samples at its start. An
+/// empty `force` starts from rest; one a shorter call left (with `run` and
+/// `state`) is continued ([`simulate_more`]).
+#[allow(clippy::too_many_arguments)]
 fn simulate_window(
     model: Model,
     x: &[f64],
@@ -421,6 +428,7 @@ fn simulate_window(
     p: &StudyParams,
     window: f64,
     run: &mut OneDofRun,
+    state: &mut OneDofState,
     force: &mut Vec<f64>,
 ) -> Result<usize, rig_model::ModelError> {
     let warmup_s = p.warmup_fraction * window;
@@ -436,7 +444,7 @@ fn simulate_window(
         steps_per_period: p.steps_per_period,
         initial_force_over_weight: law.sliding_level(),
     };
-    simulate_into(&law, &setup, run, force)?;
+    simulate_more(&law, &setup, run, state, force)?;
     Ok(((warmup_s * m.sample_rate_hz).round() as usize).min(force.len()))
 }
 
@@ -472,9 +480,19 @@ fn fit_on(model: Model, runs: &[Measured], train: &[usize], nested: Option<&Fitt
         .min_by(|a, b| a.drive_speed_um_s.total_cmp(&b.drive_speed_um_s))
         .map(|r| (r.stiffness_n_m / weight_n, r.drive_speed_um_s * 1e-6, r.features.period_s.median));
     let hints = StartHints { mu, kc_over_weight_per_m: kc, period_ratio, stiffest_n_m: stiffest, creep };
+    // Each point costed once per fit: Nelder–Mead re-evaluates its start
+    // (scored among the starts) and, clamped at a bound, may step onto a
+    // point it has costed (the same bits, the same simulations, the same value).
+    let costed: std::cell::RefCell<Vec<(Vec<u64>, f64)>> = Default::default();
     let cost = |x: &[f64]| {
+        let key: Vec<u64> = x.iter().map(|v| v.to_bits()).collect();
+        if let Some(&(_, c)) = costed.borrow().iter().find(|(k, _)| *k == key) {
+            return c;
+        }
         let m: Vec<f64> = on.par_iter().map(|r| run_misfit(&r.features, &predict(model, x, r, p))).collect();
-        m.iter().sum::<f64>() / m.len() as f64
+        let c = m.iter().sum::<f64>() / m.len() as f64;
+        costed.borrow_mut().push((key, c));
+        c
     };
     let specs = model.params();
     // Multi-start: every start scored, Nelder–Mead from the best
