@@ -93,6 +93,11 @@ pub struct StageDecl {
     /// it, and stages listing it in `after` read its last outputs. No stage
     /// that is not on demand may read its outputs as `inputs`.
     pub on_demand: bool,
+    /// Stages whose params (with their `[shared.<name>]` tables) this stage
+    /// gets as `[stage.params.<stage>]` (`params_of`): a stage that reruns
+    /// another stages' chain (the confusion battery: calibration, estimation,
+    /// diagnosis) runs it with their options, and its key covers them.
+    pub params_of: Vec<String>,
     pub params: toml::Table,
 }
 
@@ -162,6 +167,9 @@ struct RawStage {
     /// Names of `[shared.<name>]` tables handed to this stage as `params.<name>`.
     #[serde(default)]
     shared: Vec<String>,
+    /// Names of stages whose params are handed to this stage as `params.<stage>`.
+    #[serde(default)]
+    params_of: Vec<String>,
     #[serde(default)]
     params: toml::Table,
 }
@@ -214,14 +222,46 @@ impl PipelineConfig {
                     code: s.code.iter().chain(common_code.iter().filter(|c| !s.code.contains(c))).cloned().collect(),
                     optional: s.optional,
                     on_demand: s.on_demand,
+                    params_of: s.params_of,
                     params: s.params,
                 })
             })
             .collect::<Result<Vec<_>, PipelineError>>()?;
-        let config =
+        let mut config =
             PipelineConfig { path: path.to_path_buf(), root: root.to_path_buf(), settings: raw.settings, stages };
+        for s in &config.stages {
+            for other in &s.params_of {
+                let reason = match config.stage(other) {
+                    None => Some(format!("params_of = [\"{other}\"]: no stage named {other}")),
+                    Some(o) if !o.params_of.is_empty() => {
+                        Some(format!("params_of = [\"{other}\"]: stage {other} has params_of itself (one level only)"))
+                    }
+                    Some(_) if s.params.contains_key(other) => {
+                        Some(format!("[stage.params] {other}: the params of stage {other} come from params_of"))
+                    }
+                    Some(_) => None,
+                };
+                if let Some(reason) = reason {
+                    return Err(config.err(&s.name, reason));
+                }
+            }
+        }
+        config.hand_over_params();
         config.validate(registry)?;
         Ok(config)
+    }
+
+    /// Copies the params of every stage named in a `params_of` into the
+    /// listing stage's `[stage.params.<stage>]`; run again after a `--set`,
+    /// so the copy is what the named stage runs.
+    pub(crate) fn hand_over_params(&mut self) {
+        let copies: Vec<(usize, String, toml::Table)> = (self.stages.iter().enumerate())
+            .flat_map(|(i, s)| s.params_of.iter().map(move |o| (i, o.clone())))
+            .filter_map(|(i, o)| self.stage(&o).map(|d| (i, o, d.params.clone())))
+            .collect();
+        for (i, name, params) in copies {
+            self.stages[i].params.insert(name, toml::Value::Table(params));
+        }
     }
 
     pub fn stage(&self, name: &str) -> Option<&StageDecl> {

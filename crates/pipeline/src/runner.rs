@@ -297,6 +297,7 @@ impl Runner {
             reason: format!("--set {stage}.{key}: no such stage"),
         })?;
         decl.params.insert(key.to_string(), parsed);
+        self.config.hand_over_params();
         Ok(self)
     }
 
