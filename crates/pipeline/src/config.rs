@@ -98,6 +98,11 @@ pub struct StageDecl {
     /// another stages' chain (the confusion battery: calibration, estimation,
     /// diagnosis) runs it with their options, and its key covers them.
     pub params_of: Vec<String>,
+    /// CPU seconds the stage takes alone (`cpu_s`, measured with `--jobs 1`;
+    /// 0 when not given): only the schedule reads it, to start the longest
+    /// remaining path first ([`PipelineConfig::path_cpu_s`]); no key covers it
+    /// and no output depends on it.
+    pub cpu_s: f64,
     pub params: toml::Table,
 }
 
@@ -170,6 +175,9 @@ struct RawStage {
     /// Names of stages whose params are handed to this stage as `params.<stage>`.
     #[serde(default)]
     params_of: Vec<String>,
+    /// CPU seconds alone, for the schedule.
+    #[serde(default)]
+    cpu_s: f64,
     #[serde(default)]
     params: toml::Table,
 }
@@ -223,6 +231,7 @@ impl PipelineConfig {
                     optional: s.optional,
                     on_demand: s.on_demand,
                     params_of: s.params_of,
+                    cpu_s: s.cpu_s,
                     params: s.params,
                 })
             })
@@ -268,6 +277,25 @@ impl PipelineConfig {
         self.stages.iter().find(|s| s.name == name)
     }
 
+    /// Each stage's longest remaining path, in CPU seconds: its own `cpu_s`
+    /// plus the longest path of the stages that depend on it (`inputs` and
+    /// `after`). The runner starts the ready stage with the longest first
+    /// (declaration order on a tie), so the critical path is never queued
+    /// behind shorter work.
+    pub fn path_cpu_s(&self) -> std::collections::BTreeMap<String, f64> {
+        let mut path = std::collections::BTreeMap::new();
+        let order = crate::graph::topological_order(self).unwrap_or_default();
+        for name in order.iter().rev() {
+            let own = self.stage(name).map_or(0.0, |s| s.cpu_s);
+            let after = (self.stages.iter())
+                .filter(|s| s.dependencies().contains(name))
+                .filter_map(|s| path.get(&s.name).copied())
+                .fold(0.0, f64::max);
+            path.insert(name.clone(), own + after);
+        }
+        path
+    }
+
     fn err(&self, stage: &str, reason: String) -> PipelineError {
         PipelineError::Config { path: self.path.clone(), stage: Some(stage.to_string()), reason }
     }
@@ -282,6 +310,9 @@ impl PipelineConfig {
             }
             if s.outputs.is_empty() {
                 return Err(self.err(&s.name, "declares no outputs".into()));
+            }
+            if !(s.cpu_s.is_finite() && s.cpu_s >= 0.0) {
+                return Err(self.err(&s.name, format!("cpu_s = {}: must be a finite number >= 0", s.cpu_s)));
             }
             for o in &s.outputs {
                 let (OutputPattern::Exact(p) | OutputPattern::Prefix(p)) = o;
