@@ -7,7 +7,7 @@
 //! it trusts the folder (it is not a validator).
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use rig_diagnose::{DiagnoseOptions, diagnose_campaign};
+use rig_diagnose::{BlindChain, diagnose_campaign};
 use rig_types::{Campaign, RigInfo, Run, RunData, RunKind};
 use std::path::{Path, PathBuf};
 
@@ -68,7 +68,7 @@ fn bench(c: &mut Criterion) {
         .map(PathBuf::from)
         .unwrap_or_else(|_| Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/emulated-rig-2026"));
     let campaign = read(&dir);
-    let opts = DiagnoseOptions::from_pipeline_toml(include_str!("../../../pipeline.toml")).expect("pipeline.toml");
+    let chain = BlindChain::from_pipeline_toml(include_str!("../../../pipeline.toml")).expect("pipeline.toml");
     // The thesis' published values as the thesis-tables stage wrote them
     // (reports/data/thesis.json): with them the chain estimates the baseline
     // and runs every check and both free runs, as the diagnosis stage does.
@@ -80,7 +80,7 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("diagnose");
     g.sample_size(10);
     g.bench_function("30-run campaign, blind, with baseline estimate and every check", |b| {
-        b.iter(|| diagnose_campaign(&campaign, Some(&thesis), &opts).expect("diagnosis"))
+        b.iter(|| diagnose_campaign(&campaign, Some(&thesis), &chain).expect("diagnosis"))
     });
     g.finish();
 }

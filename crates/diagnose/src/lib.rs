@@ -214,32 +214,90 @@ pub struct DiagnoseOptions {
 impl DiagnoseOptions {
     /// The `[stage.params]` of the stage named `diagnosis` in a pipeline.toml text.
     pub fn from_pipeline_toml(text: &str) -> Result<Self, String> {
-        #[derive(serde::Deserialize)]
-        struct Stage {
-            name: String,
-            params: Option<toml::Value>,
-            #[serde(default)]
-            shared: Vec<String>,
-        }
-        #[derive(serde::Deserialize)]
-        struct File {
-            stage: Vec<Stage>,
-            #[serde(default)]
-            shared: toml::Table,
-        }
-        let f: File = toml::from_str(text).map_err(|e| format!("pipeline.toml: {e}"))?;
-        let st = f.stage.into_iter().find(|s| s.name == "diagnosis").ok_or("pipeline.toml: no stage `diagnosis`")?;
-        let mut params = st.params.ok_or("pipeline.toml: stage diagnosis has no [stage.params]")?;
-        // The runner hands each listed [shared.<name>] table to the stage as
-        // [stage.params.<name>]; the same here.
-        for name in &st.shared {
-            let table = f.shared.get(name).ok_or_else(|| format!("pipeline.toml: no [shared.{name}]"))?;
-            if let toml::Value::Table(t) = &mut params {
-                t.insert(name.clone(), table.clone());
-            }
-        }
-        params.try_into().map_err(|e| format!("pipeline.toml: stage diagnosis: [stage.params]: {e}"))
+        stage_params(text, "diagnosis")
     }
+}
+
+/// The blind chain's options — calibrate → estimate → diagnose, what
+/// [`diagnose_campaign`] runs — as the DAG's `campaign-calibration`,
+/// `estimation` and `diagnosis` stages run them: their `[stage.params]` in
+/// pipeline.toml (the one home of every default), with the `[shared.<name>]`
+/// tables each lists. The confusion stage gets them from the runner's parsed
+/// config (`params_of`); tests, benches and examples from the same file
+/// with [`BlindChain::from_pipeline_toml`]. Field names are the stage names.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BlindChain {
+    /// `campaign-calibration`'s params.
+    #[serde(rename = "campaign-calibration")]
+    pub calibration: rig_calibrate::CalibrationSettings,
+    /// `estimation`'s params (mapped onto `EstimateOptions` by
+    /// [`rig_estimate::EstimateParams::options`], as the stage does).
+    pub estimation: rig_estimate::EstimateParams,
+    /// `diagnosis`'s params.
+    pub diagnosis: DiagnoseOptions,
+}
+
+impl BlindChain {
+    /// The three stages' params in a pipeline.toml text.
+    pub fn from_pipeline_toml(text: &str) -> Result<Self, String> {
+        Ok(BlindChain {
+            calibration: stage_params(text, "campaign-calibration")?,
+            estimation: stage_params(text, "estimation")?,
+            diagnosis: stage_params(text, "diagnosis")?,
+        })
+    }
+
+    /// The chain's first two links: the campaign's calibration and, when the
+    /// thesis' Table 4.4 is given to start from, the estimated baseline (or
+    /// why the estimate failed: [`diagnose_campaign`] reports that as data).
+    pub fn calibrate_and_estimate(
+        &self,
+        c: &rig_types::Campaign,
+        thesis: Option<&rig_calibrate::ThesisData>,
+    ) -> Result<Baseline, DiagnoseError> {
+        let cal = rig_calibrate::calibrate_campaign_with(c, &self.calibration)
+            .map_err(|e| DiagnoseError::Calibration(e.to_string()))?;
+        let baseline = thesis.map(|t| {
+            let o = self.estimation.options(rig_estimate::InitialValues::from_thesis_data(t));
+            rig_estimate::estimate_rig(c, &cal, &o).map(|e| e.params)
+        });
+        Ok((cal, baseline))
+    }
+}
+
+/// A campaign's calibration and its estimated baseline (`None`: no thesis
+/// values to start from), as [`BlindChain::calibrate_and_estimate`] gives them.
+pub type Baseline =
+    (rig_calibrate::CampaignCalibration, Option<Result<rig_types::RigParams, rig_estimate::EstimateError>>);
+
+/// The `[stage.params]` of stage `name` in a pipeline.toml text, with the
+/// `[shared.<name>]` tables it lists, as the runner hands them over
+/// (`rig_pipeline`'s config; a test there checks the two agree).
+fn stage_params<T: serde::de::DeserializeOwned>(text: &str, name: &str) -> Result<T, String> {
+    #[derive(serde::Deserialize)]
+    struct Stage {
+        name: String,
+        params: Option<toml::Value>,
+        #[serde(default)]
+        shared: Vec<String>,
+    }
+    #[derive(serde::Deserialize)]
+    struct File {
+        stage: Vec<Stage>,
+        #[serde(default)]
+        shared: toml::Table,
+    }
+    let f: File = toml::from_str(text).map_err(|e| format!("pipeline.toml: {e}"))?;
+    let st = f.stage.into_iter().find(|s| s.name == name).ok_or_else(|| format!("pipeline.toml: no stage `{name}`"))?;
+    let mut params = st.params.ok_or_else(|| format!("pipeline.toml: stage {name} has no [stage.params]"))?;
+    for shared in &st.shared {
+        let table = f.shared.get(shared).ok_or_else(|| format!("pipeline.toml: no [shared.{shared}]"))?;
+        if let toml::Value::Table(t) = &mut params {
+            t.insert(shared.clone(), table.clone());
+        }
+    }
+    params.try_into().map_err(|e| format!("pipeline.toml: stage {name}: [stage.params]: {e}"))
 }
 
 /// Why a diagnosis could not be made.
@@ -485,24 +543,24 @@ pub fn diagnose(
     Ok(d)
 }
 
-/// The whole blind chain on a campaign: calibrate (rig-calibrate) → estimate
-/// the baseline rig model (rig-estimate, started from the thesis' Table 4.4
-/// when `thesis` is given, as the estimation stage does) → diagnose.
-/// Reads nothing but the campaign (recordings + campaign.toml) and the
-/// published thesis values. The verdict does not depend on the estimate:
-/// the candidates are compared on teacher-forced channels whose baseline
+/// The whole blind chain on a campaign, with the DAG's options ([`BlindChain`]):
+/// calibrate (`rig_calibrate::calibrate_campaign_with`, as the
+/// `campaign-calibration` stage) → estimate the baseline rig model
+/// (`rig_estimate::estimate_rig` with [`rig_estimate::EstimateParams::options`]
+/// started from the thesis' Table 4.4 when `thesis` is given, as the
+/// `estimation` stage) → [`diagnose`] (as the `diagnosis` stage). Reads
+/// nothing but the campaign (recordings + campaign.toml) and the published
+/// thesis values. The verdict does not depend on the estimate: the
+/// candidates are compared on teacher-forced channels whose baseline
 /// coefficients are refitted on the same runs (crate docs); the estimated
 /// model gives the free-run feature comparison. A failed estimate is
 /// reported as data (no free-run features), not an error.
 pub fn diagnose_campaign(
     c: &rig_types::Campaign,
     thesis: Option<&rig_calibrate::ThesisData>,
-    opts: &DiagnoseOptions,
+    chain: &BlindChain,
 ) -> Result<Diagnosis, DiagnoseError> {
-    let cal = rig_calibrate::calibrate_campaign(c).map_err(|e| DiagnoseError::Calibration(e.to_string()))?;
-    let baseline = thesis.and_then(|t| {
-        let o = rig_estimate::EstimateOptions::new(rig_estimate::InitialValues::from_thesis_data(t));
-        rig_estimate::estimate_rig(c, &cal, &o).ok().map(|e| e.params)
-    });
-    diagnose(c, &cal, baseline.as_ref(), thesis.map(|t| t.friction.mu_dynamic), opts)
+    let (cal, baseline) = chain.calibrate_and_estimate(c, thesis)?;
+    let baseline = baseline.and_then(Result::ok);
+    diagnose(c, &cal, baseline.as_ref(), thesis.map(|t| t.friction.mu_dynamic), &chain.diagnosis)
 }

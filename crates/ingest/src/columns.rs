@@ -8,8 +8,10 @@
 //! of nulls and cannot say which line a bad cell came from). polars then
 //! parses every column with its final type (`Float64` or `Int64`) with
 //! `ignore_errors`, so an unparsable or missing cell becomes a null whose row
-//! points back at the raw text for the message. Per-line cell counts are only
-//! scanned once polars has reported a problem, to keep the common path fast.
+//! points back at the raw text for the message. Cells per line are checked
+//! before polars by one count of the file's commas; per-line counts are only
+//! scanned when that count or polars reports a problem, to keep the common
+//! path fast.
 
 use crate::IngestError;
 use polars::prelude::{CsvReadOptions, DataType, Field, Schema, SerReader};
@@ -95,9 +97,10 @@ impl<'a> Lines<'a> {
 ///
 /// Rules, checked in this order: UTF-8 text; a header row naming each column
 /// of `spec` once and nothing else; at least one data row; no empty line;
-/// then the earliest row (leftmost column first) with a wrong number of
-/// cells, a missing cell, text, or a non-finite value (a row with too *many*
-/// cells is reported before any cell fault: polars refuses the whole file);
+/// then the earliest row with a wrong number of cells (too many, trailing
+/// empty cells included, or too few; reported before any cell fault), then
+/// the earliest row (leftmost column first) with a missing cell, text, or a
+/// non-finite value;
 /// then `time_s` starting at 0 (for [`TimeStart::Zero`]) and strictly increasing.
 pub(crate) fn read_numeric_csv(
     path: &Path,
@@ -118,6 +121,18 @@ pub(crate) fn read_numeric_csv(
     };
     let lines = Lines::new(text);
     let header = check_structure(path, &lines, spec)?;
+    // Every line has as many cells as the header: one count of the commas of
+    // the whole text (a vectorised byte scan) against lines × (cells − 1);
+    // only on a mismatch are lines counted one by one. polars would drop a
+    // row's trailing empty cells (`0.2,70,`) without a word, a cell the
+    // format does not describe.
+    let commas = text.bytes().filter(|&b| b == b',').count();
+    if commas != lines.len() * (header.len() - 1) {
+        return Err(ragged_row(path, &lines, header.len()).unwrap_or_else(|| IngestError::Csv {
+            file: path.to_path_buf(),
+            message: "the comma count disagrees with the cells per line".into(),
+        }));
+    }
 
     // Map header position -> spec entry, then give polars the schema in file order.
     let schema = Schema::from_iter(header.iter().map(|&k| {
@@ -137,7 +152,8 @@ pub(crate) fn read_numeric_csv(
         .into_reader_with_file_handle(Cursor::new(bytes.as_slice()))
         .finish()
         .map_err(|e| {
-            // polars refuses rows with too many cells without saying where: find the line.
+            // polars refuses a row with too many cells without saying where (its
+            // extra cells balanced by a short row elsewhere): find the line.
             ragged_row(path, &lines, header.len())
                 .unwrap_or_else(|| IngestError::Csv { file: path.to_path_buf(), message: e.to_string() })
         })?;
@@ -193,8 +209,9 @@ pub(crate) fn read_numeric_csv(
         by_file_pos.push(values);
     }
     if let Some((row, pos, fault)) = first_bad {
-        // A row with too few cells reads as nulls in its last columns.
-        if let Some(e) = ragged_line(path, &lines, row + 1, header.len()) {
+        // A row with too few cells reads as nulls in its last columns; with the
+        // comma count right, an earlier row may hold its missing cells.
+        if let Some(e) = (1..=row + 1).find_map(|k| ragged_line(path, &lines, k, header.len())) {
             return Err(e);
         }
         let col = spec[header[pos]];
@@ -269,7 +286,7 @@ fn check_structure(path: &Path, lines: &Lines<'_>, spec: &[ColSpec]) -> Result<V
     }
     // Blank lines would shift the row -> line mapping (polars reads them as
     // rows of nulls); a line of just `\n` or `\r\n` is at most 2 bytes long.
-    // Cell counts are checked later, off the fast path (see `ragged_row`).
+    // Cell counts are checked next, by one comma count (see `read_numeric_csv`).
     for k in 1..lines.len() {
         let next = lines.starts.get(k + 1).copied().unwrap_or(lines.text.len());
         if next - lines.starts[k] <= 2 && lines.get(k).is_empty() {
@@ -281,7 +298,7 @@ fn check_structure(path: &Path, lines: &Lines<'_>, spec: &[ColSpec]) -> Result<V
 }
 
 /// The first data line whose cell count differs from the header's, if any
-/// (a full scan: only run once polars has reported a problem).
+/// (a full scan: only run once the comma count has found a problem).
 fn ragged_row(path: &Path, lines: &Lines<'_>, n_cells: usize) -> Option<IngestError> {
     (1..lines.len()).find_map(|k| ragged_line(path, lines, k, n_cells))
 }

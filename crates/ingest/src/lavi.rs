@@ -2,8 +2,10 @@
 //! (../shared/data/ufrj-lavi-2018/run-175.csv, Real et al. 2018) as plain columns.
 //!
 //! Validated like a campaign run (header with exactly these columns in any
-//! order, every cell a finite number, `time_s` strictly increasing) but the
-//! recording need not start at t = 0. The top speed's dips (to about
+//! order, every row as many cells as the header — a trailing empty cell is
+//! refused —, every cell a finite number, `time_s` strictly increasing) but
+//! the recording need not start at t = 0. The reader opens the one file it is
+//! given, so no other file of its folder can be skipped unseen. The top speed's dips (to about
 //! -263 rpm, about 10 ms each) are finite numbers and are kept: they carry
 //! angle (the twist integrated from the raw top and bit speeds stays within
 //! about ±0.5 rad, README of the data), and any repair is the analysis' job,
@@ -62,4 +64,32 @@ pub fn read_lavi(path: &Path) -> Result<LaviRecording, IngestError> {
         bit_torque_nm: next(),
         wob_n: next(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const HEADER: &str = "time_s,top_speed_rpm,bit_speed_rpm,bit_torque_nm,wob_n\n";
+
+    fn read(rows: &str) -> Result<LaviRecording, IngestError> {
+        let d = tempfile::tempdir().unwrap();
+        let path = d.path().join("run.csv");
+        std::fs::write(&path, format!("{HEADER}{rows}")).unwrap();
+        read_lavi(&path)
+    }
+
+    #[test]
+    fn reads_a_recording_that_starts_anywhere() {
+        let r = read("12.000,60.0,0.0,1.5,900\n12.001,-263.0,0.1,1.6,901\n").unwrap();
+        assert_eq!(r.time_s, vec![12.0, 12.001]);
+        assert_eq!(r.top_speed_rpm, vec![60.0, -263.0]);
+    }
+
+    #[test]
+    fn a_trailing_empty_cell_names_file_line_and_rule() {
+        let e = read("12.000,60.0,0.0,1.5,900\n12.001,61.0,0.1,1.6,901,\n").unwrap_err();
+        assert_eq!(e.line(), Some(3));
+        assert!(e.to_string().ends_with("run.csv:3: row has 6 cells but the header has 5"), "{e}");
+    }
 }

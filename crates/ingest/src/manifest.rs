@@ -149,6 +149,7 @@ pub(crate) fn read_manifest(dir: &Path) -> Result<Manifest, IngestError> {
         }
         runs.push(entry);
     }
+    refuse_undescribed(dir, &runs)?;
     Ok(Manifest { name: name.into_inner(), description: raw.description.unwrap_or_default(), rig, runs })
 }
 
@@ -270,6 +271,62 @@ fn resolve_file(file: &str, dir: &Path, canonical_dir: &Path) -> Result<PathBuf,
         return Err(format!("file {file:?} is not a regular file"));
     }
     Ok(joined)
+}
+
+/// No file the format does not describe where the reader would skip it
+/// silently: every entry of `runs/` (at any depth) is a listed run's file or
+/// a folder holding one, and every `.csv` file beside campaign.toml is a
+/// listed run's file. Other files beside campaign.toml (a README, a
+/// licence) are not recordings and are left alone: the spec's layout names
+/// campaign.toml and `runs/`, and lets a run's `file` be anywhere inside the
+/// folder. Entries are reported in name order, the first one refused.
+fn refuse_undescribed(dir: &Path, runs: &[RunEntry]) -> Result<(), IngestError> {
+    let plain = |p: &Path| p.components().filter(|c| !matches!(c, Component::CurDir)).collect::<PathBuf>();
+    let listed: Vec<PathBuf> = runs.iter().map(|r| plain(&r.file)).collect();
+    let rule = |rel: &Path, what: &str| {
+        IngestError::rule(
+            dir.join(rel),
+            None,
+            format!(
+                "{what} the format does not describe: a campaign's recordings are the CSV files its \
+                 campaign.toml lists ([[runs]] file), runs/ holds nothing else, and no run lists this one"
+            ),
+        )
+    };
+    let listing = |rel: &Path| -> Result<Vec<(PathBuf, bool)>, IngestError> {
+        let abs = dir.join(rel);
+        let io = |source| IngestError::Io { file: abs.clone(), rule: "cannot list the folder".into(), source };
+        let mut out = Vec::new();
+        for e in std::fs::read_dir(&abs).map_err(io)? {
+            let e = e.map_err(io)?;
+            out.push((rel.join(e.file_name()), e.file_type().map_err(io)?.is_dir()));
+        }
+        out.sort();
+        Ok(out)
+    };
+    for (rel, is_dir) in listing(Path::new(""))? {
+        let csv = rel.extension().is_some_and(|x| x.eq_ignore_ascii_case("csv"));
+        if csv && !is_dir && !listed.contains(&rel) {
+            return Err(rule(&rel, "a CSV file"));
+        }
+    }
+    let mut stack = vec![PathBuf::from("runs")];
+    if !dir.join("runs").is_dir() {
+        return Ok(()); // every run's file lies elsewhere in the folder
+    }
+    while let Some(folder) = stack.pop() {
+        for (rel, is_dir) in listing(&folder)? {
+            if listed.contains(&rel) {
+                continue;
+            }
+            if is_dir && listed.iter().any(|l| l.starts_with(&rel)) {
+                stack.push(rel);
+                continue;
+            }
+            return Err(rule(&rel, if is_dir { "a folder" } else { "a file" }));
+        }
+    }
+    Ok(())
 }
 
 /// A finite number (TOML float or integer) under `key`.

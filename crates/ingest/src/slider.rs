@@ -3,14 +3,18 @@
 //!
 //! Rules, checked in this order, the first broken one reported with file,
 //! line and rule:
-//! - the folder has a `runs/` subfolder holding at least one `.csv` file;
+//! - the folder has a `runs/` subfolder holding at least one `.csv` file and
+//!   nothing else (no other file, no folder: a run the reader would skip is
+//!   refused, not ignored; files beside `runs/`, a README or a licence, are
+//!   left alone);
 //! - every `.csv` file in `runs/` is named `k<k>-v<V>.csv`, `k` the spring
 //!   stiffness in N/m and `V` the driving speed in µm/s, both positive
 //!   numbers (`k168-v42.csv`); a (k, V) pair appears once;
 //! - each CSV: the header names exactly `time_s` and `force_over_weight`
 //!   (any order), every cell a finite number, `time_s` strictly increasing
-//!   (it need not start at 0: the acquisition clock), at least 2 rows
-//!   (the rules of [`crate::lavi`]'s reader, the same CSV code).
+//!   (it need not start at 0: the acquisition clock), every row as many
+//!   cells as the header (no trailing empty cell), at least 2 rows (the rules
+//!   of [`crate::lavi`]'s reader, the same CSV code).
 //!
 //! Force spikes (impulsive noise, occasionally below zero) are finite
 //! numbers and are kept: denoising is the analysis' job.
@@ -56,13 +60,28 @@ pub fn read_slider_folder(dir: &Path) -> Result<Vec<SliderRun>, IngestError> {
         rule: "a slider folder must hold a runs/ subfolder".into(),
         source,
     })?;
-    let mut files = Vec::new();
+    let (mut files, mut others) = (Vec::new(), Vec::new());
     for e in entries {
         let e = e.map_err(|source| IngestError::Io { file: runs_dir.clone(), rule: "listing runs/".into(), source })?;
         let path = e.path();
-        if path.extension().and_then(|x| x.to_str()) == Some("csv") {
+        let is_dir = e.file_type().map_err(|source| IngestError::Io {
+            file: path.clone(),
+            rule: "listing runs/".into(),
+            source,
+        })?;
+        if is_dir.is_dir() || path.extension().and_then(|x| x.to_str()) != Some("csv") {
+            others.push(path);
+        } else {
             files.push(path);
         }
+    }
+    others.sort();
+    if let Some(other) = others.first() {
+        return Err(IngestError::rule(
+            other,
+            None,
+            "a file the layout does not describe: runs/ holds only the runs, k<k>-v<V>.csv (k in N/m, V in µm/s)",
+        ));
     }
     files.sort();
     if files.is_empty() {
@@ -163,6 +182,30 @@ mod tests {
         let (f, l, m) = refuse(&[("k168-v42.csv", "time_s,force_over_weight\n1.0,0.3\n")]);
         assert_eq!((f.as_str(), l), ("k168-v42.csv", Some(2)));
         assert!(m.contains("at least 2"), "{m}");
+    }
+
+    #[test]
+    fn a_file_the_layout_does_not_describe_is_refused() {
+        let (f, l, m) = refuse(&[("k168-v42.csv", GOOD), ("notes.txt", "a note")]);
+        assert_eq!((f.as_str(), l), ("notes.txt", None));
+        assert!(m.contains("runs/ holds only the runs"), "{m}");
+
+        let d = folder(&[("k168-v42.csv", GOOD)]);
+        std::fs::create_dir(d.path().join("runs/old")).unwrap();
+        let e = read_slider_folder(d.path()).unwrap_err();
+        assert_eq!((e.file().file_name().unwrap().to_str(), e.line()), (Some("old"), None));
+
+        // Beside runs/, a README is documentation, not a run: left alone.
+        let d = folder(&[("k168-v42.csv", GOOD)]);
+        std::fs::write(d.path().join("README.md"), "# a slider").unwrap();
+        assert_eq!(read_slider_folder(d.path()).unwrap().len(), 1);
+    }
+
+    #[test]
+    fn a_trailing_empty_cell_is_refused() {
+        let (f, l, m) = refuse(&[("k168-v42.csv", "time_s,force_over_weight\n1.0,0.3\n1.1,0.3,\n")]);
+        assert_eq!((f.as_str(), l), ("k168-v42.csv", Some(3)));
+        assert!(m.contains("row has 3 cells but the header has 2"), "{m}");
     }
 
     #[test]

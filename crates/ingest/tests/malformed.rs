@@ -666,3 +666,99 @@ fn motor_voltage_beyond_the_supply() {
         "<c>/runs/op-01.csv:4: motor_voltage_v = -25.5 V is physically impossible: |motor_voltage_v| must be <= 25.2 V (the drive's supply, supply_voltage_v = 24)",
     );
 }
+
+// ---- files and cells the format does not describe ----
+
+#[test]
+fn trailing_empty_cell() {
+    check(
+        |f| edit(f, "runs/twist-1.csv", "0.0020,70\n", "0.0020,70,\n"),
+        "<c>/runs/twist-1.csv:3: row has 3 cells but the header has 2",
+    );
+}
+
+#[test]
+fn trailing_empty_cells_on_every_row() {
+    check(
+        |f| {
+            let t = f.get_mut("runs/step-6v.csv").unwrap();
+            *t = t.replace('\n', ",,\n");
+        },
+        "<c>/runs/step-6v.csv:1: unexpected column \"\" (the columns must be exactly: time_s, motor_voltage_v, motor_ticks, rotor_ticks)",
+    );
+}
+
+/// The first ragged row is reported: before a later bad cell, and also when
+/// its cell too many is balanced by a short row (the file's comma count right).
+#[test]
+fn the_first_ragged_row_is_reported() {
+    for later in ["0.0060,x,2,1,4.20", "0.0060,0.080,2,1"] {
+        check(
+            |f| {
+                edit(f, "runs/op-01.csv", "0.0020,0.021,0,0,3.16", "0.0020,0.021,0,0,3.16,");
+                edit(f, "runs/op-01.csv", "0.0060,0.080,2,1,4.20", later);
+            },
+            "<c>/runs/op-01.csv:3: row has 6 cells but the header has 5",
+        );
+    }
+}
+
+const UNDESCRIBED: &str = "the format does not describe: a campaign's recordings are the CSV files its campaign.toml \
+                           lists ([[runs]] file), runs/ holds nothing else, and no run lists this one";
+
+#[test]
+fn a_file_in_runs_no_run_lists() {
+    check(
+        |f| drop(f.insert("runs/notes.txt".into(), "taken on a Tuesday".into())),
+        &format!("<c>/runs/notes.txt: a file {UNDESCRIBED}"),
+    );
+}
+
+#[test]
+fn a_csv_in_runs_no_run_lists() {
+    check(
+        |f| drop(f.insert("runs/cal-9.csv".into(), "time_s,brake_force_mv\n0.0000,3.10\n".into())),
+        &format!("<c>/runs/cal-9.csv: a file {UNDESCRIBED}"),
+    );
+}
+
+#[test]
+fn a_folder_in_runs_no_run_lists() {
+    check_with(
+        |_| {},
+        |dir| std::fs::create_dir(dir.join("runs/old")).unwrap(),
+        &format!("<c>/runs/old: a folder {UNDESCRIBED}"),
+    );
+}
+
+#[test]
+fn a_csv_beside_campaign_toml_no_run_lists() {
+    check(
+        |f| drop(f.insert("op-02.csv".into(), "time_s,brake_force_mv\n0.0000,3.10\n".into())),
+        &format!("<c>/op-02.csv: a CSV file {UNDESCRIBED}"),
+    );
+}
+
+/// What the spec allows stays allowed: a run's file anywhere inside the
+/// folder (`file` is relative to the campaign folder), in a subfolder of
+/// runs/, and a README beside campaign.toml (documentation, not a recording).
+#[test]
+fn files_the_spec_allows_are_read() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut files = base();
+    let cal = files.remove("runs/cal-1.csv").unwrap();
+    files.insert("calibration/cal-1.csv".into(), cal);
+    let twist = files.remove("runs/twist-1.csv").unwrap();
+    files.insert("runs/static/twist-1.csv".into(), twist);
+    files.insert("README.md".into(), "# tiny\n".into());
+    edit(&mut files, "campaign.toml", "runs/cal-1.csv", "calibration/cal-1.csv");
+    edit(&mut files, "campaign.toml", "runs/twist-1.csv", "./runs/static/twist-1.csv");
+    for (name, text) in &files {
+        let path = tmp.path().join(name);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, text).unwrap();
+    }
+    let c = read_campaign(tmp.path()).unwrap();
+    assert_eq!(c.runs.len(), 5);
+    assert_eq!(c.runs[2].data.rotor_ticks.as_deref(), Some(&[70, 70, 71][..]));
+}

@@ -93,6 +93,16 @@ pub struct StageDecl {
     /// it, and stages listing it in `after` read its last outputs. No stage
     /// that is not on demand may read its outputs as `inputs`.
     pub on_demand: bool,
+    /// Stages whose params (with their `[shared.<name>]` tables) this stage
+    /// gets as `[stage.params.<stage>]` (`params_of`): a stage that reruns
+    /// another stages' chain (the confusion battery: calibration, estimation,
+    /// diagnosis) runs it with their options, and its key covers them.
+    pub params_of: Vec<String>,
+    /// CPU seconds the stage takes alone (`cpu_s`, measured with `--jobs 1`;
+    /// 0 when not given): only the schedule reads it, to start the longest
+    /// remaining path first ([`PipelineConfig::path_cpu_s`]); no key covers it
+    /// and no output depends on it.
+    pub cpu_s: f64,
     pub params: toml::Table,
 }
 
@@ -162,6 +172,12 @@ struct RawStage {
     /// Names of `[shared.<name>]` tables handed to this stage as `params.<name>`.
     #[serde(default)]
     shared: Vec<String>,
+    /// Names of stages whose params are handed to this stage as `params.<stage>`.
+    #[serde(default)]
+    params_of: Vec<String>,
+    /// CPU seconds alone, for the schedule.
+    #[serde(default)]
+    cpu_s: f64,
     #[serde(default)]
     params: toml::Table,
 }
@@ -214,18 +230,70 @@ impl PipelineConfig {
                     code: s.code.iter().chain(common_code.iter().filter(|c| !s.code.contains(c))).cloned().collect(),
                     optional: s.optional,
                     on_demand: s.on_demand,
+                    params_of: s.params_of,
+                    cpu_s: s.cpu_s,
                     params: s.params,
                 })
             })
             .collect::<Result<Vec<_>, PipelineError>>()?;
-        let config =
+        let mut config =
             PipelineConfig { path: path.to_path_buf(), root: root.to_path_buf(), settings: raw.settings, stages };
+        for s in &config.stages {
+            for other in &s.params_of {
+                let reason = match config.stage(other) {
+                    None => Some(format!("params_of = [\"{other}\"]: no stage named {other}")),
+                    Some(o) if !o.params_of.is_empty() => {
+                        Some(format!("params_of = [\"{other}\"]: stage {other} has params_of itself (one level only)"))
+                    }
+                    Some(_) if s.params.contains_key(other) => {
+                        Some(format!("[stage.params] {other}: the params of stage {other} come from params_of"))
+                    }
+                    Some(_) => None,
+                };
+                if let Some(reason) = reason {
+                    return Err(config.err(&s.name, reason));
+                }
+            }
+        }
+        config.hand_over_params();
         config.validate(registry)?;
         Ok(config)
     }
 
+    /// Copies the params of every stage named in a `params_of` into the
+    /// listing stage's `[stage.params.<stage>]`; run again after a `--set`,
+    /// so the copy is what the named stage runs.
+    pub(crate) fn hand_over_params(&mut self) {
+        let copies: Vec<(usize, String, toml::Table)> = (self.stages.iter().enumerate())
+            .flat_map(|(i, s)| s.params_of.iter().map(move |o| (i, o.clone())))
+            .filter_map(|(i, o)| self.stage(&o).map(|d| (i, o, d.params.clone())))
+            .collect();
+        for (i, name, params) in copies {
+            self.stages[i].params.insert(name, toml::Value::Table(params));
+        }
+    }
+
     pub fn stage(&self, name: &str) -> Option<&StageDecl> {
         self.stages.iter().find(|s| s.name == name)
+    }
+
+    /// Each stage's longest remaining path, in CPU seconds: its own `cpu_s`
+    /// plus the longest path of the stages that depend on it (`inputs` and
+    /// `after`). The runner starts the ready stage with the longest first
+    /// (declaration order on a tie), so the critical path is never queued
+    /// behind shorter work.
+    pub fn path_cpu_s(&self) -> std::collections::BTreeMap<String, f64> {
+        let mut path = std::collections::BTreeMap::new();
+        let order = crate::graph::topological_order(self).unwrap_or_default();
+        for name in order.iter().rev() {
+            let own = self.stage(name).map_or(0.0, |s| s.cpu_s);
+            let after = (self.stages.iter())
+                .filter(|s| s.dependencies().contains(name))
+                .filter_map(|s| path.get(&s.name).copied())
+                .fold(0.0, f64::max);
+            path.insert(name.clone(), own + after);
+        }
+        path
     }
 
     fn err(&self, stage: &str, reason: String) -> PipelineError {
@@ -242,6 +310,9 @@ impl PipelineConfig {
             }
             if s.outputs.is_empty() {
                 return Err(self.err(&s.name, "declares no outputs".into()));
+            }
+            if !(s.cpu_s.is_finite() && s.cpu_s >= 0.0) {
+                return Err(self.err(&s.name, format!("cpu_s = {}: must be a finite number >= 0", s.cpu_s)));
             }
             for o in &s.outputs {
                 let (OutputPattern::Exact(p) | OutputPattern::Prefix(p)) = o;

@@ -146,6 +146,8 @@ pub struct Runner {
     campaign: Option<PathBuf>,
     out: Option<PathBuf>,
     jobs: usize,
+    /// Ready stages start in declaration order, not longest remaining path first.
+    declaration_order: bool,
     dry_run: bool,
     only: Vec<String>,
     all: bool,
@@ -197,6 +199,7 @@ impl Runner {
             campaign: None,
             out: None,
             jobs: 2,
+            declaration_order: false,
             dry_run: false,
             only: Vec::new(),
             all: false,
@@ -297,7 +300,15 @@ impl Runner {
             reason: format!("--set {stage}.{key}: no such stage"),
         })?;
         decl.params.insert(key.to_string(), parsed);
+        self.config.hand_over_params();
         Ok(self)
+    }
+
+    /// Start ready stages in declaration order, ignoring `cpu_s` (to measure
+    /// the schedule against the longest-remaining-path-first default).
+    pub fn declaration_order(mut self, yes: bool) -> Self {
+        self.declaration_order = yes;
+        self
     }
 
     /// A progress bar on stderr (drawn only when stderr is a terminal).
@@ -402,17 +413,27 @@ impl Runner {
         // `.cache/` has none (a fresh clone), and entries kept for stages not run.
         let listed = manifest::load(&dirs.out);
         let mut done: BTreeMap<String, StageReport> = BTreeMap::new();
+        let path_cpu_s = if self.declaration_order { BTreeMap::new() } else { self.config.path_cpu_s() };
         std::thread::scope(|scope| {
             let (tx, rx) = mpsc::channel::<StageReport>();
             let mut pending: Vec<String> = order.clone();
             let mut running: BTreeSet<String> = BTreeSet::new();
             loop {
-                // Launch every ready stage while workers are free, in declaration order.
+                // Launch every ready stage while workers are free: the longest
+                // remaining path first (`cpu_s`), declaration order on a tie.
                 while running.len() < self.jobs {
-                    let ready = pending.iter().position(|n| {
+                    let is_ready = |n: &String| {
                         let decl = self.config.stage(n).expect("validated");
                         decl.dependencies().iter().all(|d| done.contains_key(d) || !selected.contains(d))
-                    });
+                    };
+                    let longest = |n: &String| path_cpu_s.get(n).copied().unwrap_or(0.0);
+                    let ready = (pending.iter().enumerate())
+                        .filter(|(_, n)| is_ready(n))
+                        .fold(None, |best: Option<(usize, f64)>, (i, n)| match best {
+                            Some((_, b)) if b >= longest(n) => best,
+                            _ => Some((i, longest(n))),
+                        })
+                        .map(|(i, _)| i);
                     let Some(i) = ready else { break };
                     let name = pending.remove(i);
                     let decl = self.config.stage(&name).expect("validated");

@@ -839,3 +839,38 @@ write = ["page.txt"]
     let kept = v["stages"]["slow"]["kept"].as_str().unwrap();
     assert!(kept.starts_with("stale, not rerun (input @b/b.txt changed)") && kept.contains("--only slow"), "{kept}");
 }
+
+/// The schedule starts the ready stage with the longest remaining path
+/// (`cpu_s`: its own CPU seconds plus the longest path after it) first: with
+/// one worker, `d` (5 s alone) before `a` and `b` (whose path through `c` is
+/// 0.2 + 3 s), then `a` before `b` (a tie: declaration order); without
+/// `cpu_s` the declaration order. The outputs do not depend on it.
+#[test]
+fn the_longest_remaining_path_starts_first() {
+    let starts = |stages: &str| {
+        let f = Fixture::new(stages);
+        f.runner().jobs(1).run().unwrap();
+        let ev: Vec<String> = events(&f.out()).into_iter().filter(|e| e.starts_with("start")).collect();
+        (ev, tree(&f.out()).into_iter().filter(|(k, _)| !k.starts_with(".cache")).collect::<BTreeMap<_, _>>())
+    };
+    let (plain, plain_out) = starts(DIAMOND);
+    assert_eq!(plain, ["start a", "start b", "start c", "start d"]);
+    let timed = DIAMOND
+        .replacen("name = \"a\"\n", "name = \"a\"\ncpu_s = 0.2\n", 1)
+        .replacen("name = \"b\"\n", "name = \"b\"\ncpu_s = 0.2\n", 1)
+        .replacen("name = \"c\"\n", "name = \"c\"\ncpu_s = 3.0\n", 1)
+        .replacen("name = \"d\"\n", "name = \"d\"\ncpu_s = 5.0\n", 1);
+    let (first, first_out) = starts(&timed);
+    assert_eq!(first, ["start d", "start a", "start b", "start c"]);
+    let manifest = |t: &BTreeMap<String, Vec<u8>>| t.iter().filter(|(k, _)| *k != "manifest.json").count();
+    assert_eq!(manifest(&plain_out), manifest(&first_out));
+    for (k, v) in &plain_out {
+        if k != "manifest.json" {
+            assert_eq!(first_out.get(k), Some(v), "{k}");
+        }
+    }
+    let bad = DIAMOND.replacen("name = \"d\"\n", "name = \"d\"\ncpu_s = -1.0\n", 1);
+    let f = Fixture::new(&bad);
+    let e = Runner::with_registry(&f.root().join("pipeline.toml"), registry).err().expect("refused").to_string();
+    assert!(e.contains("stage d") && e.contains("cpu_s = -1"), "{e}");
+}

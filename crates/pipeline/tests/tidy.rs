@@ -634,6 +634,70 @@ fn a_setting_declared_twice_is_seen() {
     assert!(declared_twice(fine).is_empty(), "{:?}", declared_twice(fine));
 }
 
+/// What breaks "no window is counted in samples in pipeline.toml" in a
+/// pipeline.toml text: a key of a stage that reads `{campaign}` (its params,
+/// nested tables and the `[shared.<name>]` tables it lists) whose name says
+/// window, half-width, segment or samples but is not in seconds (`*_s`).
+fn windows_in_samples(text: &str) -> Vec<String> {
+    fn walk(t: &toml::Table, at: &str, out: &mut Vec<String>) {
+        for (key, value) in t {
+            match value.as_table() {
+                Some(inner) => walk(inner, &format!("{at}{key}."), out),
+                None => {
+                    let windowish = ["window", "half", "segment", "samples"].iter().any(|w| key.contains(w));
+                    if windowish && !key.ends_with("_s") {
+                        out.push(format!("{at}{key}"));
+                    }
+                }
+            }
+        }
+    }
+    let doc: toml::Table = toml::from_str(text).unwrap();
+    let shared = doc.get("shared").and_then(|v| v.as_table()).cloned().unwrap_or_default();
+    let mut problems = Vec::new();
+    for st in doc.get("stage").and_then(|v| v.as_array()).into_iter().flatten() {
+        let name = st.get("name").and_then(|v| v.as_str()).unwrap_or("?");
+        let reads_campaign = st
+            .get("inputs")
+            .and_then(|v| v.as_array())
+            .is_some_and(|i| i.iter().any(|x| x.as_str().is_some_and(|x| x.contains("{campaign}"))));
+        if !reads_campaign {
+            continue;
+        }
+        let mut keys = Vec::new();
+        if let Some(p) = st.get("params").and_then(|v| v.as_table()) {
+            walk(p, "", &mut keys);
+        }
+        for listed in st.get("shared").and_then(|v| v.as_array()).into_iter().flatten() {
+            let table = listed.as_str().unwrap_or("?");
+            if let Some(t) = shared.get(table).and_then(|v| v.as_table()) {
+                walk(t, &format!("[shared.{table}] "), &mut keys);
+            }
+        }
+        problems
+            .extend(keys.into_iter().map(|k| format!("stage {name}: `{k}` reads as a window not in seconds (*_s)")));
+    }
+    problems
+}
+
+/// No window of a stage that reads the campaign is counted in samples: a
+/// campaign at another sample rate keeps its windows' length (issue 26).
+#[test]
+fn campaign_windows_are_in_seconds() {
+    let problems = windows_in_samples(&std::fs::read_to_string(root().join("pipeline.toml")).unwrap());
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+/// The rule sees a window in samples, also in a nested or a shared table, and
+/// leaves stages that do not read the campaign alone (it is not vacuous).
+#[test]
+fn a_window_in_samples_is_seen() {
+    let bad = "[shared.x]\nspeed_half_window = 10\n[[stage]]\nname = \"a\"\ninputs = [\"{campaign}\"]\n\
+               shared = [\"x\"]\n[stage.params]\nwindow_samples = 25\nwindow_s = 0.05\n[stage.params.c]\nbalance_window = 50\n\
+               [[stage]]\nname = \"b\"\ninputs = [\"{shared}/data\"]\n[stage.params]\nglitch_median_window = 101\n";
+    assert_eq!(windows_in_samples(bad).len(), 3, "{:?}", windows_in_samples(bad));
+}
+
 /// One rendering convention: the module that turns a crate's results into
 /// `Table`s, `FigureSpec`s and markdown is `render` (`render.rs` or
 /// `render/`), in every crate; `report` is only the crate of the HTML page

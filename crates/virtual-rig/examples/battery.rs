@@ -10,8 +10,8 @@ use rig_virtual_rig::{Hidden, Protocol};
 
 fn main() {
     let seed: u64 = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(60_000);
-    let opts = rig_diagnose::DiagnoseOptions::from_pipeline_toml(include_str!("../../../pipeline.toml"))
-        .expect("pipeline.toml");
+    let opts =
+        rig_diagnose::BlindChain::from_pipeline_toml(include_str!("../../../pipeline.toml")).expect("pipeline.toml");
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/thesis");
     let thesis = rig_calibrate::thesis_data(&rig_ingest::thesis::read_thesis_tables(&dir).expect("data/thesis"))
         .expect("thesis data");

@@ -27,8 +27,8 @@ fn main() {
     // pipeline.toml's `[stage.params] seed` of the confusion stage.
     let seed: u64 = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(7000);
     let battery = Battery::named(name, seed).expect("battery: full, ci or smoke");
-    let opts = rig_diagnose::DiagnoseOptions::from_pipeline_toml(include_str!("../../../pipeline.toml"))
-        .expect("pipeline.toml");
+    let opts =
+        rig_diagnose::BlindChain::from_pipeline_toml(include_str!("../../../pipeline.toml")).expect("pipeline.toml");
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/thesis");
     let thesis = rig_calibrate::thesis_data(&rig_ingest::thesis::read_thesis_tables(&dir).expect("data/thesis"))
         .expect("thesis data");

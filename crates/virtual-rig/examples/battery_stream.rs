@@ -22,8 +22,8 @@ fn main() {
     let part: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(0);
     let parts: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(1).max(1);
     let battery = Battery::named("full", 7000).expect("the full battery");
-    let opts = rig_diagnose::DiagnoseOptions::from_pipeline_toml(include_str!("../../../pipeline.toml"))
-        .expect("pipeline.toml");
+    let opts =
+        rig_diagnose::BlindChain::from_pipeline_toml(include_str!("../../../pipeline.toml")).expect("pipeline.toml");
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/thesis");
     let thesis = rig_calibrate::thesis_data(&rig_ingest::thesis::read_thesis_tables(&dir).expect("data/thesis"))
         .expect("thesis data");

@@ -10,8 +10,8 @@ use std::time::Instant;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let opts = rig_diagnose::DiagnoseOptions::from_pipeline_toml(include_str!("../../../pipeline.toml"))
-        .expect("pipeline.toml");
+    let opts =
+        rig_diagnose::BlindChain::from_pipeline_toml(include_str!("../../../pipeline.toml")).expect("pipeline.toml");
     let c = if args[1] == "dir" {
         rig_ingest::read_campaign(std::path::Path::new(&args[2])).expect("campaign")
     } else {

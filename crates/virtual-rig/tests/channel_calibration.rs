@@ -5,6 +5,7 @@
 //! fires on a defect it should see (and, for the free run, not with the
 //! correct extended model). Run with `--nocapture` to see the distributions.
 
+use rig_calibrate::calibrate_campaign_with;
 use rig_diagnose::channels::{ChannelCheck, all_checks};
 use rig_diagnose::{DiagnoseOptions, EffectId, extended_params};
 use rig_types::{Campaign, RigParams, RunKind};
@@ -13,7 +14,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 fn opts() -> DiagnoseOptions {
-    DiagnoseOptions::from_pipeline_toml(include_str!("../../../pipeline.toml")).expect("pipeline.toml")
+    chain().diagnosis
 }
 
 fn thesis() -> rig_calibrate::ThesisData {
@@ -21,12 +22,15 @@ fn thesis() -> rig_calibrate::ThesisData {
     rig_calibrate::thesis_data(&t).expect("thesis data")
 }
 
-/// Calibration and blind baseline, as `diagnose_campaign` computes them.
+/// The blind chain with pipeline.toml's options (their one home).
+fn chain() -> rig_diagnose::BlindChain {
+    rig_diagnose::BlindChain::from_pipeline_toml(include_str!("../../../pipeline.toml")).expect("pipeline.toml")
+}
+
+/// Calibration and blind baseline, as `diagnose_campaign` computes them (the blind chain's first links).
 fn calibrate(c: &Campaign, th: &rig_calibrate::ThesisData) -> (rig_calibrate::CampaignCalibration, RigParams) {
-    let cal = rig_calibrate::calibrate_campaign(c).expect("calibration");
-    let o = rig_estimate::EstimateOptions::new(rig_estimate::InitialValues::from_thesis_data(th));
-    let est = rig_estimate::estimate_rig(c, &cal, &o).expect("baseline estimate");
-    (cal, est.params)
+    let (cal, baseline) = chain().calibrate_and_estimate(c, Some(th)).expect("calibration");
+    (cal, baseline.expect("thesis given").expect("baseline estimate"))
 }
 
 /// The vocabulary findings of the blind diagnosis, for `extended_params`.
@@ -189,7 +193,7 @@ fn static_twist_checks_fire_on_twist_defects() {
     let o = opts().channels;
     let base = null_campaign(77);
     let check = |c: &Campaign| {
-        let cal = rig_calibrate::calibrate_campaign(c).expect("calibration");
+        let cal = calibrate_campaign_with(c, &chain().calibration).expect("calibration");
         let v = rig_diagnose::channels::static_twist_checks(c, &cal, &o);
         show("twist", &v);
         v

@@ -22,8 +22,9 @@ use rig_virtual_rig::{Protocol, draw_truth, generate};
 use std::collections::BTreeMap;
 use std::path::Path;
 
-fn opts() -> rig_diagnose::DiagnoseOptions {
-    rig_diagnose::DiagnoseOptions::from_pipeline_toml(include_str!("../../../pipeline.toml")).expect("pipeline.toml")
+/// The blind chain with pipeline.toml's options (their one home).
+fn chain() -> rig_diagnose::BlindChain {
+    rig_diagnose::BlindChain::from_pipeline_toml(include_str!("../../../pipeline.toml")).expect("pipeline.toml")
 }
 
 fn thesis() -> rig_calibrate::ThesisData {
@@ -103,7 +104,7 @@ fn clopper_pearson_matches_known_values() {
 fn free_run_nulls() {
     let n: u64 = std::env::var("NULLS").ok().and_then(|s| s.parse().ok()).unwrap_or(24);
     let th = thesis();
-    let o = opts();
+    let o = chain();
     let mut by_check: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let (mut flagged, mut not_none, mut structure_moved) = (Vec::new(), Vec::new(), Vec::new());
     for seed in 0..n {
@@ -161,7 +162,7 @@ fn free_run_nulls() {
 fn free_run_right_models() {
     let n: u64 = std::env::var("RIGHT").ok().and_then(|s| s.parse().ok()).unwrap_or(4);
     let th = thesis();
-    let o = opts();
+    let o = chain();
     let classes = rig_virtual_rig::ids::VOCABULARY;
     // ONLY="9312,9313": those seeds, with the detail of every flagged check.
     let only: Option<Vec<u64>> =
@@ -251,7 +252,7 @@ fn damping_on_the_rotor_speed_is_named_with_its_free_run_gain() {
     truth.params.shaft_damping_nm_s_rad = 0.0;
     truth.params.rotor_damping_nm_s_rad = c_nm_s_rad;
     let c = generate("rotor-drag", &truth, &structure_protocol(), 4242).expect("generate");
-    let d = rig_diagnose::diagnose_campaign(&c, Some(&thesis()), &opts()).expect("diagnosis");
+    let d = rig_diagnose::diagnose_campaign(&c, Some(&thesis()), &chain()).expect("diagnosis");
     println!("{}\n{:#?}", d.structure.notes, d.detail.structure_scores);
     assert!(
         d.structure.damping == "rotor_absolute" || d.structure.damping == "twist_rate_and_rotor",
@@ -282,7 +283,7 @@ fn damping_on_the_rotor_speed_is_named_with_its_free_run_gain() {
 fn the_rig_models_own_placement_keeps_twist_rate() {
     let truth = draw_truth("none", 130.0, 4243);
     let c = generate("twist-rate", &truth, &structure_protocol(), 4243).expect("generate");
-    let d = rig_diagnose::diagnose_campaign(&c, Some(&thesis()), &opts()).expect("diagnosis");
+    let d = rig_diagnose::diagnose_campaign(&c, Some(&thesis()), &chain()).expect("diagnosis");
     println!("{}\n{:#?}", d.structure.notes, d.detail.structure_scores);
     assert_eq!(d.structure.damping, "twist_rate", "{}", d.structure.notes);
     assert_eq!(d.verdict, "none", "{:?}", d.findings.last().map(|f| &f.evidence));

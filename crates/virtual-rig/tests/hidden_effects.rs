@@ -13,7 +13,12 @@ use rig_virtual_rig::{Protocol, draw_truth, generate, ids, write_campaign};
 
 /// The diagnosis options of pipeline.toml (their one home).
 fn opts() -> rig_diagnose::DiagnoseOptions {
-    rig_diagnose::DiagnoseOptions::from_pipeline_toml(include_str!("../../../pipeline.toml")).expect("pipeline.toml")
+    chain().diagnosis
+}
+
+/// The blind chain with pipeline.toml's options: calibration, estimation, diagnosis.
+fn chain() -> rig_diagnose::BlindChain {
+    rig_diagnose::BlindChain::from_pipeline_toml(include_str!("../../../pipeline.toml")).expect("pipeline.toml")
 }
 
 /// Generates a campaign of `class` with `seed`, writes it, reads it back,
@@ -25,7 +30,7 @@ fn check(class: &str, seed: u64) {
     let dir = tempfile::tempdir().expect("tempdir");
     write_campaign(dir.path(), &c).expect("write");
     let read = rig_ingest::read_campaign(dir.path()).expect("the generated campaign is valid rig-campaign/1");
-    let d = rig_diagnose::diagnose_campaign(&read, None, &opts()).expect("diagnosis");
+    let d = rig_diagnose::diagnose_campaign(&read, None, &chain()).expect("diagnosis");
     let scores: Vec<String> =
         d.detail.scores.iter().map(|s| format!("{} ΔBIC {:.1} gain {:.3} [{}]", s.0, s.1, s.3, s.5)).collect();
     assert_eq!(d.verdict, truth.hidden.id(), "truth {:?}; candidates:\n{}", truth.hidden, scores.join("\n"));
@@ -88,7 +93,7 @@ fn battery_case(id: &str) -> (rig_diagnose::Diagnosis, Vec<String>) {
     let battery = rig_virtual_rig::battery::Battery::full();
     let case = battery.cases.iter().find(|c| c.id == id).expect("battery case");
     let c = case.generate(&battery.protocol).expect("generate");
-    let d = rig_diagnose::diagnose_campaign(&c, Some(&thesis_data()), &opts()).expect("diagnosis");
+    let d = rig_diagnose::diagnose_campaign(&c, Some(&thesis_data()), &chain()).expect("diagnosis");
     let effects = d.findings.iter().map(|f| f.effect.clone()).collect();
     (d, effects)
 }
@@ -143,7 +148,7 @@ fn full_battery() {
     }
     let started = std::time::Instant::now();
     let out = battery.run(|case, c| {
-        let d = rig_diagnose::diagnose_campaign(c, Some(&thesis), &opts()).map_err(|e| e.to_string())?;
+        let d = rig_diagnose::diagnose_campaign(c, Some(&thesis), &chain()).map_err(|e| e.to_string())?;
         // Progress on stderr: the full battery runs for about an hour.
         eprintln!("[{:6.0} s] {}: {}", started.elapsed().as_secs_f64(), case.id, d.verdict);
         serde_json::to_value(&d).and_then(serde_json::from_value::<DiagnosisResult>).map_err(|e| e.to_string())
@@ -207,7 +212,7 @@ fn ci_battery_cases() {
     }
     let out_dir = std::env::var("CI_OUT").ok();
     let out = battery.run(|case, c| {
-        let d = rig_diagnose::diagnose_campaign(c, Some(&thesis), &opts()).map_err(|e| e.to_string())?;
+        let d = rig_diagnose::diagnose_campaign(c, Some(&thesis), &chain()).map_err(|e| e.to_string())?;
         if let Some(dir) = &out_dir {
             let dir = std::path::Path::new(dir).join(&case.id);
             std::fs::create_dir_all(&dir).expect("CI_OUT");
@@ -259,7 +264,7 @@ fn breakaway_dwell_probe() {
         for id in ["null_stick_slip-00", "outside-static_friction_aging-0"] {
             let case = battery.cases.iter().find(|c| c.id == id).expect("case");
             let c = case.generate(&battery.protocol).expect("generate");
-            let cal = rig_calibrate::calibrate_campaign(&c).expect("calibration");
+            let cal = rig_calibrate::calibrate_campaign_with(&c, &chain().calibration).expect("calibration");
             let law = rig_diagnose::prepare::SensorLaw::Line(rig_diagnose::ForceCal {
                 factor_mv_per_n: cal.force_factor_mv_per_n,
                 offset_mv: cal.force_offset_mv,
@@ -300,7 +305,7 @@ fn ageing_is_unexplained_and_its_law_is_fitted_in_free_run() {
     let battery = rig_virtual_rig::battery::Battery::ci_seeded(confusion_seed());
     let case = battery.cases.iter().find(|c| c.id == "outside-static_friction_aging-0").expect("CI case");
     let c = case.generate(&battery.protocol).expect("generate");
-    let d = rig_diagnose::diagnose_campaign(&c, Some(&thesis_data()), &opts()).expect("diagnosis");
+    let d = rig_diagnose::diagnose_campaign(&c, Some(&thesis_data()), &chain()).expect("diagnosis");
     assert_eq!(d.verdict, "unexplained");
     let x = d.findings.iter().find_map(|f| f.extension.as_ref()).expect("an extension");
     let dwell = x.terms.iter().find(|t| t.signal == "log_dwell").unwrap_or_else(|| panic!("no log_dwell: {x:?}"));

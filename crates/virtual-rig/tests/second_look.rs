@@ -15,8 +15,8 @@ fn diagnose(id: &str) -> rig_diagnose::Diagnosis {
     let battery = Battery::named("full", 7000).expect("the full battery");
     let case = battery.cases.iter().find(|c| c.id == id).expect("a case of the full battery");
     let c = case.generate(&battery.protocol).expect("generate");
-    let o = rig_diagnose::DiagnoseOptions::from_pipeline_toml(include_str!("../../../pipeline.toml"))
-        .expect("pipeline.toml");
+    let o =
+        rig_diagnose::BlindChain::from_pipeline_toml(include_str!("../../../pipeline.toml")).expect("pipeline.toml");
     let t = rig_ingest::thesis::read_thesis_tables(Path::new("../../data/thesis")).expect("data/thesis");
     let th = rig_calibrate::thesis_data(&t).expect("thesis data");
     let d = rig_diagnose::diagnose_campaign(&c, Some(&th), &o).expect("diagnosis");

@@ -20,8 +20,6 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     let d = diagnose(&campaign, &cal, Some(&rig), Some(thesis.friction.mu_dynamic), &opts)
         .with_context(|| format!("diagnosing campaign {}", campaign.name))?;
     ctx.write_json("diagnosis.json", &d)?;
-    // The options as run: the confusion stage diagnoses with exactly these.
-    ctx.write_json("data/diagnose-options.json", &opts)?;
     ctx.write_text("diagnosis.md", &render::markdown(&d))?;
     ctx.write_table_with_parquet("tables/diagnosis-runs.csv", &render::runs_table(&d))?;
     ctx.write_table_with_parquet("tables/diagnosis-speed-traces.csv", &render::speed_traces_table(&d))?;

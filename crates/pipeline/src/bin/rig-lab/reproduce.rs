@@ -15,6 +15,10 @@ pub struct Args {
     /// Stages run at once, and the size of the thread pool inside stages.
     #[arg(long, default_value_t = 2)]
     jobs: usize,
+    /// Start ready stages in declaration order instead of the longest
+    /// remaining path first (pipeline.toml `cpu_s`): to measure the schedule.
+    #[arg(long)]
+    declaration_order: bool,
     /// List what would run and why; run nothing.
     #[arg(long)]
     dry_run: bool,
@@ -39,6 +43,7 @@ pub fn run(args: Args) -> Result<()> {
     let toml = super::workspace_root().join("pipeline.toml");
     let only: Vec<&str> = args.only.iter().map(String::as_str).collect();
     let mut runner = Runner::new(&toml)?.jobs(args.jobs).dry_run(args.dry_run).only(&only).all(args.all).progress(true);
+    runner = runner.declaration_order(args.declaration_order);
     for item in &args.set {
         let (lhs, value) = item.split_once('=').with_context(|| format!("--set {item}: expected STAGE.KEY=VALUE"))?;
         let (stage, key) = lhs.split_once('.').with_context(|| format!("--set {item}: expected STAGE.KEY=VALUE"))?;
