@@ -333,48 +333,7 @@ pub fn section(s: &crate::study::Study) -> String {
          candidate) and after (`top_delay`, step 1), and what the latter still misses (error over tolerance):\n\n| window | before: \
          targets held | after: targets held | missed after |\n|---|---|---|---|\n",
     );
-    let (mut nb, mut na) = (0, 0);
-    for wi in 1..s.windows.len() {
-        let (hb, ha) = (crate::drive::held(s, &r.before[wi], wi), crate::drive::held(s, &r.features[wi], wi));
-        nb += hb.len();
-        na += ha.len();
-        let e = crate::score::feature_errors(&s.measured[wi], &r.features[wi]);
-        let missed: Vec<String> = crate::drive::SHORT
-            .iter()
-            .zip(e)
-            .filter(|(_, x)| x.abs() > 1.0)
-            .map(|(n, x)| format!("{n} {x:+.2}"))
-            .collect();
-        let _ = writeln!(
-            md,
-            "| {} | {}: {} | {}: {} | {} |",
-            s.windows[wi].label,
-            hb.len(),
-            hb.join(", "),
-            ha.len(),
-            ha.join(", "),
-            if missed.is_empty() { "none".to_string() } else { missed.join(", ") }
-        );
-    }
-    let nh = s.windows.len() - 1;
-    let per_feature: Vec<String> = crate::FEATURES
-        .iter()
-        .enumerate()
-        .map(|(k, name)| {
-            let count = |fs: &[crate::Features]| {
-                (1..s.windows.len())
-                    .filter(|&w| crate::score::feature_errors(&s.measured[w], &fs[w])[k].abs() <= 1.0)
-                    .count()
-            };
-            format!("{name} {} → {}", count(&r.before), count(&r.features))
-        })
-        .collect();
-    let _ = writeln!(
-        md,
-        "\nTargets held on the held-out windows: {nb} of {} before, {na} after ({}, of {nh} each).\n",
-        nh * crate::features::N_FEATURES,
-        per_feature.join(", ")
-    );
+    md.push_str(&crate::drive::targets_before_after(s, &r.before, &r.features));
     let (rmin, rmax) =
         r.scan.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| (a.0.min(p.r_squared), a.1.max(p.r_squared)));
     let (kmin, kmax) = r
