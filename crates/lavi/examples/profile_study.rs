@@ -2,7 +2,8 @@
 //!
 //! `cargo run --profile dev --example profile_study`: runs the study once and
 //! prints the CPU time (all threads), the wall time and the Nelder–Mead
-//! evaluations of every fit, trial by trial: where the study's time goes.
+//! evaluations of every fit, trial by trial, and the free runs made and
+//! reused (`Evaluator::outcome`): where the study's time goes.
 //!
 //! `cargo run --profile dev --example profile_study -- torque`: the trade-off
 //! behind the missed torque targets. The final model of the study (structure
@@ -70,6 +71,7 @@ fn profile(path: &Path, p: &StudyParams) {
     }
     println!("verdict {} chosen {:?}", s.verdict(), s.selection.chosen);
     println!("evaluations {total}, analyse: CPU {cpu:.2} s, wall {wall:.2} s");
+    println!("free runs made {}, outcomes reused {}", s.free_runs[0], s.free_runs[1]);
     let (c, w) = (cpu_s(), std::time::Instant::now());
     let _ = rig_lavi::run_study(path, p).expect("the study runs");
     println!("run_study (analyse and render): CPU {:.2} s, wall {:.2} s", cpu_s() - c, w.elapsed().as_secs_f64());

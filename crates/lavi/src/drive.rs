@@ -286,6 +286,57 @@ pub(crate) fn held(s: &crate::study::Study, sim: &crate::Features, wi: usize) ->
     SHORT.iter().zip(e).filter(|(_, x)| x.abs() <= 1.0).map(|(n, _)| *n).collect()
 }
 
+/// The rows of a per-window "before → after" table (window, targets held
+/// before, after, what `after` misses: error over tolerance) and the line of
+/// targets held per feature, for the held-out windows of the study.
+pub(crate) fn targets_before_after(
+    s: &crate::study::Study,
+    before: &[crate::Features],
+    after: &[crate::Features],
+) -> String {
+    use std::fmt::Write as _;
+    let mut md = String::new();
+    let (mut nb, mut na) = (0, 0);
+    for wi in 1..s.windows.len() {
+        let (hb, ha) = (held(s, &before[wi], wi), held(s, &after[wi], wi));
+        nb += hb.len();
+        na += ha.len();
+        let e = crate::score::feature_errors(&s.measured[wi], &after[wi]);
+        let missed: Vec<String> =
+            SHORT.iter().zip(e).filter(|(_, x)| x.abs() > 1.0).map(|(n, x)| format!("{n} {x:+.2}")).collect();
+        let _ = writeln!(
+            md,
+            "| {} | {}: {} | {}: {} | {} |",
+            s.windows[wi].label,
+            hb.len(),
+            hb.join(", "),
+            ha.len(),
+            ha.join(", "),
+            if missed.is_empty() { "none".to_string() } else { missed.join(", ") }
+        );
+    }
+    let nh = s.windows.len() - 1;
+    let per_feature: Vec<String> = crate::FEATURES
+        .iter()
+        .enumerate()
+        .map(|(k, name)| {
+            let count = |fs: &[crate::Features]| {
+                (1..s.windows.len())
+                    .filter(|&w| crate::score::feature_errors(&s.measured[w], &fs[w])[k].abs() <= 1.0)
+                    .count()
+            };
+            format!("{name} {} → {}", count(before), count(after))
+        })
+        .collect();
+    let _ = writeln!(
+        md,
+        "\nTargets held on the held-out windows: {nb} of {} before, {na} after ({}, of {nh} each).\n",
+        nh * crate::features::N_FEATURES,
+        per_feature.join(", ")
+    );
+    md
+}
+
 /// `tables/lavi-drive.csv`: per window, every feature and the top-speed channel as
 /// measured, in the extended model's free run and in the `motor_drive` trial's.
 pub fn table(s: &crate::study::Study) -> Option<rig_types::Table> {

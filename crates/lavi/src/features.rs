@@ -96,20 +96,30 @@ pub fn window_features(
     window: Range<usize>,
     o: &FeatureOptions,
 ) -> Result<Features, LaviError> {
-    if bit_rpm.len() != torque_nm.len() || window.end > bit_rpm.len() || window.len() < 16 {
-        return Err(LaviError::Input {
-            what: "window_features",
-            rule: format!(
-                "bit speed ({}) and torque ({}) must have equal lengths holding the window {:?} of >= 16 samples",
-                bit_rpm.len(),
-                torque_nm.len(),
-                window
-            ),
-        });
-    }
+    check_lengths(bit_rpm, torque_nm, &window)?;
+    let v_all = lowpass_fft(bit_rpm, o.fs_hz, o.cutoff_hz, o.transition_hz)?;
+    let t_all = lowpass_fft(torque_nm, o.fs_hz, o.cutoff_hz, o.transition_hz)?;
+    features_of(&v_all[window.clone()], &t_all[window], o)
+}
+
+/// [`window_features`] and [`stick_torque`] of one window from one low-pass
+/// of each channel: what a free run is judged by, made once (the same numbers
+/// as the two calls, which low-pass the same span the same way).
+pub fn window_features_and_stick(
+    bit_rpm: &[f64],
+    torque_nm: &[f64],
+    window: Range<usize>,
+    o: &FeatureOptions,
+) -> Result<(Features, StickTorque), LaviError> {
+    check_lengths(bit_rpm, torque_nm, &window)?;
     let v_all = lowpass_fft(bit_rpm, o.fs_hz, o.cutoff_hz, o.transition_hz)?;
     let t_all = lowpass_fft(torque_nm, o.fs_hz, o.cutoff_hz, o.transition_hz)?;
     let (v, t) = (&v_all[window.clone()], &t_all[window]);
+    Ok((features_of(v, t, o)?, stick_torque_of(v, t, o.stick_speed_rpm)))
+}
+
+/// The window's features from its low-passed bit speed `v` (rpm) and torque `t` (N m).
+fn features_of(v: &[f64], t: &[f64], o: &FeatureOptions) -> Result<Features, LaviError> {
     let stick_fraction = v.iter().filter(|x| **x < o.stick_speed_rpm).count() as f64 / v.len() as f64;
     let (slip_sum, slip_n) =
         v.iter().zip(t).filter(|(x, _)| **x >= o.stick_speed_rpm).fold((0.0, 0usize), |(s, n), (_, y)| (s + y, n + 1));
@@ -146,6 +156,22 @@ pub fn window_features(
     })
 }
 
+/// The two channels cover the same span and hold the window (at least 16 samples).
+fn check_lengths(bit_rpm: &[f64], torque_nm: &[f64], window: &Range<usize>) -> Result<(), LaviError> {
+    if bit_rpm.len() != torque_nm.len() || window.end > bit_rpm.len() || window.len() < 16 {
+        return Err(LaviError::Input {
+            what: "window_features",
+            rule: format!(
+                "bit speed ({}) and torque ({}) must have equal lengths holding the window {:?} of >= 16 samples",
+                bit_rpm.len(),
+                torque_nm.len(),
+                window
+            ),
+        });
+    }
+    Ok(())
+}
+
 /// The torque through the complete stick phases of a window (issue 26's
 /// break-away target): a bit held by a shaft that a turning top winds up sees
 /// its holding torque k φ + c Ω_top rise through the whole stick, to the
@@ -173,11 +199,15 @@ pub fn stick_torque(
 ) -> Result<StickTorque, LaviError> {
     let v = lowpass_fft(bit_rpm, o.fs_hz, o.cutoff_hz, o.transition_hz)?;
     let t = lowpass_fft(torque_nm, o.fs_hz, o.cutoff_hz, o.transition_hz)?;
-    let (v, t) = (&v[window.clone()], &t[window]);
+    Ok(stick_torque_of(&v[window.clone()], &t[window], o.stick_speed_rpm))
+}
+
+/// [`StickTorque`] from the window's low-passed bit speed `v` (rpm) and torque `t` (N m).
+fn stick_torque_of(v: &[f64], t: &[f64], stick_speed_rpm: f64) -> StickTorque {
     // Complete phases only: begun after a slip sample of the window, ended by one.
     let (mut spans, mut start, mut armed) = (Vec::new(), None, false);
     for (i, x) in v.iter().enumerate() {
-        match (start, *x < o.stick_speed_rpm) {
+        match (start, *x < stick_speed_rpm) {
             (None, true) if armed => start = Some(i),
             (Some(a), false) => {
                 spans.push(a..i);
@@ -193,13 +223,13 @@ pub fn stick_torque(
         let k = (r.start..r.end).fold(r.start, |b, i| if t[i] > t[b] { i } else { b });
         (k - r.start) as f64 / (r.len() - 1).max(1) as f64
     };
-    Ok(StickTorque {
+    StickTorque {
         phases: n,
         falling: spans.iter().filter(|r| t[r.end - 1] < t[r.start]).count(),
         entry_nm: nan_if_none(spans.iter().map(|r| t[r.start]).sum()),
         exit_nm: nan_if_none(spans.iter().map(|r| t[r.end - 1]).sum()),
         peak_position: nan_if_none(spans.iter().map(peak).sum()),
-    })
+    }
 }
 
 /// The band and tolerance of every line analysis of the LAVI study: from
@@ -352,6 +382,22 @@ mod tests {
         let r = stick_torque(&vr, &tr, 2000..10_000, &opts()).unwrap();
         assert_eq!(r.falling, r.phases, "{r:?}");
         assert!(r.entry_nm > r.exit_nm + 0.1 && r.peak_position < 0.2, "{r:?}");
+    }
+
+    #[test]
+    fn features_and_stick_torque_at_once_are_the_two_calls_bit_for_bit() {
+        let (v, mut t) = sawtooth();
+        for (i, y) in t.iter_mut().enumerate() {
+            *y += 0.3 * (i as f64 / 97.0).sin();
+        }
+        let (f, s) = window_features_and_stick(&v, &t, 2000..10_000, &opts()).unwrap();
+        let (f1, s1) = (
+            window_features(&v, &t, 2000..10_000, &opts()).unwrap(),
+            stick_torque(&v, &t, 2000..10_000, &opts()).unwrap(),
+        );
+        // Debug prints every float in full (shortest round trip): equal strings, equal bits, NaN included.
+        assert_eq!(format!("{f:?} {s:?}"), format!("{f1:?} {s1:?}"));
+        assert!(s.phases > 0 && f.stick_phases > 0, "{s:?}");
     }
 
     #[test]

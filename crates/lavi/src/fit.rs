@@ -185,6 +185,7 @@ fn derive_with(
         friction_lag_s: 0.0,
         mid: None,
         drive: None,
+        wob_level: None,
         structure: st,
     };
     let info = Derivation { structure: st, free, used: dof, at_bounds, law_rmse_nm, law_constant_rmse_nm };
@@ -349,6 +350,12 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
     let mut top_scan = Vec::new();
     let (model, evals) = match c {
         Candidate::WobNormalForce => {
+            if current.wob_level.is_some() {
+                return Err(LaviError::Refused {
+                    candidate: "wob_normal_force",
+                    reason: "the weight on bit's slow level is the model's normal force already (`wob_level`)".into(),
+                });
+            }
             // A least-squares law is refitted as μ = T/W (torque = WOB·μ); a simulation-fitted law is kept.
             let m = restructure(current, ev, Structure { wob: true, ..current.structure })?;
             let w_ref = m.wob_ref_n.unwrap_or(1.0);
@@ -420,6 +427,7 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
         Candidate::TopDelay => {
             crate::top_delay::fit(current, ev, max_evals, &mut params, &mut at_bounds, &mut top_scan)?
         }
+        Candidate::WobLevel => crate::wob_level::fit(current, ev, &mut params)?,
         Candidate::FrictionLaw => {
             let (m, total, family) = law_by_simulation(current, ev, max_evals);
             insert_law_params(&mut params, &m, family);
@@ -618,6 +626,7 @@ fn restructure(current: &Model, ev: &Evaluator, st: Structure) -> Result<Model, 
     m.friction_lag_s = current.friction_lag_s;
     m.mid = current.mid;
     m.drive = current.drive;
+    m.wob_level = current.wob_level;
     if keep_law {
         m.friction = current.friction;
     }
@@ -628,7 +637,13 @@ fn restructure(current: &Model, ev: &Evaluator, st: Structure) -> Result<Model, 
 /// keeping `current`'s law and its other effects.
 fn restructure_with_law(current: &Model, ev: &Evaluator, st: Structure) -> Result<Model, LaviError> {
     let (m, _) = derive_with(ev.data, &ev.windows[ev.calibration()], ev.slip_speed_rpm, st, Some(current.friction))?;
-    Ok(Model { friction_lag_s: current.friction_lag_s, mid: current.mid, drive: current.drive, ..m })
+    Ok(Model {
+        friction_lag_s: current.friction_lag_s,
+        mid: current.mid,
+        drive: current.drive,
+        wob_level: current.wob_level,
+        ..m
+    })
 }
 
 /// True when `current`'s law is still the least-squares one of [`derive`] (no simulation fit chose it).

@@ -32,7 +32,7 @@ const TARGETS: [&str; N_FEATURES] = [
     "within 10 %",
 ];
 /// The effect ids of this rig, as the crate docs list them.
-const EFFECT_IDS: [(&str, &str); 12] = [
+const EFFECT_IDS: [(&str, &str); 13] = [
     ("none", "the baseline explains the held-out windows within the adequacy threshold."),
     (
         "friction_law",
@@ -70,6 +70,10 @@ const EFFECT_IDS: [(&str, &str); 12] = [
     (
         "top_delay",
         "the top-speed channel late (or early) on the bit speed by τ_top, jointly with the torque channel's delay: τ_top within ±50 ms where the free run of the least-squares J, k, c and law of each τ_top (the torque delay by least squares for it) fits the calibration window best, then the law refitted by simulation on that structure like `friction_law`, the better of the two on the calibration window kept (`top_delay_s`, `torque_delay_s`, `law_from_torque` and the law's keys).",
+    ),
+    (
+        "wob_level",
+        "the contact's normal force is the weight on bit's slow level: the law kept at the calibration window's mean WOB W_ref, the friction scaled by W̄(t)/W_ref, W̄ the measured WOB's centred moving mean over a span chosen on the calibration window among 0.5, 1, 2 and 4 s (at least a stick-slip cycle: the fast part, in the record's phase rather than the free run's, left out) (`wob_level_window_s`, `reference_wob_n`).",
     ),
     (
         "unexplained",
@@ -567,7 +571,7 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
             match (&t.refused, t.earns_place) {
                 (Some(r), _) => format!("no, refused: {r}"),
                 (None, true) => "yes".into(),
-                (None, false) => "no".into(),
+                (None, false) => inadmissible(sel, t).unwrap_or_else(|| "no".into()),
             }
         );
     }
@@ -788,6 +792,7 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
         }
     }
     md.push_str(&crate::top_delay::section(s));
+    md.push_str(&crate::wob_level::section(s));
     md.push_str(&crate::drive::section(s));
     let h = &s.wob;
     let _ = writeln!(md, "## The chapter's hypothesis: a varying normal force\n");
@@ -1231,4 +1236,27 @@ fn feature_summary<'a>(s: &'a Study, sim: impl Fn(usize) -> &'a Features) -> Str
         );
     }
     t
+}
+
+/// "no, worse on the calibration window …" for a trial the rule admits on the
+/// held-out windows but the calibration window refuses (None otherwise).
+fn inadmissible(sel: &crate::select::Selection, t: &crate::select::Trial) -> Option<String> {
+    let c = rig_types::select::Comparison {
+        before: f64::NAN,
+        after: t.heldout_misfit,
+        gain: t.relative_gain,
+        gain_fold_sd: t.gain_spread,
+        t: t.paired_t,
+    };
+    let before = if t.step == 1 {
+        sel.baseline_calibration
+    } else {
+        sel.trials[*sel.chosen.get(t.step - 2)?].fitted.calibration_misfit
+    };
+    (sel.rule.admits(&c) && t.fitted.calibration_misfit > before + 1e-12).then(|| {
+        format!(
+            "no: admitted by the rule on the held-out windows, worse on the calibration window it was fitted on ({:.3} > {:.3})",
+            t.fitted.calibration_misfit, before
+        )
+    })
 }

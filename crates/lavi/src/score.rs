@@ -27,9 +27,14 @@
 
 use crate::LaviError;
 use crate::data::{Prepared, RPM_TO_RAD_S, WindowSpec, derivative};
-use crate::features::{FeatureOptions, Features, N_FEATURES, StickTorque, stick_torque, window_features};
+use crate::features::{
+    FeatureOptions, Features, N_FEATURES, StickTorque, stick_torque, window_features, window_features_and_stick,
+};
 use crate::sim::{Inputs, Model, Run, Start, delay_samples, read_late, simulate};
 use rayon::prelude::*;
+use std::collections::HashMap;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Cap on one feature's normalised error.
 pub const ERROR_CAP: f64 = 10.0;
@@ -82,7 +87,19 @@ pub fn misfit_of(meas: &Features, sim: &Features) -> f64 {
     (0.5 * (motion * motion + torque * torque)).sqrt()
 }
 
+/// What a free run of a model on a window is judged by: its features and the
+/// torque through its stick phases, or the sample where it diverged.
+type Outcome = Result<(Features, StickTorque), usize>;
+
 /// Everything a free run and its score need, per window.
+///
+/// A free run is a pure function of the model and the window, so its outcome
+/// is kept ([`Evaluator::outcome`]) keyed by the model's every field as `Debug`
+/// prints it (each float's shortest round-trip digits: equal keys, equal
+/// bits) and the window: the fits' final points, the selection's scores and
+/// the report's features and stick torques of the same model are one run.
+/// The numbers are the same as running it again; on any thread count, as a
+/// run's outcome does not depend on which thread makes it first.
 #[derive(Debug)]
 pub struct Evaluator<'a> {
     pub data: &'a Prepared,
@@ -95,6 +112,12 @@ pub struct Evaluator<'a> {
     top_rad_s: Vec<f64>,
     top_ref_rad_s: Vec<f64>,
     bit_acc_rad_s2: Vec<f64>,
+    /// The weight on bit's slow level over the whole record at each span of `wob_level`'s fit.
+    wob_levels: Vec<(f64, Vec<f64>)>,
+    outcomes: Mutex<HashMap<(String, usize), Outcome>>,
+    /// Free runs made and outcomes reused ([`Evaluator::run_counts`]).
+    made: AtomicUsize,
+    reused: AtomicUsize,
 }
 
 impl<'a> Evaluator<'a> {
@@ -144,12 +167,24 @@ impl<'a> Evaluator<'a> {
             top_rad_s,
             top_ref_rad_s,
             bit_acc_rad_s2: derivative(&bit, data.fs_hz),
+            wob_levels: crate::wob_level::levels(&data.wob_n, data.fs_hz),
+            outcomes: Mutex::new(HashMap::new()),
+            made: AtomicUsize::new(0),
+            reused: AtomicUsize::new(0),
         })
     }
 
     /// The compliant drives' reference: the measured top speed's centred moving mean, rad/s (whole record).
     pub fn top_ref_rad_s(&self) -> &[f64] {
         &self.top_ref_rad_s
+    }
+
+    /// The weight on bit's slow level W̄ of `l` over the whole record, N (made once per span of the fit).
+    pub fn wob_level_n(&self, l: &crate::wob_level::WobLevel) -> std::borrow::Cow<'_, [f64]> {
+        match self.wob_levels.iter().find(|(s, _)| *s == l.window_s) {
+            Some((_, w)) => std::borrow::Cow::Borrowed(w),
+            None => std::borrow::Cow::Owned(l.level_n(&self.data.wob_n, self.data.fs_hz)),
+        }
     }
 
     /// Index of the calibration window.
@@ -168,10 +203,14 @@ impl<'a> Evaluator<'a> {
         // The top speed on the bit's clock: the channel read τ_top later when it is late by τ_top.
         let k = delay_samples(m.structure.top_delay_s, self.data.fs_hz);
         let (top, top_ref) = (read_late(&self.top_rad_s, &s, k), read_late(&self.top_ref_rad_s, &s, k));
+        // `wob_level`: the friction scaled by the weight on bit's slow level over its reference.
+        let level = m.wob_level.map(|l| self.wob_level_n(&l));
+        let scaled = m.wob_level.map(|l| Model { wob_ref_n: Some(l.reference_n), wob_level: None, ..*m });
+        let m = scaled.as_ref().unwrap_or(m);
         let u = Inputs {
             fs_hz: self.data.fs_hz,
             top_rad_s: &top,
-            wob_n: &self.data.wob_n[s.clone()],
+            wob_n: &level.as_deref().unwrap_or(&self.data.wob_n)[s.clone()],
             top_ref_rad_s: &top_ref,
         };
         // The contact torque at the start as the channel reads it: τ later when the channel is late by τ.
@@ -185,11 +224,39 @@ impl<'a> Evaluator<'a> {
         simulate(m, &u, start, self.substeps)
     }
 
+    /// Features and stick torque of the free run of `m` on window `wi` (the
+    /// same functions as for the measurement), made once per model and window
+    /// (type docs); a run that diverges is kept as such, any other error is not.
+    pub fn outcome(&self, m: &Model, wi: usize) -> Result<(Features, StickTorque), LaviError> {
+        let key = (format!("{m:?}"), wi);
+        if let Some(o) = self.outcomes.lock().expect("no thread panicked holding the cache").get(&key) {
+            self.reused.fetch_add(1, Ordering::Relaxed);
+            return o.map_err(|sample| LaviError::Diverged { sample });
+        }
+        self.made.fetch_add(1, Ordering::Relaxed);
+        let o = self.simulate(m, wi).and_then(|r| {
+            let rpm: Vec<f64> = r.bit_rad_s.iter().map(|v| v / RPM_TO_RAD_S).collect();
+            window_features_and_stick(&rpm, &r.torque_nm, self.windows[wi].window.clone(), &self.fopts)
+        });
+        let kept = match &o {
+            Ok(x) => Some(Ok(*x)),
+            Err(LaviError::Diverged { sample }) => Some(Err(*sample)),
+            Err(_) => None,
+        };
+        if let Some(k) = kept {
+            self.outcomes.lock().expect("no thread panicked holding the cache").insert(key, k);
+        }
+        o
+    }
+
+    /// Free runs made so far and outcomes reused instead of a run (a developer's count: `profile_study`).
+    pub fn run_counts(&self) -> [usize; 2] {
+        [self.made.load(Ordering::Relaxed), self.reused.load(Ordering::Relaxed)]
+    }
+
     /// Features of the free run (the same function as for the measurement).
     pub fn features(&self, m: &Model, wi: usize) -> Result<Features, LaviError> {
-        let r = self.simulate(m, wi)?;
-        let rpm: Vec<f64> = r.bit_rad_s.iter().map(|v| v / RPM_TO_RAD_S).collect();
-        window_features(&rpm, &r.torque_nm, self.windows[wi].window.clone(), &self.fopts)
+        self.outcome(m, wi).map(|o| o.0)
     }
 
     /// [`StickTorque`] of window `wi`: as recorded (`m` None) or in the free run of `m`.
@@ -202,11 +269,7 @@ impl<'a> Evaluator<'a> {
                 w.window.clone(),
                 &self.fopts,
             ),
-            Some(m) => {
-                let r = self.simulate(m, wi)?;
-                let rpm: Vec<f64> = r.bit_rad_s.iter().map(|v| v / RPM_TO_RAD_S).collect();
-                stick_torque(&rpm, &r.torque_nm, w.window.clone(), &self.fopts)
-            }
+            Some(m) => self.outcome(m, wi).map(|o| o.1),
         }
     }
 

@@ -108,6 +108,10 @@ pub struct Model {
     pub friction_lag_s: f64,
     pub mid: Option<MidDof>,
     pub drive: Option<Drive>,
+    /// Some: the normal force is the weight on bit's slow level (`wob_level`,
+    /// [`crate::wob_level`]); not serialised when None.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wob_level: Option<crate::wob_level::WobLevel>,
     /// How J, k, c (and the least-squares law) were derived (rig_lavi::fit).
     pub structure: Structure,
 }
@@ -281,6 +285,7 @@ pub(crate) mod tests {
             friction_lag_s: 0.0,
             mid: None,
             drive: None,
+            wob_level: None,
             structure: Structure::BASELINE,
         }
     }

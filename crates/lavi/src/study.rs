@@ -71,6 +71,11 @@ pub struct Study {
     pub drive: Option<crate::drive::DriveReport>,
     /// The top speed's clock (`top_delay`): its scan, its rivals side by side, per window before → after.
     pub top_delay: Option<crate::top_delay::TopDelayReport>,
+    /// The weight on bit's slow level (`wob_level`): its last trial per window before → after, side by side.
+    pub wob_level: Option<crate::wob_level::WobLevelReport>,
+    /// Free runs made and outcomes reused over the study ([`Evaluator::run_counts`]; not an output).
+    #[serde(skip)]
+    pub free_runs: [usize; 2],
 }
 
 impl Study {
@@ -149,6 +154,7 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
         .collect::<Result<Vec<_>, LaviError>>()?;
     let drive = crate::drive::report(&ev, &selection)?;
     let top_delay = crate::top_delay::report(&selection, &candidate_features);
+    let wob_level = crate::wob_level::report(&ev, &selection, &baseline)?;
     let study = Study {
         params: p.clone(),
         windows: wins,
@@ -172,6 +178,8 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
         candidate_stick_torque,
         drive,
         top_delay,
+        wob_level,
+        free_runs: ev.run_counts(),
     };
     Ok((study, d, rec))
 }

@@ -79,7 +79,13 @@ fn point(ev: &Evaluator, current: &Model, top_delay_s: f64) -> Result<(ScanPoint
     let cal = ev.calibration();
     let st = structure_at(ev, current, top_delay_s);
     let (m, der) = derive(ev.data, &ev.windows[cal], ev.slip_speed_rpm, st)?;
-    let m = Model { friction_lag_s: current.friction_lag_s, mid: current.mid, drive: current.drive, ..m };
+    let m = Model {
+        friction_lag_s: current.friction_lag_s,
+        mid: current.mid,
+        drive: current.drive,
+        wob_level: current.wob_level,
+        ..m
+    };
     let vmax = ev.measured[cal].bit_speed_max_rpm * crate::data::RPM_TO_RAD_S;
     let p = ScanPoint {
         top_delay_s,
@@ -97,19 +103,26 @@ fn point(ev: &Evaluator, current: &Model, top_delay_s: f64) -> Result<(ScanPoint
 /// Step 1 of the module docs on top of `current`: every point visited, in
 /// ascending τ_top, and the index of the best (least calibration misfit; ties: the smaller |τ_top|).
 pub fn scan(ev: &Evaluator, current: &Model) -> Result<(Vec<ScanPoint>, usize), LaviError> {
+    let (pts, i) = scan_models(ev, current)?;
+    Ok((pts.into_iter().map(|p| p.0).collect(), i))
+}
+
+/// [`scan`] with each point's model (the best one is the fit's step 1: not derived twice).
+fn scan_models(ev: &Evaluator, current: &Model) -> Result<(Vec<(ScanPoint, Model)>, usize), LaviError> {
     use rayon::prelude::*;
     let fs = ev.data.fs_hz;
     let whole = |s: f64| crate::sim::delay_samples(s, fs);
     let m = whole(MAX_DELAY_S);
     let step = whole(COARSE_S).max(1);
     let coarse: Vec<isize> = (-m..=m).filter(|k| k % step == 0).collect();
-    let run = |ks: &[isize]| -> Result<Vec<ScanPoint>, LaviError> {
-        ks.par_iter().map(|&k| point(ev, current, k as f64 / fs).map(|p| p.0)).collect()
+    let run = |ks: &[isize]| -> Result<Vec<(ScanPoint, Model)>, LaviError> {
+        ks.par_iter().map(|&k| point(ev, current, k as f64 / fs)).collect()
     };
     let mut pts = run(&coarse)?;
-    let best_k = |pts: &[ScanPoint]| -> isize {
+    let best_k = |pts: &[(ScanPoint, Model)]| -> isize {
         let b = pts
             .iter()
+            .map(|p| &p.0)
             .reduce(|a, b| {
                 let key = |p: &ScanPoint| (p.calibration_misfit, p.top_delay_s.abs());
                 if key(b) < key(a) { b } else { a }
@@ -120,9 +133,9 @@ pub fn scan(ev: &Evaluator, current: &Model) -> Result<(Vec<ScanPoint>, usize), 
     let c = best_k(&pts);
     let fine: Vec<isize> = (c - step + 1..c + step).filter(|k| k.abs() <= m && k % step != 0).collect();
     pts.extend(run(&fine)?);
-    pts.sort_by(|a, b| a.top_delay_s.total_cmp(&b.top_delay_s));
+    pts.sort_by(|a, b| a.0.top_delay_s.total_cmp(&b.0.top_delay_s));
     let b = best_k(&pts);
-    let i = pts.iter().position(|p| whole(p.top_delay_s) == b).expect("the best is a point");
+    let i = pts.iter().position(|p| whole(p.0.top_delay_s) == b).expect("the best is a point");
     Ok((pts, i))
 }
 
@@ -137,8 +150,9 @@ pub fn fit(
     scan_out: &mut Vec<ScanPoint>,
 ) -> Result<(Model, usize), LaviError> {
     let cal = ev.calibration();
-    let (pts, best) = scan(ev, current)?;
-    let (_, from_torque) = point(ev, current, pts[best].top_delay_s)?;
+    let (pts, best) = scan_models(ev, current)?;
+    let from_torque = pts[best].1;
+    let pts: Vec<ScanPoint> = pts.into_iter().map(|p| p.0).collect();
     // Step 2: the law refitted by simulation on that structure (τ_top and the torque delay held).
     let (refit, n, _) = law_by_simulation(&from_torque, ev, max_evals);
     let law_from_torque = ev.misfit(&refit, cal) >= pts[best].calibration_misfit;
@@ -319,48 +333,7 @@ pub fn section(s: &crate::study::Study) -> String {
          candidate) and after (`top_delay`, step 1), and what the latter still misses (error over tolerance):\n\n| window | before: \
          targets held | after: targets held | missed after |\n|---|---|---|---|\n",
     );
-    let (mut nb, mut na) = (0, 0);
-    for wi in 1..s.windows.len() {
-        let (hb, ha) = (crate::drive::held(s, &r.before[wi], wi), crate::drive::held(s, &r.features[wi], wi));
-        nb += hb.len();
-        na += ha.len();
-        let e = crate::score::feature_errors(&s.measured[wi], &r.features[wi]);
-        let missed: Vec<String> = crate::drive::SHORT
-            .iter()
-            .zip(e)
-            .filter(|(_, x)| x.abs() > 1.0)
-            .map(|(n, x)| format!("{n} {x:+.2}"))
-            .collect();
-        let _ = writeln!(
-            md,
-            "| {} | {}: {} | {}: {} | {} |",
-            s.windows[wi].label,
-            hb.len(),
-            hb.join(", "),
-            ha.len(),
-            ha.join(", "),
-            if missed.is_empty() { "none".to_string() } else { missed.join(", ") }
-        );
-    }
-    let nh = s.windows.len() - 1;
-    let per_feature: Vec<String> = crate::FEATURES
-        .iter()
-        .enumerate()
-        .map(|(k, name)| {
-            let count = |fs: &[crate::Features]| {
-                (1..s.windows.len())
-                    .filter(|&w| crate::score::feature_errors(&s.measured[w], &fs[w])[k].abs() <= 1.0)
-                    .count()
-            };
-            format!("{name} {} → {}", count(&r.before), count(&r.features))
-        })
-        .collect();
-    let _ = writeln!(
-        md,
-        "\nTargets held on the held-out windows: {nb} of {} before, {na} after ({}, of {nh} each).\n",
-        nh * crate::features::N_FEATURES,
-        per_feature.join(", ")
-    );
+    md.push_str(&crate::drive::targets_before_after(s, &r.before, &r.features));
     let (rmin, rmax) =
         r.scan.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| (a.0.min(p.r_squared), a.1.max(p.r_squared)));
     let (kmin, kmax) = r

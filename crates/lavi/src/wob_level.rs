@@ -1,0 +1,308 @@
+//! `wob_level`: the contact's normal force is the weight on bit's slow level.
+//!
+//! Coulomb's law on the bit's face, T = r μ(Ω) N (the thesis' Eq. 4-11 idea of
+//! a normal force that varies; the rig measures it as the weight on bit W):
+//! with the law T(Ω) fitted where the mean WOB is W_ref (the calibration
+//! window's), T(Ω, t) = T(Ω) · W̄(t) / W_ref, W̄ the measured WOB's centred
+//! moving mean over `window_s` (rig_types::sensor::centred_moving_average: zero
+//! phase, the window shrinking symmetrically at the record's ends).
+//!
+//! Why the slow level and not W(t) (`wob_normal_force`): the WOB's fast part
+//! (std 9–18 % of its mean within a window, at the stick-slip frequency) is
+//! in the record's phase of the cycle, which a free run does not keep; driven
+//! into a free run it scales the friction at the wrong phase. Its level moves
+//! between the windows (526–598 N against 554 N in the calibration window)
+//! and, within 52–56 s, from 480–510 N to 550–610 N. What the record shows:
+//! the `top_delay` model's errors over tolerance on the held-out windows
+//! follow the window's mean WOB (stick fraction r = −0.70, loop area −0.63,
+//! slip torque −0.57; docs/findings.md): a friction level fitted at 554 N,
+//! too low where the WOB is above it, too high where it is below.
+//!
+//! Fit (calibration window only): the law is kept (its level is the
+//! calibration window's, W_ref its mean WOB); the span is chosen among
+//! [`SPANS_S`] by the calibration misfit (ties: the shorter), each at least
+//! a stick-slip cycle (0.3–0.45 s) so that the cycle's own WOB swing is
+//! averaged out.
+//!
+//! On run 175 (docs/findings.md, eleventh session): on top of `top_delay`
+//! every span scores worse on the calibration window than no level, whose
+//! own slow level hardly moves there (554–566 N at 4 s), so the
+//! admissibility rule refuses it, though the held-out windows would gain
+//! 6.8 % (paired t 2.48): a measured, refused candidate, reported.
+
+use crate::data::WindowSpec;
+use crate::score::Evaluator;
+use crate::select::{Selection, mean};
+use crate::sim::Model;
+use crate::{Candidate, Features, LaviError, data::Prepared};
+use rayon::prelude::*;
+use rig_types::select::{Comparison, compare};
+use rig_types::sensor::centred_moving_average;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// The spans the fit chooses among, s.
+pub const SPANS_S: [f64; 4] = [0.5, 1.0, 2.0, 4.0];
+
+/// The normal force's slow level: W̄ over `window_s`, relative to `reference_n`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct WobLevel {
+    pub window_s: f64,
+    pub reference_n: f64,
+}
+
+impl WobLevel {
+    /// The half-width of the centred mean in samples at `fs_hz` (at least 1).
+    pub fn half_samples(&self, fs_hz: f64) -> usize {
+        ((self.window_s * fs_hz).round() as usize / 2).max(1)
+    }
+
+    /// W̄ over the whole record `wob_n`, N: the workspace's centred moving
+    /// average (rig_types::sensor; zero phase, the window shrinking
+    /// symmetrically at the record's ends).
+    pub fn level_n(&self, wob_n: &[f64], fs_hz: f64) -> Vec<f64> {
+        centred_moving_average(wob_n, self.half_samples(fs_hz))
+    }
+}
+
+/// W̄ over the whole record for every span of [`SPANS_S`] (made once per study, [`Evaluator`]).
+pub fn levels(wob_n: &[f64], fs_hz: f64) -> Vec<(f64, Vec<f64>)> {
+    SPANS_S.iter().map(|&window_s| (window_s, WobLevel { window_s, reference_n: 1.0 }.level_n(wob_n, fs_hz))).collect()
+}
+
+/// The mean WOB over the calibration window's own samples, N (the law's W_ref).
+fn reference_n(d: &Prepared, cal: &WindowSpec) -> f64 {
+    let w = &d.wob_n[cal.span.start + cal.window.start..cal.span.start + cal.window.end];
+    w.iter().sum::<f64>() / w.len() as f64
+}
+
+/// Fits `wob_level` on top of `current` (module docs); fills the candidate's parameters.
+pub fn fit(current: &Model, ev: &Evaluator, params: &mut BTreeMap<String, f64>) -> Result<(Model, usize), LaviError> {
+    if current.wob_ref_n.is_some() {
+        return Err(LaviError::Refused {
+            candidate: "wob_level",
+            reason: "the instantaneous weight on bit is the model's normal force already (`wob_normal_force`)".into(),
+        });
+    }
+    let cal = ev.calibration();
+    let reference = reference_n(ev.data, &ev.windows[cal]);
+    // The spans in parallel, collected in order; the first of equal misfits (the shorter span) kept.
+    let best = SPANS_S
+        .par_iter()
+        .map(|&window_s| {
+            let m = Model { wob_level: Some(WobLevel { window_s, reference_n: reference }), ..*current };
+            (ev.misfit(&m, cal), m)
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .reduce(|a, b| if b.0 < a.0 { b } else { a })
+        .expect("spans");
+    params.insert("wob_level_window_s".into(), best.1.wob_level.map_or(f64::NAN, |l| l.window_s));
+    params.insert("reference_wob_n".into(), reference);
+    Ok((best.1, SPANS_S.len()))
+}
+
+/// What the study reports of `wob_level`: its last trial (the step the
+/// selection stopped at, or the one that added it) against the model of that
+/// step, window by window, and against the other candidates.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct WobLevelReport {
+    pub step: usize,
+    pub level: WobLevel,
+    /// The calibration misfit at each span of [`SPANS_S`] (the fit's choice).
+    pub span_misfits: Vec<f64>,
+    pub calibration_before: f64,
+    pub calibration_after: f64,
+    pub heldout_before: Vec<f64>,
+    pub heldout_after: Vec<f64>,
+    /// The engine's comparison of the trial with the model it extends, and the windows it improves.
+    pub comparison: Comparison,
+    pub wins: usize,
+    pub earns_place: bool,
+    /// Per window (calibration first): features of the model it extends and of the trial.
+    pub before: Vec<Features>,
+    pub after: Vec<Features>,
+    /// Per window: the weight on bit's mean over the window and its slow level's least and largest value there, N.
+    pub wob_n: Vec<[f64; 3]>,
+    /// The trial against each other candidate of its step (paired t of ln(M_it/M_wob_level)).
+    pub same_step: Vec<(Candidate, Comparison, usize)>,
+    /// The trial's model against each step-1 candidate, likewise.
+    pub step1: Vec<(Candidate, Comparison, usize)>,
+}
+
+/// [`WobLevelReport`] of the selection (None: `wob_level` refused at its last step, or not tried).
+pub fn report(ev: &Evaluator, sel: &Selection, baseline: &Model) -> Result<Option<WobLevelReport>, LaviError> {
+    let Some(t) = sel.trials.iter().rev().find(|t| t.candidate == Candidate::WobLevel) else { return Ok(None) };
+    let (Some(level), None) = (t.fitted.model.wob_level, &t.refused) else { return Ok(None) };
+    let prior = (t.step >= 2).then(|| &sel.trials[sel.chosen[t.step - 2]]);
+    let before_model = prior.map_or(*baseline, |p| p.fitted.model);
+    let heldout_before = prior.map_or_else(|| sel.baseline_heldout.clone(), |p| p.heldout.clone());
+    let calibration_before = prior.map_or(sel.baseline_calibration, |p| p.fitted.calibration_misfit);
+    let cal = ev.calibration();
+    let span_misfits = SPANS_S
+        .par_iter()
+        .map(|&window_s| ev.misfit(&Model { wob_level: Some(WobLevel { window_s, ..level }), ..before_model }, cal))
+        .collect();
+    let n = t.heldout.len();
+    let folds: Vec<usize> = (0..n).collect();
+    let against = |r: &crate::select::Trial| {
+        let c = compare(&r.heldout, &t.heldout, &folds, n);
+        (r.candidate, c, t.heldout.iter().zip(&r.heldout).filter(|(a, b)| a < b).count())
+    };
+    let rivals = |step: usize| -> Vec<(Candidate, Comparison, usize)> {
+        sel.trials
+            .iter()
+            .filter(|r| r.step == step && r.candidate != Candidate::WobLevel && r.refused.is_none())
+            .map(against)
+            .collect()
+    };
+    let d = ev.data;
+    let wob_n = ev
+        .windows
+        .iter()
+        .map(|w| {
+            let s = w.span.start + w.window.start..w.span.start + w.window.end;
+            let lv = &ev.wob_level_n(&level)[s.clone()];
+            let lo = lv.iter().cloned().fold(f64::INFINITY, f64::min);
+            let hi = lv.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+            [mean(&d.wob_n[s]), lo, hi]
+        })
+        .collect();
+    Ok(Some(WobLevelReport {
+        step: t.step,
+        level,
+        span_misfits,
+        calibration_before,
+        calibration_after: t.fitted.calibration_misfit,
+        comparison: compare(&heldout_before, &t.heldout, &folds, n),
+        heldout_before,
+        heldout_after: t.heldout.clone(),
+        wins: t.wins,
+        earns_place: t.earns_place,
+        before: ev.all_features(&before_model),
+        after: ev.all_features(&t.fitted.model),
+        wob_n,
+        same_step: rivals(t.step),
+        step1: if t.step == 1 { Vec::new() } else { rivals(1) },
+    }))
+}
+
+/// The `lavi.md` section of `wob_level`: the spans, the verdict of the
+/// calibration window and the rule, per window before → after, side by side.
+pub fn section(s: &crate::study::Study) -> String {
+    use std::fmt::Write as _;
+    let Some(r) = &s.wob_level else { return String::new() };
+    let nh = s.windows.len() - 1;
+    let step_model = if r.step == 1 {
+        "the baseline".to_string()
+    } else {
+        let ids: Vec<&str> =
+            s.selection.chosen[..r.step - 1].iter().map(|&i| s.selection.trials[i].candidate.id()).collect();
+        format!("baseline + {}", ids.join(" + "))
+    };
+    let mut md = String::from("## The weight on bit's slow level (`wob_level`)\n\n");
+    let _ = writeln!(
+        md,
+        "Coulomb's law on the bit's face, T = r μ(Ω) N, with the normal force N the weight on bit's slow level: the law kept at the \
+         calibration window's mean WOB W_ref = {:.1} N and scaled by W̄(t)/W_ref, W̄ the measured WOB's centred moving mean over a span \
+         chosen on the calibration window (rig_lavi::wob_level). Why: the targets the model misses follow each window's mean WOB \
+         (docs/findings.md), and the WOB's fast part is in the record's phase of the cycle, not the free run's (`wob_normal_force`). \
+         Tried at step {} on {step_model}.\n",
+        r.level.reference_n, r.step
+    );
+    md.push_str("| window | mean WOB [N] | W̄ over the window at the kept span [N] |\n|---|---|---|\n");
+    for (w, x) in s.windows.iter().zip(&r.wob_n) {
+        let _ = writeln!(md, "| {} | {:.0} | {:.0}–{:.0} |", w.label, x[0], x[1], x[2]);
+    }
+    let spans: Vec<String> = SPANS_S.iter().zip(&r.span_misfits).map(|(sp, m)| format!("{sp} s {m:.3}")).collect();
+    let (admitted, admissible) =
+        (s.selection.rule.admits(&r.comparison), r.calibration_after <= r.calibration_before + 1e-12);
+    let _ = writeln!(
+        md,
+        "\n**The fit and the verdict.** Calibration misfit per span: {} (without the level: {:.3}); kept: {} s, {:.3}. Held out: {:.3} → \
+         {:.3} (gain {:.3}, paired t {:.2}, better on {}/{} windows; per window {}). The rule (gain ≥ {:.0} %, t ≥ {}) {} it; the \
+         calibration window {}: {}.\n",
+        spans.join(", "),
+        r.calibration_before,
+        r.level.window_s,
+        r.calibration_after,
+        r.comparison.before,
+        r.comparison.after,
+        r.comparison.gain,
+        r.comparison.t,
+        r.wins,
+        nh,
+        r.heldout_before
+            .iter()
+            .zip(&r.heldout_after)
+            .map(|(b, a)| format!("{b:.3} → {a:.3}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        100.0 * s.selection.rule.min_relative_gain,
+        s.selection.rule.min_t,
+        if admitted { "admits" } else { "does not admit" },
+        if admissible { "accepts it (no worse there)" } else { "refuses it (worse there than the model it extends)" },
+        if r.earns_place { "**earns its place**" } else { "**not kept**" },
+    );
+    md.push_str(
+        "Per held-out window, the targets held (of 7) before (the model of that step) and after (`wob_level` on it), and what the \
+         latter misses (error over tolerance):\n\n| window | before: targets held | after: targets held | missed after |\n|---|---|---|---|\n",
+    );
+    md.push_str(&crate::drive::targets_before_after(s, &r.before, &r.after));
+    let side = |list: &[(Candidate, Comparison, usize)]| -> String {
+        list.iter()
+            .map(|(c, cmp, w)| {
+                format!("`{}` {:.3}, gain {:.3}, t {:.2}, {w}/{nh}", c.id(), cmp.before, cmp.gain, cmp.t)
+            })
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
+    let _ = writeln!(
+        md,
+        "**Side by side** (held-out misfit of the rival, the gain of `wob_level`'s model over it, the paired t of \
+         ln(M_rival/M_wob_level), the windows where `wob_level`'s model is better): the other candidates of step {}: {}.{}\n",
+        r.step,
+        side(&r.same_step),
+        if r.step1.is_empty() { String::new() } else { format!(" Every step-1 candidate: {}.", side(&r.step1)) }
+    );
+    md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::RPM_TO_RAD_S;
+    use crate::fit::tests::{prepared, window_4_8};
+
+    /// Steady slip at 20 rad/s (20 v_s: the law at its kinetic 1 N m) under a weight on bit that
+    /// steps from 500 to 600 N at 6 s: with W_ref 500 N and a 1 s span the friction reads 1 N m a
+    /// second before the step (its centred mean all 500 N) and 1.2 N m 1.9 s after it; without
+    /// the level, 1 N m throughout.
+    #[test]
+    fn the_friction_follows_the_weight_on_bits_slow_level() {
+        let n = 12_000;
+        let rpm = 20.0 / RPM_TO_RAD_S;
+        let bit: Vec<f64> = (0..n).map(|i| rpm + (std::f64::consts::TAU * 2.0 * i as f64 / 1000.0).sin()).collect();
+        let mut d = prepared((0..n).map(|i| i as f64 / 1000.0).collect(), vec![rpm; n], bit, vec![1.0; n]);
+        d.wob_n = (0..n).map(|i| if i < 6000 { 500.0 } else { 600.0 }).collect();
+        let fopts = crate::FeatureOptions { fs_hz: 1000.0, cutoff_hz: 10.0, transition_hz: 2.0, stick_speed_rpm: 5.0 };
+        let ev = Evaluator::new(&d, vec![window_4_8()], fopts, 5, 5.0, 1.0).unwrap();
+        let plain = crate::sim::tests::base();
+        let m = Model { wob_level: Some(WobLevel { window_s: 1.0, reference_n: 500.0 }), ..plain };
+        // The span 1000..8000: sample 5000 is index 4000, sample 7900 index 6900.
+        let (r, r0) = (ev.simulate(&m, 0).unwrap(), ev.simulate(&plain, 0).unwrap());
+        assert!(
+            (r.torque_nm[4000] - 1.0).abs() < 1e-6 && (r0.torque_nm[4000] - 1.0).abs() < 1e-6,
+            "{}",
+            r.torque_nm[4000]
+        );
+        assert!(
+            (r.torque_nm[6900] - 1.2).abs() < 1e-6 && (r0.torque_nm[6900] - 1.0).abs() < 1e-6,
+            "{}",
+            r.torque_nm[6900]
+        );
+        // The level is the workspace's centred mean: 550 N at the step, 500 and 600 N half a span away.
+        let w = ev.wob_level_n(&m.wob_level.unwrap());
+        assert!((w[6000] - 550.0).abs() < 0.1 && w[5499] == 500.0 && (w[6500] - 600.0).abs() < 1e-9, "{}", w[6000]);
+    }
+}
