@@ -612,6 +612,33 @@ pub fn tick_loss_check_of(data: &BalanceData, o: &ChannelOptions) -> ChannelChec
     )
 }
 
+/// A test run's (id, rotor angle rad, motor angle rad, force N).
+#[cfg(test)]
+pub(crate) type TestRun = (String, Vec<f64>, Vec<f64>, Vec<f64>);
+
+#[cfg(test)]
+impl Recorded {
+    /// Test records: each run's (id, rotor angle rad, motor angle rad, force
+    /// N) at `rate_hz`, steady from its first sample, without transitions;
+    /// the balance window `window_s`, J1 `j1_kgm2`, disc radius `r_m`.
+    pub(crate) fn of_channels(runs: Vec<TestRun>, rate_hz: f64, window_s: f64, r_m: f64, j1_kgm2: f64) -> Self {
+        let w = nominal_window_samples(window_s, rate_hz).max(2);
+        let runs = runs
+            .into_iter()
+            .map(|(id, rotor_rad, motor_rad, force_n)| RecordedRun {
+                id,
+                rotor_rad,
+                motor_rad,
+                force_noise_n: diff_noise(&force_n),
+                force_n,
+                from: 0,
+                transitions: Vec::new(),
+            })
+            .collect();
+        Recorded { runs, w, dt: 1.0 / rate_hz, r_m, kernel_gain: 1.0, j1_kgm2 }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::{row_at, rows};

@@ -40,6 +40,7 @@ impl StructureCandidate for TwistRateAndRotor {
             balance: f,
             aligned: None,
             sensor: None,
+            footprint: None,
         })
     }
     /// The new term is the drag on Ω1: the finding names it.

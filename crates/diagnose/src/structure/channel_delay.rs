@@ -25,7 +25,21 @@
 //! fit best. The two parameters are the delays of the rotor encoder and of
 //! the force channel, one of them 0; the fold-jackknife rule of the
 //! selection ([`super`]) then asks every fold to pick the same channel and
-//! a delay consistent across folds. When the tick-loss check flags the
+//! a delay consistent across folds. A rotor-encoder delay must also be
+//! supported by its own footprint in the records as recorded
+//! ([`StructureCandidate::support`]): the Ω1 term above, the delay
+//! C_r/K that a drag fitted on the as-recorded balance implies, at least
+//! `min_t` fold-jackknife errors above 0. A whole-sample realignment also
+//! moves the balance's dominant noise, the rotor encoder's quantisation in
+//! the Ω̇1 term (J1 times a second difference of the angle over the window),
+//! and can lower it by chance: the full battery's
+//! `ladder-angle_periodic_friction-1-10` (no delay; a steady slide under a
+//! 4 Hz angle-periodic ripple) gains 6.6 % on the balance at one sample of
+//! advance and 5.6 % at one sample of delay, the direction no recording
+//! chain makes, while the same runs re-simulated without quantisation or
+//! noise lose 13× their misfit at either; as recorded its balance wants no
+//! Ω1 term (C_r = −8.6e-6 N·m·s/rad, the one-sample delay's footprint
+//! K·dt being 5.4e-4). When the tick-loss check flags the
 //! records ([`crate::channels::tick_loss_check_of`]: the twist grows with
 //! the angle travelled, a lost tick is never given back) the rotor encoder's
 //! delays are not tried: its count falls behind, it is not late.
@@ -73,6 +87,25 @@ const PARAMS: &[ParamSpec] = &[
         meaning: "how late the brake force is recorded against the other channels",
     },
 ];
+
+/// A rotor-encoder delay's footprint in the records as recorded (module
+/// docs): the rotor encoder late by d reads the twist as tw + Ω1·d, so the
+/// balance fitted with a drag on Ω1 reads C_r = K·d; the baseline is d = 0.
+const FOOTPRINT: ParamSpec = ParamSpec {
+    name: "rotor_encoder_delay_implied_s",
+    unit: "s",
+    lower: 0.0,
+    meaning: "the rotor encoder's delay that the as-recorded balance's Ω1 term implies, C_r/K",
+};
+
+/// The delay C_r/K (s) that the as-recorded balance of the runs `include`
+/// accepts implies, its twist-rate damping and drag fitted together
+/// (Eq. 4-7's first row with the measured r·F; module docs); `None` when
+/// singular or K ≤ 0.
+fn implied_rotor_delay_s(data: &BalanceData, include: &dyn Fn(&str) -> bool) -> Option<f64> {
+    let f = data.fit(include, true, true)?;
+    (f.stiffness_nm_rad > 0.0).then(|| f.rotor_drag_nm_s_rad / f.stiffness_nm_rad)
+}
 
 /// The balance of `c` with each channel advanced by 1 … [`MAX_DELAY_S`] samples.
 pub(super) fn grid(rec: &Recorded, rate_hz: f64) -> Vec<Aligned> {
@@ -147,10 +180,24 @@ impl StructureCandidate for ChannelDelay {
             }
         }
         let mut values = vec![0.0; 2];
+        let mut footprint = None;
         if let Some(a) = best.map(|i| &data.aligned[i]) {
             values[usize::from(a.channel == DelayedChannel::Force)] = a.delay_s;
+            if a.channel == DelayedChannel::RotorEncoder {
+                footprint = implied_rotor_delay_s(&data.balance, include);
+            }
         }
-        Some(Fitted { values, balance: best_fit, aligned: best, sensor: None })
+        Some(Fitted { values, balance: best_fit, aligned: best, sensor: None, footprint })
+    }
+    /// A rotor-encoder delay is supported by its footprint as recorded, the
+    /// delay the balance's Ω1 term implies ([`implied_rotor_delay_s`]; module
+    /// docs), not by the realignment's fit alone; a force delay by its value.
+    fn support(&self, fitted: &Fitted) -> Vec<(&'static str, f64, &'static ParamSpec)> {
+        let rotor = match fitted.footprint {
+            Some(d) if fitted.values[0] > 0.0 => (FOOTPRINT.name, d, &FOOTPRINT),
+            _ => (PARAMS[0].name, fitted.values[0], &PARAMS[0]),
+        };
+        vec![rotor, (PARAMS[1].name, fitted.values[1], &PARAMS[1])]
     }
     /// The rig is the model's: only the record is late.
     fn apply(&self, model: &RigParams, _fitted: &Fitted) -> RigParams {
@@ -186,5 +233,77 @@ impl StructureCandidate for ChannelDelay {
     }
     fn finding_id(&self) -> Option<&'static str> {
         Some(ID)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{FOOTPRINT, PARAMS, implied_rotor_delay_s};
+    use crate::channels::Recorded;
+    use crate::structure::{Fitted, StructureCandidate};
+
+    /// Steady slides at five speeds under a 4 Hz ripple of the rotor, the
+    /// force from Eq. 4-7's first row (K, C on the twist rate, no drag), the
+    /// angles quantised by a 1000-tick encoder; the rotor encoder recorded
+    /// `late` samples late.
+    fn records(late: usize) -> Recorded {
+        let (rate, n, j1, k, c, r_m) = (500.0, 15_000usize, 0.03, 0.27, 0.015, 0.09);
+        let tick = 2.0 * std::f64::consts::PI / 1000.0;
+        let q = |x: f64| (x / tick).floor() * tick;
+        let w_rip = 2.0 * std::f64::consts::PI * 4.0;
+        let runs = [2.0, 4.0, 7.0, 11.0, 15.0]
+            .iter()
+            .enumerate()
+            .map(|(i, &omega)| {
+                let t = |j: usize| j as f64 / rate;
+                // φ1 = Ωt + A sin(ω t); φ2 = Ωt + tw0 (the drive holds its speed);
+                // the mean twist (the normal force's friction) not a line in Ω.
+                let (a, tw0) = (0.004, [0.6, 0.3, 0.9, 0.45, 0.75][i]);
+                let phi1 = |x: f64| omega * x + a * (w_rip * x).sin();
+                let force: Vec<f64> = (0..n)
+                    .map(|j| {
+                        let x = t(j);
+                        let tw = tw0 - a * (w_rip * x).sin();
+                        let twd = -a * w_rip * (w_rip * x).cos();
+                        let acc = -a * w_rip * w_rip * (w_rip * x).sin();
+                        (k * tw + c * twd - j1 * acc) / r_m
+                    })
+                    .collect();
+                let rotor = (0..n).map(|j| q(phi1(t(j) - late as f64 / rate))).collect();
+                let motor = (0..n).map(|j| q(omega * t(j) + tw0)).collect();
+                (format!("op-{i}"), rotor, motor, force)
+            })
+            .collect();
+        Recorded::of_channels(runs, rate, 0.1, r_m, j1)
+    }
+
+    /// The footprint of a late rotor encoder in the balance as recorded: a
+    /// drag C_r = K·d on Ω1 (module docs), so C_r/K gives the delay back;
+    /// without a delay it is ≈ 0 (well below one sample), whatever the
+    /// quantisation does to the realigned balances.
+    #[test]
+    fn a_late_rotor_encoder_shows_as_its_delay_in_the_as_recorded_drag() {
+        let dt = 1.0 / 500.0;
+        for late in [0usize, 2, 4] {
+            let rec = records(late);
+            let d = implied_rotor_delay_s(&rec.balance(), &|_| true).expect("a fit");
+            assert!((d - late as f64 * dt).abs() < 0.25 * dt, "{late} samples late: implied {d:.2e} s");
+        }
+    }
+
+    /// The rotor delay is supported by that footprint, the force delay by its value.
+    #[test]
+    fn the_rotor_delay_is_supported_by_its_footprint() {
+        let balance = crate::channels::BalanceFit {
+            stiffness_nm_rad: 0.27,
+            twist_damping_nm_s_rad: 0.0,
+            rotor_drag_nm_s_rad: 0.0,
+            offset_nm: 0.0,
+        };
+        let f = |values: Vec<f64>, footprint| Fitted { values, balance, aligned: None, sensor: None, footprint };
+        let rotor = super::ChannelDelay.support(&f(vec![0.002, 0.0], Some(1e-5)));
+        assert_eq!((rotor[0].0, rotor[0].1), (FOOTPRINT.name, 1e-5));
+        let force = super::ChannelDelay.support(&f(vec![0.0, 0.006], None));
+        assert_eq!((force[0].0, force[0].1, force[1].1), (PARAMS[0].name, 0.0, 0.006));
     }
 }

@@ -165,6 +165,11 @@ pub struct Fitted {
     pub aligned: Option<usize>,
     /// Index into [`StructureData::sensors`]; `None`: no sensor model.
     pub sensor: Option<usize>,
+    /// The candidate's own footprint read on the records as recorded, where
+    /// it has one besides the fit ([`StructureCandidate::support`]): a
+    /// rotor-encoder delay's, the delay the as-recorded balance's Ω1 term
+    /// implies, C_r/K in s ([`channel_delay`]); `None` otherwise.
+    pub footprint: Option<f64>,
 }
 
 /// The rotor balance of the records as recorded, and realigned: one channel
@@ -893,7 +898,7 @@ mod tests {
             rotor_drag_nm_s_rad: 0.0,
             offset_nm: 0.0,
         };
-        Fitted { values, balance, aligned: None, sensor: None }
+        Fitted { values, balance, aligned: None, sensor: None, footprint: None }
     }
 
     /// The grid's edge on the side of the largest lag, and only there

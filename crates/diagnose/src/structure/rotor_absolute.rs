@@ -35,7 +35,7 @@ impl StructureCandidate for RotorAbsolute {
     }
     fn fit(&self, _model: &RigParams, data: &StructureData, include: &dyn Fn(&str) -> bool) -> Option<Fitted> {
         let f = data.balance.fit(include, false, true)?;
-        Some(Fitted { values: vec![f.rotor_drag_nm_s_rad], balance: f, aligned: None, sensor: None })
+        Some(Fitted { values: vec![f.rotor_drag_nm_s_rad], balance: f, aligned: None, sensor: None, footprint: None })
     }
     fn finding_id(&self) -> Option<&'static str> {
         Some(FINDING)

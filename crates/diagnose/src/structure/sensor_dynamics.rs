@@ -369,7 +369,7 @@ fn fit_sensor(sensor: Sensor, data: &StructureData, include: &dyn Fn(&str) -> bo
     }
     let values =
         best.map_or(vec![0.0, 0.0], |i| vec![data.sensors[i].natural_frequency_hz, data.sensors[i].damping_ratio]);
-    Some(Fitted { values, balance: best_fit, aligned: None, sensor: best })
+    Some(Fitted { values, balance: best_fit, aligned: None, sensor: best, footprint: None })
 }
 
 /// Seconds of the ring average before the aligned drop.

@@ -32,7 +32,13 @@ impl StructureCandidate for TwistRate {
     /// refitted on the same runs (no drag).
     fn fit(&self, model: &RigParams, data: &StructureData, include: &dyn Fn(&str) -> bool) -> Option<Fitted> {
         let balance = data.balance.fit(include, true, false)?;
-        Some(Fitted { values: vec![model.shaft_damping_nm_s_rad], balance, aligned: None, sensor: None })
+        Some(Fitted {
+            values: vec![model.shaft_damping_nm_s_rad],
+            balance,
+            aligned: None,
+            sensor: None,
+            footprint: None,
+        })
     }
     fn apply(&self, model: &RigParams, _fitted: &Fitted) -> RigParams {
         model.clone()
