@@ -835,14 +835,20 @@ impl SinCosSchedule {
 /// order (angle kind, `orders`, usually 1..=max_order), then Gauss–Newton on
 /// the shared (μk, a[, f]) and per-run θ_r. Returns the best fit.
 ///
-/// The angle kind takes full Newton steps where they are descent steps: its
-/// runs share one amplitude, so on data whose runs differ in amplitude (or
-/// that carry no angle modulation at all) the residual stays correlated with
-/// each run's sine, the curvature Gauss–Newton leaves out (Σ w r ∂²f) is as
-/// large as the one it keeps, and its phase steps overshoot: a quarter step
+/// Both kinds take full Newton steps where they are descent steps: the runs
+/// share one amplitude, so on data whose runs differ in amplitude (or that
+/// carry no such modulation at all) the residual stays correlated with each
+/// run's sine, the curvature Gauss–Newton leaves out (Σ w r ∂²f) is as large
+/// as the one it keeps, and its phase steps overshoot: a quarter step
 /// accepted per iteration, the phases creeping by ~3 % of their distance per
 /// iteration, 30 iterations without convergence on the emulated campaign.
 /// With the exact Hessian the same optimum is reached in a few iterations.
+/// The time kind's frequency zig-zagged the same way (issue 23: a time sine
+/// fitted to an angle-periodic rung's runs, whose angle modulation shows in
+/// time at a frequency near n·Ω/2π with run-to-run amplitudes, moved f by
+/// ±10⁻⁴ Hz per iteration, the predicted decrease shrinking by ≈ 15 % per
+/// iteration and still 0.3 σ² after the 30th; with the exact Hessian,
+/// including f's terms, 2–4 iterations reach the stop rule).
 pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeInclusive<u32>) -> Option<FrictionFit> {
     if d.is_empty() {
         return None;
@@ -923,19 +929,36 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeIn
     let mut converged = false;
     let mut ne_last = None;
     for _ in 0..30 {
-        // Angle kind: −Σ w r ∂²f/∂p∂q of f = μk(1 + a sin(x + θ_r)) (the terms
-        // Gauss–Newton drops), over (μk, a) and per run (μk, θ_r), (a, θ_r), (θ_r, θ_r).
-        let (mut h_mk_a, mut h_th) = (0.0, vec![[0.0; 3]; if time_kind { 0 } else { d.n_runs }]);
+        // −Σ w r ∂²f/∂p∂q of f = μk(1 + a sin(x + θ_r)) (the terms
+        // Gauss–Newton drops), x = 2πf·t (time kind) or n·φ (angle kind):
+        // over the shared (μk, a[, f]) and per run (μk, θ_r), (a, θ_r),
+        // [(f, θ_r),] (θ_r, θ_r). With the time kind's f, ∂x/∂f = 2πt:
+        // ∂²f/∂μk∂f = a c 2πt, ∂²f/∂a∂f = μk c 2πt, ∂²f/∂f² = −μk a s (2πt)²,
+        // ∂²f/∂f∂θ = −μk a s 2πt.
+        let mut h_shared = [[0.0f64; 3]; 3];
+        let mut h_th = vec![[0.0f64; 4]; d.n_runs];
         // Rows (μk, a[, f]) shared and θ_r of the sample's run: an arrow
         // (ArrowNormal: the sums add_sparse would make, bit for bit).
         let (mk, a) = (theta[0], theta[1]);
         let ne = if time_kind {
             let mut arrow = ArrowNormal::<3, 1>::new(d.n_runs);
             for (i, &(s, c)) in sc.iter().enumerate() {
+                let r = d.run[i];
                 let sw = sw[i];
                 let e = d.mu[i] - mk * (1.0 + a * s);
-                let shared = [sw * (1.0 + a * s), sw * mk * s, sw * mk * a * c * 2.0 * PI * d.t[i]];
-                arrow.add(&shared, d.run[i], &[sw * mk * a * c], sw * e);
+                let tt = 2.0 * PI * d.t[i];
+                let we = w[i] * e;
+                h_shared[0][1] -= we * s;
+                h_shared[0][2] -= we * a * c * tt;
+                h_shared[1][2] -= we * mk * c * tt;
+                h_shared[2][2] += we * mk * a * s * tt * tt;
+                let h = &mut h_th[r];
+                h[0] -= we * a * c;
+                h[1] -= we * mk * c;
+                h[2] += we * mk * a * s * tt;
+                h[3] += we * mk * a * s;
+                let shared = [sw * (1.0 + a * s), sw * mk * s, sw * mk * a * c * tt];
+                arrow.add(&shared, r, &[sw * mk * a * c], sw * e);
             }
             arrow.into_normal()
         } else {
@@ -945,31 +968,39 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeIn
                 let sw = sw[i];
                 let e = d.mu[i] - mk * (1.0 + a * s);
                 let we = w[i] * e;
-                h_mk_a -= we * s;
+                h_shared[0][1] -= we * s;
                 let h = &mut h_th[r];
                 h[0] -= we * a * c;
                 h[1] -= we * mk * c;
-                h[2] += we * mk * a * s;
+                h[3] += we * mk * a * s;
                 arrow.add(&[sw * (1.0 + a * s), sw * mk * s], r, &[sw * mk * a * c], sw * e);
             }
             arrow.into_normal()
         };
-        let newton = (!time_kind)
-            .then(|| {
-                let mut h = ne.clone();
-                h.ata[(0, 1)] += h_mk_a;
-                h.ata[(1, 0)] += h_mk_a;
-                for (r, x) in h_th.iter().enumerate() {
-                    let j = 2 + r;
-                    for (k, v) in [(0, x[0]), (1, x[1])] {
-                        h.ata[(k, j)] += v;
-                        h.ata[(j, k)] += v;
+        // The Newton step where the Hessian is positive definite (Cholesky).
+        let newton = {
+            let k = 2 + nf;
+            let mut h = ne.clone();
+            for p in 0..k {
+                for q in p..k {
+                    if p != q {
+                        h.ata[(p, q)] += h_shared[p][q];
+                        h.ata[(q, p)] += h_shared[p][q];
+                    } else {
+                        h.ata[(p, p)] += h_shared[p][p];
                     }
-                    h.ata[(j, j)] += x[2];
                 }
-                h.solve()
-            })
-            .flatten();
+            }
+            for (r, x) in h_th.iter().enumerate() {
+                let j = k + r;
+                for (p, v) in [(0, x[0]), (1, x[1]), (2, x[2])].into_iter().take(k) {
+                    h.ata[(p, j)] += v;
+                    h.ata[(j, p)] += v;
+                }
+                h.ata[(j, j)] += x[3];
+            }
+            h.solve()
+        };
         let gauss_newton = ne.solve();
         if newton.is_none() && gauss_newton.is_none() {
             break;
