@@ -9,6 +9,7 @@ use rig_estimate::linear::{ArrowNormal, Normal};
 use rig_types::minimize::brent_min;
 use std::f64::consts::PI;
 use std::ops::RangeInclusive;
+use std::sync::Arc;
 
 /// A friction law in slip, with its shared parameters.
 #[derive(Debug, Clone, PartialEq)]
@@ -28,12 +29,18 @@ pub enum FrictionModel {
 }
 
 /// Slip samples of a set of runs, flattened, with per-run weights.
+///
+/// The regressors (run, t, φ1, |Ω1|) are shared ([`Arc`]) and the target μ
+/// owned: the composite's blocks and the held-out phases refit the same
+/// samples against a new target (`composite::fit_composite_with`'s `work`,
+/// `composite::heldout_phases`), and a copy of the data copies one column, not five (the five columns' copy and
+/// its page faults were ≈ 3 % of a ladder rung's CPU in `perf`, issue 23).
 #[derive(Debug, Clone, Default)]
 pub struct SlipData {
-    pub run: Vec<usize>,
-    pub t: Vec<f64>,
-    pub phi: Vec<f64>,
-    pub omega: Vec<f64>,
+    pub run: Arc<Vec<usize>>,
+    pub t: Arc<Vec<f64>>,
+    pub phi: Arc<Vec<f64>>,
+    pub omega: Arc<Vec<f64>>,
     pub mu: Vec<f64>,
     /// Weight of each run: (N0/σ_F)², so weighted residuals are in noise units.
     pub run_weight: Vec<f64>,
@@ -56,6 +63,7 @@ impl SlipData {
     /// almost all of the information).
     pub fn from_runs_spaced(runs: &[&RunSignals], spacing_s: f64) -> Self {
         let mut d = SlipData { n_runs: runs.len(), ..Default::default() };
+        let (mut run, mut t, mut phi, mut omega) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for (r, s) in runs.iter().enumerate() {
             let sd = (s.force_noise_n / s.normal_force_n.max(1e-9)).max(1e-6);
             d.run_weight.push(1.0 / (sd * sd));
@@ -65,13 +73,14 @@ impl SlipData {
                 if k % every != 0 {
                     continue;
                 }
-                d.run.push(r);
-                d.t.push(s.time_s[k]);
-                d.phi.push(s.rotor_angle_rad[k]);
-                d.omega.push(s.rotor_speed_rad_s[k].abs());
+                run.push(r);
+                t.push(s.time_s[k]);
+                phi.push(s.rotor_angle_rad[k]);
+                omega.push(s.rotor_speed_rad_s[k].abs());
                 d.mu.push(s.mu_obs[j]);
             }
         }
+        (d.run, d.t, d.phi, d.omega) = (Arc::new(run), Arc::new(t), Arc::new(phi), Arc::new(omega));
         d
     }
     pub fn len(&self) -> usize {
@@ -92,10 +101,10 @@ impl SlipData {
     pub(crate) fn subsample(&self, k: usize) -> SlipData {
         let keep: Vec<usize> = (0..self.len()).step_by(k.max(1)).collect();
         SlipData {
-            run: keep.iter().map(|&i| self.run[i]).collect(),
-            t: keep.iter().map(|&i| self.t[i]).collect(),
-            phi: keep.iter().map(|&i| self.phi[i]).collect(),
-            omega: keep.iter().map(|&i| self.omega[i]).collect(),
+            run: Arc::new(keep.iter().map(|&i| self.run[i]).collect()),
+            t: Arc::new(keep.iter().map(|&i| self.t[i]).collect()),
+            phi: Arc::new(keep.iter().map(|&i| self.phi[i]).collect()),
+            omega: Arc::new(keep.iter().map(|&i| self.omega[i]).collect()),
             mu: keep.iter().map(|&i| self.mu[i]).collect(),
             run_weight: self.run_weight.clone(),
             n_runs: self.n_runs,
@@ -1270,10 +1279,10 @@ pub(crate) mod tests {
                 let t = k as f64 * 0.002;
                 let w = 0.6 + 14.4 * ((t + 0.37 * r as f64) % 2.0) / 2.0;
                 phi += w * 0.002;
-                d.run.push(r);
-                d.t.push(t);
-                d.phi.push(phi);
-                d.omega.push(w);
+                Arc::make_mut(&mut d.run).push(r);
+                Arc::make_mut(&mut d.t).push(t);
+                Arc::make_mut(&mut d.phi).push(phi);
+                Arc::make_mut(&mut d.omega).push(w);
                 d.mu.push(law(r, t, phi, w) + sigma * noise(&mut seed));
             }
         }
@@ -1420,10 +1429,10 @@ pub(crate) mod tests {
                 if (10_000..10_400).contains(&k) {
                     continue; // stuck
                 }
-                d.run.push(r);
-                d.t.push(3.0 + k as f64 / 500.0);
-                d.phi.push(0.0);
-                d.omega.push(1.0);
+                Arc::make_mut(&mut d.run).push(r);
+                Arc::make_mut(&mut d.t).push(3.0 + k as f64 / 500.0);
+                Arc::make_mut(&mut d.phi).push(0.0);
+                Arc::make_mut(&mut d.omega).push(1.0);
                 d.mu.push(1.0);
             }
         }
@@ -1462,10 +1471,10 @@ pub(crate) mod tests {
                 if (1200..1250).contains(&k) {
                     continue;
                 }
-                d.run.push(r);
-                d.t.push(t);
-                d.phi.push(0.0);
-                d.omega.push(1.0);
+                Arc::make_mut(&mut d.run).push(r);
+                Arc::make_mut(&mut d.t).push(t);
+                Arc::make_mut(&mut d.phi).push(0.0);
+                Arc::make_mut(&mut d.omega).push(1.0);
                 d.mu.push(1.0);
             }
         }
