@@ -1360,10 +1360,10 @@ pub(crate) mod tests {
         // Keep 60 % of each 1 s (slip phases), shift run r by 7.3·r s, weigh it 1 + r.
         let keep: Vec<usize> = (0..full.len()).filter(|&i| (full.t[i] % 1.0) < 0.6).collect();
         let mut d = SlipData {
-            run: keep.iter().map(|&i| full.run[i]).collect(),
-            t: keep.iter().map(|&i| full.t[i] + 7.3 * full.run[i] as f64).collect(),
-            phi: keep.iter().map(|&i| full.phi[i]).collect(),
-            omega: keep.iter().map(|&i| full.omega[i]).collect(),
+            run: Arc::new(keep.iter().map(|&i| full.run[i]).collect()),
+            t: Arc::new(keep.iter().map(|&i| full.t[i] + 7.3 * full.run[i] as f64).collect()),
+            phi: Arc::new(keep.iter().map(|&i| full.phi[i]).collect()),
+            omega: Arc::new(keep.iter().map(|&i| full.omega[i]).collect()),
             mu: keep.iter().map(|&i| full.mu[i]).collect(),
             run_weight: vec![1.0, 2.0, 3.0],
             n_runs: 3,
@@ -1383,7 +1383,7 @@ pub(crate) mod tests {
         // A grid whose start is not a multiple of its step, and samples off the grid, are declined.
         let shifted: Vec<f64> = freqs.iter().map(|f| f + 0.003).collect();
         assert!(time_scan_fft(&d, &shifted).is_none());
-        d.t[5] += 0.3e-3;
+        Arc::make_mut(&mut d.t)[5] += 0.3e-3;
         assert!(time_scan_fft(&d, &freqs).is_none());
     }
 
