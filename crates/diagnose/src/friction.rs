@@ -990,13 +990,11 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeIn
         let newton = {
             let k = 2 + nf;
             let mut h = ne.clone();
-            for p in 0..k {
-                for q in p..k {
+            for (p, row) in h_shared.iter().enumerate().take(k) {
+                for (q, &v) in row.iter().enumerate().take(k).skip(p) {
+                    h.ata[(p, q)] += v;
                     if p != q {
-                        h.ata[(p, q)] += h_shared[p][q];
-                        h.ata[(q, p)] += h_shared[p][q];
-                    } else {
-                        h.ata[(p, p)] += h_shared[p][p];
+                        h.ata[(q, p)] += v;
                     }
                 }
             }
