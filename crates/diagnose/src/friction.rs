@@ -9,6 +9,7 @@ use rig_estimate::linear::{ArrowNormal, Normal};
 use rig_types::minimize::brent_min;
 use std::f64::consts::PI;
 use std::ops::RangeInclusive;
+use std::sync::Arc;
 
 /// A friction law in slip, with its shared parameters.
 #[derive(Debug, Clone, PartialEq)]
@@ -28,12 +29,18 @@ pub enum FrictionModel {
 }
 
 /// Slip samples of a set of runs, flattened, with per-run weights.
+///
+/// The regressors (run, t, φ1, |Ω1|) are shared ([`Arc`]) and the target μ
+/// owned: the composite's blocks and the held-out phases refit the same
+/// samples against a new target (`composite::fit_composite_with`'s `work`,
+/// `composite::heldout_phases`), and a copy of the data copies one column, not five (the five columns' copy and
+/// its page faults were ≈ 3 % of a ladder rung's CPU in `perf`, issue 23).
 #[derive(Debug, Clone, Default)]
 pub struct SlipData {
-    pub run: Vec<usize>,
-    pub t: Vec<f64>,
-    pub phi: Vec<f64>,
-    pub omega: Vec<f64>,
+    pub run: Arc<Vec<usize>>,
+    pub t: Arc<Vec<f64>>,
+    pub phi: Arc<Vec<f64>>,
+    pub omega: Arc<Vec<f64>>,
     pub mu: Vec<f64>,
     /// Weight of each run: (N0/σ_F)², so weighted residuals are in noise units.
     pub run_weight: Vec<f64>,
@@ -56,6 +63,7 @@ impl SlipData {
     /// almost all of the information).
     pub fn from_runs_spaced(runs: &[&RunSignals], spacing_s: f64) -> Self {
         let mut d = SlipData { n_runs: runs.len(), ..Default::default() };
+        let (mut run, mut t, mut phi, mut omega) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for (r, s) in runs.iter().enumerate() {
             let sd = (s.force_noise_n / s.normal_force_n.max(1e-9)).max(1e-6);
             d.run_weight.push(1.0 / (sd * sd));
@@ -65,13 +73,14 @@ impl SlipData {
                 if k % every != 0 {
                     continue;
                 }
-                d.run.push(r);
-                d.t.push(s.time_s[k]);
-                d.phi.push(s.rotor_angle_rad[k]);
-                d.omega.push(s.rotor_speed_rad_s[k].abs());
+                run.push(r);
+                t.push(s.time_s[k]);
+                phi.push(s.rotor_angle_rad[k]);
+                omega.push(s.rotor_speed_rad_s[k].abs());
                 d.mu.push(s.mu_obs[j]);
             }
         }
+        (d.run, d.t, d.phi, d.omega) = (Arc::new(run), Arc::new(t), Arc::new(phi), Arc::new(omega));
         d
     }
     pub fn len(&self) -> usize {
@@ -92,10 +101,10 @@ impl SlipData {
     pub(crate) fn subsample(&self, k: usize) -> SlipData {
         let keep: Vec<usize> = (0..self.len()).step_by(k.max(1)).collect();
         SlipData {
-            run: keep.iter().map(|&i| self.run[i]).collect(),
-            t: keep.iter().map(|&i| self.t[i]).collect(),
-            phi: keep.iter().map(|&i| self.phi[i]).collect(),
-            omega: keep.iter().map(|&i| self.omega[i]).collect(),
+            run: Arc::new(keep.iter().map(|&i| self.run[i]).collect()),
+            t: Arc::new(keep.iter().map(|&i| self.t[i]).collect()),
+            phi: Arc::new(keep.iter().map(|&i| self.phi[i]).collect()),
+            omega: Arc::new(keep.iter().map(|&i| self.omega[i]).collect()),
             mu: keep.iter().map(|&i| self.mu[i]).collect(),
             run_weight: self.run_weight.clone(),
             n_runs: self.n_runs,
@@ -835,14 +844,20 @@ impl SinCosSchedule {
 /// order (angle kind, `orders`, usually 1..=max_order), then Gauss–Newton on
 /// the shared (μk, a[, f]) and per-run θ_r. Returns the best fit.
 ///
-/// The angle kind takes full Newton steps where they are descent steps: its
-/// runs share one amplitude, so on data whose runs differ in amplitude (or
-/// that carry no angle modulation at all) the residual stays correlated with
-/// each run's sine, the curvature Gauss–Newton leaves out (Σ w r ∂²f) is as
-/// large as the one it keeps, and its phase steps overshoot: a quarter step
+/// Both kinds take full Newton steps where they are descent steps: the runs
+/// share one amplitude, so on data whose runs differ in amplitude (or that
+/// carry no such modulation at all) the residual stays correlated with each
+/// run's sine, the curvature Gauss–Newton leaves out (Σ w r ∂²f) is as large
+/// as the one it keeps, and its phase steps overshoot: a quarter step
 /// accepted per iteration, the phases creeping by ~3 % of their distance per
 /// iteration, 30 iterations without convergence on the emulated campaign.
 /// With the exact Hessian the same optimum is reached in a few iterations.
+/// The time kind's frequency zig-zagged the same way (issue 23: a time sine
+/// fitted to an angle-periodic rung's runs, whose angle modulation shows in
+/// time at a frequency near n·Ω/2π with run-to-run amplitudes, moved f by
+/// ±10⁻⁴ Hz per iteration, the predicted decrease shrinking by ≈ 15 % per
+/// iteration and still 0.3 σ² after the 30th; with the exact Hessian,
+/// including f's terms, 2–4 iterations reach the stop rule).
 pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeInclusive<u32>) -> Option<FrictionFit> {
     if d.is_empty() {
         return None;
@@ -923,19 +938,36 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeIn
     let mut converged = false;
     let mut ne_last = None;
     for _ in 0..30 {
-        // Angle kind: −Σ w r ∂²f/∂p∂q of f = μk(1 + a sin(x + θ_r)) (the terms
-        // Gauss–Newton drops), over (μk, a) and per run (μk, θ_r), (a, θ_r), (θ_r, θ_r).
-        let (mut h_mk_a, mut h_th) = (0.0, vec![[0.0; 3]; if time_kind { 0 } else { d.n_runs }]);
+        // −Σ w r ∂²f/∂p∂q of f = μk(1 + a sin(x + θ_r)) (the terms
+        // Gauss–Newton drops), x = 2πf·t (time kind) or n·φ (angle kind):
+        // over the shared (μk, a[, f]) and per run (μk, θ_r), (a, θ_r),
+        // [(f, θ_r),] (θ_r, θ_r). With the time kind's f, ∂x/∂f = 2πt:
+        // ∂²f/∂μk∂f = a c 2πt, ∂²f/∂a∂f = μk c 2πt, ∂²f/∂f² = −μk a s (2πt)²,
+        // ∂²f/∂f∂θ = −μk a s 2πt.
+        let mut h_shared = [[0.0f64; 3]; 3];
+        let mut h_th = vec![[0.0f64; 4]; d.n_runs];
         // Rows (μk, a[, f]) shared and θ_r of the sample's run: an arrow
         // (ArrowNormal: the sums add_sparse would make, bit for bit).
         let (mk, a) = (theta[0], theta[1]);
         let ne = if time_kind {
             let mut arrow = ArrowNormal::<3, 1>::new(d.n_runs);
             for (i, &(s, c)) in sc.iter().enumerate() {
+                let r = d.run[i];
                 let sw = sw[i];
                 let e = d.mu[i] - mk * (1.0 + a * s);
-                let shared = [sw * (1.0 + a * s), sw * mk * s, sw * mk * a * c * 2.0 * PI * d.t[i]];
-                arrow.add(&shared, d.run[i], &[sw * mk * a * c], sw * e);
+                let tt = 2.0 * PI * d.t[i];
+                let we = w[i] * e;
+                h_shared[0][1] -= we * s;
+                h_shared[0][2] -= we * a * c * tt;
+                h_shared[1][2] -= we * mk * c * tt;
+                h_shared[2][2] += we * mk * a * s * tt * tt;
+                let h = &mut h_th[r];
+                h[0] -= we * a * c;
+                h[1] -= we * mk * c;
+                h[2] += we * mk * a * s * tt;
+                h[3] += we * mk * a * s;
+                let shared = [sw * (1.0 + a * s), sw * mk * s, sw * mk * a * c * tt];
+                arrow.add(&shared, r, &[sw * mk * a * c], sw * e);
             }
             arrow.into_normal()
         } else {
@@ -945,31 +977,37 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeIn
                 let sw = sw[i];
                 let e = d.mu[i] - mk * (1.0 + a * s);
                 let we = w[i] * e;
-                h_mk_a -= we * s;
+                h_shared[0][1] -= we * s;
                 let h = &mut h_th[r];
                 h[0] -= we * a * c;
                 h[1] -= we * mk * c;
-                h[2] += we * mk * a * s;
+                h[3] += we * mk * a * s;
                 arrow.add(&[sw * (1.0 + a * s), sw * mk * s], r, &[sw * mk * a * c], sw * e);
             }
             arrow.into_normal()
         };
-        let newton = (!time_kind)
-            .then(|| {
-                let mut h = ne.clone();
-                h.ata[(0, 1)] += h_mk_a;
-                h.ata[(1, 0)] += h_mk_a;
-                for (r, x) in h_th.iter().enumerate() {
-                    let j = 2 + r;
-                    for (k, v) in [(0, x[0]), (1, x[1])] {
-                        h.ata[(k, j)] += v;
-                        h.ata[(j, k)] += v;
+        // The Newton step where the Hessian is positive definite (Cholesky).
+        let newton = {
+            let k = 2 + nf;
+            let mut h = ne.clone();
+            for (p, row) in h_shared.iter().enumerate().take(k) {
+                for (q, &v) in row.iter().enumerate().take(k).skip(p) {
+                    h.ata[(p, q)] += v;
+                    if p != q {
+                        h.ata[(q, p)] += v;
                     }
-                    h.ata[(j, j)] += x[2];
                 }
-                h.solve()
-            })
-            .flatten();
+            }
+            for (r, x) in h_th.iter().enumerate() {
+                let j = k + r;
+                for (p, v) in [(0, x[0]), (1, x[1]), (2, x[2])].into_iter().take(k) {
+                    h.ata[(p, j)] += v;
+                    h.ata[(j, p)] += v;
+                }
+                h.ata[(j, j)] += x[3];
+            }
+            h.solve()
+        };
         let gauss_newton = ne.solve();
         if newton.is_none() && gauss_newton.is_none() {
             break;
@@ -1239,10 +1277,10 @@ pub(crate) mod tests {
                 let t = k as f64 * 0.002;
                 let w = 0.6 + 14.4 * ((t + 0.37 * r as f64) % 2.0) / 2.0;
                 phi += w * 0.002;
-                d.run.push(r);
-                d.t.push(t);
-                d.phi.push(phi);
-                d.omega.push(w);
+                Arc::make_mut(&mut d.run).push(r);
+                Arc::make_mut(&mut d.t).push(t);
+                Arc::make_mut(&mut d.phi).push(phi);
+                Arc::make_mut(&mut d.omega).push(w);
                 d.mu.push(law(r, t, phi, w) + sigma * noise(&mut seed));
             }
         }
@@ -1320,10 +1358,10 @@ pub(crate) mod tests {
         // Keep 60 % of each 1 s (slip phases), shift run r by 7.3·r s, weigh it 1 + r.
         let keep: Vec<usize> = (0..full.len()).filter(|&i| (full.t[i] % 1.0) < 0.6).collect();
         let mut d = SlipData {
-            run: keep.iter().map(|&i| full.run[i]).collect(),
-            t: keep.iter().map(|&i| full.t[i] + 7.3 * full.run[i] as f64).collect(),
-            phi: keep.iter().map(|&i| full.phi[i]).collect(),
-            omega: keep.iter().map(|&i| full.omega[i]).collect(),
+            run: Arc::new(keep.iter().map(|&i| full.run[i]).collect()),
+            t: Arc::new(keep.iter().map(|&i| full.t[i] + 7.3 * full.run[i] as f64).collect()),
+            phi: Arc::new(keep.iter().map(|&i| full.phi[i]).collect()),
+            omega: Arc::new(keep.iter().map(|&i| full.omega[i]).collect()),
             mu: keep.iter().map(|&i| full.mu[i]).collect(),
             run_weight: vec![1.0, 2.0, 3.0],
             n_runs: 3,
@@ -1343,7 +1381,7 @@ pub(crate) mod tests {
         // A grid whose start is not a multiple of its step, and samples off the grid, are declined.
         let shifted: Vec<f64> = freqs.iter().map(|f| f + 0.003).collect();
         assert!(time_scan_fft(&d, &shifted).is_none());
-        d.t[5] += 0.3e-3;
+        Arc::make_mut(&mut d.t)[5] += 0.3e-3;
         assert!(time_scan_fft(&d, &freqs).is_none());
     }
 
@@ -1389,10 +1427,10 @@ pub(crate) mod tests {
                 if (10_000..10_400).contains(&k) {
                     continue; // stuck
                 }
-                d.run.push(r);
-                d.t.push(3.0 + k as f64 / 500.0);
-                d.phi.push(0.0);
-                d.omega.push(1.0);
+                Arc::make_mut(&mut d.run).push(r);
+                Arc::make_mut(&mut d.t).push(3.0 + k as f64 / 500.0);
+                Arc::make_mut(&mut d.phi).push(0.0);
+                Arc::make_mut(&mut d.omega).push(1.0);
                 d.mu.push(1.0);
             }
         }
@@ -1431,10 +1469,10 @@ pub(crate) mod tests {
                 if (1200..1250).contains(&k) {
                     continue;
                 }
-                d.run.push(r);
-                d.t.push(t);
-                d.phi.push(0.0);
-                d.omega.push(1.0);
+                Arc::make_mut(&mut d.run).push(r);
+                Arc::make_mut(&mut d.t).push(t);
+                Arc::make_mut(&mut d.phi).push(0.0);
+                Arc::make_mut(&mut d.omega).push(1.0);
                 d.mu.push(1.0);
             }
         }
