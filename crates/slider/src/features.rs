@@ -131,7 +131,9 @@ pub struct Features {
     pub creep: Spread,
     /// The force's rise over the middle three fifths of each loading phase,
     /// in units of L = k V/(m g) (stated k and m): 1 for a slider at rest on
-    /// the stated spring, r for a spring r times stiffer, below 1 while it creeps.
+    /// the stated spring (whatever its true stiffness when, as here, the
+    /// force is its extension read through the stated k; r for a spring r
+    /// times stiffer read by a load cell), below 1 while it creeps.
     pub load_rate: Spread,
     /// Force where a slip ends (the minimum after each maximum), F/(m g).
     pub trough: Spread,

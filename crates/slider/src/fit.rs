@@ -184,6 +184,15 @@ impl Candidate {
 /// differs from spring to spring: as an explanation it would need a
 /// parameter per stiffness, refitted for each, which predicts nothing at a
 /// stiffness not seen; `effective_mass` is the one-number version.)
+///
+/// No set-up scales the spring: the channel reads the spring's extension
+/// through the stated k (its grid is about one micrometre of extension at
+/// every spring, `features::channel_step`), so a spring r times stiffer than
+/// stated records k (V t − x)/(m g) with m ẍ = r k (V t − x) − m g μ, which
+/// is `effective_mass`'s equation with m_eff = m/r and μ/r (the law's
+/// coefficients are fitted): one candidate, not two. (A spring scale read
+/// as r k (V t − x), a load cell's reading, would raise the force's rise in
+/// stick to r L, which the stick-slip runs refute: `render::inertial_note`.)
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SetupCandidate {
@@ -193,13 +202,10 @@ pub enum SetupCandidate {
     EffectiveMass,
     /// 1/k_eff = 1/k + 1/k_s.
     SeriesCompliance,
-    /// k_eff = r k.
-    SpringScale,
 }
 
 /// The set-ups a study tries beside the stated one.
-pub const SETUPS: [SetupCandidate; 3] =
-    [SetupCandidate::EffectiveMass, SetupCandidate::SeriesCompliance, SetupCandidate::SpringScale];
+pub const SETUPS: [SetupCandidate; 2] = [SetupCandidate::EffectiveMass, SetupCandidate::SeriesCompliance];
 
 impl SetupCandidate {
     pub fn id(self) -> &'static str {
@@ -207,23 +213,20 @@ impl SetupCandidate {
             SetupCandidate::Stated => "stated_setup",
             SetupCandidate::EffectiveMass => "effective_mass",
             SetupCandidate::SeriesCompliance => "series_compliance",
-            SetupCandidate::SpringScale => "spring_scale",
         }
     }
 
-    /// The fitted parameters. Bounds: a mass ratio of 1/4 to 4 and a spring
-    /// ratio of 1/2 to 2 (the README's m and k are not off by more); a series
+    /// The fitted parameters. Bounds: a mass ratio of 1/4 to 4 (the README's
+    /// m and k are not off by more); a series
     /// stiffness from 30 N/m (a fifth of the softest spring: softer and the
     /// springs would not matter) to 10⁶ N/m (a rigid chain at any spring here).
     pub fn params(self) -> &'static [ParamSpec] {
         const MASS: &[ParamSpec] = &[p("mass_ratio", 0.25, 4.0, true)];
         const SERIES: &[ParamSpec] = &[p("series_stiffness_n_m", 30.0, 1e6, true)];
-        const SCALE: &[ParamSpec] = &[p("stiffness_ratio", 0.5, 2.0, true)];
         match self {
             SetupCandidate::Stated => &[],
             SetupCandidate::EffectiveMass => MASS,
             SetupCandidate::SeriesCompliance => SERIES,
-            SetupCandidate::SpringScale => SCALE,
         }
     }
 
@@ -232,14 +235,13 @@ impl SetupCandidate {
             SetupCandidate::Stated => Structure::Stated,
             SetupCandidate::EffectiveMass => Structure::EffectiveMass { mass_ratio: x[0] },
             SetupCandidate::SeriesCompliance => Structure::SeriesCompliance { series_stiffness_n_m: x[0] },
-            SetupCandidate::SpringScale => Structure::SpringScale { stiffness_ratio: x[0] },
         }
     }
 
     /// Starting points: the stated set-up, and the one that puts the natural
     /// period on the measured inertial ones: `period_ratio` is the median of
     /// P/T0 over the calibration runs in the inertial regime (1 when none),
-    /// so m_eff/m or k/k_eff = ratio² (a Coulomb cycle near the inertial
+    /// so m_eff/m = ratio² (a Coulomb cycle near the inertial
     /// limit lasts about one natural period). Where the search starts, not a
     /// value it keeps.
     pub fn starts(self, h: &StartHints) -> Vec<Vec<f64>> {
@@ -248,7 +250,6 @@ impl SetupCandidate {
         match self {
             SetupCandidate::Stated => vec![vec![]],
             SetupCandidate::EffectiveMass => vec![vec![r2], vec![1.0]],
-            SetupCandidate::SpringScale => vec![vec![1.0 / r2], vec![1.0]],
             // k_eff/k = ratio⁻² at the stiffest spring, when that softens it; else nearly rigid.
             SetupCandidate::SeriesCompliance => {
                 let ks = if r2 > 1.0 { stiffest_n_m / (r2 - 1.0) } else { 1e5 };

@@ -22,9 +22,8 @@
 //! | `rate_state_slip` | the same friction with Ruina's slip law: the state evolves only while sliding, symmetric after a jump in speed ([`slip`]) | μ = μ0 + a ln(v/v*) + b ln(v*θ/Dc), dθ/dt = −(vθ/Dc) ln(vθ/Dc), v* = 100 µm/s | `mu0`, `a`, `b_minus_a`, `dc_m` |
 //! | `heslot_creep` | rate and state with the speed and the age cut off at small values (Heslot et al. 1994): a static threshold that ages, a steady friction weakening below B V0/A and strengthening above ([`heslot`]) | μ = μ0 + A ln(1 + v/V0) + B ln(1 + θ/θ0), dθ/dt = 1 − vθ/D0, θ0 = D0/V0 | `mu0`, `a`, `b_minus_a`, `d0_m`, `v0_m_s` |
 //! | `track_threshold` | Coulomb whose threshold varies along the paper: a stiff spring follows it (creep), a soft one stick-slips over it ([`track`]) | μs(x) = μs0 + σ z(x/ℓ), μk = μs − Δμ, z smooth random of unit deviation | `mu_static0`, `mu_drop`, `track_sd`, `track_length_m` |
-//! | `effective_mass` | the mass that oscillates is not the slider's weighed mass (a spring's own mass adds m_s/3) | m_eff = r m in m_eff ẍ = k (V t − x) − m g μ | `mass_ratio` |
+//! | `effective_mass` | the mass that oscillates is not the slider's weighed mass (a spring's own mass adds m_s/3), or — the same equation, the channel reading the spring's extension through the stated k — the spring is 1/r times stiffer than stated | m_eff = r m in m_eff ẍ = k (V t − x) − m g μ | `mass_ratio` |
 //! | `series_compliance` | a compliance in series with the spring (force sensor, loading stage) | 1/k_eff = 1/k + 1/k_s | `series_stiffness_n_m` |
-//! | `spring_scale` | the springs as mounted are stiffer or softer than stated, by one factor | k_eff = r k | `stiffness_ratio` |
 //! | `none` / `unexplained` | as in ../shared/spec/diagnosis.md | — | — |
 //!
 //! A model is a friction law on a set-up (`stated_setup`: the README's m and

@@ -118,7 +118,8 @@ fn inertial_note(s: &Study) -> String {
          friction law on one mass m and one spring k oscillates faster than 1/T0. A spring's own mass (m + m_s/3, \
          Rayleigh) and a compliance in series (1/k + 1/k_s) both make it slower still. What is left is a lighter mass that \
          oscillates or springs stiffer than stated, by (P/T0)², the same factor at stiffnesses 13 × apart — a set-up \
-         number, not a friction one — which the period alone cannot tell apart (the loading rate in stick can: k_eff V/(m g)).{}\n",
+         number, not a friction one — which the period alone cannot tell apart (nor, when the force is read from the \
+         spring's extension, the force's rise in stick: below).{}\n",
         s.params.mass_kg,
         list.join(", "),
         spectral
@@ -191,39 +192,69 @@ fn inertial_note(s: &Study) -> String {
             pairs.join("; ")
         );
     }
-    // The loading rate where the slider rests (stick-slip runs): a spring r
-    // times stiffer raises it to r L, a lighter mass leaves it at L.
-    let resting: Vec<String> = s
-        .runs
-        .iter()
-        .filter(|r| r.features.regime == Regime::StickSlip && r.features.load_rate.n > 0)
-        .map(|r| format!("{} {:.3} ± {:.3} L", r.name, r.features.load_rate.median, r.features.load_rate.sd))
-        .collect();
-    if !resting.is_empty() {
+    // The loading rate where the slider rests (stick-slip runs) and what
+    // the channel reads: a spring r times stiffer read by a load cell
+    // (r k (V t − x)) raises it to r L; read through its extension and the
+    // stated k it stays at L, and a lighter mass leaves it at L.
+    let stick_runs: Vec<&crate::study::Measured> =
+        s.runs.iter().filter(|r| r.features.regime == Regime::StickSlip && r.features.load_rate.n > 0).collect();
+    if !stick_runs.is_empty() {
         let want = 1.0 / (lo.0 + hi.0) * 2.0;
-        let _ = writeln!(
-            out,
-            "The force's rise where the slider rests (stick-slip runs; median ± sd over loading phases, in units of \
-             L = k V/(m g)): {}. A spring as mounted r times the stated one raises it to r L, a lighter mass leaves it at L; \
-             the inertial periods alone would want r ≈ {:.2} (1/(P/T0)², fastest runs).\n",
-            resting.join(", "),
-            want
-        );
-        // Which of the set-up's elements the numbers leave: a spring r times
-        // stiffer (refuted when the resting load rate's median sits many
-        // standard errors below r), a contact stiffness in parallel with the
-        // spring (k_p = k (T0²/P² − 1), one number only if it comes out the
-        // same at every spring), a lighter mass (m (P/T0)², the same factor).
-        let z_scale: Vec<String> = s
-            .runs
+        let resting: Vec<String> = stick_runs
             .iter()
-            .filter(|r| r.features.regime == Regime::StickSlip && r.features.load_rate.n > 0)
+            .map(|r| format!("{} {:.3} ± {:.3} L", r.name, r.features.load_rate.median, r.features.load_rate.sd))
+            .collect();
+        // Standard errors of the median by which r L sits above each run's.
+        let z_scale: Vec<String> = stick_runs
+            .iter()
             .map(|r| {
                 let l = &r.features.load_rate;
                 let se = 1.253 * l.sd / (l.n as f64).sqrt();
                 format!("{:.1} ({})", (want - l.median) / se, r.name)
             })
             .collect();
+        let _ = writeln!(
+            out,
+            "The force's rise where the slider rests (stick-slip runs; median ± sd over loading phases, in units of \
+             L = k V/(m g)): {}; the inertial periods alone would want springs r ≈ {want:.2} times the stated ones \
+             (1/(P/T0)², fastest runs) or a mass 1/r of the weighed one.\n",
+            resting.join(", "),
+        );
+        let weight_n = s.params.mass_kg * s.params.gravity_m_s2;
+        match extension_reading(s) {
+            Some(grid) => {
+                let _ = writeln!(
+                    out,
+                    "What the channel reads: {grid}. A load cell would put every spring's force on one grid in F/(m g); \
+                     this grid is one length of spring extension ({:.2} µm) whatever the spring, so the force is the \
+                     spring's extension read through the stated k. Read so, the force rises at V k/(m g) = 1 L wherever the \
+                     slider rests, whatever the spring's true stiffness, and a spring r times stiffer than stated obeys \
+                     m ẍ = r k (V t − x) − m g μ while recording k (V t − x)/(m g): divided by r, the equation of a mass \
+                     m/r under the law's coefficients over r. A lighter mass and stiffer springs are one candidate \
+                     (`effective_mass`), and the resting load rate cannot tell them apart; it refutes only a spring \
+                     read as r k (V t − x) (a load cell's reading: {want:.2} L would sit {} standard errors of the \
+                     median above the measured rises), which is not tried.\n",
+                    1e6 * Spread::of(
+                        &s.runs.iter().map(|r| r.force_step * weight_n / r.stiffness_n_m).collect::<Vec<_>>()
+                    )
+                    .median,
+                    z_scale.join(", "),
+                );
+            }
+            None => {
+                let _ = writeln!(
+                    out,
+                    "A spring as mounted r times the stated one, its force read by a load cell, raises the rise to r L \
+                     ({want:.2} L would sit {} standard errors of the median above the measured ones); a lighter mass \
+                     leaves it at L, and so does a stiffer spring read through its extension and the stated k.\n",
+                    z_scale.join(", "),
+                );
+            }
+        }
+        // Which of the set-up's elements the numbers leave: a contact
+        // stiffness in parallel with the spring (k_p = k (T0²/P² − 1), one
+        // number only if it comes out the same at every spring), the ratio
+        // m/k the oscillation sees ((P/T0)², the same factor).
         let parallel: Vec<String> = r2
             .iter()
             .filter_map(|(ratio2, _, name)| {
@@ -234,18 +265,17 @@ fn inertial_note(s: &Study) -> String {
         let mean_r2 = r2.iter().map(|x| x.0).sum::<f64>() / r2.len() as f64;
         let _ = writeln!(
             out,
-            "Which element, by the numbers: a spring {want:.2} × stiffer would raise the resting load rate to {want:.2} L, \
-             which sits {} standard errors of the median above the measured ones (refuted); a contact stiffness in parallel \
-             with the spring (the pinned micro-contacts' elasticity acting on the slider beside the spring) would need \
-             {} — not one interface; a velocity-strengthening term or the state's relaxation adds damping or a negative \
-             stiffness (above), so the law's stiffness at high speed shortens nothing. What is left is a mass: {:.1} g \
-             oscillating ({:.2} m, the mean (P/T0)² of the fastest runs), lighter than the weighed slider — an element \
-             the README's set-up (slider, spring, drive) does not have (a spring's own mass adds to m), so it stays a \
-             set-up finding for the data's authors, one number for both springs.\n",
-            z_scale.join(", "),
+            "Which element, by the numbers: a contact stiffness in parallel with the spring (the pinned micro-contacts' \
+             elasticity acting on the slider beside the spring) would need {} — not one interface; a \
+             velocity-strengthening term or the state's relaxation adds damping or a negative stiffness (above), so the \
+             law's stiffness at high speed shortens nothing. What is left is the ratio m/k the oscillation sees, {:.2} of \
+             the stated (the mean (P/T0)² of the fastest runs): a mass of {:.1} g oscillating, or springs {:.2} × stiffer \
+             than stated — one number for both springs, an element the README's set-up (slider, spring, drive) does not \
+             state (a spring's own mass adds to m), so it stays a set-up finding for the data's authors.\n",
             parallel.join(" and "),
+            mean_r2,
             1e3 * mean_r2 * s.params.mass_kg,
-            mean_r2
+            1.0 / mean_r2
         );
     }
     for c in s.candidates.iter().filter(|c| c.model.setup != SetupCandidate::Stated) {
@@ -271,6 +301,39 @@ fn inertial_note(s: &Study) -> String {
         );
     }
     out
+}
+
+/// Whether the channel reads the spring's extension rather than its force:
+/// with two stiffnesses or more, the grid (`features::channel_step`) of each
+/// stiffness (the median over its runs) spans a range in µm of extension
+/// (step × m g/k) at most a quarter of its range in F/(m g), on the log
+/// scale (a load cell's grid is one force step whatever the spring; a
+/// displacement gauge's one length). Some(the grids, as text) when it does.
+fn extension_reading(s: &Study) -> Option<String> {
+    let weight_n = s.params.mass_kg * s.params.gravity_m_s2;
+    let ks = distinct(s.runs.iter().map(|r| r.stiffness_n_m));
+    if ks.len() < 2 {
+        return None;
+    }
+    let grids: Vec<(f64, f64, f64)> = ks
+        .iter()
+        .map(|&k| {
+            let steps: Vec<f64> = s.runs.iter().filter(|r| r.stiffness_n_m == k).map(|r| r.force_step).collect();
+            let step = Spread::of(&steps).median;
+            (k, step, step * weight_n / k)
+        })
+        .collect();
+    let span = |v: &mut dyn Iterator<Item = f64>| {
+        let (lo, hi) = v.fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)));
+        (hi / lo).ln()
+    };
+    let force_span = span(&mut grids.iter().map(|g| g.1));
+    let extension_span = span(&mut grids.iter().map(|g| g.2));
+    (force_span.is_finite() && extension_span <= 0.25 * force_span).then(|| {
+        let list: Vec<String> =
+            grids.iter().map(|(k, f, x)| format!("{f:.5} F/(m g) = {:.2} µm at {k} N/m", 1e6 * x)).collect();
+        format!("the force's grid is {}", list.join(", "))
+    })
 }
 
 /// What the records can show: each run's grid (the channel's step, in
@@ -1497,7 +1560,7 @@ fn markdown(s: &Study) -> String {
     );
     let _ = writeln!(
         md,
-        "Ids (crate docs of `rig_slider`): friction laws `{}`, `{}`, `{}`, `{}`, `{}`, `{}`; set-ups `{}`, `{}`, `{}`, `{}`; a model is `law+set-up`.",
+        "Ids (crate docs of `rig_slider`): friction laws `{}`, `{}`, `{}`, `{}`, `{}`, `{}`; set-ups `{}`, `{}`, `{}`; a model is `law+set-up`.",
         Candidate::Coulomb.id(),
         Candidate::StaticAgeing.id(),
         Candidate::RateState.id(),
@@ -1506,8 +1569,7 @@ fn markdown(s: &Study) -> String {
         Candidate::Track.id(),
         SetupCandidate::Stated.id(),
         SetupCandidate::EffectiveMass.id(),
-        SetupCandidate::SeriesCompliance.id(),
-        SetupCandidate::SpringScale.id()
+        SetupCandidate::SeriesCompliance.id()
     );
     md
 }

@@ -63,15 +63,14 @@ pub enum Structure {
     /// spring moves with the slider (a uniform spring adds a third of its own
     /// mass, Rayleigh's estimate), less than m only if part of the weighed
     /// mass does not move with the slider.
+    /// A spring r times stiffer than stated, read through its extension and
+    /// the stated k (the channel's reading), is this with m_eff = m/r and the
+    /// law's coefficients over r (`fit::SetupCandidate`).
     EffectiveMass { mass_ratio: f64 },
     /// A compliance in series with the spring (the force sensor, the loading
     /// stage): the chain is 1/k_eff = 1/k + 1/k_s, the same k_s whichever
     /// spring is mounted; the force through the chain is k_eff (V t − x).
     SeriesCompliance { series_stiffness_n_m: f64 },
-    /// The spring as mounted is k_eff = r k (a stiffness stated from a
-    /// calibration, not measured in place, off by the same factor for every
-    /// spring).
-    SpringScale { stiffness_ratio: f64 },
 }
 
 impl Structure {
@@ -83,7 +82,6 @@ impl Structure {
             Structure::SeriesCompliance { series_stiffness_n_m: ks } => {
                 (mass_kg, stiffness_n_m * ks / (stiffness_n_m + ks))
             }
-            Structure::SpringScale { stiffness_ratio } => (mass_kg, stiffness_ratio * stiffness_n_m),
         }
     }
 }
@@ -313,14 +311,13 @@ mod tests {
     fn a_set_up_sets_the_inertial_period_as_its_closed_form() {
         // Coulomb with a small drop, r = ω Δμ m g/(k V) ≈ 0.1: one cycle lasts
         // T (1 − atan(r)/π + r/π) (a slip from rest, then a stick of 2r/ω),
-        // T = 2π √(m_eff/k_eff): 0.8 T0 for m_eff = 0.64 m or k_eff = k/0.64,
+        // T = 2π √(m_eff/k_eff): 0.8 T0 for m_eff = 0.64 m,
         // √2 T0 for a series spring k_s = k. The slip is a harmonic arc of
         // amplitude Δμ √(1 + 1/r²) about μk, so the force spans twice that.
         let law = Law::Coulomb { mu_static: 0.36, mu_kinetic: 0.35 };
         for (structure, ratio) in [
             (Structure::EffectiveMass { mass_ratio: 0.64 }, 0.8),
             (Structure::SeriesCompliance { series_stiffness_n_m: 2254.0 }, 2f64.sqrt()),
-            (Structure::SpringScale { stiffness_ratio: 1.0 / 0.64 }, 0.8),
         ] {
             let mut s = setup(2254.0, 4300.0, 1.0);
             s.structure = structure;

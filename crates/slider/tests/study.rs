@@ -94,7 +94,7 @@ fn study_on_the_shipped_folder() {
     // The forward selection starts from Coulomb on the stated set-up and tries every memory law and every set-up.
     assert_eq!(s.candidates[0].model, Model::BASELINE);
     let first: Vec<Model> = s.steps[0].tried.iter().map(|&i| s.candidates[i].model).collect();
-    assert_eq!(first.len(), 8, "{first:?}");
+    assert_eq!(first.len(), 7, "{first:?}");
     let out = render(&s);
     let verdict = out.diagnosis["verdict"].as_str().unwrap();
     let ids = [
@@ -107,7 +107,6 @@ fn study_on_the_shipped_folder() {
         "track_threshold",
         "effective_mass",
         "series_compliance",
-        "spring_scale",
     ];
     assert!(ids.contains(&verdict), "{verdict}");
     assert_eq!(out.diagnosis["candidates"].as_array().unwrap().len(), s.candidates.len() - 1);
@@ -208,16 +207,23 @@ fn each_shipped_stiffness_held_out() {
     // RMS held-out misfit by 11.5 % at paired t 0.38 and the pair step's
     // static_ageing+effective_mass loses 8.3 % (t −0.99), so
     // Coulomb on the stated m and k is kept: it misses k2254-v42's regime,
-    // k2254-v4300's inertial period, and now k2254-v42's period (×0.47
+    // k2254-v4300's inertial period, and k2254-v42's period (×0.47
     // against ×0.5: the check held by 0.020 ln units against a standard
     // error of 0.028, unresolved, and that creeping run's period is the
     // reading's, 0.32–1.65 s across running medians; the spread term, a
     // constant for Coulomb, reweighs the runs of its fit and Δμ, which sets
     // the stick-slip period 2 Δμ m g/(k V), comes out lower). Calibrated on
-    // 2254 N/m the pair track_threshold+spring_scale is kept (gain 17.2 %,
-    // t 4.49): it gets 168 N/m's stick-slip runs within every bound and
-    // k168-v4300's inertial period within 15 % (+11.0 %, unresolved), not
-    // its onset (the level 0.55 of that run).
+    // 2254 N/m the step's best is track_threshold (gain 5.1 %, t 0.59) and
+    // the pair track_threshold+series_compliance (5.6 %, t 0.33): Coulomb is
+    // kept, and it gets 168 N/m's stick-slip runs within every bound, not
+    // k168-v4300's inertial period (+29.4 %) nor its onset (the level 0.55
+    // of that run). (Until the twelfth session the pair
+    // track_threshold+spring_scale was kept there, gain 17.2 %, t 4.49, and
+    // held k168-v4300's period at +11.0 %: its spring was read as a load
+    // cell reads, r k (V t − x), which drives the recorded force at r V —
+    // 1.35 L in stick where the records rise at 1.10–1.14 L. The channel
+    // reads the spring's extension (`render::extension_reading`), and a
+    // stiffer spring read so is `effective_mass`: spring_scale is gone.)
     for want in [
         "k2254-v1100 regime",
         "k2254-v1100 inertial period",
@@ -235,7 +241,6 @@ fn each_shipped_stiffness_held_out() {
         "k168-v1100 drop",
         "k168-v1100 onset",
         "k168-v4300 regime",
-        "k168-v4300 inertial period",
     ] {
         assert!(passed.iter().any(|p| p == want), "{want}: passed {passed:?}");
     }
@@ -249,11 +254,22 @@ fn each_shipped_stiffness_held_out() {
     // the selection keeps neither), and the inertial periods at
     // 4300 µm/s with a Coulomb law on the stated m and k, which cannot
     // oscillate faster than 2π√(m/k) (the force's spectrum confirms 0.76 T0
-    // at both stiffnesses; a lighter mass, 0.62 m, is the one element the
-    // numbers leave, and held out it mends one run of three, t 0.35); at
+    // at both stiffnesses; a ratio m/k of 0.62 the stated one — a lighter
+    // mass or stiffer springs read through their extension, one candidate —
+    // is the one element the numbers leave, and held out it mends one run of
+    // three, t 0.35); at
     // k168-v4300 it also slips at μs where the record slips at 0.55 (its mean
     // force 0.50, every other run's 0.30–0.37).
-    assert_eq!(failed, ["k2254-v42 regime", "k2254-v42 period", "k2254-v4300 inertial period", "k168-v4300 onset"]);
+    assert_eq!(
+        failed,
+        [
+            "k2254-v42 regime",
+            "k2254-v42 period",
+            "k2254-v4300 inertial period",
+            "k168-v4300 inertial period",
+            "k168-v4300 onset"
+        ]
+    );
 }
 
 #[test]
