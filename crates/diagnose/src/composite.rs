@@ -701,6 +701,42 @@ mod tests {
         crate::friction::tests::synth_noisy(runs, 7, 0.003, law)
     }
 
+    /// The sets that share one cold Stribeck fit get the models they get
+    /// fitted alone, bit for bit, whichever of them fills the memo first.
+    #[test]
+    fn a_shared_cold_stribeck_fit_is_each_fit_alone() {
+        let d = synth(4, |r, t, _, w| {
+            (0.4 + 0.2 * rig_model::friction::stribeck_decay(w, 2.0f64))
+                * (1.0 + 0.1 * (2.0 * PI * 1.3 * t + 0.7 * r as f64).sin())
+        });
+        let freqs: Vec<f64> = (0..200).map(|j| 0.5 + 0.01 * j as f64).collect();
+        let s = FrictionSet::default().with(Term::Stribeck);
+        let sets = [s.with(Term::TimeSine), s, s.with(Term::AngleSine), s.with(Term::Viscous)];
+        let bits = |m: Option<Composite>| {
+            format!(
+                "{:?}",
+                m.map(|m| {
+                    let f = |x: f64| x.to_bits();
+                    (
+                        f(m.mu_k),
+                        m.stribeck.map(|(a, b)| (f(a), f(b))),
+                        m.viscous.map(f),
+                        m.time_mod.map(|(a, b)| (f(a), f(b))),
+                        m.angle_mod.map(|(a, n)| (f(a), n)),
+                    )
+                })
+            )
+        };
+        let cold = ColdStribeck::default();
+        for set in sets {
+            let alone = fit_composite_model_from(&d, set, &freqs, 4, None);
+            assert!(alone.as_ref().is_some_and(|m| m.stribeck.is_some()), "{set:?}");
+            let shared = fit_composite_model_from_cached(&d, set, &freqs, 4, None, &cold);
+            assert_eq!(bits(shared), bits(alone), "{set:?}");
+        }
+        assert!(cold.fits.iter().all(|f| f.get().is_some()));
+    }
+
     #[test]
     fn two_effects_at_once_are_recovered() {
         // Stribeck speed law × normal-force modulation at 1.3 Hz, own phase per run.
