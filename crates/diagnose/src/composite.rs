@@ -25,7 +25,7 @@
 //! and the angle block's conditional on the rest, inflated for correlated
 //! residuals (effective sample size).
 
-use crate::friction::{self, FrictionModel, SlipData};
+use crate::friction::{self, FrictionFit, FrictionModel, SlipData};
 use rig_estimate::linear::{ArrowNormal, Normal};
 use std::f64::consts::PI;
 
@@ -368,7 +368,7 @@ fn joint_params(m: &Composite, ne: &Normal, rss: f64, n: usize) -> Vec<(Term, &'
 /// Fits the composite of `set` on `d` (the frequency grid and the highest
 /// order are the scans of the modulations). `None` when a block is singular.
 pub fn fit_composite(d: &SlipData, set: FrictionSet, freqs_hz: &[f64], max_order: u32) -> Option<CompositeFit> {
-    fit_composite_with(d, set, freqs_hz, max_order, true, None)
+    fit_composite_with(d, set, freqs_hz, max_order, true, None, None)
 }
 
 /// The model of [`fit_composite`] alone, as a cross-validation fold uses it
@@ -398,7 +398,41 @@ pub fn fit_composite_model_from(
     max_order: u32,
     start: Option<&Composite>,
 ) -> Option<Composite> {
-    fit_composite_with(d, set, freqs_hz, max_order, false, start).map(|f| f.model)
+    fit_composite_with(d, set, freqs_hz, max_order, false, start, None).map(|f| f.model)
+}
+
+/// The cold Stribeck fits of one data set, [`friction::fit_stribeck`] of
+/// `d` itself without and with the viscous column, each computed once on
+/// first use. A composite's first pass fits its speed law before any
+/// modulation, on μ/(1·1) = μ to the bit, so every set with the Stribeck
+/// term and no warm-started speed (`{stribeck}` of the first selection
+/// step, `{time, stribeck}` and `{angle, stribeck}` of the second) starts
+/// from the same fit of the same fold: built once per fold, bit-identical
+/// to fitting it again (a cold fit is a 41-point grid and Brent's search).
+#[derive(Debug, Default)]
+pub struct ColdStribeck {
+    fits: [std::sync::OnceLock<Option<FrictionFit>>; 2],
+}
+
+impl ColdStribeck {
+    /// `friction::fit_stribeck(d, with_viscous)`, the first time for this `d`.
+    fn get(&self, d: &SlipData, with_viscous: bool) -> Option<FrictionFit> {
+        self.fits[usize::from(with_viscous)].get_or_init(|| friction::fit_stribeck(d, with_viscous)).clone()
+    }
+}
+
+/// [`fit_composite_model_from`] with `cold`, the cold Stribeck fits of `d`
+/// ([`ColdStribeck`]: the same `d` on every call that shares it), so the
+/// same model to the bit.
+pub fn fit_composite_model_from_cached(
+    d: &SlipData,
+    set: FrictionSet,
+    freqs_hz: &[f64],
+    max_order: u32,
+    start: Option<&Composite>,
+    cold: &ColdStribeck,
+) -> Option<Composite> {
+    fit_composite_with(d, set, freqs_hz, max_order, false, start, Some(cold)).map(|f| f.model)
 }
 
 /// The time modulation's frequency scan of [`fit_composite`] for the set
@@ -422,6 +456,7 @@ fn fit_composite_with(
     max_order: u32,
     errors: bool,
     start: Option<&Composite>,
+    cold: Option<&ColdStribeck>,
 ) -> Option<CompositeFit> {
     if d.is_empty() {
         return None;
@@ -486,7 +521,11 @@ fn fit_composite_with(
                 let f = match (m.stribeck, start_vs) {
                     (Some((_, vs)), _) if pass > 0 => friction::fit_stribeck_near(ds, set.viscous, vs)?,
                     (_, Some(vs)) if pass == 0 => friction::fit_stribeck_near(ds, set.viscous, vs)?,
-                    _ => friction::fit_stribeck(ds, set.viscous)?,
+                    // The first pass's target is μ/(1·1) = μ: the cold fit of `d` itself.
+                    _ => match cold.filter(|_| pass == 0) {
+                        Some(cold) => cold.get(d, set.viscous)?,
+                        None => friction::fit_stribeck(ds, set.viscous)?,
+                    },
                 };
                 let FrictionModel::Stribeck { mu_k, mu_s, vs, c } = f.model else { unreachable!() };
                 m.mu_k = mu_k;
@@ -660,6 +699,42 @@ mod tests {
 
     fn synth(runs: usize, law: impl Fn(usize, f64, f64, f64) -> f64) -> SlipData {
         crate::friction::tests::synth_noisy(runs, 7, 0.003, law)
+    }
+
+    /// The sets that share one cold Stribeck fit get the models they get
+    /// fitted alone, bit for bit, whichever of them fills the memo first.
+    #[test]
+    fn a_shared_cold_stribeck_fit_is_each_fit_alone() {
+        let d = synth(4, |r, t, _, w| {
+            (0.4 + 0.2 * rig_model::friction::stribeck_decay(w, 2.0f64))
+                * (1.0 + 0.1 * (2.0 * PI * 1.3 * t + 0.7 * r as f64).sin())
+        });
+        let freqs: Vec<f64> = (0..200).map(|j| 0.5 + 0.01 * j as f64).collect();
+        let s = FrictionSet::default().with(Term::Stribeck);
+        let sets = [s.with(Term::TimeSine), s, s.with(Term::AngleSine), s.with(Term::Viscous)];
+        let bits = |m: Option<Composite>| {
+            format!(
+                "{:?}",
+                m.map(|m| {
+                    let f = |x: f64| x.to_bits();
+                    (
+                        f(m.mu_k),
+                        m.stribeck.map(|(a, b)| (f(a), f(b))),
+                        m.viscous.map(f),
+                        m.time_mod.map(|(a, b)| (f(a), f(b))),
+                        m.angle_mod.map(|(a, n)| (f(a), n)),
+                    )
+                })
+            )
+        };
+        let cold = ColdStribeck::default();
+        for set in sets {
+            let alone = fit_composite_model_from(&d, set, &freqs, 4, None);
+            assert!(alone.as_ref().is_some_and(|m| m.stribeck.is_some()), "{set:?}");
+            let shared = fit_composite_model_from_cached(&d, set, &freqs, 4, None, &cold);
+            assert_eq!(bits(shared), bits(alone), "{set:?}");
+        }
+        assert!(cold.fits.iter().all(|f| f.get().is_some()));
     }
 
     #[test]

@@ -82,6 +82,10 @@ struct Cv<'a> {
     /// of every selection step (each fit built them anew: 4–5 % of a
     /// full-protocol diagnosis's CPU in `perf`, with their page faults).
     fold_data: Vec<(SlipData, Vec<(usize, SlipData)>)>,
+    /// Per fold, the cold Stribeck fits of its training data, shared by
+    /// every friction set whose first pass starts from them
+    /// ([`composite::ColdStribeck`]).
+    cold: Vec<composite::ColdStribeck>,
 }
 
 /// One fold's friction fit: the model fitted on its training runs and, per
@@ -205,7 +209,8 @@ impl Cv<'_> {
     /// and each held-out run's μ error and phases under it.
     fn fold_friction(&self, set: FrictionSet, f: usize, start: Option<&Composite>) -> FoldFriction {
         let (d, held_data) = &self.fold_data[f];
-        let model = composite::fit_composite_model_from(d, set, &self.freqs, self.max_order, start);
+        let model =
+            composite::fit_composite_model_from_cached(d, set, &self.freqs, self.max_order, start, &self.cold[f]);
         let mut held = Vec::new();
         for (i, dr) in held_data {
             let (e, ph) = match &model {
@@ -535,7 +540,8 @@ pub(crate) fn select_over<'a>(
         (0..=n).map(|j| opts.freq_min_hz + opts.freq_step_hz * j as f64).collect()
     };
     let fold_data = Cv::fold_data(runs, folds, opts.fold_fit_spacing_s);
-    let cv = Cv { runs, folds, supply_v, freqs, max_order: opts.max_order, fold_data };
+    let cold = (0..folds).map(|_| composite::ColdStribeck::default()).collect();
+    let cv = Cv { runs, folds, supply_v, freqs, max_order: opts.max_order, fold_data, cold };
 
     // Forward selection on the one engine: the runs are the units, fold f
     // holds out the runs of fold f and trains on the others; the baseline

@@ -41,45 +41,70 @@ fn row_at(phi1: &[f64], phi2: &[f64], force_n: &[f64], dt: f64, w: usize, r_m: f
 }
 
 /// [`row_at`] every `w` samples from `from` on (the steady state's grid),
-/// the triangle-weighted means from running box sums: the triangle
-/// w − |k − b| (|k − b| < w) is a box of w samples convolved with itself,
-/// so its weighted sum at b is the sum of the w box sums B(s) = Σ x[s..s+w]
-/// for s = b − w + 1 … b, and B is updated by one sample in and one out
-/// (the same rows as [`row_at`]'s to rounding, without its 2w + 1
-/// products per boundary; a campaign's structural grids build ≈ 100
-/// balances of every run).
-fn rows(phi1: &[f64], phi2: &[f64], force_n: &[f64], dt: f64, w: usize, r_m: f64, from: usize) -> Vec<Row> {
-    let n = phi1.len().min(phi2.len()).min(force_n.len());
+/// for `L` channel sets of one run at once (a sensor grid's points,
+/// [`Recorded::balance_lanes`]; one set is `L = 1`). The triangle-weighted
+/// means come from running box sums: the triangle w − |k − b| (|k − b| < w)
+/// is a box of w samples convolved with itself, so its weighted sum at b is
+/// the sum of the w box sums B(s) = Σ x[s..s+w] for s = b − w + 1 … b, and B
+/// is updated by one sample in and one out (the same rows as [`row_at`]'s
+/// to rounding, without its 2w + 1 products per boundary; a campaign's
+/// structural grids build ≈ 100 balances of every run). The running sums
+/// are additions each waiting for its last (latency-bound) and the lanes'
+/// are independent, so one pass with the lanes interleaved lets the
+/// processor overlap them; each lane performs the same operations in the
+/// same order as it would alone (`L = 1`), so it is its own rows to the
+/// bit. Lanes of unequal length are built one after the other.
+fn rows_lanes<const L: usize>(
+    lanes: [(&[f64], &[f64], &[f64]); L],
+    dt: f64,
+    w: usize,
+    r_m: f64,
+    from: usize,
+) -> [Vec<Row>; L] {
+    let len = |(phi1, phi2, force_n): (&[f64], &[f64], &[f64])| phi1.len().min(phi2.len()).min(force_n.len());
+    let n = len(lanes[0]);
+    if L > 1 && lanes.iter().any(|&c| len(c) != n) {
+        return lanes.map(|c| {
+            let [out] = rows_lanes([c], dt, w, r_m, from);
+            out
+        });
+    }
     let first = from.max(w);
     if first + w >= n {
-        return Vec::new();
+        return std::array::from_fn(|_| Vec::new());
     }
-    let tw = |k: usize| phi2[k] - phi1[k];
+    let tw = |l: usize, k: usize| lanes[l].1[k] - lanes[l].0[k];
     let big_t = w as f64 * dt;
     let s_k = (w * w) as f64;
     // Box sums starting at s = first − w + 1, advanced along the boundaries.
     let mut s = first + 1 - w;
-    let (mut b_tw, mut b_f) = ((s..s + w).map(tw).sum::<f64>(), force_n[s..s + w].iter().sum::<f64>());
-    let mut out = Vec::with_capacity((n - first) / w + 1);
+    let mut b_tw: [f64; L] = std::array::from_fn(|l| (s..s + w).map(|k| tw(l, k)).sum::<f64>());
+    let mut b_f: [f64; L] = std::array::from_fn(|l| lanes[l].2[s..s + w].iter().sum::<f64>());
+    let mut out: [Vec<Row>; L] = std::array::from_fn(|_| Vec::with_capacity((n - first) / w + 1));
     let mut b = first;
     while b + w < n {
-        let (mut t_tw, mut t_f) = (0.0, 0.0);
+        let (mut t_tw, mut t_f) = ([0.0; L], [0.0; L]);
         // Σ over s = b − w + 1 … b of B(s); on leaving, s = b + 1.
         while s <= b {
-            t_tw += b_tw;
-            t_f += b_f;
-            b_tw += tw(s + w) - tw(s);
-            b_f += force_n[s + w] - force_n[s];
+            for l in 0..L {
+                t_tw[l] += b_tw[l];
+                t_f[l] += b_f[l];
+                b_tw[l] += tw(l, s + w) - tw(l, s);
+                b_f[l] += lanes[l].2[s + w] - lanes[l].2[s];
+            }
             s += 1;
         }
-        let w1_prev = (phi1[b] - phi1[b - w]) / big_t;
-        let w1_next = (phi1[b + w] - phi1[b]) / big_t;
-        let tw_prev = (tw(b) - tw(b - w)) / big_t;
-        let tw_next = (tw(b + w) - tw(b)) / big_t;
-        out.push((
-            [(w1_next - w1_prev) / big_t, t_tw / s_k, 0.5 * (tw_prev + tw_next), 0.5 * (w1_prev + w1_next), 1.0],
-            r_m * t_f / s_k,
-        ));
+        for l in 0..L {
+            let phi1 = lanes[l].0;
+            let w1_prev = (phi1[b] - phi1[b - w]) / big_t;
+            let w1_next = (phi1[b + w] - phi1[b]) / big_t;
+            let tw_prev = (tw(l, b) - tw(l, b - w)) / big_t;
+            let tw_next = (tw(l, b + w) - tw(l, b)) / big_t;
+            out[l].push((
+                [(w1_next - w1_prev) / big_t, t_tw[l] / s_k, 0.5 * (tw_prev + tw_next), 0.5 * (w1_prev + w1_next), 1.0],
+                r_m * t_f[l] / s_k,
+            ));
+        }
         b += w;
     }
     out
@@ -302,17 +327,25 @@ impl Recorded {
     ) -> [BalanceData; L] {
         let mut lanes: [Vec<RunRows>; L] = std::array::from_fn(|_| Vec::with_capacity(self.runs.len()));
         for (i, run) in self.runs.iter().enumerate() {
-            for (lane, channels) in lanes.iter_mut().zip(transform(i, run)) {
-                lane.push(self.run_rows(run, channels));
+            let channels = transform(i, run);
+            let grids = rows_lanes::<L>(
+                std::array::from_fn(|l| (&*channels[l].0, &*channels[l].1, &*channels[l].2)),
+                self.dt,
+                self.w,
+                self.r_m,
+                run.from,
+            );
+            for ((lane, channels), grid) in lanes.iter_mut().zip(channels).zip(grids) {
+                lane.push(self.run_rows(run, channels, grid));
             }
         }
         lanes.map(|runs| BalanceData { runs, j1_kgm2: self.j1_kgm2 })
     }
 
-    /// One run's [`RunRows`] from its channels `(phi1, phi2, f)`.
-    fn run_rows(&self, run: &RecordedRun, (phi1, phi2, f): Channels<'_>) -> RunRows {
+    /// One run's [`RunRows`] from its channels `(phi1, phi2, f)` and their
+    /// grid rows (`rows` of the channels from `run.from`).
+    fn run_rows(&self, run: &RecordedRun, (phi1, phi2, f): Channels<'_>, grid: Vec<Row>) -> RunRows {
         let (w, dt, r_m) = (self.w, self.dt, self.r_m);
-        let grid = rows(&phi1, &phi2, &f, dt, w, r_m, run.from);
         let angle_rad = (0..grid.len()).map(|j| phi1[run.from.max(w) + j * w]).collect();
         let events = run
             .transitions
@@ -641,7 +674,46 @@ impl Recorded {
 
 #[cfg(test)]
 mod tests {
-    use super::{row_at, rows};
+    use super::{Row, row_at, rows_lanes};
+
+    fn rows(phi1: &[f64], phi2: &[f64], f: &[f64], dt: f64, w: usize, r_m: f64, from: usize) -> Vec<Row> {
+        let [out] = rows_lanes([(phi1, phi2, f)], dt, w, r_m, from);
+        out
+    }
+
+    /// Lanes built together are each lane built alone, bit for bit (the
+    /// sensor grid's balances are read as the single balance's).
+    #[test]
+    fn lanes_are_each_balance_alone() {
+        let (n, dt, w, r_m) = (2500, 0.002, 40, 0.09);
+        let t = |k: usize| k as f64 * dt;
+        let phi1: Vec<f64> = (0..n).map(|k| 3.0 * t(k) + 0.02 * (40.0 * t(k)).sin()).collect();
+        let phi2: Vec<Vec<f64>> =
+            (0..3).map(|j| (0..n).map(|k| 3.0 * t(k) + 0.5 + 0.01 * j as f64 * (7.0 * t(k)).cos()).collect()).collect();
+        let f: Vec<Vec<f64>> =
+            (0..3).map(|j| (0..n).map(|k| 10.0 + ((k * 7919 + j * 31) % 101) as f64 * 0.01).collect()).collect();
+        for from in [0, 37] {
+            let lanes =
+                rows_lanes(std::array::from_fn::<_, 3, _>(|j| (&phi1[..], &phi2[j][..], &f[j][..])), dt, w, r_m, from);
+            for (j, lane) in lanes.iter().enumerate() {
+                let alone = rows(&phi1, &phi2[j], &f[j], dt, w, r_m, from);
+                assert!(!alone.is_empty());
+                let bits = |r: &[Row]| {
+                    r.iter()
+                        .flat_map(|(x, y)| x.iter().chain([y]).map(|v| v.to_bits()).collect::<Vec<_>>())
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(bits(lane), bits(&alone), "lane {j}, from {from}");
+            }
+        }
+        // Unequal lengths: each lane alone.
+        let short = &f[1][..n - 300];
+        let [a, b] =
+            rows_lanes([(&phi1[..], &phi2[0][..], &f[0][..]), (&phi1[..], &phi2[1][..], short)], dt, w, r_m, 0);
+        assert_eq!(a.len(), rows(&phi1, &phi2[0], &f[0], dt, w, r_m, 0).len());
+        assert_eq!(b, rows(&phi1, &phi2[1], short, dt, w, r_m, 0));
+        assert!(b.len() < a.len());
+    }
 
     /// The running box sums give [`row_at`]'s rows (its explicit triangle
     /// weights, the independent reference) on a record with every term
