@@ -27,5 +27,5 @@ pub use lsq::{IterationRecord, LsqProblem, LsqSolution, SolverOptions, Transform
 pub use options::{DampingStructure, EstimateOptions, InitialValues, RotorDamping, SolverKind};
 pub use params::EstimateParams;
 pub use pi::{PiEstimate, PiMethod, PiOptions, estimate_pi};
-pub use rig::{ModeComparison, RigEstimate, StepFit, estimate_rig};
+pub use rig::{MOTOR_SIDE, ModeComparison, MotorRefit, RigEstimate, StepFit, estimate_rig, refit_motor_side};
 pub use steps::StepResidual;

@@ -467,3 +467,66 @@ pub fn estimate_rig(
         table_4_4,
     })
 }
+
+/// The voltage-step parameters other than the damping: the motor side
+/// (J_m, k_T, k_e, T_f) and J1, [`FREE`] without C.
+pub const MOTOR_SIDE: [&str; 5] = ["J_m", "k_T", "k_e", "T_f", "J_1"];
+
+/// A [`refit_motor_side`] answer: the model with its motor side refitted,
+/// and how the fit went.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MotorRefit {
+    pub params: RigParams,
+    /// Voltage-step SSR at the start (the model as given) and at the refit, (rad/s)².
+    pub ssr_start: f64,
+    pub ssr: f64,
+    pub iterations: usize,
+    pub converged: bool,
+}
+
+/// The motor side re-estimated under the damping a model has (issue 25):
+/// the voltage-step fit of [`estimate_rig`] (same residual, integrator,
+/// solver and default step split: the lowest and highest voltage) with
+/// [`MOTOR_SIDE`] free and the damping held where and as `model` puts it —
+/// C on the twist rate and C_r on Ω1, e.g. a structural candidate's values
+/// from the rotor torque balance. Warm-started at `model`'s motor side (the
+/// estimate under the twist-rate placement), so a structure that moves only
+/// part of the damping costs a few iterations. Everything else of `model`
+/// (drive, friction, effects) is returned unchanged.
+///
+/// Why: the steps estimate k_T, k_e, T_f *together with* the damping
+/// placement they are fitted under ([`DampingStructure`]'s docs: a drag on
+/// Ω1 loads the motor in steady rotation, which a twist-rate fit absorbs into
+/// the motor constants), so a structure compared on the twist-rate estimate's
+/// motor side counts that load twice or not at all.
+pub fn refit_motor_side(
+    c: &Campaign,
+    model: &RigParams,
+    window_s: f64,
+    residual: crate::steps::StepResidual,
+    sim: &SimOptions,
+    solver: &crate::lsq::SolverOptions,
+) -> Result<MotorRefit, EstimateError> {
+    let steps = step_data(c, window_s)?;
+    let used = split(&steps, None);
+    let est_steps: Vec<&StepData> = steps.iter().zip(&used).filter(|(_, u)| **u).map(|(s, _)| s).collect();
+    if est_steps.is_empty() {
+        return Err(EstimateError::MissingRuns {
+            campaign: c.name.clone(),
+            what: "no voltage_step run".into(),
+            rule: "the motor side is re-estimated on the open-brake voltage steps",
+        });
+    }
+    let names = MOTOR_SIDE.to_vec();
+    let problem =
+        StepProblem { base: model.clone(), names: names.clone(), steps: est_steps, sim: sim.clone(), residual };
+    let x0: Vec<f64> = names.iter().map(|n| get_param(model, n)).collect();
+    let sol = levenberg_marquardt(&problem, &x0, &vec![Transform::Log; names.len()], solver)?;
+    Ok(MotorRefit {
+        params: problem.params_at(&sol.x),
+        ssr_start: sol.history.first().map_or(f64::NAN, |h| h.ssr),
+        ssr: sol.ssr,
+        iterations: sol.iterations,
+        converged: sol.converged,
+    })
+}

@@ -44,6 +44,10 @@ impl StructureCandidate for TwistRateAndRotor {
         })
     }
     /// The new term is the drag on Ω1: the finding names it.
+    /// The damping moves off the twist rate: the motor side is re-estimated under it.
+    fn refits_motor_side(&self) -> bool {
+        true
+    }
     fn finding_id(&self) -> Option<&'static str> {
         Some(super::rotor_absolute::FINDING)
     }

@@ -97,6 +97,27 @@
 //! right drag's free-run gain is +0.2 % ± 24 % across folds, so that
 //! answer rests on a small margin.
 //!
+//! # The motor side under each damping
+//!
+//! The estimate's motor side (k_T, k_e, T_f, J_m, and J1) is fitted on the
+//! voltage steps *together with* the twist-rate damping
+//! ([`rig_estimate::DampingStructure`]'s docs): with the damping moved, the
+//! two-inertia dynamics the free run depends on (the motor's reflected
+//! inertia n²J_m is about J1) are those of a compromise the twist-rate C
+//! completes. A damping candidate's free run is therefore simulated on the
+//! motor side re-estimated under it ([`MotorSide`],
+//! [`StructureCandidate::refits_motor_side`]): one warm-started voltage-step
+//! fit per candidate and campaign, with the candidate's C and C_r from its
+//! balance fit to every run held; each fold's free run then applies the
+//! fold's own C and C_r on that motor side. Not per fold: the voltage steps
+//! are not among the held-out operating points, so the refit sees no
+//! held-out record; what it takes from every run is the damping it holds,
+//! whose fold-to-fold spread is the jackknife error the support rule
+//! already requires to be `min_t` times smaller than the drag. The baseline
+//! keeps the estimate (its structure is the estimate's). Measured in
+//! docs/findings.md (twelfth session,
+//! `structural-normal_force_modulation+damping_rotor_absolute-0`).
+//!
 //! # A fit at its grid's edge
 //!
 //! The delay and the two sensors are fitted on grids ([`channel_delay`],
@@ -141,6 +162,7 @@ use crate::channels::{
 };
 use crate::result::{Finding, ParamAtBound, StructureScore, round_sig};
 use crate::select::{Comparison, overall};
+use rayon::prelude::*;
 use rig_types::{Campaign, RigParams};
 use std::collections::BTreeMap;
 
@@ -219,6 +241,66 @@ impl StructureData {
     }
 }
 
+/// The motor side re-estimated under a candidate's damping (module docs,
+/// "The motor side under each damping"): the voltage-step fit
+/// ([`rig_estimate::refit_motor_side`]) with the candidate's C and C_r held,
+/// warm-started at the estimate's motor side.
+#[derive(Debug, Clone)]
+pub struct MotorSide {
+    /// The extended model with the candidate's damping (its fit to every
+    /// run) and the re-estimated motor side; the candidate's `apply` of a
+    /// fold's fit on it sets that fold's damping.
+    pub model: RigParams,
+    /// The voltage steps' SSR with the estimate's motor side under the
+    /// candidate's damping, and after the refit, (rad/s)².
+    pub ssr_start: f64,
+    pub ssr: f64,
+}
+
+impl MotorSide {
+    /// The refit of `model`'s motor side; `None` when the campaign has no
+    /// voltage step or the fit fails (the candidate is then judged on the
+    /// estimate's motor side, as before the refit existed).
+    fn refit(c: &Campaign, model: &RigParams, opts: &DiagnoseOptions) -> Option<Self> {
+        // The estimation's residual and solver (pipeline.toml's estimation
+        // params are the solver's defaults: lm, 40 iterations, tolerances
+        // 1e-8, fd step 1e-4) and the checks' step window and integrator, the
+        // same values as the estimation's (`[shared.integrator]`, 50 ms).
+        let r = rig_estimate::refit_motor_side(
+            c,
+            model,
+            opts.channels.window_s,
+            rig_estimate::StepResidual::Speed,
+            &opts.integrator,
+            &rig_estimate::SolverOptions::default(),
+        )
+        .ok()?;
+        Some(MotorSide { model: r.params, ssr_start: r.ssr_start, ssr: r.ssr })
+    }
+
+    /// The refit in words: the motor constants against the estimate's.
+    fn describe(&self, est: &RigParams) -> String {
+        let (m, e) = (&self.model.motor, &est.motor);
+        format!(
+            "motor side re-estimated under it on the voltage steps (SSR {:.3e} → {:.3e} (rad/s)²): k_T {:.4} \
+             (estimate {:.4}) N·m/A, k_e {:.4} ({:.4}) V·s/rad, T_f {:.3e} ({:.3e}) N·m, J_m {:.3e} ({:.3e}) kg·m², \
+             J1 {:.4} ({:.4}) kg·m²",
+            self.ssr_start,
+            self.ssr,
+            m.torque_constant_nm_a,
+            e.torque_constant_nm_a,
+            m.voltage_constant_v_s_rad,
+            e.voltage_constant_v_s_rad,
+            m.friction_torque_nm,
+            e.friction_torque_nm,
+            m.inertia_kgm2,
+            e.inertia_kgm2,
+            self.model.rotor_inertia_kgm2,
+            est.rotor_inertia_kgm2
+        )
+    }
+}
+
 /// A structural candidate (one file each; [`REGISTRY`]).
 pub trait StructureCandidate: Sync {
     fn id(&self) -> &'static str;
@@ -237,6 +319,12 @@ pub trait StructureCandidate: Sync {
     /// its free run is the extended model's).
     fn moves(&self) -> bool {
         true
+    }
+    /// Whether its free run needs the motor side re-estimated under it
+    /// (module docs, "The motor side under each damping"): a candidate that
+    /// moves the damping.
+    fn refits_motor_side(&self) -> bool {
+        false
     }
     /// Each run's ring misfit after its break-aways with this fit, N·m, over
     /// the runs `include` accepts ([`sensor_dynamics::Ring`]): the records'
@@ -343,6 +431,10 @@ struct Study<'a> {
     c: &'a Campaign,
     data: &'a StructureData,
     ext: &'a RigParams,
+    /// The model each candidate extends ([`REGISTRY`] order): the extended
+    /// model, with the motor side re-estimated under the candidate's damping
+    /// for one that moves it ([`MotorSide`]).
+    models: Vec<RigParams>,
     runs: &'a [crate::RunRow],
     /// The extended model's free-run misfit of each run (`None`: no misfit).
     ext_free_run: Vec<Option<f64>>,
@@ -415,7 +507,7 @@ impl rig_types::select::ViewStudy<Structured> for Study<'_> {
             _ => {
                 // Compared only where the extended model's free run has a misfit.
                 self.ext_free_run[unit]?;
-                let p = with_run_phases(&REGISTRY[m.k].apply(self.ext, &m.fit), self.runs[unit].phases_rad);
+                let p = with_run_phases(&REGISTRY[m.k].apply(&self.models[m.k], &m.fit), self.runs[unit].phases_rad);
                 let pairs = free_run_pairs_by(self.c, self.s, |r| (r == id).then(|| p.clone()));
                 pairs.first().and_then(|q| free_run_misfit(q, self.floor_rad_s))
             }
@@ -566,10 +658,20 @@ pub fn select_structure(
     let floor_rad_s = crate::channels::speed_floor_rad_s(c, s);
     let ext_ms: BTreeMap<&str, f64> =
         ext_pairs.iter().filter_map(|q| free_run_misfit(q, floor_rad_s).map(|m| (q.id.as_str(), m))).collect();
+    // The motor side re-estimated once under each candidate that moves the
+    // damping, at its fit to every run (module docs), in REGISTRY order.
+    let motor: Vec<Option<MotorSide>> = REGISTRY
+        .par_iter()
+        .map(|cand| {
+            let full = cand.refits_motor_side().then(|| cand.fit(ext, data, &|_| true)).flatten()?;
+            MotorSide::refit(c, &cand.apply(ext, &full), opts)
+        })
+        .collect();
     let study = Study {
         c,
         data,
         ext,
+        models: motor.iter().map(|m| m.as_ref().map_or_else(|| ext.clone(), |m| m.model.clone())).collect(),
         runs,
         ext_free_run: runs.iter().map(|r| ext_ms.get(r.id.as_str()).copied()).collect(),
         floor_rad_s,
@@ -659,13 +761,17 @@ pub fn select_structure(
         }
         let cmp = &t.comparisons;
         let admissible = a.pinned.is_empty() && a.weak.is_empty();
-        scores.push(score_row(
+        let mut row = score_row(
             REGISTRY[k],
             &a.full,
             &a.weak,
             [&cmp[BALANCE], &cmp[FREE_RUN], &cmp[EVENTS], &cmp[RING]],
             admissible,
-        ));
+        );
+        if let Some(m) = &motor[k] {
+            row.description = format!("{}; {}", row.description, m.describe(ext));
+        }
+        scores.push(row);
         if t.accepted {
             // Admitted on neither the balance nor the free run ([`FourViews`]
             // ranks those by the event-locked gain): on the ring where it
@@ -679,7 +785,7 @@ pub fn select_structure(
     match winner {
         Some((k, row, full, se, on)) => {
             scores[row].accepted = true;
-            finish(ext, REGISTRY[k], row, full, se, scores, at_bounds, runs, on)
+            finish(&study.models[k], REGISTRY[k], row, full, se, scores, at_bounds, runs, on)
         }
         None => {
             scores[0].accepted = true;
@@ -693,10 +799,12 @@ fn no_gain(m: f64) -> Comparison {
     Comparison { before: m, after: m, gain: 0.0, gain_fold_sd: 0.0, t: 0.0 }
 }
 
-/// The selection from its winner (`row`: its row of `scores`).
+/// The selection from its winner (`row`: its row of `scores`), applied to
+/// `model`, the model it extends (the extended model, with the motor side
+/// re-estimated under a damping winner's structure).
 #[allow(clippy::too_many_arguments)]
 fn finish(
-    ext: &RigParams,
+    model: &RigParams,
     winner: &'static dyn StructureCandidate,
     row: usize,
     fitted: Fitted,
@@ -710,7 +818,7 @@ fn finish(
     let notes = notes(winner, &fitted, row, &scores);
     StructureSelection {
         damping: winner.damping(),
-        model: winner.apply(ext, &fitted),
+        model: winner.apply(model, &fitted),
         candidate: winner,
         fitted,
         stderr,

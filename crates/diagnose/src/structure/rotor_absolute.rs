@@ -37,6 +37,10 @@ impl StructureCandidate for RotorAbsolute {
         let f = data.balance.fit(include, false, true)?;
         Some(Fitted { values: vec![f.rotor_drag_nm_s_rad], balance: f, aligned: None, sensor: None, footprint: None })
     }
+    /// The damping moves off the twist rate: the motor side is re-estimated under it.
+    fn refits_motor_side(&self) -> bool {
+        true
+    }
     fn finding_id(&self) -> Option<&'static str> {
         Some(FINDING)
     }
