@@ -529,8 +529,16 @@ pub fn diagnose(
             d.detail.motor_speed_tick_rad_s = base_pairs.first().map_or(0.0, |q| q.motor_tick_rad_s);
             // An `unexplained` answer carries the best data-driven extension (issue 25, item 6).
             let model = if moved { &sel.model } else { &ext };
-            let inputs =
-                extension::Inputs { c, runs: &runs, model, before: &final_pairs, phases: &phases, s: &s, opts };
+            let inputs = extension::Inputs {
+                c,
+                runs: &runs,
+                model,
+                before: &final_pairs,
+                phases: &phases,
+                s: &s,
+                measured,
+                opts,
+            };
             extension::attach(&mut d, &inputs);
             structure::attach(&mut d, sel);
             d.parameters_at_bounds.extend(extension::vocabulary_bounds(p, &d.findings));

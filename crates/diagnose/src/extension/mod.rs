@@ -90,8 +90,8 @@ pub mod drift;
 pub mod dwell;
 
 use crate::channels::{
-    ChannelCheck, FreeRunPair, FreeRunSettings, free_run_checks_of, free_run_misfit_channels, free_run_pairs_by,
-    speed_floor_rad_s, with_run_phases,
+    ChannelCheck, FreeRunPair, FreeRunSettings, MeasuredRuns, free_run_checks_of, free_run_misfit_channels,
+    free_run_pairs_measured, speed_floor_rad_s, with_run_phases,
 };
 use crate::prepare::RunSignals;
 use crate::result::{Extension, ExtensionTerm, SpeedTraces, StepRow, round_sig};
@@ -162,6 +162,9 @@ pub struct Inputs<'a> {
     /// Each run's nuisance phases (θ of the time and angle modulations).
     pub phases: &'a BTreeMap<String, (f64, f64)>,
     pub s: &'a FreeRunSettings,
+    /// The records' side of every free run, measured once under `s`
+    /// ([`MeasuredRuns::of`]): every free run here simulates only.
+    pub measured: &'a MeasuredRuns,
     pub opts: &'a crate::DiagnoseOptions,
 }
 
@@ -359,9 +362,9 @@ impl Library<'_> {
         if let Some(q) = self.pairs.lock().expect("free-run cache").get(&key) {
             return q.clone();
         }
-        let Inputs { c, runs, s, .. } = *self.x;
+        let Inputs { c, runs, s, measured, .. } = *self.x;
         let id = runs[r].id.as_str();
-        let q = free_run_pairs_by(c, s, |k| (k == id).then(|| self.x.with_extension(coef, id))).pop();
+        let q = free_run_pairs_measured(c, s, measured, |k| (k == id).then(|| self.x.with_extension(coef, id))).pop();
         self.pairs.lock().expect("free-run cache").insert(key, q.clone());
         q
     }
@@ -408,7 +411,7 @@ impl SignalFits for Library<'_> {
     /// simulation of the training runs: the slope c_d by Brent, the level c_0
     /// the break-aways' least squares at that slope.
     fn fit_set(&self, set: &[usize], train: &[usize]) -> Option<[f64; 4]> {
-        let Inputs { c, runs, s, .. } = *self.x;
+        let Inputs { c, runs, s, measured, .. } = *self.x;
         let mut mask = vec![false; runs.len()];
         train.iter().for_each(|&r| mask[r] = true);
         let mut coef = self.teacher_forced(set, &mask)?;
@@ -431,7 +434,9 @@ impl SignalFits for Library<'_> {
         let misfit = |cd: f64| {
             let mut k = coef;
             (k[LEVEL], k[DWELL]) = (level_at(cd), cd);
-            let pairs = free_run_pairs_by(c, s, |id| training.contains_key(id).then(|| self.x.with_extension(k, id)));
+            let pairs = free_run_pairs_measured(c, s, measured, |id| {
+                training.contains_key(id).then(|| self.x.with_extension(k, id))
+            });
             let m2: Vec<f64> = pairs
                 .iter()
                 .map(|q| free_run_misfit_channels(q, self.floor).map_or(FAILED_RUN_MISFIT, |m| m * m))
