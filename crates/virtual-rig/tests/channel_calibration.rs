@@ -155,7 +155,14 @@ fn force_linearity_sees_a_bent_sensor() {
     let ratio = |class: &str, seed: u64| {
         let truth = draw_truth(class, 130.0, seed);
         let c = generate(class, &truth, &Protocol::small(), seed).expect("generate");
-        let ch = rig_diagnose::channels::force_linearity_check(&c, &o.channels);
+        // μ's relative uncertainty as the diagnosis reads it (rig-estimate's
+        // kinetic level through the calibration line).
+        let cal = calibrate_campaign_with(&c, &chain().calibration).expect("calibration");
+        let mu_se =
+            rig_estimate::estimate_friction(&c, cal.force_offset_mv, cal.force_factor_mv_per_n, &o.stick_episodes)
+                .ok()
+                .and_then(|f| Some(f.mu_kinetic_stderr? / f.mu_kinetic));
+        let ch = rig_diagnose::channels::force_linearity_check(&c, &o.channels, mu_se);
         println!("{class:<30} seed {seed}: ratio {:.2} {}", ch.ratio, ch.detail);
         (ch.ratio, ch.flagged, ch.detail)
     };
