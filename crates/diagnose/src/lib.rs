@@ -457,7 +457,8 @@ pub fn diagnose(
             let sdata = sdata.get_or_init(|| {
                 structure::StructureData::of(c, recorded.as_ref().expect("with the balance"), o, data.clone())
             });
-            let sel = structure::select_structure(c, sdata, &ext, &ext_pairs, &d.detail.runs, &s, opts);
+            let rec = recorded.as_ref().expect("with the balance");
+            let sel = structure::select_structure(c, sdata, &ext, &ext_pairs, &d.detail.runs, &s, opts, rec);
             let moved = sel.damping != structure::REGISTRY[0].id();
             let final_pairs = if moved {
                 channels::free_run_pairs_measured(c, &s, measured, |id| Some(phased(&sel.model, id)))
