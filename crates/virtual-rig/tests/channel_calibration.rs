@@ -147,8 +147,9 @@ fn drive_balance_sees_a_motor_that_warms_up() {
 /// `force_sensor_nonlinearity`, 0.3–0.8 mV/N² on a ≈ 210 mV/N sensor) is seen
 /// in the calibration runs; effect-free rigs and rigs with a vocabulary
 /// effect (which never touches the sensor) are not. Small protocol,
-/// `draw_truth` seeds 9000+: 4 bent sensors 37–61, 30 null draws 0.29–2.69
-/// (threshold 6); `--nocapture` prints the ratios.
+/// `draw_truth` seeds 9000+, the bend's t (twelfth session): 4 bent sensors
+/// 54–89, 30 null draws 0.14–1.92 (threshold 6; the line's lack of fit it
+/// replaced read 37–61 and 0.29–2.69); `--nocapture` prints the ratios.
 #[test]
 fn force_linearity_sees_a_bent_sensor() {
     let o = opts();
