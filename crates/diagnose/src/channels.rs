@@ -266,7 +266,11 @@ pub fn all_checks(
     v.extend(free_run_checks(c, model, &FreeRunSettings::of(opts, o), o));
     v.push(torque_balance_check(c, cal, baseline, opts, o));
     v.push(drive_balance_check(c, opts, o));
-    v.push(force_linearity_check(c, o));
+    let mu_relative_se =
+        rig_estimate::estimate_friction(c, cal.force_offset_mv, cal.force_factor_mv_per_n, &opts.stick_episodes)
+            .ok()
+            .and_then(|f| Some(f.mu_kinetic_stderr? / f.mu_kinetic));
+    v.push(force_linearity_check(c, o, mu_relative_se));
     v
 }
 

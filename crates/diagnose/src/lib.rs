@@ -346,7 +346,14 @@ pub fn diagnose(
     // channel reads forces through the calibration runs' parabola instead, so
     // the friction laws are fitted to forces and not to the sensor's bend
     // (the failed check still makes the verdict `unexplained`).
-    let mut force_check = channels::force_linearity_check(c, o);
+    // The model's kinetic level is the estimation's, fitted on these records:
+    // its standard error bounds how well any free run can match the slip
+    // force, and what a bend of the force sensor must exceed to matter.
+    let friction =
+        rig_estimate::estimate_friction(c, cal.force_offset_mv, cal.force_factor_mv_per_n, &opts.stick_episodes).ok();
+    let mu_k_se = friction.as_ref().and_then(|f| f.mu_kinetic_stderr).unwrap_or(0.0);
+    let mu_relative_se = friction.as_ref().and_then(|f| Some(f.mu_kinetic_stderr? / f.mu_kinetic));
+    let mut force_check = channels::force_linearity_check(c, o, mu_relative_se);
     let law = match channels::force_parabola(c).filter(|_| force_check.flagged) {
         Some(q) => {
             force_check.detail.push_str(&format!(
@@ -397,13 +404,6 @@ pub fn diagnose(
     // something. The baseline's free runs need no finding either: they run
     // beside the selection.
     let flagged0 = flagged_of(&checks);
-    // The model's kinetic level is the estimation's, fitted on these records:
-    // its standard error bounds how well any free run can match the slip force.
-    let mu_k_se =
-        rig_estimate::estimate_friction(c, cal.force_offset_mv, cal.force_factor_mv_per_n, &opts.stick_episodes)
-            .ok()
-            .and_then(|f| f.mu_kinetic_stderr)
-            .unwrap_or(0.0);
     let s = channels::FreeRunSettings::of(opts, o).with_force(law).with_mu_kinetic_stderr(mu_k_se);
     // The voltage steps judge the estimate on the runs it was fitted to, in
     // the structure it was fitted in (rig-estimate fits the twist-rate
@@ -457,7 +457,8 @@ pub fn diagnose(
             let sdata = sdata.get_or_init(|| {
                 structure::StructureData::of(c, recorded.as_ref().expect("with the balance"), o, data.clone())
             });
-            let sel = structure::select_structure(c, sdata, &ext, &ext_pairs, &d.detail.runs, &s, opts);
+            let rec = recorded.as_ref().expect("with the balance");
+            let sel = structure::select_structure(c, sdata, &ext, &ext_pairs, &d.detail.runs, &s, opts, rec);
             let moved = sel.damping != structure::REGISTRY[0].id();
             let final_pairs = if moved {
                 channels::free_run_pairs_measured(c, &s, measured, |id| Some(phased(&sel.model, id)))
