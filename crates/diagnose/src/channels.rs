@@ -197,8 +197,6 @@ pub struct ChannelOptions {
     /// Does the slip force trend within a run? RMS over runs of each run's
     /// relative drift over its floor ([`crate::extension::drift`]).
     pub slip_drift_ratio: f64,
-    /// Window of the step residual, s (the estimate's 50 ms).
-    pub window_s: f64,
     /// Window of the torque balance, s (long enough that the
     /// quantisation of Ω̇1 does not swamp the balance).
     pub balance_window_s: f64,
@@ -262,7 +260,7 @@ pub fn all_checks(
     o: &ChannelOptions,
 ) -> Vec<ChannelCheck> {
     let mut v = static_twist_checks(c, cal, o);
-    v.extend(voltage_step_checks(c, cal, baseline, o, &opts.integrator));
+    v.extend(voltage_step_checks(c, cal, baseline, o, opts.voltage_steps.window_s, &opts.integrator));
     v.extend(free_run_checks(c, model, &FreeRunSettings::of(opts, o), o));
     v.push(torque_balance_check(c, cal, baseline, opts, o));
     v.push(drive_balance_check(c, opts, o));

@@ -201,6 +201,10 @@ pub struct DiagnoseOptions {
     /// The regime classifier, the one definition of stick-slip
     /// (`[shared.classify]` of pipeline.toml, handed to the stage).
     pub classify: rig_sweep::ClassifyOptions,
+    /// The voltage-step fit, as the estimation's (pipeline.toml's
+    /// `[shared.voltage_steps]`): the step checks' window and the motor
+    /// side refitted under each damping candidate.
+    pub voltage_steps: rig_estimate::VoltageStepFit,
     /// Integrator tolerances of every simulation of the checks (free runs,
     /// voltage steps): pipeline.toml's `[shared.integrator]`, as the
     /// simulation, sweeps, spectra and estimation stages.
@@ -410,7 +414,7 @@ pub fn diagnose(
     // placement; with another structure its motor-side coefficients absorb
     // the rotor's drag, so the selected structure on top of the estimate
     // would count that drag twice on the steps).
-    let steps = baseline.map(|p| channels::voltage_step_checks(c, cal, p, o, &opts.integrator)).unwrap_or_default();
+    let steps = baseline.map(|p| channels::voltage_step_checks(c, cal, p, o, opts.voltage_steps.window_s, &opts.integrator)).unwrap_or_default();
     let mut flagged1 = flagged0.clone();
     flagged1.extend(flagged_of(&steps));
     let (sel, base_pairs) = rayon::join(

@@ -25,7 +25,7 @@ pub use fit_stats::{FitReport, Identifiability, ParamEstimate};
 pub use friction::{FrictionEstimate, FrictionOptions, estimate_friction};
 pub use lsq::{IterationRecord, LsqProblem, LsqSolution, SolverOptions, Transform, levenberg_marquardt};
 pub use options::{DampingStructure, EstimateOptions, InitialValues, RotorDamping, SolverKind};
-pub use params::EstimateParams;
+pub use params::{EstimateParams, VoltageStepFit};
 pub use pi::{PiEstimate, PiMethod, PiOptions, estimate_pi};
 pub use rig::{MOTOR_SIDE, ModeComparison, MotorRefit, RigEstimate, StepFit, estimate_rig, refit_motor_side};
 pub use steps::StepResidual;

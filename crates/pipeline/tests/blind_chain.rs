@@ -46,15 +46,15 @@ fn a_set_on_a_chain_stage_reaches_the_battery() {
     let path = workspace_root().join("pipeline.toml");
     let shipped = dag_chain(&Runner::new(&path).unwrap());
     assert_ne!(shipped.diagnosis.folds, 3, "the test must change the value");
-    assert_ne!(shipped.estimation.max_iterations, 7, "the test must change the value");
+    assert_ne!(shipped.estimation.whiteness_max_lag, 7, "the test must change the value");
     let set = Runner::new(&path)
         .unwrap()
         .set_param("diagnosis", "folds", "3")
         .unwrap()
-        .set_param("estimation", "max_iterations", "7")
+        .set_param("estimation", "whiteness_max_lag", "7")
         .unwrap();
     let chain = battery_chain(&set);
-    assert_eq!((chain.diagnosis.folds, chain.estimation.max_iterations), (3, 7));
+    assert_eq!((chain.diagnosis.folds, chain.estimation.whiteness_max_lag), (3, 7));
     assert_eq!(chain, dag_chain(&set));
 }
 

@@ -38,6 +38,7 @@ pub fn voltage_step_checks(
     cal: &CampaignCalibration,
     baseline: &RigParams,
     o: &ChannelOptions,
+    window_s: f64,
     sim: &SimOptions,
 ) -> Vec<ChannelCheck> {
     let mut out = Vec::new();
@@ -90,8 +91,8 @@ pub fn voltage_step_checks(
         ));
     }
 
-    let w = nominal_window_samples(o.window_s, c.rig.sample_rate_hz);
-    let Ok(data) = step_data(c, o.window_s) else {
+    let w = nominal_window_samples(window_s, c.rig.sample_rate_hz);
+    let Ok(data) = step_data(c, window_s) else {
         out.push(ChannelCheck::not_testable("voltage_step.residual", ids, "no usable voltage_step run".into()));
         return out;
     };

@@ -286,17 +286,19 @@ impl MotorSide {
     /// voltage step or the fit fails (the candidate is then judged on the
     /// estimate's motor side, as before the refit existed).
     fn refit(c: &Campaign, model: &RigParams, opts: &DiagnoseOptions) -> Option<Self> {
-        // The estimation's residual and solver (pipeline.toml's estimation
-        // params are the solver's defaults: lm, 40 iterations, tolerances
-        // 1e-8, fd step 1e-4) and the checks' step window and integrator, the
-        // same values as the estimation's (`[shared.integrator]`, 50 ms).
+        // The estimation's voltage-step fit (`[shared.voltage_steps]`: window,
+        // residual, solver; declared once for both stages) and the checks'
+        // integrator (`[shared.integrator]`, as the estimation's). The refit
+        // is a warm-started polish from the estimate, by Levenberg–Marquardt
+        // whichever solver the first fit names.
+        let v = &opts.voltage_steps;
         let r = rig_estimate::refit_motor_side(
             c,
             model,
-            opts.channels.window_s,
-            rig_estimate::StepResidual::Speed,
+            v.window_s,
+            v.step_residual(),
             &opts.integrator,
-            &rig_estimate::SolverOptions::default(),
+            &v.solver_options(),
         )
         .ok()?;
         Some(MotorSide { model: r.params, ssr_start: r.ssr_start, ssr: r.ssr })
