@@ -260,7 +260,7 @@ pub fn all_checks(
     o: &ChannelOptions,
 ) -> Vec<ChannelCheck> {
     let mut v = static_twist_checks(c, cal, o);
-    v.extend(voltage_step_checks(c, cal, baseline, o, opts.voltage_steps.window_s, &opts.integrator));
+    v.extend(voltage_step_checks(c, cal, baseline, o, opts.voltage_steps.residual_window_s, &opts.integrator));
     v.extend(free_run_checks(c, model, &FreeRunSettings::of(opts, o), o));
     v.push(torque_balance_check(c, cal, baseline, opts, o));
     v.push(drive_balance_check(c, opts, o));

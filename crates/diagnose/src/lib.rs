@@ -414,7 +414,9 @@ pub fn diagnose(
     // placement; with another structure its motor-side coefficients absorb
     // the rotor's drag, so the selected structure on top of the estimate
     // would count that drag twice on the steps).
-    let steps = baseline.map(|p| channels::voltage_step_checks(c, cal, p, o, opts.voltage_steps.window_s, &opts.integrator)).unwrap_or_default();
+    let steps = baseline
+        .map(|p| channels::voltage_step_checks(c, cal, p, o, opts.voltage_steps.residual_window_s, &opts.integrator))
+        .unwrap_or_default();
     let mut flagged1 = flagged0.clone();
     flagged1.extend(flagged_of(&steps));
     let (sel, base_pairs) = rayon::join(

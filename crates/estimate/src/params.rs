@@ -47,7 +47,7 @@ pub struct VoltageStepFit {
     pub gtol: f64,
     pub fd_step: f64,
     /// Window of the step residuals' window-mean speeds, s.
-    pub window_s: f64,
+    pub residual_window_s: f64,
     pub residual: Residual,
 }
 
@@ -115,7 +115,7 @@ impl EstimateParams {
         o.solver_kind = v.solver_kind();
         o.solver = v.solver_options();
         o.gear_ratio = self.gear_ratio;
-        o.speed_window_s = v.window_s;
+        o.speed_window_s = v.residual_window_s;
         o.step_residual = v.step_residual();
         o.free_inductance = self.free_inductance;
         o.holdout =

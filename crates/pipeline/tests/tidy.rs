@@ -585,9 +585,21 @@ fn declared_twice(text: &str) -> Vec<String> {
     for st in &stages {
         let name = st.get("name").and_then(|v| v.as_str()).unwrap_or("?").to_string();
         let Some(params) = st.get("params").and_then(|v| v.as_table()) else { continue };
-        for (key, value) in params {
+        // Nested tables too (`[stage.params.channels]`): a key's leaf name is
+        // what a second declaration would repeat.
+        let mut leaves: Vec<(String, toml::Value)> = Vec::new();
+        let mut open: Vec<&toml::Table> = vec![params];
+        while let Some(t) = open.pop() {
+            for (key, value) in t {
+                match value.as_table() {
+                    Some(inner) => open.push(inner),
+                    None => leaves.push((key.clone(), value.clone())),
+                }
+            }
+        }
+        for (key, value) in &leaves {
             for (table, keys) in &shared {
-                let in_shared = keys.as_table().is_some_and(|t| t.contains_key(key));
+                let in_shared = keys.as_table().is_some_and(|t| t.contains_key(key.as_str()));
                 if in_shared && !per_study.contains(&key.as_str()) {
                     problems.push(format!(
                         "stage {name}: `{key}` is declared in [shared.{table}]; list \"{table}\" in `shared`"
@@ -602,7 +614,7 @@ fn declared_twice(text: &str) -> Vec<String> {
     for (key, decls) in &seen {
         for (i, (a, va)) in decls.iter().enumerate() {
             for (b, vb) in &decls[i + 1..] {
-                if va == vb && !SAME_VALUE_ON_PURPOSE.iter().any(|(k, _)| k == key) {
+                if a != b && va == vb && !SAME_VALUE_ON_PURPOSE.iter().any(|(k, _)| k == key) {
                     problems.push(format!(
                         "`{key} = {va}` is declared by stages {a} and {b}: one [shared.<name>] table, or list it \
                          in SAME_VALUE_ON_PURPOSE with the reason"
@@ -627,6 +639,9 @@ fn a_setting_declared_twice_is_seen() {
     let twice = "[[stage]]\nname = \"a\"\n[stage.params]\nmin_relative_gain = 0.05\n\
                  [[stage]]\nname = \"b\"\n[stage.params]\nmin_relative_gain = 0.05\n";
     assert_eq!(declared_twice(twice).len(), 1, "{:?}", declared_twice(twice));
+    let nested = "[[stage]]\nname = \"a\"\n[stage.params]\nwindow_s = 0.05\n\
+                  [[stage]]\nname = \"b\"\n[stage.params]\n[stage.params.checks]\nwindow_s = 0.05\n";
+    assert_eq!(declared_twice(nested).len(), 1, "{:?}", declared_twice(nested));
     let beside_shared = "[shared.integrator]\nrtol = 1e-8\n[[stage]]\nname = \"a\"\n[stage.params]\nrtol = 1e-7\n";
     assert_eq!(declared_twice(beside_shared).len(), 1, "{:?}", declared_twice(beside_shared));
     let fine = "[shared.integrator]\nrtol = 1e-8\n[[stage]]\nname = \"a\"\nshared = [\"integrator\"]\n\

@@ -295,7 +295,7 @@ impl MotorSide {
         let r = rig_estimate::refit_motor_side(
             c,
             model,
-            v.window_s,
+            v.residual_window_s,
             v.step_residual(),
             &opts.integrator,
             &v.solver_options(),
