@@ -570,6 +570,20 @@ const SAME_VALUE_ON_PURPOSE: [(&str, &str); 4] = [
     ),
 ];
 
+/// Every non-table value of `t` and of the tables nested in it: its dotted
+/// path (after `at`, ending in a dot, or `at` itself at the top), its key and
+/// its value, in key order.
+fn leaves<'a>(t: &'a toml::Table, at: &str) -> Vec<(String, &'a str, &'a toml::Value)> {
+    let mut out = Vec::new();
+    for (key, value) in t {
+        match value.as_table() {
+            Some(inner) => out.extend(leaves(inner, &format!("{at}{key}."))),
+            None => out.push((at.to_string(), key.as_str(), value)),
+        }
+    }
+    out
+}
+
 /// What breaks "no setting two stages must agree on is declared twice" in
 /// a pipeline.toml text: a key of a `[shared.<name>]` table in a stage's
 /// params (the spectral-band keys excepted: each study sets its band for its
@@ -587,28 +601,16 @@ fn declared_twice(text: &str) -> Vec<String> {
         let Some(params) = st.get("params").and_then(|v| v.as_table()) else { continue };
         // Nested tables too (`[stage.params.channels]`): a key's leaf name is
         // what a second declaration would repeat.
-        let mut leaves: Vec<(String, toml::Value)> = Vec::new();
-        let mut open: Vec<&toml::Table> = vec![params];
-        while let Some(t) = open.pop() {
-            for (key, value) in t {
-                match value.as_table() {
-                    Some(inner) => open.push(inner),
-                    None => leaves.push((key.clone(), value.clone())),
-                }
-            }
-        }
-        for (key, value) in &leaves {
+        for (_, key, value) in leaves(params, "") {
             for (table, keys) in &shared {
-                let in_shared = keys.as_table().is_some_and(|t| t.contains_key(key.as_str()));
-                if in_shared && !per_study.contains(&key.as_str()) {
+                let in_shared = keys.as_table().is_some_and(|t| t.contains_key(key));
+                if in_shared && !per_study.contains(&key) {
                     problems.push(format!(
                         "stage {name}: `{key}` is declared in [shared.{table}]; list \"{table}\" in `shared`"
                     ));
                 }
             }
-            if !value.is_table() {
-                seen.entry(key.clone()).or_default().push((name.clone(), value.to_string()));
-            }
+            seen.entry(key.to_string()).or_default().push((name.clone(), value.to_string()));
         }
     }
     for (key, decls) in &seen {
@@ -655,15 +657,10 @@ fn a_setting_declared_twice_is_seen() {
 /// window, half-width, segment or samples but is not in seconds (`*_s`).
 fn windows_in_samples(text: &str) -> Vec<String> {
     fn walk(t: &toml::Table, at: &str, out: &mut Vec<String>) {
-        for (key, value) in t {
-            match value.as_table() {
-                Some(inner) => walk(inner, &format!("{at}{key}."), out),
-                None => {
-                    let windowish = ["window", "half", "segment", "samples"].iter().any(|w| key.contains(w));
-                    if windowish && !key.ends_with("_s") {
-                        out.push(format!("{at}{key}"));
-                    }
-                }
+        for (path, key, _) in leaves(t, at) {
+            let windowish = ["window", "half", "segment", "samples"].iter().any(|w| key.contains(w));
+            if windowish && !key.ends_with("_s") {
+                out.push(format!("{path}{key}"));
             }
         }
     }
