@@ -368,7 +368,7 @@ fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi,
     let mut scores = vec![f64::INFINITY; grid.len()];
     let mut best_rss = f64::INFINITY;
     for (j, &l) in grid.iter().enumerate().rev() {
-        if rss_lower_bound(runs, l) > best_rss {
+        if rss_lower_bound(runs, l, best_rss) > best_rss {
             continue;
         }
         scores[j] = eval_with(l, &p0);
@@ -445,14 +445,33 @@ fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi,
 
 /// A lower bound of the voltage RSS (noise units, as [`voltage_rss`]) of any
 /// gains at limit `l`: the prediction is clamped to ±l, so a sample measured
-/// at |V| > l misses by at least |V| − l.
-fn rss_lower_bound(runs: &[Recording], l: f64) -> f64 {
-    runs.iter()
-        .map(|s| {
-            let w = 1.0 / s.voltage_noise_v.max(1e-6).powi(2);
-            w * s.voltage_v.iter().map(|v| (v.abs() - l).max(0.0).powi(2)).sum::<f64>()
-        })
-        .sum()
+/// at |V| > l misses by at least |V| − l. Only the samples beyond `l` add, so
+/// each run's are read from the top of its |V| in ascending order
+/// ([`Prepared`]'s `v_abs_sorted`), largest first, and the sum stops once it
+/// exceeds `cap` (every term is ≥ 0, so it can only grow): the grid's
+/// limits far below the driven voltage, each a pass over every sample of
+/// every training run, were 2.8 % of a ladder rung's CPU in `perf` (issue
+/// 23). The terms are added in another order than the samples', so the
+/// bound differs from the per-sample sum by rounding (≈ 10⁻¹⁶ of itself);
+/// it decides only whether a limit is fitted, and a limit whose RSS is
+/// within that rounding of the best one's is the only one it could decide
+/// otherwise.
+fn rss_lower_bound(runs: &[Recording], l: f64, cap: f64) -> f64 {
+    let mut total = 0.0;
+    for s in runs {
+        let w = 1.0 / s.voltage_noise_v.max(1e-6).powi(2);
+        let v = &s.p.v_abs_sorted;
+        let beyond = &v[v.partition_point(|&x| x <= l)..];
+        let mut run_sum = 0.0;
+        for chunk in beyond.rchunks(256) {
+            run_sum += chunk.iter().rev().map(|x| (x - l).powi(2)).sum::<f64>();
+            if total + w * run_sum > cap {
+                return total + w * run_sum;
+            }
+        }
+        total += w * run_sum;
+    }
+    total
 }
 
 /// The lowest limit from which on the drive-limit fit no longer depends on
@@ -644,12 +663,28 @@ mod tests {
         let scored: Vec<(f64, f64, f64)> = (0..=38)
             .map(|j| {
                 let l = 24.0 * (0.05 + 0.025 * j as f64);
-                (l, rss_lower_bound(&rec, l), fit_gains(&r, l).map(|p| voltage_rss(&p, &r).0).expect("fit"))
+                (
+                    l,
+                    rss_lower_bound(&rec, l, f64::INFINITY),
+                    fit_gains(&r, l).map(|p| voltage_rss(&p, &r).0).expect("fit"),
+                )
             })
             .collect();
         let best = scored.iter().map(|x| x.2).fold(f64::INFINITY, f64::min);
         for &(l, bound, rss) in &scored {
             assert!(bound <= rss, "limit {l}: bound {bound} > rss {rss}");
+            // The bound read from the sorted tails is the per-sample sum, up to rounding.
+            let per_sample: f64 = limited
+                .iter()
+                .map(|s| {
+                    let w = 1.0 / s.voltage_noise_v.max(1e-6).powi(2);
+                    w * s.voltage_v.iter().map(|v| (v.abs() - l).max(0.0).powi(2)).sum::<f64>()
+                })
+                .sum();
+            assert!((bound - per_sample).abs() <= 1e-12 * per_sample, "limit {l}: {bound} vs {per_sample}");
+            // Capped, it stops above the cap, never below it.
+            let capped = rss_lower_bound(&rec, l, 0.5 * per_sample);
+            assert!(capped <= bound && (per_sample == 0.0 || capped > 0.5 * per_sample), "limit {l}: {capped}");
             if l > 5.1 {
                 assert_eq!(bound, 0.0, "limit {l}");
             }
