@@ -146,14 +146,6 @@ impl FrictionModel {
             FrictionModel::AngleSine { mu_k, a, order } => mu_k * (1.0 + a * (order as f64 * phi + theta).sin()),
         }
     }
-    /// Regressor x of the sine models (the argument without the phase).
-    fn sine_arg(&self, t: f64, phi: f64) -> Option<(f64, f64, f64)> {
-        match *self {
-            FrictionModel::TimeSine { mu_k, a, f_hz } => Some((2.0 * PI * f_hz * t, mu_k, a)),
-            FrictionModel::AngleSine { mu_k, a, order } => Some((order as f64 * phi, mu_k, a)),
-            _ => None,
-        }
-    }
 }
 
 fn weighted_rss(d: &SlipData, m: &FrictionModel, phases: &[f64]) -> f64 {
@@ -1184,19 +1176,21 @@ pub fn inflation_of(r: &[f64], run: &[usize]) -> f64 {
 }
 
 /// Per-run fit of the nuisance phase with the shared parameters fixed, for a
-/// held-out run: the phase is free per run in the vocabulary, the rest is not.
-pub fn heldout_phase(m: &FrictionModel, d: &SlipData) -> f64 {
-    if m.sine_arg(0.0, 0.0).is_none() || d.is_empty() {
+/// held-out run: the phase is free per run in the vocabulary, the rest is
+/// not. The model is 1 + `amp`·sin(x_i + θ) of a target already divided by
+/// every other factor of the law (level 1), `trig` the sin and cos of each
+/// sample's argument x_i without the phase (2πf·t or n·φ1), computed once
+/// by the caller: the Newton steps below add the phase by angle addition,
+/// sin(x + θ) = sin x cos θ + cos x sin θ (a sin_cos per sample and step was
+/// 3 % of a diagnosis), and the composite's alternation reuses them in
+/// every round (`composite::heldout_phases`).
+pub fn heldout_phase(target: &[f64], trig: &[(f64, f64)], amp: f64) -> f64 {
+    if target.is_empty() {
         return 0.0;
     }
-    // sin and cos of each sample's argument, once: the Newton steps below add the
-    // phase by angle addition, sin(x + θ) = sin x cos θ + cos x sin θ (a sin_cos
-    // per sample and step was 3 % of a diagnosis).
-    let trig: Vec<(f64, f64)> = (0..d.len()).map(|i| m.sine_arg(d.t[i], d.phi[i]).expect("sine").0.sin_cos()).collect();
     let (mut ss, mut sc, mut cc, mut ys, mut yc) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for (i, &(s, c)) in trig.iter().enumerate() {
-        let (_, mk, _) = m.sine_arg(d.t[i], d.phi[i]).expect("sine");
-        let y = d.mu[i] - mk;
+    for (&mu, &(s, c)) in target.iter().zip(trig) {
+        let y = mu - 1.0;
         ss += s * s;
         sc += s * c;
         cc += c * c;
@@ -1214,11 +1208,10 @@ pub fn heldout_phase(m: &FrictionModel, d: &SlipData) -> f64 {
     for _ in 0..5 {
         let (mut g, mut h) = (0.0, 0.0);
         let (st, ct) = th.sin_cos();
-        for (i, &(sx, cx)) in trig.iter().enumerate() {
-            let (_, mk, amp) = m.sine_arg(d.t[i], d.phi[i]).expect("sine");
+        for (&mu, &(sx, cx)) in target.iter().zip(trig) {
             let (s, c) = (sx * ct + cx * st, cx * ct - sx * st);
-            let e = d.mu[i] - mk * (1.0 + amp * s);
-            let j = mk * amp * c;
+            let e = mu - (1.0 + amp * s);
+            let j = amp * c;
             g += j * e;
             h += j * j;
         }

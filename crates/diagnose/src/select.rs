@@ -214,10 +214,7 @@ impl Cv<'_> {
         let mut held = Vec::new();
         for (i, dr) in held_data {
             let (e, ph) = match &model {
-                Some(m) => {
-                    let ph = composite::heldout_phases(m, dr);
-                    (composite::relative_mu_error(m, dr, ph), ph)
-                }
+                Some(m) => composite::heldout_fit(m, dr),
                 None => (None, (0.0, 0.0)),
             };
             held.push((*i, e, ph));
