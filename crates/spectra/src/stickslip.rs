@@ -10,7 +10,8 @@ use serde::{Deserialize, Serialize};
 /// `f64::total_cmp`. Where the window is monotone (a smooth signal between
 /// its turning points: most of a simulated or a filtered record) that
 /// element is the window's middle one in its own order, read without
-/// sorting; elsewhere the window is kept sorted as it slides (rebuilt by a
+/// sorting (its adjacent pairs' falls and rises counted as it slides);
+/// elsewhere the window is kept sorted as it slides (rebuilt by a
 /// sort when the monotone stretch it skipped was longer than the window) —
 /// one binary search and shift to take the sample leaving, one to insert
 /// the sample entering — O(n·w) moves instead of a sort per sample
@@ -19,50 +20,66 @@ use serde::{Deserialize, Serialize};
 /// order; equal keys are equal bits). The same order statistic of the same
 /// samples, so the same values, bit for bit.
 pub fn running_median(x: &[f64], window: usize) -> Vec<f64> {
+    use std::cmp::Ordering::{Equal, Greater, Less};
     // `f64::total_cmp`'s key: the bits as i64, the magnitude flipped for negatives (an involution).
-    let key = |v: i64| v ^ ((((v >> 63) as u64) >> 1) as i64);
+    let flip = |k: i64| k ^ ((((k >> 63) as u64) >> 1) as i64);
+    let key = |v: f64| flip(v.to_bits() as i64);
     let h = window / 2;
     let n = x.len();
-    let keys: Vec<i64> = x.iter().map(|v| key(v.to_bits() as i64)).collect();
-    // up[i] (down[i]): the last index j with keys[i..=j] non-decreasing (non-increasing).
-    let (mut up, mut down) = (vec![0usize; n], vec![0usize; n]);
-    for i in (0..n).rev() {
-        let next = i + 1 < n;
-        up[i] = if next && keys[i] <= keys[i + 1] { up[i + 1] } else { i };
-        down[i] = if next && keys[i] >= keys[i + 1] { down[i + 1] } else { i };
-    }
     let position = |buf: &[i64], v: i64| buf.partition_point(|&b| b < v);
+    // The window is x[lo..hi]; of its adjacent pairs, `falls` fall and `rises` rise.
+    let (mut lo, mut hi, mut falls, mut rises) = (0usize, 0usize, 0usize, 0usize);
+    let pair = |j: usize| key(x[j]).cmp(&key(x[j + 1]));
     let mut buf: Vec<i64> = Vec::with_capacity(2 * h + 1);
-    // The samples in `buf`: keys[from..to], sorted.
+    // The samples in `buf`: x[from..to], sorted by key.
     let (mut from, mut to) = (0usize, 0usize);
-    (0..n)
-        .map(|i| {
-            let (lo, hi) = (i.saturating_sub(h), (i + h + 1).min(n));
-            let len = hi - lo;
-            let k = if up[lo] >= hi - 1 {
-                keys[lo + len / 2]
-            } else if down[lo] >= hi - 1 {
-                keys[hi - 1 - len / 2]
-            } else {
-                if lo >= to {
-                    buf.clear();
-                    buf.extend_from_slice(&keys[lo..hi]);
-                    buf.sort_unstable();
-                } else {
-                    for &v in &keys[to..hi] {
-                        buf.insert(position(&buf, v), v);
-                    }
-                    for &v in &keys[from..lo] {
-                        let at = position(&buf, v);
-                        buf.remove(at);
-                    }
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        while hi < (i + h + 1).min(n) {
+            if hi > lo {
+                match pair(hi - 1) {
+                    Greater => falls += 1,
+                    Less => rises += 1,
+                    Equal => {}
                 }
-                (from, to) = (lo, hi);
-                buf[len / 2]
-            };
-            f64::from_bits(key(k) as u64)
-        })
-        .collect()
+            }
+            hi += 1;
+        }
+        while lo < i.saturating_sub(h) {
+            if lo + 1 < hi {
+                match pair(lo) {
+                    Greater => falls -= 1,
+                    Less => rises -= 1,
+                    Equal => {}
+                }
+            }
+            lo += 1;
+        }
+        let len = hi - lo;
+        out.push(if falls == 0 {
+            x[lo + len / 2]
+        } else if rises == 0 {
+            x[hi - 1 - len / 2]
+        } else {
+            if lo >= to {
+                buf.clear();
+                buf.extend(x[lo..hi].iter().map(|&v| key(v)));
+                buf.sort_unstable();
+            } else {
+                for &v in &x[to..hi] {
+                    let k = key(v);
+                    buf.insert(position(&buf, k), k);
+                }
+                for &v in &x[from..lo] {
+                    let at = position(&buf, key(v));
+                    buf.remove(at);
+                }
+            }
+            (from, to) = (lo, hi);
+            f64::from_bits(flip(buf[len / 2]) as u64)
+        });
+    }
+    out
 }
 
 /// How isolated sensor glitches are found and bridged.
