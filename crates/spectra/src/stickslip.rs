@@ -8,19 +8,19 @@ use serde::{Deserialize, Serialize};
 /// Running median over an odd window (shrunk at the ends): element
 /// len/2 of the window x[i−h ..= i+h] (clipped to the record) sorted by
 /// `f64::total_cmp`. Where the window is monotone (a smooth signal between
-/// its turning points: most of a simulated or a filtered record) that
-/// element is the window's middle one in its own order, read without
-/// sorting (its adjacent pairs' falls and rises counted as it slides);
-/// elsewhere the window is kept sorted as it slides (rebuilt by a
-/// sort when the monotone stretch it skipped was longer than the window) —
-/// one binary search and shift to take the sample leaving, one to insert
-/// the sample entering — O(n·w) moves instead of a sort per sample
-/// (O(n·w log w) comparisons: 23 % of the LAVI stage with its 1 kHz
-/// record). Samples are compared as `total_cmp`'s integer keys (the same
-/// order; equal keys are equal bits). The same order statistic of the same
-/// samples, so the same values, bit for bit.
+/// its turning points: most of a simulated record) that element is the
+/// window's middle one in its own order, read without sorting (the
+/// window's falling and rising adjacent pairs counted, without a branch, as
+/// it slides). Elsewhere the window is kept sorted as it slides: one sample
+/// in and one out, the entering one takes the leaving one's place and moves
+/// to its own by swaps; after a monotone stretch, the samples that entered
+/// and left since are inserted and removed by binary search, or the window
+/// is sorted afresh when none of it is left — O(n·w) moves instead of a
+/// sort per sample (O(n·w log w) comparisons: 23 % of the LAVI stage with
+/// its 1 kHz record). Samples are compared as `total_cmp`'s integer keys
+/// (the same order; equal keys are equal bits). The same order statistic of
+/// the same samples, so the same values, bit for bit.
 pub fn running_median(x: &[f64], window: usize) -> Vec<f64> {
-    use std::cmp::Ordering::{Equal, Greater, Less};
     // `f64::total_cmp`'s key: the bits as i64, the magnitude flipped for negatives (an involution).
     let flip = |k: i64| k ^ ((((k >> 63) as u64) >> 1) as i64);
     let key = |v: f64| flip(v.to_bits() as i64);
@@ -29,7 +29,6 @@ pub fn running_median(x: &[f64], window: usize) -> Vec<f64> {
     let position = |buf: &[i64], v: i64| buf.partition_point(|&b| b < v);
     // The window is x[lo..hi]; of its adjacent pairs, `falls` fall and `rises` rise.
     let (mut lo, mut hi, mut falls, mut rises) = (0usize, 0usize, 0usize, 0usize);
-    let pair = |j: usize| key(x[j]).cmp(&key(x[j + 1]));
     let mut buf: Vec<i64> = Vec::with_capacity(2 * h + 1);
     // The samples in `buf`: x[from..to], sorted by key.
     let (mut from, mut to) = (0usize, 0usize);
@@ -37,21 +36,17 @@ pub fn running_median(x: &[f64], window: usize) -> Vec<f64> {
     for i in 0..n {
         while hi < (i + h + 1).min(n) {
             if hi > lo {
-                match pair(hi - 1) {
-                    Greater => falls += 1,
-                    Less => rises += 1,
-                    Equal => {}
-                }
+                let (a, b) = (key(x[hi - 1]), key(x[hi]));
+                falls += usize::from(a > b);
+                rises += usize::from(a < b);
             }
             hi += 1;
         }
         while lo < i.saturating_sub(h) {
             if lo + 1 < hi {
-                match pair(lo) {
-                    Greater => falls -= 1,
-                    Less => rises -= 1,
-                    Equal => {}
-                }
+                let (a, b) = (key(x[lo]), key(x[lo + 1]));
+                falls -= usize::from(a > b);
+                rises -= usize::from(a < b);
             }
             lo += 1;
         }
@@ -65,6 +60,20 @@ pub fn running_median(x: &[f64], window: usize) -> Vec<f64> {
                 buf.clear();
                 buf.extend(x[lo..hi].iter().map(|&v| key(v)));
                 buf.sort_unstable();
+            } else if lo == from + 1 && hi == to + 1 {
+                // One sample in, one out: the entering one takes the leaving one's
+                // place and moves to its own by swaps (a short window: few).
+                let out_key = key(x[from]);
+                let mut k = buf.iter().position(|&b| b == out_key).expect("a sample of the window");
+                buf[k] = key(x[to]);
+                while k > 0 && buf[k - 1] > buf[k] {
+                    buf.swap(k - 1, k);
+                    k -= 1;
+                }
+                while k + 1 < buf.len() && buf[k] > buf[k + 1] {
+                    buf.swap(k, k + 1);
+                    k += 1;
+                }
             } else {
                 for &v in &x[to..hi] {
                     let k = key(v);
