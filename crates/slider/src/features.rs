@@ -323,54 +323,28 @@ pub fn channel_step(raw: &[f64]) -> f64 {
 /// 1.4826 × the median absolute deviation of the raw record from its running
 /// median: the noise's standard deviation, blind to the spikes and to the
 /// slips (both are rare), 0 for a noiseless simulation.
+///
+/// A deviation is ≥ +0 under `f64::total_cmp` (an absolute value), so when
+/// more than half of them are exactly +0 (a smooth simulation, whose
+/// running median is the sample itself wherever the window is monotone)
+/// the median is +0 without the selection: the same bits.
 pub fn robust_noise_sd(raw: &[f64], filtered: &[f64]) -> f64 {
+    let n = raw.len().min(filtered.len());
+    let m = n / 2;
+    let zeros = raw.iter().zip(filtered).filter(|(a, b)| (*a - *b).abs().to_bits() == 0).count();
+    if zeros > m {
+        return 1.4826 * 0.0;
+    }
     let mut d: Vec<f64> = raw.iter().zip(filtered).map(|(a, b)| (a - b).abs()).collect();
-    let m = d.len() / 2;
     1.4826 * *d.select_nth_unstable_by(m, f64::total_cmp).1
 }
 
 /// Running median over 2·`half` + 1 samples (shrinking at the ends): the
-/// window kept sorted (under `f64::total_cmp`) as it slides — the sample
-/// that leaves is overwritten by the one that enters, which then moves to
-/// its place by swaps — and its middle element (index len/2) read: the
-/// element a selection over each window gives, bit for bit.
+/// element a selection over each window gives, bit for bit — the
+/// workspace's one running median, `rig_spectra::stickslip::running_median`
+/// (a monotone window read off without sorting: most of a simulated record).
 pub fn running_median(x: &[f64], half: usize) -> Vec<f64> {
-    use std::cmp::Ordering::Greater;
-    if half == 0 {
-        return x.to_vec();
-    }
-    let n = x.len();
-    let mut w: Vec<f64> = x[..half.min(n)].to_vec();
-    w.sort_by(f64::total_cmp);
-    let settle = |w: &mut [f64], mut k: usize| {
-        while k > 0 && w[k - 1].total_cmp(&w[k]) == Greater {
-            w.swap(k - 1, k);
-            k -= 1;
-        }
-        while k + 1 < w.len() && w[k].total_cmp(&w[k + 1]) == Greater {
-            w.swap(k, k + 1);
-            k += 1;
-        }
-    };
-    let slot = |w: &[f64], v: f64| w.iter().position(|e| e.to_bits() == v.to_bits()).expect("a sample of the window");
-    let mut out = Vec::with_capacity(n);
-    for i in 0..n {
-        let (enters, leaves) = (i + half < n, i > half);
-        if enters && leaves {
-            let k = slot(&w, x[i - half - 1]);
-            w[k] = x[i + half];
-            settle(&mut w, k);
-        } else if enters {
-            w.push(x[i + half]);
-            let k = w.len() - 1;
-            settle(&mut w, k);
-        } else if leaves {
-            let k = slot(&w, x[i - half - 1]);
-            w.remove(k);
-        }
-        out.push(w[w.len() / 2]);
-    }
-    out
+    rig_spectra::stickslip::running_median(x, 2 * half + 1)
 }
 
 /// Turning points with hysteresis `h`: (index, is_maximum), alternating.
@@ -498,6 +472,24 @@ mod tests {
         }
         assert!(running_median(&[], 3).is_empty());
         assert_eq!(running_median(&x[..2], 3).len(), 2);
+    }
+
+    #[test]
+    fn the_noise_deviation_is_the_selection_with_or_without_its_shortcut() {
+        // Half, just over half and just under half of the deviations exactly +0 (the shortcut's edge), and none.
+        let reference = |raw: &[f64], f: &[f64]| {
+            let mut d: Vec<f64> = raw.iter().zip(f).map(|(a, b)| (a - b).abs()).collect();
+            let m = d.len() / 2;
+            1.4826 * *d.select_nth_unstable_by(m, f64::total_cmp).1
+        };
+        let f: Vec<f64> = (0..101).map(|i| 0.3 + 1e-3 * i as f64).collect();
+        for equal in [0, 49, 50, 51, 52, 101] {
+            let raw: Vec<f64> =
+                f.iter().enumerate().map(|(i, &x)| if i < equal { x } else { x + 1e-4 * (1 + i % 7) as f64 }).collect();
+            let (got, want) = (robust_noise_sd(&raw, &f), reference(&raw, &f));
+            assert_eq!(got.to_bits(), want.to_bits(), "{equal} equal samples: {got} vs {want}");
+            assert_eq!(got == 0.0, equal > 50, "{equal} equal samples");
+        }
     }
 
     #[test]
