@@ -681,7 +681,9 @@ impl rig_types::select::ViewRule for FourViews<'_> {
 /// four views and [`FourViews`]). `ext_pairs` are the extended model's free
 /// runs (campaign order), `runs` the diagnosis' rows: each run's
 /// cross-validation fold (numbered from 0) and its nuisance phases, with
-/// which its free runs are simulated.
+/// which its free runs are simulated; `measured` the records' side of every
+/// free run ([`MeasuredRuns::of`] under `s`), so a candidate's held-out runs
+/// only simulate.
 #[allow(clippy::too_many_arguments)]
 pub fn select_structure(
     c: &Campaign,
