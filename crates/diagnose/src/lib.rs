@@ -464,7 +464,7 @@ pub fn diagnose(
                 structure::StructureData::of(c, recorded.as_ref().expect("with the balance"), o, data.clone())
             });
             let rec = recorded.as_ref().expect("with the balance");
-            let sel = structure::select_structure(c, sdata, &ext, &ext_pairs, &d.detail.runs, &s, opts, rec);
+            let sel = structure::select_structure(c, sdata, &ext, &ext_pairs, &d.detail.runs, &s, opts, rec, measured);
             let moved = sel.damping != structure::REGISTRY[0].id();
             let final_pairs = if moved {
                 channels::free_run_pairs_measured(c, &s, measured, |id| Some(phased(&sel.model, id)))

@@ -46,10 +46,13 @@ fn floor_powers(phi: &[f64], x: &[f64], qs: &[f64], step: &[(f64, f64)]) -> Vec<
     // its order (re_j, im_j summed over the samples in sample order), so the
     // same powers to the bit; the block's independent sums overlap instead
     // of one chain of additions waiting on the last.
-    const BLOCK: usize = 8;
+    // The blocks share the grid evenly (25 points: 9, 9, 7, not 8, 8, 8, 1:
+    // a pass over the samples for one point costs nearly a full block's).
+    const BLOCK: usize = 9;
+    let size = qs.len().div_ceil(qs.len().div_ceil(BLOCK));
     let mut j0 = 0;
     while j0 < qs.len() {
-        let k = BLOCK.min(qs.len() - j0);
+        let k = size.min(qs.len() - j0);
         let mut acc = [(0.0f64, 0.0f64); BLOCK];
         for ((v, r), xv) in sc.iter_mut().zip(step).zip(x) {
             for (j, a) in acc[..k].iter_mut().enumerate() {
@@ -64,6 +67,33 @@ fn floor_powers(phi: &[f64], x: &[f64], qs: &[f64], step: &[(f64, f64)]) -> Vec<
         j0 += k;
     }
     out
+}
+
+/// The floor grid's powers of every order 1..=`max_order`: order n's at q =
+/// n − 0.8 + 0.04·j, j = 0..=40 ([`floor_powers`]). Order n + 1's grid starts
+/// at n + 0.2, order n's j = 25: consecutive grids share 16 points. Each
+/// order's first 25 points are computed from its own start (as when each
+/// order had its whole grid: the same powers to the bit), its last 16 are the
+/// next order's first 16 (the last order computes its own), so 25·N + 16
+/// points instead of 41·N (216 for 8 orders, not 328). A shared point's q
+/// differs from the order's own by rounding (10⁻¹⁶), and it is fewer
+/// rotations from an exact start (0–15 instead of 25–40).
+fn order_floors(phi: &[f64], x: &[f64], max_order: u32, step: &[(f64, f64)]) -> Vec<Vec<f64>> {
+    const OWN: usize = 25;
+    let heads: Vec<Vec<f64>> = (1..=max_order)
+        .map(|n| {
+            let len = if n == max_order { 41 } else { OWN };
+            let qs: Vec<f64> = (0..len).map(|j| n as f64 - 0.8 + 0.04 * j as f64).collect();
+            floor_powers(phi, x, &qs, step)
+        })
+        .collect();
+    (0..heads.len())
+        .map(|i| {
+            let own = &heads[i];
+            let tail = heads.get(i + 1).map_or(&own[OWN..], |next| &next[..41 - OWN]);
+            own[..OWN].iter().chain(tail).copied().collect()
+        })
+        .collect()
 }
 
 /// Order lines of one run and channel, for orders 1..=max_order, over the
@@ -88,17 +118,14 @@ pub fn order_lines(s: &RunSignals, motor: bool, max_order: u32) -> Vec<OrderLine
     let excl = (2.0 / revs).clamp(0.1, 0.35);
     // sin/cos of the 0.04-order step of the floor's grid, per sample (see floor_powers).
     let step: Vec<(f64, f64)> = p.iter().map(|a| (0.04 * a).sin_cos()).collect();
+    let floors = order_floors(&p, &x, max_order, &step);
     let mut out = Vec::new();
-    for n in 1..=max_order {
+    for (n, grid) in (1..=max_order).zip(floors) {
         let nf = n as f64;
         let pn = order_power(&p, &x, nf);
         let qs: Vec<f64> = (0..=40).map(|j| nf - 0.8 + 0.04 * j as f64).collect();
-        let mut floor: Vec<f64> = floor_powers(&p, &x, &qs, &step)
-            .into_iter()
-            .zip(&qs)
-            .filter(|(_, q)| (*q - nf).abs() > excl && **q > 0.2)
-            .map(|(pw, _)| pw)
-            .collect();
+        let mut floor: Vec<f64> =
+            grid.into_iter().zip(&qs).filter(|(_, q)| (*q - nf).abs() > excl && **q > 0.2).map(|(pw, _)| pw).collect();
         floor.sort_by(|a, b| a.total_cmp(b));
         let med = floor.get(floor.len() / 2).copied().unwrap_or(0.0).max(f64::MIN_POSITIVE);
         out.push(OrderLine {
@@ -210,5 +237,30 @@ mod tests {
         for ((q, a), b) in qs.iter().zip(&fast).zip(&direct) {
             assert!((a - b).abs() <= 1e-9 * top, "q = {q}: {a} vs {b}");
         }
+    }
+
+    /// The shared floor grids ([`order_floors`]): each order's 41 powers,
+    /// its first 25 the order's own grid's to the bit, the 16 it shares
+    /// with the next order within 10⁻¹² of the largest power of its own
+    /// grid (a line at order 3 and one between orders).
+    #[test]
+    fn shared_floor_grids_are_each_orders_own() {
+        let phi: Vec<f64> = (0..2500).map(|k| 0.021 * k as f64 + 0.3 * (0.003 * k as f64).sin()).collect();
+        let x: Vec<f64> = phi.iter().map(|p| (3.0 * p + 0.4).sin() + 0.3 * (4.62 * p).cos() - 0.1).collect();
+        let step: Vec<(f64, f64)> = phi.iter().map(|a| (0.04 * a).sin_cos()).collect();
+        let floors = order_floors(&phi, &x, 8, &step);
+        assert_eq!(floors.len(), 8);
+        for (n, shared) in (1..=8u32).zip(&floors) {
+            let qs: Vec<f64> = (0..=40).map(|j| n as f64 - 0.8 + 0.04 * j as f64).collect();
+            let own = floor_powers(&phi, &x, &qs, &step);
+            assert_eq!(shared.len(), 41);
+            let bits = |v: &[f64]| v.iter().map(|p| p.to_bits()).collect::<Vec<u64>>();
+            assert_eq!(bits(&shared[..25]), bits(&own[..25]), "order {n}");
+            let top = own.iter().cloned().fold(0.0, f64::max);
+            for j in 25..41 {
+                assert!((shared[j] - own[j]).abs() <= 1e-12 * top, "order {n}, j {j}: {} vs {}", shared[j], own[j]);
+            }
+        }
+        assert!(order_floors(&phi, &x, 0, &step).is_empty());
     }
 }

@@ -53,7 +53,11 @@ fn row_at(phi1: &[f64], phi2: &[f64], force_n: &[f64], dt: f64, w: usize, r_m: f
 /// are independent, so one pass with the lanes interleaved lets the
 /// processor overlap them; each lane performs the same operations in the
 /// same order as it would alone (`L = 1`), so it is its own rows to the
-/// bit. Lanes of unequal length are built one after the other.
+/// bit. Lanes of unequal length are built one after the other. Lanes that
+/// read the same angles (the same slices: a force sensor's points, which
+/// change the force alone) share their twist's running sums, computed once
+/// by the same operations in the same order, so each lane's rows are still
+/// its own to the bit.
 fn rows_lanes<const L: usize>(
     lanes: [(&[f64], &[f64], &[f64]); L],
     dt: f64,
@@ -69,6 +73,25 @@ fn rows_lanes<const L: usize>(
             out
         });
     }
+    let same = |a: &[f64], b: &[f64]| std::ptr::eq(a, b);
+    if L > 1 && lanes.iter().all(|c| same(c.0, lanes[0].0) && same(c.1, lanes[0].1)) {
+        rows_lanes_of::<L, true>(lanes, n, dt, w, r_m, from)
+    } else {
+        rows_lanes_of::<L, false>(lanes, n, dt, w, r_m, from)
+    }
+}
+
+/// [`rows_lanes`] of `L` lanes of `n` samples each; with `SHARED_ANGLES`
+/// every lane reads lane 0's angles and the twist's sums are lane 0's.
+fn rows_lanes_of<const L: usize, const SHARED_ANGLES: bool>(
+    lanes: [(&[f64], &[f64], &[f64]); L],
+    n: usize,
+    dt: f64,
+    w: usize,
+    r_m: f64,
+    from: usize,
+) -> [Vec<Row>; L] {
+    let tw_lanes = if SHARED_ANGLES { 1 } else { L };
     let first = from.max(w);
     if first + w >= n {
         return std::array::from_fn(|_| Vec::new());
@@ -78,7 +101,8 @@ fn rows_lanes<const L: usize>(
     let s_k = (w * w) as f64;
     // Box sums starting at s = first − w + 1, advanced along the boundaries.
     let mut s = first + 1 - w;
-    let mut b_tw: [f64; L] = std::array::from_fn(|l| (s..s + w).map(|k| tw(l, k)).sum::<f64>());
+    let mut b_tw: [f64; L] =
+        std::array::from_fn(|l| if l < tw_lanes { (s..s + w).map(|k| tw(l, k)).sum::<f64>() } else { 0.0 });
     let mut b_f: [f64; L] = std::array::from_fn(|l| lanes[l].2[s..s + w].iter().sum::<f64>());
     let mut out: [Vec<Row>; L] = std::array::from_fn(|_| Vec::with_capacity((n - first) / w + 1));
     let mut b = first;
@@ -86,22 +110,25 @@ fn rows_lanes<const L: usize>(
         let (mut t_tw, mut t_f) = ([0.0; L], [0.0; L]);
         // Σ over s = b − w + 1 … b of B(s); on leaving, s = b + 1.
         while s <= b {
-            for l in 0..L {
+            for l in 0..tw_lanes {
                 t_tw[l] += b_tw[l];
-                t_f[l] += b_f[l];
                 b_tw[l] += tw(l, s + w) - tw(l, s);
+            }
+            for l in 0..L {
+                t_f[l] += b_f[l];
                 b_f[l] += lanes[l].2[s + w] - lanes[l].2[s];
             }
             s += 1;
         }
         for l in 0..L {
+            let t_tw_l = t_tw[if SHARED_ANGLES { 0 } else { l }];
             let phi1 = lanes[l].0;
             let w1_prev = (phi1[b] - phi1[b - w]) / big_t;
             let w1_next = (phi1[b + w] - phi1[b]) / big_t;
             let tw_prev = (tw(l, b) - tw(l, b - w)) / big_t;
             let tw_next = (tw(l, b + w) - tw(l, b)) / big_t;
             out[l].push((
-                [(w1_next - w1_prev) / big_t, t_tw[l] / s_k, 0.5 * (tw_prev + tw_next), 0.5 * (w1_prev + w1_next), 1.0],
+                [(w1_next - w1_prev) / big_t, t_tw_l / s_k, 0.5 * (tw_prev + tw_next), 0.5 * (w1_prev + w1_next), 1.0],
                 r_m * t_f[l] / s_k,
             ));
         }
@@ -706,6 +733,18 @@ mod tests {
                 assert_eq!(bits(lane), bits(&alone), "lane {j}, from {from}");
             }
         }
+        // Lanes on the same angles (a force sensor's points) share the
+        // twist's sums: still each lane alone, to the bit.
+        let shared =
+            rows_lanes(std::array::from_fn::<_, 3, _>(|j| (&phi1[..], &phi2[0][..], &f[j][..])), dt, w, r_m, 37);
+        for (j, lane) in shared.iter().enumerate() {
+            let alone = rows(&phi1, &phi2[0], &f[j], dt, w, r_m, 37);
+            let bits =
+                |r: &[Row]| r.iter().flat_map(|(x, y)| x.iter().chain([y]).map(|v| v.to_bits())).collect::<Vec<_>>();
+            assert!(!alone.is_empty());
+            assert_eq!(bits(lane), bits(&alone), "shared angles, lane {j}");
+        }
+        assert!(shared[0] != shared[1], "the lanes' forces differ");
         // Unequal lengths: each lane alone.
         let short = &f[1][..n - 300];
         let [a, b] =

@@ -182,7 +182,8 @@ pub use channel_delay::DelayedChannel;
 
 use crate::DiagnoseOptions;
 use crate::channels::{
-    BalanceData, BalanceFit, FreeRunPair, FreeRunSettings, free_run_misfit, free_run_pairs_by, with_run_phases,
+    BalanceData, BalanceFit, FreeRunPair, FreeRunSettings, MeasuredRuns, free_run_misfit, free_run_pairs_measured,
+    with_run_phases,
 };
 use crate::result::{Finding, ParamAtBound, StructureScore, round_sig};
 use crate::select::{Comparison, overall};
@@ -473,6 +474,9 @@ struct Study<'a> {
     ext_free_run: Vec<Option<f64>>,
     floor_rad_s: f64,
     s: &'a FreeRunSettings,
+    /// The records' side of every free run, measured once under `s` (the
+    /// diagnosis' [`MeasuredRuns`]): a candidate's held-out free runs only simulate.
+    measured: &'a MeasuredRuns,
     min_t: f64,
 }
 
@@ -541,7 +545,7 @@ impl rig_types::select::ViewStudy<Structured> for Study<'_> {
                 // Compared only where the extended model's free run has a misfit.
                 self.ext_free_run[unit]?;
                 let p = with_run_phases(&REGISTRY[m.k].apply(&self.models[m.k], &m.fit), self.runs[unit].phases_rad);
-                let pairs = free_run_pairs_by(self.c, self.s, |r| (r == id).then(|| p.clone()));
+                let pairs = free_run_pairs_measured(self.c, self.s, self.measured, |r| (r == id).then(|| p.clone()));
                 pairs.first().and_then(|q| free_run_misfit(q, self.floor_rad_s))
             }
         }
@@ -677,7 +681,9 @@ impl rig_types::select::ViewRule for FourViews<'_> {
 /// four views and [`FourViews`]). `ext_pairs` are the extended model's free
 /// runs (campaign order), `runs` the diagnosis' rows: each run's
 /// cross-validation fold (numbered from 0) and its nuisance phases, with
-/// which its free runs are simulated.
+/// which its free runs are simulated; `measured` the records' side of every
+/// free run ([`MeasuredRuns::of`] under `s`), so a candidate's held-out runs
+/// only simulate.
 #[allow(clippy::too_many_arguments)]
 pub fn select_structure(
     c: &Campaign,
@@ -688,6 +694,7 @@ pub fn select_structure(
     s: &FreeRunSettings,
     opts: &DiagnoseOptions,
     rec: &crate::channels::Recorded,
+    measured: &MeasuredRuns,
 ) -> StructureSelection {
     use rig_types::select::{Candidate, Fold, Search, select_on_views};
     let floor_rad_s = crate::channels::speed_floor_rad_s(c, s);
@@ -711,6 +718,7 @@ pub fn select_structure(
         ext_free_run: runs.iter().map(|r| ext_ms.get(r.id.as_str()).copied()).collect(),
         floor_rad_s,
         s,
+        measured,
         min_t: opts.selection.min_t,
     };
     // One fold per cross-validation fold of the diagnosis that holds out a run.
