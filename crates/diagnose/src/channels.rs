@@ -189,7 +189,9 @@ pub struct ChannelOptions {
     /// Linearity of the force sensor over its calibration runs (ratio² is F-distributed, (n − 2, n) dof).
     pub force_linearity_ratio: f64,
     /// The break-away level's dependence on the dwell within runs
-    /// ([`crate::extension::dwell`]: slope over its floor).
+    /// ([`crate::extension::dwell`]: slope over its floor), both readings:
+    /// the first break-away against the steady ones and every stick under
+    /// the final model's normal force.
     pub breakaway_dwell_ratio: f64,
     /// Does an encoder lose ticks? The twist's drift with the angle travelled
     /// ([`tick_loss_check_of`]: mean over runs over its standard error ⊕
