@@ -23,6 +23,7 @@
 //! | `operating_point.torque_balance` | operating_point | RMS of the rotor torque balance, N·m | sensor noise |
 //! | `operating_point.drive_balance` | operating_point | RMS the motor-constant drift explains in ⟨V⟩, V | √(2σ̂²/n) of the drift fit (ratio² = F) |
 //! | `operating_point.breakaway_dwell` | operating_point | slope of the break-away level on the log dwell within runs, record minus the final model's free run (one rule for both sides; the record alone without a model; [`crate::extension::dwell`]) | its standard error ⊕ 0.006 |
+//! | `operating_point.breakaway_ageing` | operating_point | slope of every break-away's ln F/N(t, φ1) on the log dwell within runs, N the final model's normal force, pooled over runs (with a model only; [`crate::extension::dwell`], "Every stick") | its cluster-robust standard error ⊕ 0.003 |
 //! | `operating_point.slip_drift` | operating_point | RMS over runs of each run's relative slip-force drift after the settle ([`crate::extension::drift`]) | the scatter of its 1 s block means ⊕ 0.5 % |
 //! | `force_calibration.linearity` | force_calibration | residual SD of the line mV vs load through the runs' means, mV | half-run difference of the means / 2 |
 //!
@@ -188,7 +189,9 @@ pub struct ChannelOptions {
     /// Linearity of the force sensor over its calibration runs (ratio² is F-distributed, (n − 2, n) dof).
     pub force_linearity_ratio: f64,
     /// The break-away level's dependence on the dwell within runs
-    /// ([`crate::extension::dwell`]: slope over its floor).
+    /// ([`crate::extension::dwell`]: slope over its floor), both readings:
+    /// the first break-away against the steady ones and every stick under
+    /// the final model's normal force.
     pub breakaway_dwell_ratio: f64,
     /// Does an encoder lose ticks? The twist's drift with the angle travelled
     /// ([`tick_loss_check_of`]: mean over runs over its standard error ⊕

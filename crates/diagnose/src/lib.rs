@@ -482,11 +482,20 @@ pub fn diagnose(
             let dwell_pairs: Vec<_> =
                 final_pairs.iter().filter_map(|q| Some((q.dwell.0.clone()?, q.dwell.1.clone()?))).collect();
             let dwell = extension::dwell::breakaway_dwell_model_check(&dwell_pairs, o.breakaway_dwell_ratio);
+            // Every stick's break-away under the final model's normal force,
+            // within runs (extension::dwell, "Every stick").
+            let final_model = if moved { &sel.model } else { &ext };
+            let ageing = extension::dwell::breakaway_ageing_check(
+                &runs,
+                &|id: &str| phased(final_model, id),
+                &opts.stick_episodes,
+                o.breakaway_dwell_ratio,
+            );
             let mut flagged = flagged1.clone();
             flagged.extend(
                 free_run_final
                     .iter()
-                    .chain([&dwell])
+                    .chain([&dwell, &ageing])
                     .filter(|k| k.flagged)
                     .map(|k| ("free_run".to_string(), k.as_pair().1)),
             );
@@ -522,6 +531,7 @@ pub fn diagnose(
             let at = checks.iter().take_while(|k| k.run_kind == "static_twist").count();
             checks.splice(at..at, steps.take().unwrap_or_default());
             checks.push(dwell);
+            checks.push(ageing);
             for row in d.detail.runs.iter_mut() {
                 if let Some(q) = base_pairs.iter().find(|q| q.id == row.id) {
                     row.measured = q.measured;

@@ -84,11 +84,13 @@ pub fn checks_table(d: &Diagnosis) -> Table {
     let det = &d.detail;
     // With a free run, the break-away dwell is the record's against the final
     // model's (lib.rs, extension::dwell); the other run kinds judge the baseline.
-    let model_of =
-        |k: &ChannelCheck| match k.channel == crate::extension::dwell::CHECK && !det.free_run_extended.is_empty() {
-            true => "extended",
-            false => "baseline",
-        };
+    let model_of = |k: &ChannelCheck| match [crate::extension::dwell::CHECK, crate::extension::dwell::STICKS_CHECK]
+        .contains(&k.channel.as_str())
+        && !det.free_run_extended.is_empty()
+    {
+        true => "extended",
+        false => "baseline",
+    };
     let rows = det
         .channel_checks
         .iter()
