@@ -261,25 +261,36 @@ fn check_of(rows: &[DwellRow], threshold: f64, what: &str, per_run: String) -> C
             ),
         );
     };
-    let floor = se.hypot(MIN_SLOPE);
-    // One-sided (module docs): only a level that grows with the dwell is ageing.
-    let ratio = b / floor;
-    ChannelCheck {
-        channel: CHECK.into(),
-        run_kind: "operating_point".into(),
-        runs: ids,
-        statistic: b,
-        noise_floor: floor,
-        ratio,
+    one_sided(
+        CHECK,
+        ids,
+        b,
+        se.hypot(MIN_SLOPE),
         threshold,
-        flagged: ratio > threshold,
-        detail: format!(
+        format!(
             "the break-away level changes by {:+.2} % ± {:.2} % ({dof} dof) per unit of ln(1 + t_stick/{DWELL_TIME_S} \
              s) {what}; floor ⊕ {:.1} %): {per_run}",
             100.0 * b,
             100.0 * se,
             100.0 * MIN_SLOPE,
         ),
+    )
+}
+
+/// A dwell slope judged one-sided (module docs: only a level that grows with
+/// the dwell is ageing): flagged when b over its floor exceeds the threshold.
+fn one_sided(channel: &str, runs: Vec<String>, b: f64, floor: f64, threshold: f64, detail: String) -> ChannelCheck {
+    let ratio = b / floor;
+    ChannelCheck {
+        channel: channel.into(),
+        run_kind: "operating_point".into(),
+        runs,
+        statistic: b,
+        noise_floor: floor,
+        ratio,
+        threshold,
+        flagged: ratio > threshold,
+        detail,
     }
 }
 
@@ -390,18 +401,13 @@ pub fn breakaway_ageing_check(
         );
     };
     let sticks: usize = rows.iter().map(|r| r.1.len()).sum();
-    let floor = se.hypot(MIN_STICK_SLOPE);
-    let ratio = b / floor;
-    ChannelCheck {
-        channel: STICKS_CHECK.into(),
-        run_kind: "operating_point".into(),
-        runs: ids,
-        statistic: b,
-        noise_floor: floor,
-        ratio,
+    one_sided(
+        STICKS_CHECK,
+        ids,
+        b,
+        se.hypot(MIN_STICK_SLOPE),
         threshold,
-        flagged: ratio > threshold,
-        detail: format!(
+        format!(
             "every break-away's level F/N(t, φ1) under the final model's normal force changes by {:+.2} % ± {:.2} % \
              (cluster-robust over {} runs, {sticks} break-aways, {dof} dof) per unit of ln(1 + t_stick/{DWELL_TIME_S} \
              s) within the runs; floor ⊕ {:.1} %",
@@ -410,7 +416,7 @@ pub fn breakaway_ageing_check(
             rows.len(),
             100.0 * MIN_STICK_SLOPE,
         ),
-    }
+    )
 }
 
 #[cfg(test)]
