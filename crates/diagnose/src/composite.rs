@@ -745,24 +745,13 @@ fn phases_on(m: &Composite, d: &SlipData, h: &HeldOut) -> Phases {
 pub fn heldout_fit(m: &Composite, d: &SlipData) -> (Option<f64>, Phases) {
     let h = HeldOut::of(m, d);
     let ph = phases_on(m, d, &h);
-    if d.is_empty() {
-        return (None, ph);
-    }
     let (tf, af) = h.both(m, ph);
-    let mean = d.mu.iter().sum::<f64>() / d.len() as f64;
-    let ms = (0..d.len()).map(|i| (d.mu[i] - h.speed[i] * tf[i] * af[i]).powi(2)).sum::<f64>() / d.len() as f64;
-    (Some(ms.sqrt() / mean.abs().max(1e-9)), ph)
+    (friction::relative_rms(&d.mu, |i| h.speed[i] * tf[i] * af[i]), ph)
 }
 
 /// Relative RMS error of μ̂ on one run's slip samples (crate docs: e_μ).
 pub fn relative_mu_error(m: &Composite, d: &SlipData, ph: Phases) -> Option<f64> {
-    if d.is_empty() {
-        return None;
-    }
-    let mean = d.mu.iter().sum::<f64>() / d.len() as f64;
-    let ms =
-        (0..d.len()).map(|i| (d.mu[i] - m.mu(d.t[i], d.phi[i], d.omega[i], ph)).powi(2)).sum::<f64>() / d.len() as f64;
-    Some(ms.sqrt() / mean.abs().max(1e-9))
+    friction::relative_rms(&d.mu, |i| m.mu(d.t[i], d.phi[i], d.omega[i], ph))
 }
 
 #[cfg(test)]

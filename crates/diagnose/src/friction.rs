@@ -1226,12 +1226,19 @@ pub fn heldout_phase(target: &[f64], trig: &[(f64, f64)], amp: f64) -> f64 {
 /// Relative RMS error of μ̂ against μ_obs on one run's slip samples:
 /// sqrt(mean((μ̂ − μ_obs)²)) / mean(μ_obs). Dimensionless.
 pub fn relative_mu_error(m: &FrictionModel, d: &SlipData, theta: f64) -> Option<f64> {
-    if d.is_empty() {
+    relative_rms(&d.mu, |i| m.mu(d.t[i], d.phi[i], d.omega[i], theta))
+}
+
+/// The relative RMS error of `predicted(i)` against `mu[i]`:
+/// sqrt(mean((μ̂ − μ_obs)²)) / |mean(μ_obs)| (floored at 1e-9); None for no
+/// samples. The one home of e_μ (crate docs) for every law form.
+pub fn relative_rms(mu: &[f64], predicted: impl Fn(usize) -> f64) -> Option<f64> {
+    if mu.is_empty() {
         return None;
     }
-    let mean = d.mu.iter().sum::<f64>() / d.len() as f64;
-    let ms = (0..d.len()).map(|i| (d.mu[i] - m.mu(d.t[i], d.phi[i], d.omega[i], theta)).powi(2)).sum::<f64>()
-        / d.len() as f64;
+    let n = mu.len() as f64;
+    let mean = mu.iter().sum::<f64>() / n;
+    let ms = (0..mu.len()).map(|i| (mu[i] - predicted(i)).powi(2)).sum::<f64>() / n;
     Some(ms.sqrt() / mean.abs().max(1e-9))
 }
 

@@ -333,7 +333,7 @@ pub fn robust_noise_sd(raw: &[f64], filtered: &[f64]) -> f64 {
     let m = n / 2;
     let zeros = raw.iter().zip(filtered).filter(|(a, b)| (*a - *b).abs().to_bits() == 0).count();
     if zeros > m {
-        return 1.4826 * 0.0;
+        return 0.0;
     }
     let mut d: Vec<f64> = raw.iter().zip(filtered).map(|(a, b)| (a - b).abs()).collect();
     1.4826 * *d.select_nth_unstable_by(m, f64::total_cmp).1
