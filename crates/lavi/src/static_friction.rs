@@ -133,9 +133,10 @@ pub fn section(s: &crate::study::Study) -> String {
         "Karnopp's stuck contact holds up to a static level T_brk and slips under the kinetic law T(Ω) (rig_model::one_dof); every \
          other model sets T_brk = T(0), the law's zero-speed torque. Here T_brk = T(0) + ΔT_s, ΔT_s ≥ 0, a static friction above the \
          Stribeck curve's start (rig_lavi::static_friction): the bit stays stuck until the shaft holds ΔT_s more and leaves with the \
-         torque dropping to T(0). Why: the extended model's break-away torque is −10 % of the measured one on the held-out windows and \
-         its stick phases fewer and longer. ΔT_s on a grid of {:.0} % of T(0) = {:.3} N m up to {:.0} %, the law, J, k, c kept. Tried \
+         torque dropping to T(0). Why: the break-away torque of the model it extends is {:+.0} % of the measured one on the held-out \
+         windows (means), and its stick phases fewer and longer. ΔT_s on a grid of {:.0} % of T(0) = {:.3} N m up to {:.0} %, the law, J, k, c kept. Tried \
          at step {} on {}.\n",
+        100.0 * (mean_of(&r.before, s) / mean_of(&s.measured, s) - 1.0),
         100.0 * GRID_STEP,
         f.law_static_nm,
         100.0 * MAX_FRACTION,
@@ -161,6 +162,12 @@ pub fn section(s: &crate::study::Study) -> String {
     );
     md.push_str(&trial_section(s, r, "static_friction"));
     md
+}
+
+/// The held-out windows' mean break-away torque of `f` (window order, calibration first), N m.
+fn mean_of(f: &[crate::Features], s: &crate::study::Study) -> f64 {
+    let held: Vec<f64> = (1..s.windows.len()).map(|w| f[w].breakaway_torque_nm).collect();
+    crate::select::mean(&held)
 }
 
 #[cfg(test)]
