@@ -28,7 +28,14 @@
 //! every span scores worse on the calibration window than no level, whose
 //! own slow level hardly moves there (554–566 N at 4 s), so the
 //! admissibility rule refuses it, though the held-out windows would gain
-//! 6.8 % (paired t 2.48): a measured, refused candidate, reported.
+//! 6.8 % (paired t 2.48): a measured, refused candidate, reported. The
+//! refusal holds at every start of the free run (the section's resolution
+//! paragraph) and comes from the reference: W̄ at 4 s averages 559.6 N over
+//! the calibration window against W_ref 554.3 N, the raw WOB's mean, so the
+//! level lifts the window's own law by ≈ 1 %; with W_ref at W̄'s own mean
+//! the rule admits it, by a margin the window does not resolve, for a
+//! third selection step (docs/findings.md, fourteenth session: measured,
+//! not landed).
 
 use crate::data::WindowSpec;
 use crate::score::Evaluator;
@@ -115,6 +122,8 @@ pub struct WobLevelReport {
     /// started from the measured state that long before the window), the calibration misfit of
     /// the model the trial extends and of the trial.
     pub start_resolution: Vec<[f64; 3]>,
+    /// The kept level's mean over the calibration window's samples, N (against `level.reference_n`).
+    pub calibration_level_mean_n: f64,
 }
 
 /// Warm-ups the calibration misfit is recomputed at to judge the admissibility difference
@@ -168,7 +177,10 @@ pub fn report(
         })
         .collect();
     let start_resolution = start_resolution(ev, p, &before_model, &t.fitted.model)?;
-    Ok(Some(WobLevelReport { trial, level, span_misfits, wob_n, start_resolution }))
+    let c = &ev.windows[cal];
+    let calibration_level_mean_n =
+        mean(&ev.wob_level_n(&level)[c.span.start + c.window.start..c.span.start + c.window.end]);
+    Ok(Some(WobLevelReport { trial, level, span_misfits, wob_n, start_resolution, calibration_level_mean_n }))
 }
 
 /// The `lavi.md` section of `wob_level`: the spans, the verdict of the
@@ -210,7 +222,10 @@ pub fn section(s: &crate::study::Study) -> String {
         md,
         "**What the calibration window resolves.** The free run started from the measured state {:.2}–{:.2} s before the window \
          (the study's {} s; {} starts): the model of that step scores {:.3}–{:.3} there, `wob_level` {:.3}–{:.3}; the difference \
-         `wob_level` minus the model it extends is {m:+.4} ± {:.4} (mean ± sd over the starts), {lo:+.4} to {hi:+.4}: {}.\n",
+         `wob_level` minus the model it extends is {m:+.4} ± {:.4} (mean ± sd over the starts), {lo:+.4} to {hi:+.4}: {}. At the \
+         kept span W̄ averages {:.1} N over the calibration window's samples against W_ref {:.1} N (the raw WOB's mean there; the \
+         centred mean reaches {} s beyond the window's ends): the level scales the window's own law by {:+.1} % on average \
+         (docs/findings.md, fourteenth session).\n",
         START_WARMUPS_S[0],
         START_WARMUPS_S[START_WARMUPS_S.len() - 1],
         s.params.warmup_s,
@@ -228,6 +243,10 @@ pub fn section(s: &crate::study::Study) -> String {
         } else {
             "of either sign over the starts: the window does not resolve the difference"
         },
+        w.calibration_level_mean_n,
+        w.level.reference_n,
+        w.level.window_s / 2.0,
+        100.0 * (w.calibration_level_mean_n / w.level.reference_n - 1.0),
     );
     md.push_str(&trial_section(s, r, "wob_level"));
     md
