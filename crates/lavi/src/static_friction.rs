@@ -28,6 +28,16 @@
 //! change by whole samples), where a simplex stalls. At the grid's end the
 //! excess is reported at its bound. ΔT_s = 0 is the model it extends: the
 //! candidate then gains nothing.
+//!
+//! On run 175 (docs/findings.md, fourteenth session): on top of `top_delay`
+//! the calibration window keeps ΔT_s = 0 (its misfit rises from 0.195 at 0 %
+//! to 0.237 at 20 %), so the candidate gains nothing; at any grid point the
+//! held-out misfit moves by less than 0.006. The break-away feature reads
+//! the torque as the bit arrives in stick; a static level raises it at the
+//! exit, where the low-pass spreads it and the torque channel's delay moves
+//! it past the phase. The record's excess over T(0) appears only in long
+//! sticks (contact ageing; up to 3.94 N m through 28–32 s's 1.43 s stall),
+//! which the calibration window (sticks ≤ 54 ms) does not hold.
 
 use crate::fit::AtBound;
 use crate::score::Evaluator;
