@@ -14,6 +14,10 @@
 //!
 //! `cargo run --profile dev --example profile_study -- top`: `top_delay`'s scan
 //! on the baseline (rig_lavi::top_delay::scan), point by point, and its CPU time.
+//!
+//! `cargo run --profile dev --example profile_study -- static`:
+//! `static_friction`'s grid on the final model, every point's calibration
+//! misfit and, looked at after the choice, its held-out misfit and targets.
 
 use rig_lavi::score::{Evaluator, feature_errors};
 use rig_lavi::sim::{FrictionLaw, Model};
@@ -43,6 +47,8 @@ fn main() {
         torque_level(&path, &p);
     } else if std::env::args().nth(1).as_deref() == Some("top") {
         top_scan(&path, &p);
+    } else if std::env::args().nth(1).as_deref() == Some("static") {
+        static_grid(&path, &p);
     } else {
         profile(&path, &p);
     }
@@ -160,6 +166,52 @@ fn top_scan(path: &Path, p: &StudyParams) {
             q.law_at_max_nm,
             q.calibration_misfit
         );
+    }
+}
+
+/// `-- static`: `static_friction`'s grid on the final model, every point's calibration misfit and
+/// held-out misfit and targets (what the grid would do held out; the fit looks at the calibration only).
+fn static_grid(path: &Path, p: &StudyParams) {
+    let (s, d, _) = rig_lavi::study::analyse(path, p).expect("the study runs");
+    let ev = Evaluator::new(
+        &d,
+        s.windows.clone(),
+        feature_options(&d, p),
+        p.substeps,
+        p.slip_speed_rpm,
+        p.drive_ref_window_s,
+    )
+    .expect("evaluator");
+    let fin = s.selection.final_model;
+    for f in rig_lavi::static_friction::fractions() {
+        let m = rig_lavi::static_friction::with_fraction(&fin, f);
+        let fe = ev.all_features(&m);
+        let met: Vec<usize> = (0..FEATURES.len())
+            .map(|k| (1..fe.len()).filter(|&w| feature_errors(&ev.measured[w], &fe[w])[k].abs() <= 1.0).count())
+            .collect();
+        let held = ev.heldout_misfits(&m);
+        println!(
+            "excess {:4.0} % ({:.3} N m) cal {:.3} (max {:.1} stick {:.4} break-away {:.3}) held {:.3} met {met:?} = {} per window {:?}",
+            100.0 * f,
+            m.static_excess_nm,
+            ev.misfit(&m, 0),
+            fe[0].bit_speed_max_rpm,
+            fe[0].stick_fraction,
+            fe[0].breakaway_torque_nm,
+            rig_lavi::select::overall(&held),
+            met.iter().sum::<usize>(),
+            held.iter().map(|x| format!("{x:.3}")).collect::<Vec<_>>(),
+        );
+    }
+}
+
+/// The features' options of the study.
+fn feature_options(d: &rig_lavi::data::Prepared, p: &StudyParams) -> FeatureOptions {
+    FeatureOptions {
+        fs_hz: d.fs_hz,
+        cutoff_hz: p.cutoff_hz,
+        transition_hz: p.transition_hz,
+        stick_speed_rpm: p.stick_speed_rpm,
     }
 }
 

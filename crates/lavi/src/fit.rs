@@ -32,7 +32,7 @@ pub struct Structure {
     pub wob: bool,
 }
 
-fn is_zero(x: &f64) -> bool {
+pub(crate) fn is_zero(x: &f64) -> bool {
     *x == 0.0
 }
 
@@ -186,6 +186,7 @@ fn derive_with(
         mid: None,
         drive: None,
         wob_level: None,
+        static_excess_nm: 0.0,
         structure: st,
     };
     let info = Derivation { structure: st, free, used: dof, at_bounds, law_rmse_nm, law_constant_rmse_nm };
@@ -428,6 +429,7 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
             crate::top_delay::fit(current, ev, max_evals, &mut params, &mut at_bounds, &mut top_scan)?
         }
         Candidate::WobLevel => crate::wob_level::fit(current, ev, &mut params)?,
+        Candidate::StaticFriction => crate::static_friction::fit(current, ev, &mut params, &mut at_bounds)?,
         Candidate::FrictionLaw => {
             let (m, total, family) = law_by_simulation(current, ev, max_evals);
             insert_law_params(&mut params, &m, family);
@@ -627,6 +629,7 @@ fn restructure(current: &Model, ev: &Evaluator, st: Structure) -> Result<Model, 
     m.mid = current.mid;
     m.drive = current.drive;
     m.wob_level = current.wob_level;
+    m.static_excess_nm = current.static_excess_nm;
     if keep_law {
         m.friction = current.friction;
     }
@@ -642,6 +645,7 @@ fn restructure_with_law(current: &Model, ev: &Evaluator, st: Structure) -> Resul
         mid: current.mid,
         drive: current.drive,
         wob_level: current.wob_level,
+        static_excess_nm: current.static_excess_nm,
         ..m
     })
 }

@@ -28,6 +28,7 @@
 //! | `motor_drive` | the top answers the bit: a motor under a speed loop whose speed responds to the string torque (the chapter's Eq. 4-6/4-7 motor row with its PI loop, [`drive`]) | J_m, K_p, K_i, T_0 identified by linear least squares on the calibration window (the top speed's response to the string torque; J_m below the chapter's motor inertia and K_i < 0 pinned, reported); reference = the measured top speed's moving mean; then the law decided on the calibration window by the joint score: the current one, or the least-squares law of the torque as the current structure reads it (the falling law, run again now that the top answers) | `drive_inertia_kgm2`, `kp_nm_s_rad`, `ki_nm_rad`, `load_nm`, `law_from_torque` (1: the least-squares law), and `friction_law`'s keys |
 //! | `top_delay` | the top-speed channel is late (or early) on the bit speed: Ω_top(t) = Ω_top,m(t + τ_top), jointly with the torque channel's delay ([`top_delay`]) | τ_top over ±50 ms on the calibration window's free run of each structure's least-squares J, k, c and law (the torque delay by least squares for each τ_top), then the law refitted by simulation on that structure (like `channel_delay`'s); the better of the two on the calibration window | `top_delay_s`, `torque_delay_s`, `law_from_torque` (1: the least-squares law kept), and `friction_law`'s keys |
 //! | `wob_level` | the contact's normal force is the weight on bit's slow level: torque = μ(Ω)·W̄(t), W̄ the measured WOB's centred moving mean over a span of at least a stick-slip cycle ([`wob_level`]) | the law kept at the calibration window's mean WOB, scaled by W̄(t)/W_ref; the span chosen on the calibration window among 0.5, 1, 2, 4 s | `wob_level_window_s`, `reference_wob_n` |
+//! | `static_friction` | the stuck contact holds more than the kinetic law's zero-speed torque: a static level T(0) + ΔT_s above the Stribeck curve's start ([`static_friction`]) | ΔT_s on a grid of 1 % of T(0) up to 30 % by the calibration misfit, the law, J, k, c kept | `static_excess_nm`, `breakaway_nm` |
 //! | `unexplained` | a significant mismatch is left (adequacy below) | — | — |
 //!
 //! The structural candidates that change the motion (`channel_delay`,
@@ -62,6 +63,7 @@ pub mod score;
 pub mod select;
 pub mod signature;
 pub mod sim;
+pub mod static_friction;
 pub mod study;
 pub mod top_delay;
 pub mod wob_level;
@@ -108,10 +110,11 @@ pub enum Candidate {
     MotorDrive,
     TopDelay,
     WobLevel,
+    StaticFriction,
 }
 
 impl Candidate {
-    pub const ALL: [Candidate; 11] = [
+    pub const ALL: [Candidate; 12] = [
         Candidate::FrictionLaw,
         Candidate::WobNormalForce,
         Candidate::SensorInertia,
@@ -123,6 +126,7 @@ impl Candidate {
         Candidate::MotorDrive,
         Candidate::TopDelay,
         Candidate::WobLevel,
+        Candidate::StaticFriction,
     ];
 
     pub fn id(self) -> &'static str {
@@ -138,6 +142,7 @@ impl Candidate {
             Candidate::MotorDrive => "motor_drive",
             Candidate::TopDelay => "top_delay",
             Candidate::WobLevel => "wob_level",
+            Candidate::StaticFriction => "static_friction",
         }
     }
 }

@@ -32,7 +32,7 @@ const TARGETS: [&str; N_FEATURES] = [
     "within 10 %",
 ];
 /// The effect ids of this rig, as the crate docs list them.
-const EFFECT_IDS: [(&str, &str); 13] = [
+const EFFECT_IDS: [(&str, &str); 14] = [
     ("none", "the baseline explains the held-out windows within the adequacy threshold."),
     (
         "friction_law",
@@ -74,6 +74,10 @@ const EFFECT_IDS: [(&str, &str); 13] = [
     (
         "wob_level",
         "the contact's normal force is the weight on bit's slow level: the law kept at the calibration window's mean WOB W_ref, the friction scaled by W̄(t)/W_ref, W̄ the measured WOB's centred moving mean over a span chosen on the calibration window among 0.5, 1, 2 and 4 s (at least a stick-slip cycle: the fast part, in the record's phase rather than the free run's, left out) (`wob_level_window_s`, `reference_wob_n`).",
+    ),
+    (
+        "static_friction",
+        "the stuck contact holds more than the kinetic law's zero-speed torque: a static level T(0) + ΔT_s, ΔT_s ≥ 0 on a grid of 1 % of T(0) up to 30 % chosen by the calibration misfit, the law, J, k and c kept; the bit leaves stick with the torque dropping to T(0) (`static_excess_nm`, `breakaway_nm`).",
     ),
     (
         "unexplained",
@@ -793,6 +797,7 @@ fn markdown(s: &Study, met_base: &[usize; N_FEATURES], met_ext: &[usize; N_FEATU
     }
     md.push_str(&crate::top_delay::section(s));
     md.push_str(&crate::wob_level::section(s));
+    md.push_str(&crate::static_friction::section(s));
     md.push_str(&crate::drive::section(s));
     let h = &s.wob;
     let _ = writeln!(md, "## The chapter's hypothesis: a varying normal force\n");

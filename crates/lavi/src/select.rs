@@ -177,3 +177,101 @@ pub(crate) fn std(x: &[f64]) -> f64 {
 
 /// The engine's overall misfit (RMS over the windows).
 pub use rig_types::select::overall;
+
+/// A candidate's last trial (the step the selection stopped at, or the one
+/// that added it) against the model of that step, window by window, and
+/// against every other candidate side by side: what the study reports of a
+/// candidate whose own section says why it was or was not kept (`wob_level`,
+/// `static_friction`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TrialReport {
+    pub step: usize,
+    pub calibration_before: f64,
+    pub calibration_after: f64,
+    pub heldout_before: Vec<f64>,
+    pub heldout_after: Vec<f64>,
+    /// The engine's comparison of the trial with the model it extends.
+    pub comparison: rig_types::select::Comparison,
+    /// Held-out windows the trial improves.
+    pub wins: usize,
+    pub earns_place: bool,
+    /// Per window (calibration first): features of the model it extends and of the trial.
+    pub before: Vec<crate::Features>,
+    pub after: Vec<crate::Features>,
+    /// The trial against each other candidate of its step (paired t of ln(M_it/M_trial)), and the windows the trial is better.
+    pub same_step: Vec<(Candidate, rig_types::select::Comparison, usize)>,
+    /// The trial's model against each step-1 candidate, likewise (empty at step 1).
+    pub step1: Vec<(Candidate, rig_types::select::Comparison, usize)>,
+}
+
+/// [`TrialReport`] of candidate `c`'s last trial, with the model that trial
+/// extends and the trial itself (None: never tried, or refused at its last step).
+pub fn trial_report<'s>(
+    ev: &Evaluator,
+    sel: &'s Selection,
+    baseline: &Model,
+    c: Candidate,
+) -> Option<(TrialReport, Model, &'s Trial)> {
+    use rig_types::select::compare;
+    let t = sel.trials.iter().rev().find(|t| t.candidate == c)?;
+    if t.refused.is_some() {
+        return None;
+    }
+    let prior = (t.step >= 2).then(|| &sel.trials[sel.chosen[t.step - 2]]);
+    let before_model = prior.map_or(*baseline, |p| p.fitted.model);
+    let heldout_before = prior.map_or_else(|| sel.baseline_heldout.clone(), |p| p.heldout.clone());
+    let calibration_before = prior.map_or(sel.baseline_calibration, |p| p.fitted.calibration_misfit);
+    let n = t.heldout.len();
+    let folds: Vec<usize> = (0..n).collect();
+    let against = |r: &Trial| {
+        let cmp = compare(&r.heldout, &t.heldout, &folds, n);
+        (r.candidate, cmp, t.heldout.iter().zip(&r.heldout).filter(|(a, b)| a < b).count())
+    };
+    let rivals = |step: usize| -> Vec<(Candidate, rig_types::select::Comparison, usize)> {
+        sel.trials.iter().filter(|r| r.step == step && r.candidate != c && r.refused.is_none()).map(against).collect()
+    };
+    let report = TrialReport {
+        step: t.step,
+        calibration_before,
+        calibration_after: t.fitted.calibration_misfit,
+        comparison: compare(&heldout_before, &t.heldout, &folds, n),
+        heldout_before,
+        heldout_after: t.heldout.clone(),
+        wins: t.wins,
+        earns_place: t.earns_place,
+        before: ev.all_features(&before_model),
+        after: ev.all_features(&t.fitted.model),
+        same_step: rivals(t.step),
+        step1: if t.step == 1 { Vec::new() } else { rivals(1) },
+    };
+    Some((report, before_model, t))
+}
+
+/// The `lavi.md` paragraphs every [`TrialReport`] shares: the targets per
+/// held-out window before → after and the trial side by side with its rivals.
+pub fn trial_section(s: &crate::study::Study, r: &TrialReport, id: &str) -> String {
+    use std::fmt::Write as _;
+    let nh = s.windows.len() - 1;
+    let mut md = format!(
+        "Per held-out window, the targets held (of 7) before (the model of that step) and after (`{id}` on it), and what the \
+         latter misses (error over tolerance):\n\n| window | before: targets held | after: targets held | missed after |\n|---|---|---|---|\n"
+    );
+    md.push_str(&crate::drive::targets_before_after(s, &r.before, &r.after));
+    let side = |list: &[(Candidate, rig_types::select::Comparison, usize)]| -> String {
+        list.iter()
+            .map(|(c, cmp, w)| {
+                format!("`{}` {:.3}, gain {:.3}, t {:.2}, {w}/{nh}", c.id(), cmp.before, cmp.gain, cmp.t)
+            })
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
+    let _ = writeln!(
+        md,
+        "**Side by side** (held-out misfit of the rival, the gain of `{id}`'s model over it, the paired t of \
+         ln(M_rival/M_{id}), the windows where `{id}`'s model is better): the other candidates of step {}: {}.{}\n",
+        r.step,
+        side(&r.same_step),
+        if r.step1.is_empty() { String::new() } else { format!(" Every step-1 candidate: {}.", side(&r.step1)) }
+    );
+    md
+}

@@ -112,8 +112,21 @@ pub struct Model {
     /// [`crate::wob_level`]); not serialised when None.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub wob_level: Option<crate::wob_level::WobLevel>,
+    /// The stuck contact holds up to the law's zero-speed torque plus this
+    /// much, N m at the reference normal force (`static_friction`,
+    /// [`crate::static_friction`]; 0: the break-away is the law's T(0); not serialised at 0).
+    #[serde(skip_serializing_if = "crate::fit::is_zero")]
+    pub static_excess_nm: f64,
     /// How J, k, c (and the least-squares law) were derived (rig_lavi::fit).
     pub structure: Structure,
+}
+
+impl Model {
+    /// The largest torque the stuck contact holds at the reference normal
+    /// force, N m: the law's zero-speed torque T(0) plus the static excess.
+    pub fn static_level_nm(&self) -> f64 {
+        self.friction.static_nm + self.static_excess_nm
+    }
 }
 
 /// What a free run is driven by (rad/s and N, one value per sample).
@@ -152,11 +165,13 @@ const STICK_RAD_S: f64 = 1e-3;
 struct Contact {
     law: FrictionLaw,
     lag_s: f64,
+    /// The largest torque held while stuck (the law's T(0) plus the static excess), N m.
+    static_nm: f64,
 }
 
 impl Friction for Contact {
     fn static_nm(&self, scale: f64, _: &[f64; MAX_FRICTION_STATES]) -> Option<f64> {
-        Some(scale * self.law.static_nm)
+        Some(scale * self.static_nm)
     }
     fn slip_nm(&self, speed_rad_s: f64, scale: f64, state: &[f64; MAX_FRICTION_STATES]) -> f64 {
         if self.lag_s > 0.0 { state[0] } else { scale * self.law.slip_nm(speed_rad_s) }
@@ -225,7 +240,7 @@ pub fn simulate(m: &Model, u: &Inputs, start: Start, substeps: usize) -> Result<
             _ => 0.0,
         },
         friction_state: [tf0.abs(), 0.0],
-        stuck: om.abs() < STICK_RAD_S && tau0.abs() <= scale0 * m.friction.static_nm,
+        stuck: om.abs() < STICK_RAD_S && tau0.abs() <= scale0 * m.static_level_nm(),
     };
     // T_0 as a shift of the reference: K_p (Ω_ref + T_0/K_p − Ω_top) = K_p (Ω_ref − Ω_top) + T_0.
     let shifted: Option<Vec<f64>> = m
@@ -241,7 +256,7 @@ pub fn simulate(m: &Model, u: &Inputs, start: Start, substeps: usize) -> Result<
         },
         None => one_dof::Drive::Speed(u.top_rad_s),
     };
-    let contact = Contact { law: m.friction, lag_s: m.friction_lag_s };
+    let contact = Contact { law: m.friction, lag_s: m.friction_lag_s, static_nm: m.static_level_nm() };
     let r =
         one_dof::simulate(&shaft, &contact, drive, scale.as_deref(), state, u.fs_hz, n, substeps).map_err(
             |e| match e {
@@ -286,6 +301,7 @@ pub(crate) mod tests {
             mid: None,
             drive: None,
             wob_level: None,
+            static_excess_nm: 0.0,
             structure: Structure::BASELINE,
         }
     }

@@ -73,6 +73,8 @@ pub struct Study {
     pub top_delay: Option<crate::top_delay::TopDelayReport>,
     /// The weight on bit's slow level (`wob_level`): its last trial per window before → after, side by side.
     pub wob_level: Option<crate::wob_level::WobLevelReport>,
+    /// A static level above the law (`static_friction`): its last trial per window before → after, side by side.
+    pub static_friction: Option<crate::static_friction::StaticFrictionReport>,
     /// Free runs made and outcomes reused over the study ([`Evaluator::run_counts`]; not an output).
     #[serde(skip)]
     pub free_runs: [usize; 2],
@@ -154,7 +156,8 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
         .collect::<Result<Vec<_>, LaviError>>()?;
     let drive = crate::drive::report(&ev, &selection)?;
     let top_delay = crate::top_delay::report(&selection, &candidate_features);
-    let wob_level = crate::wob_level::report(&ev, &selection, &baseline)?;
+    let wob_level = crate::wob_level::report(&ev, &selection, &baseline, p)?;
+    let static_friction = crate::static_friction::report(&ev, &selection, &baseline);
     let study = Study {
         params: p.clone(),
         windows: wins,
@@ -179,6 +182,7 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
         drive,
         top_delay,
         wob_level,
+        static_friction,
         free_runs: ev.run_counts(),
     };
     Ok((study, d, rec))

@@ -84,6 +84,7 @@ fn point(ev: &Evaluator, current: &Model, top_delay_s: f64) -> Result<(ScanPoint
         mid: current.mid,
         drive: current.drive,
         wob_level: current.wob_level,
+        static_excess_nm: current.static_excess_nm,
         ..m
     };
     let vmax = ev.measured[cal].bit_speed_max_rpm * crate::data::RPM_TO_RAD_S;

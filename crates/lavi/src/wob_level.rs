@@ -28,15 +28,21 @@
 //! every span scores worse on the calibration window than no level, whose
 //! own slow level hardly moves there (554–566 N at 4 s), so the
 //! admissibility rule refuses it, though the held-out windows would gain
-//! 6.8 % (paired t 2.48): a measured, refused candidate, reported.
+//! 6.8 % (paired t 2.48): a measured, refused candidate, reported. The
+//! refusal holds at every start of the free run (the section's resolution
+//! paragraph) and comes from the reference: W̄ at 4 s averages 559.6 N over
+//! the calibration window against W_ref 554.3 N, the raw WOB's mean, so the
+//! level lifts the window's own law by ≈ 1 %; with W_ref at W̄'s own mean
+//! the rule admits it, by a margin the window does not resolve, for a
+//! third selection step (docs/findings.md, fourteenth session: measured,
+//! not landed).
 
 use crate::data::WindowSpec;
 use crate::score::Evaluator;
-use crate::select::{Selection, mean};
+use crate::select::{Selection, TrialReport, mean, trial_report, trial_section};
 use crate::sim::Model;
-use crate::{Candidate, Features, LaviError, data::Prepared};
+use crate::{Candidate, LaviError, StudyParams, data::Prepared};
 use rayon::prelude::*;
-use rig_types::select::{Comparison, compare};
 use rig_types::sensor::centred_moving_average;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -102,60 +108,62 @@ pub fn fit(current: &Model, ev: &Evaluator, params: &mut BTreeMap<String, f64>) 
     Ok((best.1, SPANS_S.len()))
 }
 
-/// What the study reports of `wob_level`: its last trial (the step the
-/// selection stopped at, or the one that added it) against the model of that
-/// step, window by window, and against the other candidates.
+/// What the study reports of `wob_level`: its last trial against the model
+/// of that step and its rivals ([`TrialReport`]), the spans and the level per window.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct WobLevelReport {
-    pub step: usize,
+    pub trial: TrialReport,
     pub level: WobLevel,
     /// The calibration misfit at each span of [`SPANS_S`] (the fit's choice).
     pub span_misfits: Vec<f64>,
-    pub calibration_before: f64,
-    pub calibration_after: f64,
-    pub heldout_before: Vec<f64>,
-    pub heldout_after: Vec<f64>,
-    /// The engine's comparison of the trial with the model it extends, and the windows it improves.
-    pub comparison: Comparison,
-    pub wins: usize,
-    pub earns_place: bool,
-    /// Per window (calibration first): features of the model it extends and of the trial.
-    pub before: Vec<Features>,
-    pub after: Vec<Features>,
     /// Per window: the weight on bit's mean over the window and its slow level's least and largest value there, N.
     pub wob_n: Vec<[f64; 3]>,
-    /// The trial against each other candidate of its step (paired t of ln(M_it/M_wob_level)).
-    pub same_step: Vec<(Candidate, Comparison, usize)>,
-    /// The trial's model against each step-1 candidate, likewise.
-    pub step1: Vec<(Candidate, Comparison, usize)>,
+    /// What the calibration window resolves: per warm-up of [`START_WARMUPS_S`] (the free run
+    /// started from the measured state that long before the window), the calibration misfit of
+    /// the model the trial extends and of the trial.
+    pub start_resolution: Vec<[f64; 3]>,
+    /// The kept level's mean over the calibration window's samples, N (against `level.reference_n`).
+    pub calibration_level_mean_n: f64,
+}
+
+/// Warm-ups the calibration misfit is recomputed at to judge the admissibility difference
+/// against the free run's start, s (the study's own is `warmup_s`, 3 s).
+pub const START_WARMUPS_S: [f64; 9] = [2.0, 2.25, 2.5, 2.75, 3.0, 3.25, 3.5, 3.75, 4.0];
+
+/// The calibration misfits of `before` and `after` with the free run started at each warm-up of
+/// [`START_WARMUPS_S`]: the spread a model's calibration misfit has over where its free run
+/// starts, against which the admissibility rule's difference is read.
+fn start_resolution(
+    ev: &Evaluator,
+    p: &StudyParams,
+    before: &Model,
+    after: &Model,
+) -> Result<Vec<[f64; 3]>, LaviError> {
+    START_WARMUPS_S
+        .par_iter()
+        .map(|&warmup_s| {
+            let q = StudyParams { warmup_s, heldout_starts_s: Vec::new(), ..p.clone() };
+            let wins = crate::data::windows(ev.data, &q)?;
+            let e = Evaluator::new(ev.data, wins, ev.fopts, ev.substeps, ev.slip_speed_rpm, p.drive_ref_window_s)?;
+            Ok([warmup_s, e.misfit(before, 0), e.misfit(after, 0)])
+        })
+        .collect()
 }
 
 /// [`WobLevelReport`] of the selection (None: `wob_level` refused at its last step, or not tried).
-pub fn report(ev: &Evaluator, sel: &Selection, baseline: &Model) -> Result<Option<WobLevelReport>, LaviError> {
-    let Some(t) = sel.trials.iter().rev().find(|t| t.candidate == Candidate::WobLevel) else { return Ok(None) };
-    let (Some(level), None) = (t.fitted.model.wob_level, &t.refused) else { return Ok(None) };
-    let prior = (t.step >= 2).then(|| &sel.trials[sel.chosen[t.step - 2]]);
-    let before_model = prior.map_or(*baseline, |p| p.fitted.model);
-    let heldout_before = prior.map_or_else(|| sel.baseline_heldout.clone(), |p| p.heldout.clone());
-    let calibration_before = prior.map_or(sel.baseline_calibration, |p| p.fitted.calibration_misfit);
+pub fn report(
+    ev: &Evaluator,
+    sel: &Selection,
+    baseline: &Model,
+    p: &StudyParams,
+) -> Result<Option<WobLevelReport>, LaviError> {
+    let Some((trial, before_model, t)) = trial_report(ev, sel, baseline, Candidate::WobLevel) else { return Ok(None) };
+    let Some(level) = t.fitted.model.wob_level else { return Ok(None) };
     let cal = ev.calibration();
     let span_misfits = SPANS_S
         .par_iter()
         .map(|&window_s| ev.misfit(&Model { wob_level: Some(WobLevel { window_s, ..level }), ..before_model }, cal))
         .collect();
-    let n = t.heldout.len();
-    let folds: Vec<usize> = (0..n).collect();
-    let against = |r: &crate::select::Trial| {
-        let c = compare(&r.heldout, &t.heldout, &folds, n);
-        (r.candidate, c, t.heldout.iter().zip(&r.heldout).filter(|(a, b)| a < b).count())
-    };
-    let rivals = |step: usize| -> Vec<(Candidate, Comparison, usize)> {
-        sel.trials
-            .iter()
-            .filter(|r| r.step == step && r.candidate != Candidate::WobLevel && r.refused.is_none())
-            .map(against)
-            .collect()
-    };
     let d = ev.data;
     let wob_n = ev
         .windows
@@ -168,38 +176,21 @@ pub fn report(ev: &Evaluator, sel: &Selection, baseline: &Model) -> Result<Optio
             [mean(&d.wob_n[s]), lo, hi]
         })
         .collect();
-    Ok(Some(WobLevelReport {
-        step: t.step,
-        level,
-        span_misfits,
-        calibration_before,
-        calibration_after: t.fitted.calibration_misfit,
-        comparison: compare(&heldout_before, &t.heldout, &folds, n),
-        heldout_before,
-        heldout_after: t.heldout.clone(),
-        wins: t.wins,
-        earns_place: t.earns_place,
-        before: ev.all_features(&before_model),
-        after: ev.all_features(&t.fitted.model),
-        wob_n,
-        same_step: rivals(t.step),
-        step1: if t.step == 1 { Vec::new() } else { rivals(1) },
-    }))
+    let start_resolution = start_resolution(ev, p, &before_model, &t.fitted.model)?;
+    let c = &ev.windows[cal];
+    let calibration_level_mean_n =
+        mean(&ev.wob_level_n(&level)[c.span.start + c.window.start..c.span.start + c.window.end]);
+    Ok(Some(WobLevelReport { trial, level, span_misfits, wob_n, start_resolution, calibration_level_mean_n }))
 }
 
 /// The `lavi.md` section of `wob_level`: the spans, the verdict of the
 /// calibration window and the rule, per window before → after, side by side.
 pub fn section(s: &crate::study::Study) -> String {
     use std::fmt::Write as _;
-    let Some(r) = &s.wob_level else { return String::new() };
+    let Some(w) = &s.wob_level else { return String::new() };
+    let r = &w.trial;
     let nh = s.windows.len() - 1;
-    let step_model = if r.step == 1 {
-        "the baseline".to_string()
-    } else {
-        let ids: Vec<&str> =
-            s.selection.chosen[..r.step - 1].iter().map(|&i| s.selection.trials[i].candidate.id()).collect();
-        format!("baseline + {}", ids.join(" + "))
-    };
+    let step_model = step_model(s, r.step);
     let mut md = String::from("## The weight on bit's slow level (`wob_level`)\n\n");
     let _ = writeln!(
         md,
@@ -208,24 +199,77 @@ pub fn section(s: &crate::study::Study) -> String {
          chosen on the calibration window (rig_lavi::wob_level). Why: the targets the model misses follow each window's mean WOB \
          (docs/findings.md), and the WOB's fast part is in the record's phase of the cycle, not the free run's (`wob_normal_force`). \
          Tried at step {} on {step_model}.\n",
-        r.level.reference_n, r.step
+        w.level.reference_n, r.step
     );
     md.push_str("| window | mean WOB [N] | W̄ over the window at the kept span [N] |\n|---|---|---|\n");
-    for (w, x) in s.windows.iter().zip(&r.wob_n) {
-        let _ = writeln!(md, "| {} | {:.0} | {:.0}–{:.0} |", w.label, x[0], x[1], x[2]);
+    for (win, x) in s.windows.iter().zip(&w.wob_n) {
+        let _ = writeln!(md, "| {} | {:.0} | {:.0}–{:.0} |", win.label, x[0], x[1], x[2]);
     }
-    let spans: Vec<String> = SPANS_S.iter().zip(&r.span_misfits).map(|(sp, m)| format!("{sp} s {m:.3}")).collect();
-    let (admitted, admissible) =
-        (s.selection.rule.admits(&r.comparison), r.calibration_after <= r.calibration_before + 1e-12);
+    let spans: Vec<String> = SPANS_S.iter().zip(&w.span_misfits).map(|(sp, m)| format!("{sp} s {m:.3}")).collect();
     let _ = writeln!(
         md,
-        "\n**The fit and the verdict.** Calibration misfit per span: {} (without the level: {:.3}); kept: {} s, {:.3}. Held out: {:.3} → \
-         {:.3} (gain {:.3}, paired t {:.2}, better on {}/{} windows; per window {}). The rule (gain ≥ {:.0} %, t ≥ {}) {} it; the \
-         calibration window {}: {}.\n",
+        "\n**The fit and the verdict.** Calibration misfit per span: {} (without the level: {:.3}); kept: {} s, {:.3}. {}\n",
         spans.join(", "),
         r.calibration_before,
-        r.level.window_s,
+        w.level.window_s,
         r.calibration_after,
+        verdict(s, r, nh),
+    );
+    let diff: Vec<f64> = w.start_resolution.iter().map(|x| x[2] - x[1]).collect();
+    let (lo, hi) = diff.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), d| (a.min(*d), b.max(*d)));
+    let m = mean(&diff);
+    let _ = writeln!(
+        md,
+        "**What the calibration window resolves.** The free run started from the measured state {:.2}–{:.2} s before the window \
+         (the study's {} s; {} starts): the model of that step scores {:.3}–{:.3} there, `wob_level` {:.3}–{:.3}; the difference \
+         `wob_level` minus the model it extends is {m:+.4} ± {:.4} (mean ± sd over the starts), {lo:+.4} to {hi:+.4}: {}. At the \
+         kept span W̄ averages {:.1} N over the calibration window's samples against W_ref {:.1} N (the raw WOB's mean there; the \
+         centred mean reaches {} s beyond the window's ends): the level scales the window's own law by {:+.1} % on average \
+         (docs/findings.md, fourteenth session).\n",
+        START_WARMUPS_S[0],
+        START_WARMUPS_S[START_WARMUPS_S.len() - 1],
+        s.params.warmup_s,
+        START_WARMUPS_S.len(),
+        w.start_resolution.iter().map(|x| x[1]).fold(f64::INFINITY, f64::min),
+        w.start_resolution.iter().map(|x| x[1]).fold(f64::NEG_INFINITY, f64::max),
+        w.start_resolution.iter().map(|x| x[2]).fold(f64::INFINITY, f64::min),
+        w.start_resolution.iter().map(|x| x[2]).fold(f64::NEG_INFINITY, f64::max),
+        crate::select::std(&diff),
+        if lo > 0.0 {
+            "of one sign at every start, so the window's refusal is no accident of where the free run starts (the rule is \
+             applied as it stands)"
+        } else if hi < 0.0 {
+            "of one sign at every start: the window prefers `wob_level` at every start"
+        } else {
+            "of either sign over the starts: the window does not resolve the difference"
+        },
+        w.calibration_level_mean_n,
+        w.level.reference_n,
+        w.level.window_s / 2.0,
+        100.0 * (w.calibration_level_mean_n / w.level.reference_n - 1.0),
+    );
+    md.push_str(&trial_section(s, r, "wob_level"));
+    md
+}
+
+/// "baseline + …" of the model that step `step` extends.
+pub(crate) fn step_model(s: &crate::study::Study, step: usize) -> String {
+    if step == 1 {
+        "the baseline".to_string()
+    } else {
+        let ids: Vec<&str> =
+            s.selection.chosen[..step - 1].iter().map(|&i| s.selection.trials[i].candidate.id()).collect();
+        format!("baseline + {}", ids.join(" + "))
+    }
+}
+
+/// The held-out comparison of a [`TrialReport`] and what the rule and the calibration window say of it.
+pub(crate) fn verdict(s: &crate::study::Study, r: &TrialReport, nh: usize) -> String {
+    let (admitted, admissible) =
+        (s.selection.rule.admits(&r.comparison), r.calibration_after <= r.calibration_before + 1e-12);
+    format!(
+        "Held out: {:.3} → {:.3} (gain {:.3}, paired t {:.2}, better on {}/{} windows; per window {}). The rule (gain ≥ {:.0} %, t ≥ \
+         {}) {} it; the calibration window {}: {}.",
         r.comparison.before,
         r.comparison.after,
         r.comparison.gain,
@@ -243,29 +287,7 @@ pub fn section(s: &crate::study::Study) -> String {
         if admitted { "admits" } else { "does not admit" },
         if admissible { "accepts it (no worse there)" } else { "refuses it (worse there than the model it extends)" },
         if r.earns_place { "**earns its place**" } else { "**not kept**" },
-    );
-    md.push_str(
-        "Per held-out window, the targets held (of 7) before (the model of that step) and after (`wob_level` on it), and what the \
-         latter misses (error over tolerance):\n\n| window | before: targets held | after: targets held | missed after |\n|---|---|---|---|\n",
-    );
-    md.push_str(&crate::drive::targets_before_after(s, &r.before, &r.after));
-    let side = |list: &[(Candidate, Comparison, usize)]| -> String {
-        list.iter()
-            .map(|(c, cmp, w)| {
-                format!("`{}` {:.3}, gain {:.3}, t {:.2}, {w}/{nh}", c.id(), cmp.before, cmp.gain, cmp.t)
-            })
-            .collect::<Vec<_>>()
-            .join("; ")
-    };
-    let _ = writeln!(
-        md,
-        "**Side by side** (held-out misfit of the rival, the gain of `wob_level`'s model over it, the paired t of \
-         ln(M_rival/M_wob_level), the windows where `wob_level`'s model is better): the other candidates of step {}: {}.{}\n",
-        r.step,
-        side(&r.same_step),
-        if r.step1.is_empty() { String::new() } else { format!(" Every step-1 candidate: {}.", side(&r.step1)) }
-    );
-    md
+    )
 }
 
 #[cfg(test)]
