@@ -952,6 +952,8 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeIn
     let mut rss = rss_of(&theta, &mut sc);
     let mut converged = false;
     let mut ne_last = None;
+    // Where each step's line search starts ([`LineStart`]): Newton's, Gauss–Newton's.
+    let mut starts = [LineStart::default(); 2];
     for _ in 0..30 {
         // −Σ w r ∂²f/∂p∂q of f = μk(1 + a sin(x + θ_r)) (the terms
         // Gauss–Newton drops), x = 2πf·t (time kind) or n·φ (angle kind):
@@ -1030,8 +1032,9 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeIn
         let near = gauss_newton.as_ref().is_some_and(|step| near_stationary(step, &ne, rss, d.len()));
         let mut improved = false;
         // The Newton step (where the Hessian is positive definite), then the Gauss–Newton step.
-        for step in newton.iter().chain(gauss_newton.iter()) {
-            let mut lambda = 1.0;
+        for (kind, step) in [(0, &newton), (1, &gauss_newton)] {
+            let Some(step) = step else { continue };
+            let mut lambda = starts[kind].lambda;
             for _ in 0..12 {
                 let cand: Vec<f64> = theta.iter().zip(step).map(|(t, s)| t + lambda * s).collect();
                 let r2 = rss_of(&cand, &mut sc_cand);
@@ -1041,6 +1044,7 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeIn
                     rss = r2;
                     std::mem::swap(&mut sc, &mut sc_cand);
                     improved = true;
+                    starts[kind].accepted(lambda);
                     if rel < 1e-10 {
                         converged = true;
                     }
@@ -1116,6 +1120,39 @@ pub(crate) fn near_stationary(step: &[f64], ne: &Normal, rss: f64, n: usize) -> 
 
 /// [`near_stationary`]'s distance, in standard errors.
 pub(crate) const GN_STOP_SE: f64 = 0.1;
+
+/// Where a Gauss–Newton (or Newton) line search starts: the full step, or
+/// twice the fraction of it the last accepted step of the same kind took,
+/// whichever is smaller (the search then halves as before, up to 12 times,
+/// and accepts the first fraction that does not raise the RSS). A fit
+/// whose steps are accepted whole, or at half, starts every search at the
+/// full step, as before; one that needed a quarter of its step or less
+/// (a modulation the data barely pin, whose quadratic model overshoots on
+/// every iteration: 30 iterations of 4–9 trials each on the 37-case
+/// sample's worst fits, 42 % of the sine fits' RSS passes over 5 % of the
+/// calls) starts the next search near the fraction that worked, and grows
+/// back by doubling. The directions and the stop rules
+/// ([`near_stationary`], the relative RSS) are unchanged; where the
+/// search starts lower it accepts a shorter step than the first trial
+/// that would have passed, so such fits follow another path to the same
+/// stop rule (issue 23).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LineStart {
+    pub(crate) lambda: f64,
+}
+
+impl Default for LineStart {
+    fn default() -> Self {
+        LineStart { lambda: 1.0 }
+    }
+}
+
+impl LineStart {
+    /// The search accepted `lambda` of its step.
+    pub(crate) fn accepted(&mut self, lambda: f64) {
+        self.lambda = (2.0 * lambda).min(1.0);
+    }
+}
 
 /// Variance inflation for correlated residuals: τ = 1 + 2 Σ_{k=1..K} ρ_k of the
 /// weighted residuals, consecutive slip samples of one run (K = 50 samples,
