@@ -240,6 +240,7 @@ fn refine_speed_time(
     let mut rss = eval(&theta, &mut g, &mut sc);
     let mut converged = false;
     let mut ne_last = None;
+    let mut start = friction::LineStart::default();
     for _ in 0..30 {
         // Columns 0..i_p shared, the sample's run's phase its block: an arrow
         // (ArrowNormal: the sums add_sparse would make, bit for bit).
@@ -278,7 +279,7 @@ fn refine_speed_time(
         let near = friction::near_stationary(&step, &ne, rss, d.len());
         ne_last = Some(ne);
         let mut improved = false;
-        let mut lambda = 1.0;
+        let mut lambda = start.lambda;
         for _ in 0..12 {
             let cand: Vec<f64> = theta.iter().zip(&step).map(|(t, s)| t + lambda * s).collect();
             let r2 = eval(&cand, &mut g_cand, &mut sc_cand);
@@ -289,6 +290,7 @@ fn refine_speed_time(
                 std::mem::swap(&mut g, &mut g_cand);
                 std::mem::swap(&mut sc, &mut sc_cand);
                 improved = true;
+                start.accepted(lambda);
                 converged = rel < 1e-10;
                 break;
             }

@@ -14,9 +14,24 @@ pub fn stribeck_mu(mu_static: f64, mu_kinetic: f64, stribeck_speed_rad_s: f64, o
 
 /// The Stribeck decay exp(−(Ω/vs)²) of [`stribeck_mu`] (its shape alone: the
 /// diagnosis' linear fits use it as a regressor).
+///
+/// Beyond (Ω/vs)² ≈ 745.13 the exponential is below half the smallest
+/// subnormal and rounds to +0; libm reaches that +0 through its underflow
+/// path (a special case that sets errno), which the diagnosis' Stribeck
+/// fits take for every sample slipping faster than ≈ 27 vs — 2.3 % of a
+/// ladder rung's CPU in `perf` (issue 23). Past [`DECAY_ZERO_BEYOND`] the
+/// decay is that +0 without the call: the same bits (test
+/// `the_decay_past_its_underflow_is_libm_s_zero`).
+#[inline]
 pub fn stribeck_decay(omega_rad_s: f64, stribeck_speed_rad_s: f64) -> f64 {
-    (-(omega_rad_s / stribeck_speed_rad_s).powi(2)).exp()
+    let x2 = (omega_rad_s / stribeck_speed_rad_s).powi(2);
+    if x2 > DECAY_ZERO_BEYOND { 0.0 } else { (-x2).exp() }
 }
+
+/// (Ω/vs)² past which exp(−(Ω/vs)²) is +0 in f64 (it is from ≈ 745.14 on;
+/// at 750 the exact value is 0.004 of the smallest subnormal, so any libm
+/// within an ulp rounds it to +0).
+const DECAY_ZERO_BEYOND: f64 = 750.0;
 
 /// Eq. 4-10 with Table 4.7, read as a piecewise-linear lookup over rotor rpm
 /// (the reading is argued in the crate docs, "Friction as published"):
@@ -146,6 +161,23 @@ pub fn imbalance_torque_nm(effects: &[Effect], phi1: f64) -> f64 {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+
+    /// The decay's shortcut past the underflow gives libm's bits: on a dense
+    /// grid of (Ω/vs)² across the shortcut's edge and the underflow (700–800)
+    /// and on ratios far either side, including ∞ and NaN.
+    #[test]
+    fn the_decay_past_its_underflow_is_libm_s_zero() {
+        let libm = |w: f64, vs: f64| (-(w / vs).powi(2)).exp();
+        let mut ratios: Vec<f64> = (0..=200_000).map(|k| (700.0 + k as f64 * 5e-4).sqrt()).collect();
+        ratios.extend([0.0, 1e-3, 1.0, 10.0, 27.0, 27.4, 28.0, 1e3, 1e200, f64::INFINITY, f64::NAN]);
+        for &x in &ratios {
+            for (w, vs) in [(x, 1.0), (-x * 0.37, 0.37), (x * 4.5, 4.5)] {
+                assert_eq!(stribeck_decay(w, vs).to_bits(), libm(w, vs).to_bits(), "Ω {w}, vs {vs}");
+            }
+        }
+        assert_eq!(stribeck_decay(1.0, 0.0).to_bits(), 0.0f64.to_bits());
+        assert!(libm(27.4, 1.0) == 0.0 && libm(27.2, 1.0) > 0.0, "the underflow lies inside the grid");
+    }
 
     /// Table 4.7 (also used by the unit tests of `system`).
     pub(crate) fn table_4_7() -> ThesisFriction {
