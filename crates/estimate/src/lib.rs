@@ -23,7 +23,10 @@ pub mod steps;
 pub use error::EstimateError;
 pub use fit_stats::{FitReport, Identifiability, ParamEstimate};
 pub use friction::{FrictionEstimate, FrictionOptions, estimate_friction};
-pub use lsq::{IterationRecord, LsqProblem, LsqSolution, SolverOptions, Transform, levenberg_marquardt};
+pub use lsq::{
+    IterationRecord, LsqMinimum, LsqProblem, LsqSolution, SolverOptions, Transform, levenberg_marquardt,
+    levenberg_marquardt_minimum,
+};
 pub use options::{DampingStructure, EstimateOptions, InitialValues, RotorDamping, SolverKind};
 pub use params::{EstimateParams, VoltageStepFit};
 pub use pi::{PiEstimate, PiMethod, PiOptions, estimate_pi};

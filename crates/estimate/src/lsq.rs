@@ -172,6 +172,58 @@ pub fn levenberg_marquardt<P: LsqProblem>(
     transforms: &[Transform],
     opts: &SolverOptions,
 ) -> Result<LsqSolution, EstimateError> {
+    solve(problem, x0, transforms, opts, true)
+}
+
+/// A [`levenberg_marquardt`] minimum without the Jacobian at it: the same
+/// iterations, the same point and SSR to the bit, but where an accepted
+/// step ends the search (its SSR decrease below `ftol`) the central
+/// differences at the new point, 2·p residual evaluations that only the
+/// returned Jacobian would read, are not taken. For callers that use the
+/// fitted point alone (the motor side's refit,
+/// [`crate::refit_motor_side`]).
+#[derive(Debug, Clone)]
+pub struct LsqMinimum {
+    pub x: Vec<f64>,
+    pub residuals: Vec<f64>,
+    pub ssr: f64,
+    pub iterations: usize,
+    pub converged: bool,
+    pub stop_reason: String,
+    /// Entry 0 is the initial point.
+    pub history: Vec<IterationRecord>,
+}
+
+/// [`levenberg_marquardt`] to its minimum alone ([`LsqMinimum`]).
+pub fn levenberg_marquardt_minimum<P: LsqProblem>(
+    problem: &P,
+    x0: &[f64],
+    transforms: &[Transform],
+    opts: &SolverOptions,
+) -> Result<LsqMinimum, EstimateError> {
+    let s = solve(problem, x0, transforms, opts, false)?;
+    Ok(LsqMinimum {
+        x: s.x,
+        residuals: s.residuals,
+        ssr: s.ssr,
+        iterations: s.iterations,
+        converged: s.converged,
+        stop_reason: s.stop_reason,
+        history: s.history,
+    })
+}
+
+/// The iterations of [`levenberg_marquardt`]; the solution's `jacobian` is
+/// at the solution when `final_jacobian`, else the last one computed (the
+/// central differences after a step that ends the search are skipped;
+/// [`levenberg_marquardt_minimum`] drops it).
+fn solve<P: LsqProblem>(
+    problem: &P,
+    x0: &[f64],
+    transforms: &[Transform],
+    opts: &SolverOptions,
+    final_jacobian: bool,
+) -> Result<LsqSolution, EstimateError> {
     assert_eq!(x0.len(), transforms.len(), "one transform per parameter");
     for (i, (x, t)) in x0.iter().zip(transforms).enumerate() {
         if !x.is_finite() || (*t == Transform::Log && *x <= 0.0) {
@@ -261,7 +313,9 @@ pub fn levenberg_marquardt<P: LsqProblem>(
             lambda *= nu;
             nu *= 2.0;
         }
-        if accepted {
+        if accepted && converged && !final_jacobian {
+            // The search ends here and nothing reads the Jacobian at theta.
+        } else if accepted {
             jac = fd_jacobian(problem, &theta, transforms, opts.fd_step, m)?;
             evals += 2 * p;
             (jtj, g) = normal_equations(&jac, &r);

@@ -521,7 +521,8 @@ pub fn refit_motor_side(
     let problem =
         StepProblem { base: model.clone(), names: names.clone(), steps: est_steps, sim: sim.clone(), residual };
     let x0: Vec<f64> = names.iter().map(|n| get_param(model, n)).collect();
-    let sol = levenberg_marquardt(&problem, &x0, &vec![Transform::Log; names.len()], solver)?;
+    // The fitted point alone is read: no Jacobian after the last step.
+    let sol = crate::lsq::levenberg_marquardt_minimum(&problem, &x0, &vec![Transform::Log; names.len()], solver)?;
     Ok(MotorRefit {
         params: problem.params_at(&sol.x),
         ssr_start: sol.history.first().map_or(f64::NAN, |h| h.ssr),

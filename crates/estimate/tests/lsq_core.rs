@@ -6,7 +6,10 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use rig_estimate::argmin_adapter::gauss_newton_ls;
 use rig_estimate::fit_stats::{aic_bic, covariance, fit_percent, flagged_pairs, whiteness};
-use rig_estimate::{EstimateError, LsqProblem, SolverOptions, Transform, levenberg_marquardt};
+use rig_estimate::{
+    EstimateError, LsqProblem, SolverOptions, Transform, levenberg_marquardt, levenberg_marquardt_minimum,
+};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Free decay x(t) = A e^{−ζωt} cos(ω√(1−ζ²) t); parameters (A, ω, ζ).
 fn decay(p: &[f64], t: f64) -> f64 {
@@ -141,4 +144,39 @@ fn aic_bic_match_the_gaussian_likelihood_by_hand() {
     assert!((aic - (m2ll + 6.0)).abs() < 1e-12);
     assert!((bic - (m2ll + 3.0 * 100f64.ln())).abs() < 1e-12);
     assert!((m2ll + 38.0999).abs() < 1e-3);
+}
+
+/// A problem that counts its residual evaluations.
+struct Counted<'a>(&'a Decay, AtomicUsize);
+
+impl LsqProblem for Counted<'_> {
+    fn residuals(&self, p: &[f64]) -> Result<Vec<f64>, EstimateError> {
+        self.1.fetch_add(1, Ordering::Relaxed);
+        self.0.residuals(p)
+    }
+}
+
+/// The minimum alone (`levenberg_marquardt_minimum`, the motor side's
+/// refit) is the full solver's point, SSR, iterations and history to the
+/// bit, and where the search ends on the SSR's decrease it skips the
+/// central differences at the last point: 2·p = 6 evaluations fewer.
+#[test]
+fn the_minimum_alone_is_the_solution_without_its_last_jacobian() {
+    for seed in [1, 2, 3] {
+        let prob = data(seed);
+        let (full, alone) = (Counted(&prob, AtomicUsize::new(0)), Counted(&prob, AtomicUsize::new(0)));
+        let opts = SolverOptions { ftol: 1e-6, ..SolverOptions::default() };
+        let a = levenberg_marquardt(&full, &X0, &LOG, &opts).unwrap();
+        let b = levenberg_marquardt_minimum(&alone, &X0, &LOG, &opts).unwrap();
+        let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&a.x), bits(&b.x));
+        assert_eq!(bits(&a.residuals), bits(&b.residuals));
+        assert_eq!((a.ssr.to_bits(), a.iterations, a.converged), (b.ssr.to_bits(), b.iterations, b.converged));
+        assert_eq!(a.stop_reason, b.stop_reason);
+        assert_eq!(a.history.len(), b.history.len());
+        assert!(a.history.iter().zip(&b.history).all(|(u, v)| u.ssr.to_bits() == v.ssr.to_bits()));
+        assert_eq!(a.stop_reason, "relative SSR decrease below ftol", "seed {seed}");
+        let (n_full, n_alone) = (full.1.load(Ordering::Relaxed), alone.1.load(Ordering::Relaxed));
+        assert_eq!(n_full, n_alone + 6, "seed {seed}: {n_full} against {n_alone} evaluations");
+    }
 }

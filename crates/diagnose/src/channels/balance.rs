@@ -409,6 +409,68 @@ impl Recorded {
 }
 
 impl BalanceData {
+    /// The balance of the force F + Σ a_j G_j on the same angles, from the
+    /// balance of F (`self`) and of each G_j (`terms`: (a_j, balance of
+    /// G_j), lanes of one [`Recorded::balance_lanes`] call on the same
+    /// angles, so the same runs, rows and events). A row's regressors are
+    /// the angles' alone and its r⟨F⟩ is a triangle-weighted mean of the
+    /// force, linear in it (Eq. 4-7's first row, [`row_at`]): each row,
+    /// event-locked rows included, is F's with r⟨F⟩ + Σ a_j r⟨G_j⟩. The
+    /// force sensor's inverse H⁻¹[F] = F + a1·D1F + a2·D2F
+    /// ([`crate::structure`]) is so built at every grid point from three
+    /// balances instead of one pass over every sample per point; it equals
+    /// the balance of the combined force built sample by sample up to
+    /// rounding (the sums combined, not the samples).
+    pub fn force_combination(&self, terms: &[(f64, &BalanceData)]) -> BalanceData {
+        let combine = |rows: &[Row], of: &dyn Fn(&BalanceData) -> &[Row]| -> Vec<Row> {
+            let mut out = rows.to_vec();
+            for &(a, t) in terms {
+                let t_rows = of(t);
+                debug_assert_eq!(t_rows.len(), out.len(), "a force combination's lanes share their rows");
+                for ((_, y), (_, ty)) in out.iter_mut().zip(t_rows) {
+                    *y += a * ty;
+                }
+            }
+            out
+        };
+        let runs = self
+            .runs
+            .iter()
+            .enumerate()
+            .map(|(i, r)| {
+                debug_assert!(
+                    terms.iter().all(|(_, t)| t.runs[i].id == r.id && t.runs[i].events.len() == r.events.len())
+                );
+                let rows = combine(&r.rows, &|t| &t.runs[i].rows);
+                let events = (r.events.iter().enumerate())
+                    .map(|(e, (kind, e_rows))| (*kind, combine(e_rows, &|t| &t.runs[i].events[e].1)))
+                    .collect();
+                // The regressors are `self`'s, so XᵀX is too; Xᵀy and yᵀy of
+                // the new y, summed as [`Recorded::balance_lanes`] sums them.
+                let (mut atb, mut yty) = ([0.0; 5], 0.0);
+                for (x, y) in &rows {
+                    let y = y + self.j1_kgm2 * x[0];
+                    yty += y * y;
+                    for k in 0..5 {
+                        atb[k] += x[k] * y;
+                    }
+                }
+                RunRows {
+                    id: r.id.clone(),
+                    rows,
+                    angle_rad: r.angle_rad.clone(),
+                    events,
+                    force_noise_n: r.force_noise_n,
+                    kernel_gain: r.kernel_gain,
+                    ata: r.ata,
+                    atb,
+                    yty,
+                }
+            })
+            .collect();
+        BalanceData { runs, j1_kgm2: self.j1_kgm2 }
+    }
+
     /// Least squares of the balance over the runs `include` accepts, J1
     /// held; C (twist rate) and C_r (absolute rotor speed) are fitted only
     /// when asked, else held at 0. `None` when the regression is singular.
@@ -701,7 +763,8 @@ impl Recorded {
 
 #[cfg(test)]
 mod tests {
-    use super::{Row, row_at, rows_lanes};
+    use super::{Recorded, RecordedRun, Row, row_at, rows_lanes};
+    use std::borrow::Cow;
 
     fn rows(phi1: &[f64], phi2: &[f64], f: &[f64], dt: f64, w: usize, r_m: f64, from: usize) -> Vec<Row> {
         let [out] = rows_lanes([(phi1, phi2, f)], dt, w, r_m, from);
@@ -776,5 +839,91 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A balance of F + a1·G1 + a2·G2 combined from the three balances
+    /// ([`super::BalanceData::force_combination`]) is the balance of that
+    /// force built sample by sample (the independent reference), rows,
+    /// event-locked rows, normal equations and fits, to rounding: on two
+    /// runs with transitions, a noisy force and coefficients of the force
+    /// sensor's grid (a2 up to rate²/ω² ≈ 1.6·10³ at 2 Hz).
+    #[test]
+    fn a_force_combination_is_the_combined_force_balance() {
+        let (n, dt, w, r_m) = (4000, 0.002, 50, 0.09);
+        let t = |k: usize| k as f64 * dt;
+        let run = |j: usize| {
+            let rotor_rad: Vec<f64> = (0..n).map(|k| 2.0 * t(k) + 0.05 * (9.0 * t(k) + j as f64).sin()).collect();
+            let motor_rad: Vec<f64> = (0..n).map(|k| 2.0 * t(k) + 0.4 + 0.01 * (3.0 * t(k)).cos()).collect();
+            let force_n: Vec<f64> =
+                (0..n).map(|k| 30.0 + (6.0 * t(k)).sin() + ((k * 7919 + j) % 101) as f64 * 0.003).collect();
+            RecordedRun {
+                id: format!("op-{j}"),
+                rotor_rad,
+                motor_rad,
+                force_n,
+                from: 120,
+                transitions: vec![(1, 400), (0, 900), (1, 1500), (0, 2100), (1, 3920)],
+                force_noise_n: 0.01,
+            }
+        };
+        let rec = Recorded { runs: vec![run(0), run(1)], w, dt, r_m, kernel_gain: 0.5, j1_kgm2: 0.02 };
+        let diff = |f: &[f64], second: bool| -> Vec<f64> {
+            (0..f.len())
+                .map(|k| match (k.checked_sub(1), f.get(k + 1)) {
+                    (Some(j), Some(&next)) if second => next - 2.0 * f[k] + f[j],
+                    (Some(j), Some(&next)) => next - f[j],
+                    _ => 0.0,
+                })
+                .collect()
+        };
+        let [f0, g1, g2] = rec.balance_lanes(|_, r| {
+            [
+                Cow::Borrowed(r.force_n.as_slice()),
+                Cow::Owned(diff(&r.force_n, false)),
+                Cow::Owned(diff(&r.force_n, true)),
+            ]
+            .map(|f| (Cow::Borrowed(r.rotor_rad.as_slice()), Cow::Borrowed(r.motor_rad.as_slice()), f))
+        });
+        for (a1, a2) in [(0.0, 0.0), (0.8, 1583.0), (0.05, 6.3)] {
+            let combined = f0.force_combination(&[(a1, &g1), (a2, &g2)]);
+            let direct = rec.balance_with(|_, r| {
+                let (d1, d2) = (diff(&r.force_n, false), diff(&r.force_n, true));
+                let f: Vec<f64> = (0..n).map(|k| r.force_n[k] + a1 * d1[k] + a2 * d2[k]).collect();
+                (r.rotor_rad.as_slice().into(), r.motor_rad.as_slice().into(), f.into())
+            });
+            let close = |a: f64, b: f64, scale: f64| (a - b).abs() <= 1e-12 * scale.max(1.0);
+            for (c, d) in combined.runs.iter().zip(&direct.runs) {
+                assert_eq!((c.rows.len(), c.events.len()), (d.rows.len(), d.events.len()));
+                assert!(c.rows.len() > 50 && c.events.len() == 4, "{} rows, {} events", c.rows.len(), c.events.len());
+                let scale = d.rows.iter().fold(0.0f64, |m, (_, y)| m.max(y.abs()));
+                for ((xc, yc), (xd, yd)) in c
+                    .rows
+                    .iter()
+                    .chain(c.events.iter().flat_map(|e| &e.1))
+                    .zip(d.rows.iter().chain(d.events.iter().flat_map(|e| &e.1)))
+                {
+                    assert_eq!(xc, xd, "the regressors are the angles'");
+                    assert!(close(*yc, *yd, scale), "a1 {a1}, a2 {a2}: {yc} vs {yd}");
+                }
+                assert_eq!(c.ata, d.ata);
+                assert!(
+                    c.atb.iter().zip(&d.atb).all(|(u, v)| close(*u, *v, v.abs() * 1e3)),
+                    "{:?} vs {:?}",
+                    c.atb,
+                    d.atb
+                );
+                assert!(close(c.yty, d.yty, d.yty), "{} vs {}", c.yty, d.yty);
+            }
+            let (fc, fd) = (combined.fit(|_| true, true, false).unwrap(), direct.fit(|_| true, true, false).unwrap());
+            assert!(
+                close(fc.stiffness_nm_rad, fd.stiffness_nm_rad, 1e3 * fd.stiffness_nm_rad.abs()),
+                "{fc:?} vs {fd:?}"
+            );
+            let (rc, rd) = (combined.run_rms(&fc, |_| true), direct.run_rms(&fd, |_| true));
+            assert!(rc.iter().zip(&rd).all(|(u, v)| (u.1 - v.1).abs() <= 1e-9 * v.1), "{rc:?} vs {rd:?}");
+        }
+        // The differences move the balance: a sensor point is not the record.
+        let moved = f0.force_combination(&[(0.8, &g1), (1583.0, &g2)]);
+        assert!(moved.runs[0].rows.iter().zip(&f0.runs[0].rows).any(|(a, b)| (a.1 - b.1).abs() > 1e-6));
     }
 }

@@ -116,6 +116,7 @@ use crate::channels::{BalanceData, MIN_EVENTS, Recorded, RecordedRun};
 use rayon::prelude::*;
 use rig_types::RigParams;
 use rig_types::sensor::{centred_moving_average, nominal_window_samples};
+use std::borrow::Cow;
 
 /// The force sensor's finding id.
 pub const FORCE_SENSOR_ID: &str = "force_sensor_dynamics";
@@ -215,10 +216,15 @@ fn corrected_pairs<const L: usize>(
 /// H⁻¹[F_m] = F_m + (2ζ/ω)·Ḟ_m + F̈_m/ω², the exact inverse of H(s) =
 /// ω²/(s² + 2ζωs + ω²) (a polynomial in s, no recursion), the derivatives
 /// central differences at `rate_hz` (error ω²Δt²/12: 0.2 % at 11.5 Hz and
-/// 500 Hz), the first and last sample as recorded.
+/// 500 Hz), the first and last sample as recorded: F_m + a1·D1F_m +
+/// a2·D2F_m with D1F[k] = F[k+1] − F[k−1], D2F[k] = F[k+1] − 2F[k] + F[k−1]
+/// (0 at both ends, [`force_differences`]) and (a1, a2) =
+/// ([`inverse_coefficients`]). The grid builds its balance from the three
+/// channels' balances ([`BalanceData::force_combination`]); this, sample by
+/// sample, is what that equals to rounding (tests).
+#[cfg(test)]
 fn force_through_inverse(force_n: &[f64], rate_hz: f64, f_n_hz: f64, zeta: f64) -> Vec<f64> {
-    let w = 2.0 * std::f64::consts::PI * f_n_hz;
-    let (a1, a2) = (2.0 * zeta / w * rate_hz / 2.0, rate_hz * rate_hz / (w * w));
+    let (a1, a2) = inverse_coefficients(rate_hz, f_n_hz, zeta);
     let n = force_n.len();
     (0..n)
         .map(|k| match (k.checked_sub(1), force_n.get(k + 1)) {
@@ -231,50 +237,76 @@ fn force_through_inverse(force_n: &[f64], rate_hz: f64, f_n_hz: f64, zeta: f64) 
         .collect()
 }
 
+/// The weights of the force's central differences in H⁻¹ at `rate_hz`
+/// ([`force_through_inverse`]): a1 = (2ζ/ω)·rate/2 on F[k+1] − F[k−1],
+/// a2 = rate²/ω² on F[k+1] − 2F[k] + F[k−1].
+fn inverse_coefficients(rate_hz: f64, f_n_hz: f64, zeta: f64) -> (f64, f64) {
+    let w = 2.0 * std::f64::consts::PI * f_n_hz;
+    (2.0 * zeta / w * rate_hz / 2.0, rate_hz * rate_hz / (w * w))
+}
+
+/// The recorded force's central first and second differences
+/// ([`force_through_inverse`]'s D1F and D2F), 0 at the first and last sample.
+fn force_differences(force_n: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let n = force_n.len();
+    let (mut d1, mut d2) = (vec![0.0; n], vec![0.0; n]);
+    for k in 1..n.saturating_sub(1) {
+        let (prev, f, next) = (force_n[k - 1], force_n[k], force_n[k + 1]);
+        d1[k] = next - prev;
+        d2[k] = next - 2.0 * f + prev;
+    }
+    (d1, d2)
+}
+
 /// The balance of the records at every point of the grid, for both
 /// sensors: the force sensor's from the force through its inverse
-/// ([`force_through_inverse`], the angles as recorded), the coupling's from
-/// the channels it touches, smoothed once per run ([`SMOOTH_HALF_S`]),
-/// through its filter as a correction; the points of one sensor and natural
-/// frequency (every damping ratio) are built together
+/// ([`force_through_inverse`], the angles as recorded), linear in the
+/// force, so every force point's balance is the recorded force's plus a1
+/// and a2 times its differences' ([`force_differences`],
+/// [`BalanceData::force_combination`]: three balances built once); the
+/// coupling's from the channels it touches, smoothed once per run
+/// ([`SMOOTH_HALF_S`]), through its filter as a correction, the points of
+/// one natural frequency (every damping ratio) built together
 /// ([`corrected_pairs`], [`Recorded::balance_lanes`]).
 pub(super) fn grid(rec: &Recorded, rate_hz: f64) -> Vec<SensorPoint> {
     let half = nominal_window_samples(SMOOTH_HALF_S, rate_hz);
     let smooth: Vec<[Vec<f64>; 2]> =
         rec.runs.iter().map(|r| [&r.motor_rad, &r.force_n].map(|x| centred_moving_average(x, half))).collect();
-    // Every (sensor, f_n)'s balances are independent: built in parallel, in grid order.
-    let groups: Vec<(Sensor, f64)> = [Sensor::Force, Sensor::EncoderCoupling]
-        .into_iter()
-        .flat_map(|sensor| FREQUENCIES_HZ.iter().map(move |&f_n| (sensor, f_n)))
-        .collect();
-    let per_group: Vec<Vec<SensorPoint>> = groups
-        .into_par_iter()
-        .map(|(sensor, f_n)| {
+    let [recorded, d1, d2] = rec.balance_lanes(|_, r| {
+        let (d1, d2) = force_differences(&r.force_n);
+        [Cow::Borrowed(r.force_n.as_slice()), Cow::Owned(d1), Cow::Owned(d2)]
+            .map(|f| (Cow::Borrowed(r.rotor_rad.as_slice()), Cow::Borrowed(r.motor_rad.as_slice()), f))
+    });
+    let force = FREQUENCIES_HZ.iter().flat_map(|&f_n| {
+        DAMPING_RATIOS.map(|zeta| {
+            let (a1, a2) = inverse_coefficients(rate_hz, f_n, zeta);
+            let data = recorded.force_combination(&[(a1, &d1), (a2, &d2)]);
+            SensorPoint { sensor: Sensor::Force, natural_frequency_hz: f_n, damping_ratio: zeta, data }
+        })
+    });
+    // Every f_n's coupling balances are independent: built in parallel, in grid order.
+    let coupling: Vec<Vec<SensorPoint>> = FREQUENCIES_HZ
+        .par_iter()
+        .map(|&f_n| {
             let data = rec.balance_lanes(|i, r| {
                 let [s2, sf] = &smooth[i];
-                match sensor {
-                    Sensor::Force => DAMPING_RATIOS.map(|zeta| {
-                        (
-                            r.rotor_rad.as_slice().into(),
-                            r.motor_rad.as_slice().into(),
-                            force_through_inverse(&r.force_n, rate_hz, f_n, zeta).into(),
-                        )
-                    }),
-                    Sensor::EncoderCoupling => {
-                        let q = DAMPING_RATIOS.map(|zeta| Biquad::new(rate_hz, f_n, zeta, true));
-                        corrected_pairs((&r.motor_rad, s2), (&r.force_n, sf), q)
-                            .map(|(phi2, f)| (r.rotor_rad.as_slice().into(), phi2.into(), f.into()))
-                    }
-                }
+                let q = DAMPING_RATIOS.map(|zeta| Biquad::new(rate_hz, f_n, zeta, true));
+                corrected_pairs((&r.motor_rad, s2), (&r.force_n, sf), q)
+                    .map(|(phi2, f)| (r.rotor_rad.as_slice().into(), phi2.into(), f.into()))
             });
             DAMPING_RATIOS
                 .iter()
                 .zip(data)
-                .map(|(&zeta, data)| SensorPoint { sensor, natural_frequency_hz: f_n, damping_ratio: zeta, data })
+                .map(|(&zeta, data)| SensorPoint {
+                    sensor: Sensor::EncoderCoupling,
+                    natural_frequency_hz: f_n,
+                    damping_ratio: zeta,
+                    data,
+                })
                 .collect()
         })
         .collect();
-    per_group.into_iter().flatten().collect()
+    force.chain(coupling.into_iter().flatten()).collect()
 }
 
 /// The encoder coupling's placebo (module docs of [`super`], "A placebo at
