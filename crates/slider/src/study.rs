@@ -668,8 +668,8 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
     // baseline fitted on each training set: each step tries the current
     // model's extensions (a memory law, a set-up) and keeps the best when the
     // step rule admits it (`[shared.selection]`); when none is admitted, the
-    // pair step tries the best with the best of the other group (a law and a
-    // set-up may each fail alone and gain together: the set-up moves the
+    // pair step tries the best with each member of the other group (a law and
+    // a set-up may each fail alone and gain together: the set-up moves the
     // inertial periods, the law the regimes).
     let sets = engine::train_sets(&folds);
     let baselines: Vec<Fitted> = sets.par_iter().map(|t| fit_on(Model::BASELINE, &runs, t, None, p)).collect();
