@@ -563,13 +563,53 @@ pub fn simulate_implicit_into<F: ImplicitFriction>(
     simulate_implicit_extend(shaft, law, drive, &mut s, fs_hz, samples, substeps, out)
 }
 
+/// Where [`simulate_implicit_extend`] puts each sample: a [`OneDofRun`]
+/// keeps every channel; a caller that reads fewer (the spring–slider reads
+/// the twist alone) implements this for what it reads, and the steps, the
+/// same code, are the same bits.
+pub trait ImplicitSink {
+    /// Samples held (the run's length: where a continued run resumes).
+    fn samples(&self) -> usize;
+    /// Room for `more` samples.
+    fn reserve(&mut self, more: usize);
+    /// One sample: the state after it, the contact's torque and the bit's
+    /// acceleration over its last step.
+    fn push(&mut self, state: &OneDofState, friction_nm: f64, accel_rad_s2: f64);
+}
+
+impl ImplicitSink for OneDofRun {
+    fn samples(&self) -> usize {
+        self.stuck.len()
+    }
+    fn reserve(&mut self, more: usize) {
+        for ch in [
+            &mut self.bit_rad_s,
+            &mut self.top_rad_s,
+            &mut self.twist_rad,
+            &mut self.friction_nm,
+            &mut self.accel_rad_s2,
+        ] {
+            ch.reserve(more);
+        }
+        self.stuck.reserve(more);
+    }
+    fn push(&mut self, s: &OneDofState, friction_nm: f64, accel_rad_s2: f64) {
+        self.bit_rad_s.push(s.bit_rad_s);
+        self.top_rad_s.push(s.top_rad_s);
+        self.twist_rad.push(s.twist_rad);
+        self.friction_nm.push(friction_nm);
+        self.accel_rad_s2.push(accel_rad_s2);
+        self.stuck.push(s.stuck);
+    }
+}
+
 /// [`simulate_implicit_into`] continued: `out` (a run this made or left
-/// empty) grows to `samples` samples from `state`, the state at its last
-/// sample as the previous call left it (an empty run starts at `state`, as
-/// [`simulate_implicit_into`] from it). Every step is the one the longer
-/// run from the start would take, so a run made in pieces is bit for bit
-/// the run made at once (a caller that lengthens a simulated stretch pays
-/// only for the added samples).
+/// empty, or any [`ImplicitSink`]) grows to `samples` samples from `state`,
+/// the state at its last sample as the previous call left it (an empty run
+/// starts at `state`, as [`simulate_implicit_into`] from it). Every step is
+/// the one the longer run from the start would take, so a run made in
+/// pieces is bit for bit the run made at once (a caller that lengthens a
+/// simulated stretch pays only for the added samples).
 #[allow(clippy::too_many_arguments)]
 pub fn simulate_implicit_extend<F: ImplicitFriction>(
     shaft: &Shaft,
@@ -579,7 +619,7 @@ pub fn simulate_implicit_extend<F: ImplicitFriction>(
     fs_hz: f64,
     samples: usize,
     substeps: usize,
-    out: &mut OneDofRun,
+    out: &mut impl ImplicitSink,
 ) -> Result<(), ModelError> {
     if samples < 2 {
         return Err(invalid("samples", samples as f64, "at least 2"));
@@ -610,28 +650,15 @@ pub fn simulate_implicit_extend<F: ImplicitFriction>(
         (shaft.stiffness_nm_rad, shaft.twist_damping_nm_s_rad, shaft.absolute_damping_nm_s_rad, shaft.inertia_kgm2);
     let h_j = h / j;
     let s = state;
-    let first = out.stuck.len();
-    let more = samples.saturating_sub(first);
-    for ch in [&mut out.bit_rad_s, &mut out.top_rad_s, &mut out.twist_rad, &mut out.friction_nm, &mut out.accel_rad_s2]
-    {
-        ch.reserve(more);
-    }
-    out.stuck.reserve(more);
-    let push = |out: &mut OneDofRun, s: &OneDofState, fric: f64, acc: f64| {
-        out.bit_rad_s.push(s.bit_rad_s);
-        out.top_rad_s.push(s.top_rad_s);
-        out.twist_rad.push(s.twist_rad);
-        out.friction_nm.push(fric);
-        out.accel_rad_s2.push(acc);
-        out.stuck.push(s.stuck);
-    };
+    let first = out.samples();
+    out.reserve(samples.saturating_sub(first));
     if first == 0 {
         s.top_rad_s = top_at(0, 0.0)?;
         if s.stuck {
             s.bit_rad_s = 0.0;
         }
         // At sample 0 the contact is taken to balance the shaft (quasi-static start).
-        push(out, s, k * s.twist_rad + c * (s.top_rad_s - s.bit_rad_s) - ca * s.bit_rad_s, 0.0);
+        out.push(s, k * s.twist_rad + c * (s.top_rad_s - s.bit_rad_s) - ca * s.bit_rad_s, 0.0);
     }
     for i in first.max(1)..samples {
         let (mut acc, mut fric) = (0.0, 0.0);
@@ -652,7 +679,7 @@ pub fn simulate_implicit_extend<F: ImplicitFriction>(
             });
         }
         s.top_rad_s = top_at(i, 0.0)?;
-        push(out, s, fric, acc);
+        out.push(s, fric, acc);
     }
     Ok(())
 }
@@ -803,5 +830,37 @@ mod tests {
             simulate_implicit_extend(&sh, &LAW, drive, &mut state, FS, n, 4, &mut run).unwrap();
         }
         assert_eq!(run, whole);
+    }
+
+    #[test]
+    fn a_sink_that_keeps_the_twist_alone_gets_the_runs_twist() {
+        // The steps do not depend on where the samples go: a sink keeping one
+        // channel, filled in pieces, holds the full run's twist bit for bit.
+        struct Twist(Vec<f64>);
+        impl ImplicitSink for Twist {
+            fn samples(&self) -> usize {
+                self.0.len()
+            }
+            fn reserve(&mut self, more: usize) {
+                self.0.reserve(more);
+            }
+            fn push(&mut self, s: &OneDofState, _: f64, _: f64) {
+                self.0.push(s.twist_rad);
+            }
+        }
+        let sh = Shaft { twist_damping_nm_s_rad: 0.0, ..shaft() };
+        let rs = RateStateAgeing { normal_nm: 1.0, mu0: 1.0, a: 0.01, b: 0.015, dc_rad: 1e-3, v_ref_rad_s: 0.1 };
+        let drive = Drive::ConstantSpeed(0.2);
+        let start =
+            OneDofState { stuck: true, twist_rad: 0.5, friction_state: rs.initial_state(0.2), ..Default::default() };
+        let whole = simulate_implicit(&sh, &rs, drive, start, FS, 9_000, 4).unwrap();
+        let (mut twist, mut state) = (Twist(Vec::new()), start);
+        for n in [2, 4_000, 9_000] {
+            simulate_implicit_extend(&sh, &rs, drive, &mut state, FS, n, 4, &mut twist).unwrap();
+        }
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();
+        assert_eq!(bits(&twist.0), bits(&whole.twist_rad));
+        let (lo, hi) = whole.twist_rad.iter().fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(*v), h.max(*v)));
+        assert!(hi - lo > 0.01, "the twist moves: {lo}..{hi}");
     }
 }

@@ -1384,9 +1384,10 @@ fn markdown(s: &Study) -> String {
          of the README's m and k — and keeps the one with the largest gain when the workspace's step rule admits it \
          (`[shared.selection]`, `rig_types::select::compare`): a gain 1 − M_after/M_before of the RMS held-out misfit of \
          at least {} % and a paired t of ln(M_before/M_after) over the held-out runs of at least {}. When none is admitted, \
-         the engine's pair step (`rig_types::select::forward_select_from`) fits the best of the other kind (a law on the \
-         step's best set-up, or a set-up under its best law) on top of the step's best and judges the pair once more by \
-         the same rule, in a step of its own. The mean misfit is shown beside it.\n",
+         the engine's pair step (`rig_types::select::forward_select_from`) fits each extension of the other kind (every law \
+         on the step's best set-up, or every set-up under its best law) on top of the step's best and judges each pair \
+         once more by the same rule, in a step of its own; the pair with the largest gain is that step's best. The mean \
+         misfit is shown beside it.\n",
         100.0 * p.selection.min_relative_gain,
         p.selection.min_t
     );

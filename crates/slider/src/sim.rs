@@ -31,7 +31,7 @@
 
 use rig_model::ModelError;
 use rig_model::one_dof::{
-    self, Drive, ImplicitFriction, MAX_FRICTION_STATES, OneDofRun, OneDofState, RateStateAgeing, Shaft,
+    self, Drive, ImplicitFriction, ImplicitSink, MAX_FRICTION_STATES, OneDofState, RateStateAgeing, Shaft,
 };
 /// A friction law, parameters dimensionless (μ) or in the units of their names.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -135,36 +135,29 @@ impl Law {
 /// with the spring preloaded to `initial_force_over_weight` (the drive starts
 /// at t = 0).
 pub fn simulate(law: &Law, s: &Setup) -> Result<Vec<f64>, ModelError> {
-    let mut run = OneDofRun::default();
     let mut out = Vec::new();
-    simulate_into(law, s, &mut run, &mut out)?;
+    simulate_into(law, s, &mut out)?;
     Ok(out)
 }
 
-/// [`simulate`] into a caller's buffers (a batch's per-thread scratch): the
-/// one_dof run and the force over weight, both overwritten.
+/// [`simulate`] into a caller's buffer (a batch's per-thread scratch), overwritten.
 /// An error is one_dof's refusal: a set-up out of range, or a law whose
 /// simulation left the physical range.
-pub fn simulate_into(law: &Law, s: &Setup, run: &mut OneDofRun, out: &mut Vec<f64>) -> Result<(), ModelError> {
+pub fn simulate_into(law: &Law, s: &Setup, out: &mut Vec<f64>) -> Result<(), ModelError> {
     out.clear();
-    simulate_more(law, s, run, &mut OneDofState::default(), out)
+    simulate_more(law, s, &mut OneDofState::default(), out)
 }
 
-/// [`simulate_into`] continued: `out` and `run` (as a call of this with the
-/// same law and set-up but a shorter `duration_s` left them, or empty: a
-/// run from the start) grow to `s.duration_s` from `state` (the state at
-/// their last sample, which this keeps). The steps do not depend on the
+/// [`simulate_into`] continued: `out` (as a call of this with the same law
+/// and set-up but a shorter `duration_s` left it, or empty: a run from the
+/// start) grows to `s.duration_s` from `state` (the state at its last
+/// sample, which this keeps). One_dof's run is not kept: each sample goes
+/// straight to its force over weight ([`ForceOverWeight`]). The steps do not depend on the
 /// duration (an integer number per sample, from the natural period and the
 /// rate), so a stretch lengthened piece by piece is bit for bit the one
 /// simulated at once (`one_dof::simulate_implicit_extend`): a caller that
 /// lengthens a stretch pays for the added samples only.
-pub fn simulate_more(
-    law: &Law,
-    s: &Setup,
-    run: &mut OneDofRun,
-    state: &mut OneDofState,
-    out: &mut Vec<f64>,
-) -> Result<(), ModelError> {
+pub fn simulate_more(law: &Law, s: &Setup, state: &mut OneDofState, out: &mut Vec<f64>) -> Result<(), ModelError> {
     let n_out = (s.duration_s * s.sample_rate_hz).floor() as usize;
     if n_out < 2 || out.len() < 2 {
         out.clear();
@@ -193,19 +186,31 @@ pub fn simulate_more(
             friction_state: contact.initial_state(s.drive_speed_m_s),
             ..OneDofState::default()
         };
-        for ch in
-            [&mut run.bit_rad_s, &mut run.top_rad_s, &mut run.twist_rad, &mut run.friction_nm, &mut run.accel_rad_s2]
-        {
-            ch.clear();
-        }
-        run.stuck.clear();
     }
     let drive = Drive::ConstantSpeed(s.drive_speed_m_s);
-    let from = out.len();
-    one_dof::simulate_implicit_extend(&shaft, &contact, drive, state, s.sample_rate_hz, n_out, sub, run)?;
-    let to_fw = chain_n_m / weight_n;
-    out.extend(run.twist_rad[from..].iter().map(|x| to_fw * x));
-    Ok(())
+    let mut sink = ForceOverWeight { out, per_m: chain_n_m / weight_n };
+    one_dof::simulate_implicit_extend(&shaft, &contact, drive, state, s.sample_rate_hz, n_out, sub, &mut sink)
+}
+
+/// The one channel the slider reads, as one_dof's samples come: the spring
+/// force over weight k_eff φ/(m g), φ the spring's extension (one_dof's
+/// twist, m); the other channels are not stored.
+struct ForceOverWeight<'a> {
+    out: &'a mut Vec<f64>,
+    /// k_eff/(m g), 1/m.
+    per_m: f64,
+}
+
+impl ImplicitSink for ForceOverWeight<'_> {
+    fn samples(&self) -> usize {
+        self.out.len()
+    }
+    fn reserve(&mut self, more: usize) {
+        self.out.reserve(more);
+    }
+    fn push(&mut self, state: &OneDofState, _friction_nm: f64, _accel_m_s2: f64) {
+        self.out.push(self.per_m * state.twist_rad);
+    }
 }
 
 /// A [`Law`] as one_dof's implicit contact, forces in N (μ times the weight).

@@ -21,7 +21,7 @@ use crate::fit::{
 use crate::sim::{Setup, simulate_more};
 use rayon::prelude::*;
 use rig_ingest::slider::{SliderRun, read_slider_folder};
-use rig_model::one_dof::{OneDofRun, OneDofState};
+use rig_model::one_dof::OneDofState;
 use rig_types::select::{self as engine, Comparison, Fold};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -375,11 +375,11 @@ pub fn predict(model: Model, x: &[f64], m: &Measured, p: &StudyParams) -> Featur
     }
     // The first stretch from the start; a longer one continues it (bit for
     // bit the stretch simulated at once: `sim::simulate_more`).
-    SCRATCH.with_borrow_mut(|(_, _, force, _)| force.clear());
+    SCRATCH.with_borrow_mut(|(_, force, _)| force.clear());
     loop {
-        let f = SCRATCH.with_borrow_mut(|(run, state, force, time)| {
+        let f = SCRATCH.with_borrow_mut(|(state, force, time)| {
             // A law whose simulation leaves the physical range predicts nothing: no slip.
-            let Ok(skip) = simulate_window(model, x, m, p, window, run, state, force) else {
+            let Ok(skip) = simulate_window(model, x, m, p, window, state, force) else {
                 return Features::default_steady();
             };
             time.clear();
@@ -400,15 +400,15 @@ pub fn predict(model: Model, x: &[f64], m: &Measured, p: &StudyParams) -> Featur
 }
 
 thread_local! {
-    /// Each thread's simulation buffers (one_dof run, its state at the last
-    /// sample, force over weight, time), reused across evaluations.
-    static SCRATCH: std::cell::RefCell<(OneDofRun, OneDofState, Vec<f64>, Vec<f64>)> = Default::default();
+    /// Each thread's simulation buffers (the state at the last sample, force
+    /// over weight, time), reused across evaluations.
+    static SCRATCH: std::cell::RefCell<(OneDofState, Vec<f64>, Vec<f64>)> = Default::default();
 }
 
 /// The simulated force of `cand` at run `m` after its warm-up, thinned to about `points` (for figures).
 pub fn predict_trace(model: Model, x: &[f64], m: &Measured, p: &StudyParams, points: usize) -> (Vec<f64>, Vec<f64>) {
-    let (mut run, mut state, mut f) = (OneDofRun::default(), OneDofState::default(), Vec::new());
-    let Ok(skip) = simulate_window(model, x, m, p, window_s(m, p), &mut run, &mut state, &mut f) else {
+    let (mut state, mut f) = (OneDofState::default(), Vec::new());
+    let Ok(skip) = simulate_window(model, x, m, p, window_s(m, p), &mut state, &mut f) else {
         return (Vec::new(), Vec::new());
     };
     let step = ((f.len() - skip) / points.max(1)).max(1);
@@ -418,16 +418,14 @@ pub fn predict_trace(model: Model, x: &[f64], m: &Measured, p: &StudyParams, poi
 
 /// Simulates `window` s of run `m` after a warm-up of `warmup_fraction` of it
 /// into `force`; returns the number of warm-up samples at its start. An
-/// empty `force` starts from rest; one a shorter call left (with `run` and
-/// `state`) is continued ([`simulate_more`]).
-#[allow(clippy::too_many_arguments)]
+/// empty `force` starts from rest; one a shorter call left (with `state`) is
+/// continued ([`simulate_more`]).
 fn simulate_window(
     model: Model,
     x: &[f64],
     m: &Measured,
     p: &StudyParams,
     window: f64,
-    run: &mut OneDofRun,
     state: &mut OneDofState,
     force: &mut Vec<f64>,
 ) -> Result<usize, rig_model::ModelError> {
@@ -444,7 +442,7 @@ fn simulate_window(
         steps_per_period: p.steps_per_period,
         initial_force_over_weight: law.sliding_level(),
     };
-    simulate_more(&law, &setup, run, state, force)?;
+    simulate_more(&law, &setup, state, force)?;
     Ok(((warmup_s * m.sample_rate_hz).round() as usize).min(force.len()))
 }
 
@@ -670,8 +668,8 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
     // baseline fitted on each training set: each step tries the current
     // model's extensions (a memory law, a set-up) and keeps the best when the
     // step rule admits it (`[shared.selection]`); when none is admitted, the
-    // pair step tries the best with the best of the other group (a law and a
-    // set-up may each fail alone and gain together: the set-up moves the
+    // pair step tries the best with each member of the other group (a law and
+    // a set-up may each fail alone and gain together: the set-up moves the
     // inertial periods, the law the regimes).
     let sets = engine::train_sets(&folds);
     let baselines: Vec<Fitted> = sets.par_iter().map(|t| fit_on(Model::BASELINE, &runs, t, None, p)).collect();

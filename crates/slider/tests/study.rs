@@ -152,7 +152,8 @@ fn each_shipped_stiffness_held_out() {
         assert!(!s.leave_one_out);
         for st in &s.steps {
             eprintln!(
-                "calibrated on {cal}: step from {}: best {} (RMS {:.3} -> {:.3}, gain {:.3}, t {:.2}) kept {}",
+                "calibrated on {cal}: step {} from {}: best {} (RMS {:.3} -> {:.3}, gain {:.3}, t {:.2}) kept {}",
+                st.step,
                 s.candidates[st.from].model.id(),
                 s.candidates[st.best].model.id(),
                 st.gain.before,
@@ -161,6 +162,14 @@ fn each_shipped_stiffness_held_out() {
                 st.gain.t,
                 st.kept
             );
+            for (&t, g) in st.tried.iter().zip(&st.compared) {
+                eprintln!(
+                    "calibrated on {cal}:   tried {} (gain {:.3}, t {:.2})",
+                    s.candidates[t].model.id(),
+                    g.gain,
+                    g.t
+                );
+            }
         }
         let fin = &s.candidates[s.chosen.unwrap_or(0)];
         let held: Vec<f64> = fin.heldout.iter().map(|h| s.runs[h.0].stiffness_n_m).collect();
@@ -203,21 +212,23 @@ fn each_shipped_stiffness_held_out() {
     // What holds today (slider.md and docs/findings.md give the numbers),
     // with the misfit's spread term (`fit::spread_term`). The selection is
     // the workspace's one engine (`rig_types::select::forward_select_from`,
-    // its pair step on): calibrated on 168 N/m the effective mass lowers the
-    // RMS held-out misfit by 11.5 % at paired t 0.38 and the pair step's
-    // static_ageing+effective_mass loses 8.3 % (t −0.99), so
-    // Coulomb on the stated m and k is kept: it misses k2254-v42's regime,
-    // k2254-v4300's inertial period, and k2254-v42's period (×0.47
-    // against ×0.5: the check held by 0.020 ln units against a standard
-    // error of 0.028, unresolved, and that creeping run's period is the
-    // reading's, 0.32–1.65 s across running medians; the spread term, a
-    // constant for Coulomb, reweighs the runs of its fit and Δμ, which sets
-    // the stick-slip period 2 Δμ m g/(k V), comes out lower). Calibrated on
-    // 2254 N/m the step's best is track_threshold (gain 5.1 %, t 0.59) and
-    // the pair track_threshold+series_compliance (5.6 %, t 0.33): Coulomb is
-    // kept, and it gets 168 N/m's stick-slip runs within every bound, not
-    // k168-v4300's inertial period (+29.4 %) nor its onset (the level 0.55
-    // of that run). (Until the twelfth session the pair
+    // its pair step on, which since the fourteenth session pairs the step's
+    // best with every member of the other group, not only the best-scoring
+    // one). Calibrated on 168 N/m step 1's best is the effective mass (gain
+    // 11.5 %, t 0.38; static_ageing the best law alone, 4.8 %, t 1.28), and
+    // of its five pairs track_threshold+effective_mass gains 58.8 % at t 2.51
+    // and is kept (static_ageing+effective_mass, the one pair tried before,
+    // loses 8.3 %, t −0.99; the three rate-and-state pairs lose 39–41 %):
+    // held out it gets every 2254 N/m check — k2254-v42's creep (a stiff
+    // spring follows the track), its period (×0.54 against ×0.5, margin
+    // 0.070 ln units, se 0.028) and k2254-v4300's inertial period (+2.8 %).
+    // (Until this session Coulomb was kept there and missed those three.)
+    // Calibrated on 2254 N/m the step's best is track_threshold (gain
+    // 5.1 %, t 0.59) and its two pairs track_threshold+series_compliance
+    // (5.6 %, t 0.33) and track_threshold+effective_mass (3.6 %, t 1.07):
+    // Coulomb is kept, and it gets 168 N/m's stick-slip runs within every
+    // bound, not k168-v4300's inertial period (+29.4 %) nor its onset (the
+    // level 0.55 of that run). (Until the twelfth session the pair
     // track_threshold+spring_scale was kept there, gain 17.2 %, t 4.49, and
     // held k168-v4300's period at +11.0 %: its spring was read as a load
     // cell reads, r k (V t − x), which drives the recorded force at r V —
@@ -225,10 +236,13 @@ fn each_shipped_stiffness_held_out() {
     // reads the spring's extension (`render::extension_reading`), and a
     // stiffer spring read so is `effective_mass`: spring_scale is gone.)
     for want in [
+        "k2254-v42 regime",
+        "k2254-v42 period",
         "k2254-v1100 regime",
         "k2254-v1100 inertial period",
         "k2254-v1100 onset",
         "k2254-v4300 regime",
+        "k2254-v4300 inertial period",
         "k2254-v4300 onset",
         "k2254-v42 drop",
         "k2254-v42 onset",
@@ -244,32 +258,16 @@ fn each_shipped_stiffness_held_out() {
     ] {
         assert!(passed.iter().any(|p| p == want), "{want}: passed {passed:?}");
     }
-    // What does not (slider.md's "The causes, from the records" gives the
-    // numbers): the creep at k2254-v42 (a rate-and-state fit on 168 N/m,
-    // where every run stick-slips, puts k_c at 565 N/m and slides steadily
-    // at 2254; nothing at 168 N/m places k_c; the law creeps there only on
-    // its Hopf point, where it stick-slips at k2254-v1100:
-    // `rate_state_creeps_at_the_creeping_run_only_on_its_hopf_point`;
-    // `heslot_creep` never creeps: `heslots_law_rests_through_every_loading_phase`;
-    // the selection keeps neither), and the inertial periods at
-    // 4300 µm/s with a Coulomb law on the stated m and k, which cannot
-    // oscillate faster than 2π√(m/k) (the force's spectrum confirms 0.76 T0
-    // at both stiffnesses; a ratio m/k of 0.62 the stated one — a lighter
-    // mass or stiffer springs read through their extension, one candidate —
-    // is the one element the numbers leave, and held out it mends one run of
-    // three, t 0.35); at
-    // k168-v4300 it also slips at μs where the record slips at 0.55 (its mean
-    // force 0.50, every other run's 0.30–0.37).
-    assert_eq!(
-        failed,
-        [
-            "k2254-v42 regime",
-            "k2254-v42 period",
-            "k2254-v4300 inertial period",
-            "k168-v4300 inertial period",
-            "k168-v4300 onset"
-        ]
-    );
+    // What does not: calibrated on 2254 N/m, k168-v4300's inertial period
+    // with a Coulomb law on the stated m and k, which cannot oscillate
+    // faster than 2π√(m/k) (the force's spectrum confirms 0.76 T0 at both
+    // stiffnesses; a ratio m/k of 0.62 the stated one — a lighter mass or
+    // stiffer springs read through their extension, one candidate — is the
+    // one element the numbers leave, and its pair with track_threshold is
+    // not admitted on that fold: above), and its onset: Coulomb slips at μs
+    // where the record slips at 0.55 (its mean force 0.50, every other
+    // run's 0.30–0.37).
+    assert_eq!(failed, ["k168-v4300 inertial period", "k168-v4300 onset"]);
 }
 
 #[test]

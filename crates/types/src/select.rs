@@ -24,10 +24,11 @@
 //! Two options ([`forward_select_from`]; [`forward_select`] uses neither): a
 //! baseline fitted on each training set (a baseline with parameters of its
 //! own, like the slider's Coulomb law), and a *pair step* ([`Search`]): when
-//! a step's best is not admitted, the best candidate of another group
+//! a step's best is not admitted, each applicable candidate of another group
 //! ([`Candidate::group`]: candidates of one group are alternatives, one per
 //! model) is fitted on top of it and judged once more by the same rule
-//! against the model the step started from; admitted, both are added.
+//! against the model the step started from; the best of these pairs
+//! ([`best_of`]), admitted, adds both.
 //! [`Search::units_ascending`] orders the held-out units ascending in every
 //! misfit vector instead of fold by fold (a campaign's runs in campaign order
 //! under interleaved folds). A candidate whose fit brings a companion term
@@ -295,13 +296,19 @@ impl std::error::Error for SelectError {}
 /// How far a selection searches beyond one candidate per step.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
 pub struct Search {
-    /// When a step's best is not admitted, try once more a pair: the second
-    /// best of another group ([`Candidate::group`]) fitted on top of the
-    /// step's best (each fit on its training set), judged by the same rule
-    /// against the model the step started from. Two causes may each fail
-    /// alone and gain together (a set-up that moves one feature and a law
-    /// that moves another); the pair is one more trial in the trace, in a
-    /// step of its own, never a way round the rule.
+    /// When a step's best is not admitted, try once more pairs: each
+    /// candidate of another group ([`Candidate::group`]) that applies on top
+    /// of the step's best ([`Candidate::applies`]; one whose own fit failed
+    /// too) fitted on top of it (each fit on its training set), every pair
+    /// compared by the same rule with the model the step started from. Two
+    /// causes may each fail alone and gain together (a set-up that moves one
+    /// feature and a law that moves another), and the partner that gains
+    /// together need not be the one that gains most alone, so every partner
+    /// is tried, not only the best-scoring one. The pairs are trials of a
+    /// step of their own, every one in the trace; the best of them
+    /// ([`best_of`]: largest gain, ties the first in candidate order) is the
+    /// step's best and is added, with the step's best under it, when the rule
+    /// admits it (and it is admissible) — never a way round the rule.
     pub pair_step: bool,
     /// The held-out units in ascending order in every misfit vector
     /// ([`Selection::units`]) rather than fold by fold: a campaign's runs in
@@ -423,32 +430,34 @@ where
             if !search.pair_step {
                 break;
             }
-            // The pair step: the best of another group fitted on top of the step's best.
-            let other: Vec<Comparison> = trials[first..]
+            // The pair step: each applicable candidate of another group fitted
+            // on top of the step's best, every pair a trial of the next step;
+            // the best of them ([`best_of`]) is that step's pair.
+            let (b, on) = (trials[best].candidate, trials[best].fitted.clone());
+            let partners: Vec<usize> = left
                 .iter()
-                .map(|t| {
-                    let apart = t.candidate != trials[best].candidate
-                        && (group(t.candidate).is_none() || group(t.candidate) != group(trials[best].candidate))
-                        && candidates[t.candidate].applies(study, &trials[best].fitted);
-                    if apart && t.error.is_none() {
-                        t.comparison
-                    } else {
-                        Comparison { after: f64::NAN, ..t.comparison }
-                    }
+                .copied()
+                .filter(|&c| {
+                    c != b && (group(c).is_none() || group(c) != group(b)) && candidates[c].applies(study, &on)
                 })
                 .collect();
-            let Some(second) = best_of(&other).map(|i| first + i) else { break };
-            let (b, a) = (trials[best].candidate, trials[second].candidate);
-            let on = trials[best].fitted.clone();
-            let fits: Vec<Result<M, String>> = (0..train_sets.len())
-                .into_par_iter()
-                .map(|s| candidates[a].fit(study, &on[s], &train_sets[s]))
-                .collect();
+            if partners.is_empty() {
+                break;
+            }
+            let tasks: Vec<(usize, usize)> =
+                partners.iter().flat_map(|&c| (0..train_sets.len()).map(move |s| (c, s))).collect();
+            let fits: Vec<Result<M, String>> =
+                tasks.par_iter().map(|&(c, s)| candidates[c].fit(study, &on[s], &train_sets[s])).collect();
             step += 1;
-            let mut t = trial(step, a, Some(b), &fits, &cur_ms);
-            t.best = true;
-            trials.push(t);
-            best = trials.len() - 1;
+            let first_pair = trials.len();
+            for (k, &a) in partners.iter().enumerate() {
+                let t = trial(step, a, Some(b), &fits[k * train_sets.len()..(k + 1) * train_sets.len()], &cur_ms);
+                trials.push(t);
+            }
+            let pair_comparisons: Vec<Comparison> = trials[first_pair..].iter().map(|t| t.comparison).collect();
+            let Some(pair) = best_of(&pair_comparisons).map(|i| first_pair + i) else { break };
+            trials[pair].best = true;
+            best = pair;
             if !trials[best].significant {
                 break;
             }
@@ -835,8 +844,8 @@ mod tests {
         // Alone, each switch changes no prediction: no gain, nothing chosen (the plain engine).
         let plain = forward_select(&s, &cands, &base, &folds, &rule()).unwrap();
         assert!(plain.chosen.is_empty() && plain.trials.len() == 3, "{:?}", plain.chosen_ids());
-        // With the pair step: the step's best (ties: the first, `law`) with the best
-        // of another group (`setup`, not its alternative `law2`), fitted on top of it.
+        // With the pair step: the step's best (ties: the first, `law`) with each
+        // candidate of another group (`setup`; not its alternative `law2`), fitted on top of it.
         let search = Search { pair_step: true, ..Search::default() };
         let bases = vec![base; train_sets(&folds).len()];
         let sel = forward_select_from(&s, &cands, &bases, &folds, &rule(), &search).unwrap();
@@ -849,6 +858,80 @@ mod tests {
         assert!(overall(&sel.final_misfits) < 0.1 * overall(&sel.baseline_misfits));
         // A baseline per training set: one per distinct set, or refused.
         assert!(forward_select_from(&s, &cands, &bases[..2], &folds, &rule(), &search).is_err());
+    }
+
+    /// A law and two set-ups: the prediction is the fitted level only with
+    /// the law and the `right` set-up; otherwise each switch on nudges it a
+    /// little (the law most, the `decoy` set-up less, `right` not at all).
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    struct Trio {
+        law: bool,
+        right: bool,
+        decoy: bool,
+        level: f64,
+    }
+
+    struct Trios(Vec<f64>);
+
+    impl Study<Trio> for Trios {
+        fn score(&self, m: &Trio, u: usize) -> f64 {
+            let pred = if m.law && m.right {
+                m.level
+            } else {
+                0.02 * f64::from(u8::from(m.law)) + 0.01 * f64::from(u8::from(m.decoy))
+            };
+            (pred - self.0[u]).abs() + 0.01
+        }
+    }
+
+    /// Switches one of the trio on (`law`: group "law"; `right`, `decoy`: group
+    /// "setup") and fits the level on the training units.
+    struct Turn(&'static str);
+
+    impl Candidate<Trios, Trio> for Turn {
+        fn id(&self) -> &str {
+            self.0
+        }
+        fn group(&self) -> Option<&str> {
+            Some(if self.0 == "law" { "law" } else { "setup" })
+        }
+        fn fit(&self, s: &Trios, cur: &Trio, train: &[usize]) -> Result<Trio, String> {
+            let level = train.iter().map(|&u| s.0[u]).sum::<f64>() / train.len() as f64;
+            Ok(match self.0 {
+                "law" => Trio { law: true, level, ..*cur },
+                "right" => Trio { right: true, level, ..*cur },
+                _ => Trio { decoy: true, level, ..*cur },
+            })
+        }
+    }
+
+    #[test]
+    fn a_pair_step_tries_every_partner_not_only_the_best_scoring_one() {
+        let s = Trios(vec![1.0, 1.1, 0.9, 1.05, 0.95]);
+        let (decoy, law, right) = (Turn("decoy"), Turn("law"), Turn("right"));
+        let cands: [&dyn Candidate<Trios, Trio>; 3] = [&decoy, &law, &right];
+        let folds = Fold::leave_one_out(5);
+        let base = Trio { law: false, right: false, decoy: false, level: 0.0 };
+        let bases = vec![base; train_sets(&folds).len()];
+        let search = Search { pair_step: true, ..Search::default() };
+        let sel = forward_select_from(&s, &cands, &bases, &folds, &rule(), &search).unwrap();
+        // Step 1: the law gains most alone (2 %), the decoy less (1 %), `right` nothing: none admitted.
+        let one: Vec<&Trial<Trio>> = sel.step(1).collect();
+        assert_eq!(one.iter().map(|t| t.id.as_str()).collect::<Vec<_>>(), ["decoy", "law", "right"]);
+        assert!(one.iter().all(|t| !t.significant));
+        assert!(one[1].best && one[1].comparison.gain > one[0].comparison.gain);
+        assert!(one[0].comparison.gain > one[2].comparison.gain);
+        // Step 2: the law with each set-up, both in the trace. With the
+        // best-scoring set-up alone (the decoy) the pair gains too little;
+        // with the second (`right`) it gains together, and is chosen.
+        let two: Vec<&Trial<Trio>> = sel.step(2).collect();
+        assert_eq!(two.iter().map(|t| t.id.as_str()).collect::<Vec<_>>(), ["law+decoy", "law+right"]);
+        assert!(two.iter().all(|t| t.on == Some(1) && t.fitted.iter().all(|m| m.law)));
+        assert!(!two[0].significant && !two[0].best && two[0].comparison.gain < 0.05);
+        assert!(two[1].best && two[1].accepted && two[1].comparison.gain > 0.9);
+        assert_eq!(sel.chosen_ids(), ["law+right"]);
+        // Both groups used up: nothing after it.
+        assert_eq!(sel.trials.len(), 5);
     }
 
     #[test]
