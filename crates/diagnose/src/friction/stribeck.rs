@@ -1,0 +1,188 @@
+//! The Stribeck law's fits: μ = μk + Δ·exp(−(Ω/vs)²) [+ c|Ω|] (Eq. 4-10's
+//! velocity weakening as the diagnosis vocabulary states it, the law of
+//! `rig_model::friction::stribeck_mu`), linear in (μk, Δ[, c]) at a fixed vs;
+//! vs by a log grid on a subsample and Brent's search on every sample
+//! ([`fit_stribeck`]), or by Brent's search alone in a basin already found
+//! ([`fit_stribeck_near`], the composite's later passes).
+
+use super::{FrictionFit, FrictionModel, SEARCH_EVERY, SlipData, linear_fit};
+use rig_estimate::linear::Normal;
+use rig_types::minimize::brent_min;
+
+/// The weighted RSS of the Stribeck regression μ = μk + Δ g(Ω; vs) [+ c Ω]
+/// at a given vs, as [`linear_solve`] computes it (the same products summed
+/// in the same order, so the same bits), without its per-call row storage
+/// and general sparse accumulation: the sums that do not involve g (Σw,
+/// ΣwΩ, ΣwΩ², Σwμ, ΣwΩμ) are made once, and each vs costs one exp and a
+/// few products per sample. The Stribeck speed search evaluates it ~70
+/// times per fit.
+struct StribeckRss<'a> {
+    d: &'a SlipData,
+    viscous: bool,
+    /// √w and μ√w per sample.
+    sw: Vec<f64>,
+    y: Vec<f64>,
+    /// Σ sw², Σ sw·(Ω sw), Σ (Ω sw)², Σ sw·y, Σ (Ω sw)·y.
+    fixed: [f64; 5],
+    /// g of every sample at the last vs (the residual pass reuses it).
+    g: Vec<f64>,
+}
+
+impl<'a> StribeckRss<'a> {
+    fn new(d: &'a SlipData, viscous: bool) -> Self {
+        let sw: Vec<f64> = (0..d.len()).map(|i| d.w(i).sqrt()).collect();
+        let y: Vec<f64> = (0..d.len()).map(|i| d.mu[i] * sw[i]).collect();
+        let mut fixed = [0.0; 5];
+        for i in 0..d.len() {
+            let (v0, v2) = (1.0 * sw[i], d.omega[i] * sw[i]);
+            fixed[0] += v0 * v0;
+            fixed[1] += v0 * v2;
+            fixed[2] += v2 * v2;
+            fixed[3] += v0 * y[i];
+            fixed[4] += v2 * y[i];
+        }
+        StribeckRss { d, viscous, sw, y, fixed, g: vec![0.0; d.len()] }
+    }
+
+    /// The RSS at `vs` (∞ when the normal equations are singular).
+    fn at(&mut self, vs: f64) -> f64 {
+        let d = self.d;
+        let (mut a01, mut a11, mut a12, mut b1) = (0.0, 0.0, 0.0, 0.0);
+        for i in 0..d.len() {
+            let g = rig_model::friction::stribeck_decay(d.omega[i], vs);
+            self.g[i] = g;
+            let (v0, v1, v2) = (1.0 * self.sw[i], g * self.sw[i], d.omega[i] * self.sw[i]);
+            a01 += v0 * v1;
+            a11 += v1 * v1;
+            a12 += v1 * v2;
+            b1 += v1 * self.y[i];
+        }
+        let [a00, a02, a22, b0, b2] = self.fixed;
+        let ne = if self.viscous {
+            Normal::from_row_major(3, &[a00, a01, a02, a01, a11, a12, a02, a12, a22], vec![b0, b1, b2])
+        } else {
+            Normal::from_row_major(2, &[a00, a01, a01, a11], vec![b0, b1])
+        };
+        let Some(p) = ne.solve() else { return f64::INFINITY };
+        let mut rss = 0.0;
+        for i in 0..d.len() {
+            let fit = if self.viscous {
+                1.0 * p[0] + self.g[i] * p[1] + d.omega[i] * p[2]
+            } else {
+                1.0 * p[0] + self.g[i] * p[1]
+            };
+            let e = d.mu[i] - fit;
+            rss += d.w(i) * e * e;
+        }
+        rss
+    }
+}
+
+/// μ = μk + Δ exp(−(Ω/vs)²) [+ c|Ω| when `with_viscous`]: linear in (μk, Δ[, c])
+/// for fixed vs; vs by a log grid then Brent's refinement; covariance
+/// from the numerical Jacobian.
+pub fn fit_stribeck(d: &SlipData, with_viscous: bool) -> Option<FrictionFit> {
+    let grid: Vec<f64> = (0..41).map(|j| 0.05 * 10f64.powf(j as f64 * 3.0 / 40.0)).collect();
+    // The grid on a subsample locates the basin; Brent's method on every sample.
+    let ds = d.subsample(SEARCH_EVERY);
+    let mut coarse = StribeckRss::new(&ds, with_viscous);
+    let (best, _) = grid.iter().enumerate().map(|(j, &v)| (j, coarse.at(v))).min_by(|a, b| a.1.total_cmp(&b.1))?;
+    let lo = grid[best.saturating_sub(1)].ln();
+    let hi = grid[(best + 1).min(grid.len() - 1)].ln();
+    stribeck_in(d, with_viscous, lo, hi)
+}
+
+/// Decades per step of [`fit_stribeck`]'s log grid of vs (41 points over 0.05–50 rad/s, 3/40 decade apart).
+const STRIBECK_GRID_STEP_LN10: f64 = 3.0 / 40.0;
+
+/// [`fit_stribeck`] started in a known basin: Brent's search on the bracket
+/// of the same width the grid gives (one grid step either side) around
+/// `vs_near`, without the grid. The composite's later passes refit the speed
+/// law on a target that only the modulations' re-estimation changed (by a
+/// fraction of a percent per pass), so the basin its first pass's grid found
+/// is the one to refine; the grid's 41 subsample evaluations (≈ 10 passes
+/// over every sample, a third of the fit) are saved. The search is the same
+/// (ln vs to 10⁻⁶); where the optimum lies inside both brackets it is found
+/// to that tolerance either way. Off the grid's 0.05–50 rad/s range the
+/// cold fit runs instead.
+pub fn fit_stribeck_near(d: &SlipData, with_viscous: bool, vs_near: f64) -> Option<FrictionFit> {
+    let h = STRIBECK_GRID_STEP_LN10 * std::f64::consts::LN_10;
+    let lv = vs_near.ln();
+    if !lv.is_finite() || lv - h < 0.05f64.ln() || lv + h > 50f64.ln() {
+        return fit_stribeck(d, with_viscous);
+    }
+    stribeck_in(d, with_viscous, lv - h, lv + h)
+}
+
+/// Brent's search for ln vs on [lo, hi], then the linear fit and the covariance at it.
+fn stribeck_in(d: &SlipData, with_viscous: bool, lo: f64, hi: f64) -> Option<FrictionFit> {
+    let ncol = if with_viscous { 3 } else { 2 };
+    let lin = |vs: f64| {
+        linear_fit(d, ncol, |i, r| {
+            r[0] = 1.0;
+            r[1] = rig_model::friction::stribeck_decay(d.omega[i], vs);
+            if with_viscous {
+                r[2] = d.omega[i];
+            }
+        })
+    };
+    let mut fine = StribeckRss::new(d, with_viscous);
+    // ln vs to 10⁻⁶ (golden section's 25 steps on this bracket reached 2·10⁻⁶).
+    let lv = brent_min(lo, hi, 1e-6, 27, |lv| fine.at(lv.exp()));
+    let vs = lv.exp();
+    let (p, _, rss) = lin(vs)?;
+    let (mu_k, dmu) = (p[0], p[1]);
+    let c = if with_viscous { p[2] } else { 0.0 };
+    // Gauss–Newton covariance over (μk, Δ, vs[, c]).
+    let np = ncol + 1;
+    let mut ne = Normal::new(np);
+    for i in 0..d.len() {
+        let g = rig_model::friction::stribeck_decay(d.omega[i], vs);
+        let dg_dvs = g * 2.0 * d.omega[i].powi(2) / vs.powi(3);
+        let sw = d.w(i).sqrt();
+        if with_viscous {
+            ne.add_sparse(&[(0, sw), (1, sw * g), (2, sw * dmu * dg_dvs), (3, sw * d.omega[i])], 0.0);
+        } else {
+            ne.add_sparse(&[(0, sw), (1, sw * g), (2, sw * dmu * dg_dvs)], 0.0);
+        }
+    }
+    let var = rss / (d.len().saturating_sub(np).max(1)) as f64;
+    let inv = ne.inverse();
+    let se = |a: usize, b: usize| inv.as_ref().map(|m| m[a * np + b] * var).unwrap_or(f64::NAN);
+    let se_mu_s = (se(0, 0) + se(1, 1) + 2.0 * se(0, 1)).max(0.0).sqrt();
+    let mut params = vec![
+        ("mu_static", mu_k + dmu, se_mu_s),
+        ("mu_kinetic", mu_k, se(0, 0).max(0.0).sqrt()),
+        ("stribeck_speed_rad_s", vs, se(2, 2).max(0.0).sqrt()),
+    ];
+    if with_viscous {
+        params.push(("viscous_per_rad_s", c, se(3, 3).max(0.0).sqrt()));
+    }
+    Some(FrictionFit {
+        model: FrictionModel::Stribeck { mu_k, mu_s: mu_k + dmu, vs, c },
+        phases: vec![],
+        params,
+        rss_w: rss,
+        n: d.len(),
+        k: np,
+        converged: inv.is_some(),
+        scan: vec![],
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::friction::fit_coulomb;
+    use crate::friction::tests::synth;
+
+    #[test]
+    fn stribeck_law_is_recovered() {
+        let d = synth(4, |_, _, _, w| 0.4 + 0.2 * rig_model::friction::stribeck_decay(w, 2.0f64));
+        let f = fit_stribeck(&d, false).unwrap();
+        let FrictionModel::Stribeck { mu_k, mu_s, vs, .. } = f.model else { panic!() };
+        assert!((mu_k - 0.4).abs() < 1e-3 && (mu_s - 0.6).abs() < 5e-3 && (vs - 2.0).abs() < 0.05, "{:?}", f.model);
+        // The Coulomb baseline is much worse on the same data.
+        assert!(fit_coulomb(&d).rss_w > 10.0 * f.rss_w);
+    }
+}
