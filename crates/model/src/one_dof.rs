@@ -328,12 +328,7 @@ pub fn simulate<F: Friction>(
         if !matches!(drive, Drive::SpeedLoop { .. }) {
             s.top_rad_s = imposed(i);
         }
-        out.bit_rad_s.push(s.bit_rad_s);
-        out.top_rad_s.push(s.top_rad_s);
-        out.twist_rad.push(s.twist_rad);
-        out.friction_nm.push(fric);
-        out.accel_rad_s2.push(acc);
-        out.stuck.push(s.stuck);
+        ImplicitSink::push(&mut out, &s, fric, acc);
     }
     Ok(out)
 }
