@@ -406,22 +406,27 @@ where
             accepted: false,
         }
     };
+    // Every (candidate, training set) fit on `base` is a task of its own,
+    // collected in order; one trial per candidate, `under` the step's best in a pair.
+    let trials_of = |step: usize, cands: &[usize], under: Option<usize>, base: &[M], cur_ms: &[f64]| {
+        let n = train_sets.len();
+        let tasks: Vec<(usize, usize)> = cands.iter().flat_map(|&c| (0..n).map(move |s| (c, s))).collect();
+        let fits: Vec<Result<M, String>> =
+            tasks.par_iter().map(|&(c, s)| candidates[c].fit(study, &base[s], &train_sets[s])).collect();
+        cands
+            .iter()
+            .enumerate()
+            .map(|(k, &c)| trial(step, c, under, &fits[k * n..(k + 1) * n], cur_ms))
+            .collect::<Vec<_>>()
+    };
     loop {
         // A candidate the current model already holds leaves ([`Candidate::applies`]).
         left.retain(|&c| candidates[c].applies(study, &current));
         if left.is_empty() {
             break;
         }
-        // Every (candidate, training set) fit is a task of its own, collected in order.
-        let tasks: Vec<(usize, usize)> =
-            left.iter().flat_map(|&c| (0..train_sets.len()).map(move |s| (c, s))).collect();
-        let fits: Vec<Result<M, String>> =
-            tasks.par_iter().map(|&(c, s)| candidates[c].fit(study, &current[s], &train_sets[s])).collect();
         let first = trials.len();
-        for (k, &c) in left.iter().enumerate() {
-            let t = trial(step, c, None, &fits[k * train_sets.len()..(k + 1) * train_sets.len()], &cur_ms);
-            trials.push(t);
-        }
+        trials.extend(trials_of(step, &left, None, &current, &cur_ms));
         let step_comparisons: Vec<Comparison> = trials[first..].iter().map(|t| t.comparison).collect();
         let best = best_of(&step_comparisons).map(|i| first + i);
         let Some(mut best) = best else { break };
@@ -444,16 +449,9 @@ where
             if partners.is_empty() {
                 break;
             }
-            let tasks: Vec<(usize, usize)> =
-                partners.iter().flat_map(|&c| (0..train_sets.len()).map(move |s| (c, s))).collect();
-            let fits: Vec<Result<M, String>> =
-                tasks.par_iter().map(|&(c, s)| candidates[c].fit(study, &on[s], &train_sets[s])).collect();
             step += 1;
             let first_pair = trials.len();
-            for (k, &a) in partners.iter().enumerate() {
-                let t = trial(step, a, Some(b), &fits[k * train_sets.len()..(k + 1) * train_sets.len()], &cur_ms);
-                trials.push(t);
-            }
+            trials.extend(trials_of(step, &partners, Some(b), &on, &cur_ms));
             let pair_comparisons: Vec<Comparison> = trials[first_pair..].iter().map(|t| t.comparison).collect();
             let Some(pair) = best_of(&pair_comparisons).map(|i| first_pair + i) else { break };
             trials[pair].best = true;
