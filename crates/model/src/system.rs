@@ -120,6 +120,13 @@ pub(crate) struct System<'a> {
     varying_n: bool,
     /// Whether the motor carries cogging ([`Effect::MotorCogging`]).
     cogging: bool,
+    /// Whether the only effect is the diagnosis' friction extension with its
+    /// break-away terms alone (slip coefficients 0, no harmonic term): the
+    /// motion is then the plain model's in slip and in stick, only the
+    /// break-away threshold (the stick mode's event) reads the pad state, so
+    /// exact steps apply ([`System::region`]; module `sim` advances the pad
+    /// state, the time since the last event, by each exact step's length).
+    static_extension_only: bool,
     /// Half the backlash gap b, rad (0: no backlash).
     half_gap_rad: f64,
     /// β of the cubic shaft, 1/rad² (0: linear).
@@ -188,6 +195,11 @@ impl<'a> System<'a> {
             current_limit_a,
             aging,
             extension: Extension::of(&p.effects),
+            static_extension_only: p.harmonic.is_none()
+                && !p.effects.is_empty()
+                && p.effects.iter().all(|e| matches!(e, Effect::FrictionExtension { .. }))
+                && Extension::of(&p.effects)
+                    .is_some_and(|x| x.slip_speed_per_rad_s == 0.0 && x.breakaway_transient == 0.0),
             inv_ki_tracking: 1.0 / (p.drive.ki_v_rad * ANTI_WINDUP_TRACKING_S),
         }
     }
@@ -208,6 +220,13 @@ impl<'a> System<'a> {
     /// extension's time since break-away, crate::extension).
     pub fn has_slip_age(&self) -> bool {
         self.extension.is_some()
+    }
+
+    /// Whether exact steps must advance the pad state (the friction
+    /// extension's time since the last event, dt/dt = 1 in both modes): a
+    /// region exists with it only under [`System::static_extension_only`]'s condition.
+    pub fn exact_steps_age(&self) -> bool {
+        self.static_extension_only
     }
 
     /// Whether friction can act at all (brake closed).
@@ -545,12 +564,18 @@ impl<'a> System<'a> {
     }
 
     /// The affine region of (mode, t, y), or `None` where the right-hand side
-    /// is not affine there: effects or harmonic friction present, the Stribeck
+    /// is not affine there: effects or harmonic friction present (but for the
+    /// friction extension's break-away terms alone, which leave the motion
+    /// the plain model's and change only the stick mode's event), the Stribeck
     /// law in slip, the rig model's motor friction off its saturated branch
     /// (|n Ω2| < [`MOTOR_FRICTION_SATURATED`] rad/s), the thermal state.
     #[inline(always)]
     pub fn region(&self, mode: Mode, t: f64, y: &Vector) -> Option<Region> {
-        if !self.plain || !self.linear_shaft || self.fade.is_some() || self.current_limit_a.is_some() {
+        if !(self.plain || self.static_extension_only)
+            || !self.linear_shaft
+            || self.fade.is_some()
+            || self.current_limit_a.is_some()
+        {
             return None;
         }
         let (saturation, ramping) = match self.drive {
