@@ -68,11 +68,19 @@ impl Extension {
 
     /// Factor on the slip coefficient at slip speed |Ω1| and `age_s` since
     /// break-away (never below 0: friction does not push).
+    ///
+    /// A zero `breakaway_transient` skips its `exp`: the term is then 0 × a
+    /// number in (0, 1], ±0, and adding ±0 to 1 + a_v|Ω1| (never −0) leaves
+    /// it, so the factor is the same to the bit (the ageing law's free-run
+    /// fit, whose slip coefficients are 0, evaluates it on every slip
+    /// right-hand side).
     #[inline]
     pub fn slip_factor(&self, speed_abs_rad_s: f64, age_s: f64) -> f64 {
-        (1.0 + self.slip_speed_per_rad_s * speed_abs_rad_s
-            + self.breakaway_transient * (-age_s.max(0.0) / BREAKAWAY_TIME_S).exp())
-        .max(0.0)
+        let speed = 1.0 + self.slip_speed_per_rad_s * speed_abs_rad_s;
+        if self.breakaway_transient == 0.0 {
+            return speed.max(0.0);
+        }
+        (speed + self.breakaway_transient * (-age_s.max(0.0) / BREAKAWAY_TIME_S).exp()).max(0.0)
     }
 
     /// Factor on the static coefficient after `age_s` stuck (never below 0).

@@ -141,7 +141,12 @@
 //!   the rig model's motor friction on its saturated branch ±T_f (|n Ω2| ≥
 //!   15 rad/s at the armature, where 1 − tanh drops < 2·10⁻¹³ T_f), a
 //!   Coulomb or viscous brake in slip, held in stick or open, a segment of the
-//!   thesis lookup, no effects. There, with z = [q, t, 1], ż = M z and a step
+//!   thesis lookup, no effects (but the diagnosis' friction extension with
+//!   its break-away terms alone: the motion is the plain model's, its
+//!   threshold is the stick mode's event, and an exact step advances its pad
+//!   state, the time since the last event, by the step's length; test
+//!   `break_away_terms_alone_take_exact_steps_and_age_the_contact`). There,
+//!   with z = [q, t, 1], ż = M z and a step
 //!   is z(t + h) = e^{M h} z(t), exact to rounding whatever h and however stiff
 //!   the drive (the armature's R/L and the PI loop, −300…−600 1/s, or the
 //!   thesis lookup's creep slope, ≈ −1.8·10⁴ 1/s). e^{M h} is computed once

@@ -312,15 +312,22 @@ pub(crate) fn run(
                             push_pending(out, sys, mode, &region, &samples[idx - held..idx], &pending);
                             held = 0;
                         }
-                        let yk = apply_along(phi, &y, t, &samples[idx..idx + k], &mut pending, held);
+                        let mut yk = apply_along(phi, &y, t, &samples[idx..idx + k], &mut pending, held);
                         let tk = samples[idx + k - 1];
+                        if sys.exact_steps_age() {
+                            // The time since the last event grows with time (the friction extension).
+                            yk[TEMP] = y[TEMP] + (tk - t);
+                        }
                         if let Some(end) = exact_end(sys, mode, &region, g0, tk, &yk) {
                             (carried, steps, idx, t, y, ok, held) =
                                 (end, steps + k as u64, idx + k, tk, yk, true, held + k);
                         }
                     }
                     if !ok {
-                        let y1 = apply(phi, &y, t);
+                        let mut y1 = apply(phi, &y, t);
+                        if sys.exact_steps_age() {
+                            y1[TEMP] = y[TEMP] + (t1 - t);
+                        }
                         if let Some(end) = exact_end(sys, mode, &region, g0, t1, &y1) {
                             if held > 0 {
                                 push_pending(out, sys, mode, &region, &samples[idx - held..idx], &pending);

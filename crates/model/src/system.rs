@@ -9,7 +9,7 @@ use crate::friction::{
     RAD_S_TO_RPM, cogging_nm, imbalance_torque_nm, normal_force_n, slip_mu, slip_mu_affine, static_mu, thesis_lookup,
     thesis_segment, torque_factor,
 };
-use rig_types::{Effect, FrictionLaw, ModelKind, RigParams};
+use rig_types::{Effect, FrictionLaw, HarmonicFriction, ModelKind, RigParams};
 
 // State layout.
 pub(crate) const PHI1: usize = 0;
@@ -113,6 +113,20 @@ pub(crate) struct System<'a> {
     cm_shaft: f64,
     /// Whether any effect, harmonic term or cogging is present (skips their loops).
     plain: bool,
+    /// Whether N depends on t, φ1 or the pad state: a normal-force or
+    /// angle-periodic modulation, harmonic friction on N, or brake fade.
+    /// Without one [`System::normal_force_n`] is N0 whatever other effects
+    /// there are (e.g. the diagnosis' friction extension alone).
+    varying_n: bool,
+    /// Whether the motor carries cogging ([`Effect::MotorCogging`]).
+    cogging: bool,
+    /// Whether the only effect is the diagnosis' friction extension with its
+    /// break-away terms alone (slip coefficients 0, no harmonic term): the
+    /// motion is then the plain model's in slip and in stick, only the
+    /// break-away threshold (the stick mode's event) reads the pad state, so
+    /// exact steps apply ([`System::region`]; module `sim` advances the pad
+    /// state, the time since the last event, by each exact step's length).
+    static_extension_only: bool,
     /// Half the backlash gap b, rad (0: no backlash).
     half_gap_rad: f64,
     /// β of the cubic shaft, 1/rad² (0: linear).
@@ -140,12 +154,16 @@ impl<'a> System<'a> {
         let gear = p.motor.gear_ratio;
         let (mut half_gap_rad, mut cubic_per_rad2, mut imbalance, mut fade, mut current_limit_a, mut aging) =
             (0.0, 0.0, false, None, None, None);
+        let (mut varying_n, mut cogging) = (matches!(p.harmonic, Some(HarmonicFriction::NormalForce { .. })), false);
         for e in &p.effects {
             match *e {
+                Effect::NormalForceModulation { .. } | Effect::AnglePeriodicFriction { .. } => varying_n = true,
+                Effect::MotorCogging { .. } => cogging = true,
                 Effect::CouplingBacklash { gap_rad } => half_gap_rad += 0.5 * gap_rad,
                 Effect::ShaftCubicStiffness { cubic_per_rad2: b } => cubic_per_rad2 += b,
                 Effect::RotorImbalance { .. } => imbalance = true,
                 Effect::BrakeFade { heat_capacity_j_k, cooling_time_s, fade_temperature_k } => {
+                    varying_n = true;
                     fade = Some((heat_capacity_j_k, cooling_time_s, fade_temperature_k))
                 }
                 Effect::DriveCurrentLimit { current_limit_a: i } => current_limit_a = Some(i),
@@ -167,6 +185,8 @@ impl<'a> System<'a> {
             ke_shaft: gear * p.motor.voltage_constant_v_s_rad,
             cm_shaft: gear * gear * p.motor.speed_regulation_nm_s_rad,
             plain: p.effects.is_empty() && p.harmonic.is_none(),
+            varying_n,
+            cogging,
             half_gap_rad,
             cubic_per_rad2,
             linear_shaft: half_gap_rad == 0.0 && cubic_per_rad2 == 0.0,
@@ -175,6 +195,11 @@ impl<'a> System<'a> {
             current_limit_a,
             aging,
             extension: Extension::of(&p.effects),
+            static_extension_only: p.harmonic.is_none()
+                && !p.effects.is_empty()
+                && p.effects.iter().all(|e| matches!(e, Effect::FrictionExtension { .. }))
+                && Extension::of(&p.effects)
+                    .is_some_and(|x| x.slip_speed_per_rad_s == 0.0 && x.breakaway_transient == 0.0),
             inv_ki_tracking: 1.0 / (p.drive.ki_v_rad * ANTI_WINDUP_TRACKING_S),
         }
     }
@@ -195,6 +220,13 @@ impl<'a> System<'a> {
     /// extension's time since break-away, crate::extension).
     pub fn has_slip_age(&self) -> bool {
         self.extension.is_some()
+    }
+
+    /// Whether exact steps must advance the pad state (the friction
+    /// extension's time since the last event, dt/dt = 1 in both modes): a
+    /// region exists with it only under [`System::static_extension_only`]'s condition.
+    pub fn exact_steps_age(&self) -> bool {
+        self.static_extension_only
     }
 
     /// Whether friction can act at all (brake closed).
@@ -363,7 +395,8 @@ impl<'a> System<'a> {
     /// 1/(1 + ϑ/ϑ_fade) is folded in here (it scales μs and μ alike).
     #[inline]
     pub fn normal_force_n(&self, t: f64, y: &Vector) -> f64 {
-        if self.plain {
+        // Without a modulation or fade the product below has no factor: N0 itself.
+        if self.plain || !self.varying_n {
             return self.n0;
         }
         let n = normal_force_n(self.n0, &self.p.effects, self.p.harmonic.as_ref(), t, y[PHI1]);
@@ -375,7 +408,7 @@ impl<'a> System<'a> {
 
     #[inline]
     fn torque_factor(&self, t: f64) -> f64 {
-        if self.plain { 1.0 } else { torque_factor(self.p.harmonic.as_ref(), t) }
+        if self.plain || self.p.harmonic.is_none() { 1.0 } else { torque_factor(self.p.harmonic.as_ref(), t) }
     }
 
     /// Stick threshold μs·N·r (× |sin ω_p t| under Eq. 4-11 as published).
@@ -434,7 +467,11 @@ impl<'a> System<'a> {
         let m = &self.p.motor;
         let shaft =
             self.gear * (m.torque_constant_nm_a * y[CUR] - self.motor_friction_nm(y[W2])) - self.cm_shaft * y[W2];
-        if self.plain { shaft } else { shaft + cogging_nm(&self.p.effects, y[PHI2]) }
+        // Without cogging the sum below is +0.0, which changes only a shaft
+        // torque of −0.0, i.e. a current of −0.0 exactly at Ω2 = +0.0: the
+        // integration never makes −0.0 from a +0.0 start (x + y is −0.0 only
+        // when both are), so the shortcut is the sum to the bit.
+        if self.plain || !self.cogging { shaft } else { shaft + cogging_nm(&self.p.effects, y[PHI2]) }
     }
 
     /// dq/dt (Eq. 4-9 made consistent, q = [φ1 φ2 Ω1 Ω2 i ∫e]).
@@ -527,12 +564,18 @@ impl<'a> System<'a> {
     }
 
     /// The affine region of (mode, t, y), or `None` where the right-hand side
-    /// is not affine there: effects or harmonic friction present, the Stribeck
+    /// is not affine there: effects or harmonic friction present (but for the
+    /// friction extension's break-away terms alone, which leave the motion
+    /// the plain model's and change only the stick mode's event), the Stribeck
     /// law in slip, the rig model's motor friction off its saturated branch
     /// (|n Ω2| < [`MOTOR_FRICTION_SATURATED`] rad/s), the thermal state.
     #[inline(always)]
     pub fn region(&self, mode: Mode, t: f64, y: &Vector) -> Option<Region> {
-        if !self.plain || !self.linear_shaft || self.fade.is_some() || self.current_limit_a.is_some() {
+        if !(self.plain || self.static_extension_only)
+            || !self.linear_shaft
+            || self.fade.is_some()
+            || self.current_limit_a.is_some()
+        {
             return None;
         }
         let (saturation, ramping) = match self.drive {
@@ -715,11 +758,23 @@ impl<'a> System<'a> {
 /// evaluates it ~2000 times). The cancellation in 1 − e for small |x| costs
 /// relative accuracy, not absolute: |error| < 4·10⁻¹⁶ everywhere (test
 /// `tanh_by_exp_is_within_4e_16_of_tanh`), so T_f·tanh moves by < 10⁻¹⁶ N·m.
+///
+/// Past |x| = [`TANH_ONE_ABOVE`] it returns ±1 without the `exp`: there
+/// e < e^{−38} < 2^{−54}, so 1 − e and 1 + e both round to 1 and the formula
+/// gives ±1 exactly (test `tanh_by_exp_is_one_past_its_cut_to_the_bit`). The
+/// motor of a steady operating point turns at |n Ω2| of tens of rad/s, so
+/// most right-hand sides of a free run skip it.
 #[inline]
 pub(crate) fn tanh_by_exp(x: f64) -> f64 {
+    if x.abs() > TANH_ONE_ABOVE {
+        return 1f64.copysign(x);
+    }
     let e = (-2.0 * x.abs()).exp();
     ((1.0 - e) / (1.0 + e)).copysign(x)
 }
+
+/// |x| above which [`tanh_by_exp`] is ±1 to the bit: 2^{−54} = e^{−37.4}.
+const TANH_ONE_ABOVE: f64 = 19.0;
 
 fn sign_or_zero(x: f64) -> f64 {
     if x == 0.0 { 0.0 } else { x.signum() }
@@ -770,6 +825,25 @@ mod tests {
         assert!(worst < 4e-16, "{worst:e}");
         assert_eq!(tanh_by_exp(1e300), 1.0);
         assert_eq!(tanh_by_exp(-1e300), -1.0);
+    }
+
+    #[test]
+    fn tanh_by_exp_is_one_past_its_cut_to_the_bit() {
+        // The formula without the cut, from its cut out to where e underflows:
+        // ±1 exactly, so the cut returns what the formula did.
+        let formula = |x: f64| {
+            let e = (-2.0f64 * x.abs()).exp();
+            ((1.0 - e) / (1.0 + e)).copysign(x)
+        };
+        for k in 0..=400_000 {
+            let x = TANH_ONE_ABOVE + f64::from(k) * 2.5e-3;
+            for x in [x, -x, x.next_up()] {
+                assert_eq!(formula(x).to_bits(), tanh_by_exp(x).to_bits(), "{x}");
+                assert_eq!(formula(x).abs(), 1.0, "{x}");
+            }
+        }
+        // And the cut is not far above the first x whose formula gives 1 (18.72).
+        assert!(formula(18.0) < 1.0 && formula(TANH_ONE_ABOVE) == 1.0);
     }
 
     /// The affine form M z of every region equals rhs() at states spread over

@@ -8,8 +8,13 @@
 //! group order), so its CPU total × stride estimates the whole battery's
 //! (docs/performance.md, issue 23); two builds that print the same answers
 //! diagnose alike.
-//! `cargo run --workspace --example battery_cost -- [full|ci|smoke] [STRIDE] [OFFSET] [SEED]`
-//! (SEED: the first case seed, 7000 as the confusion stage's)
+//! `cargo run --workspace --example battery_cost -- [full|ci|smoke] [STRIDE] [OFFSET] [SEED] [--json DIR] [--count N]`
+//! (SEED: the first case seed, 7000 as the confusion stage's; `--json DIR`
+//! also writes each case's whole diagnosis JSON to `DIR/<case id>.json`, which
+//! carries what `ExactResult` leaves out, e.g. the extension's fitted
+//! parameters, so two builds can be compared number by number; `--count N`
+//! stops after N cases, e.g. `full 1 73 --count 44` = the 11
+//! `vocabulary_plus_outside` and 33 `outside` cases)
 //! (the dev profile optimises the numeric crates; never --release, which rebuilds polars).
 
 use rig_virtual_rig::battery::{Battery, DiagnosisResult, ExactResult};
@@ -20,7 +25,18 @@ fn cpu_s() -> f64 {
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().collect();
+    let mut args: Vec<String> = std::env::args().collect();
+    let json_dir = args.iter().position(|a| a == "--json").map(|i| {
+        let dir = std::path::PathBuf::from(args.get(i + 1).expect("--json DIR"));
+        args.drain(i..i + 2);
+        std::fs::create_dir_all(&dir).expect("--json DIR: create");
+        dir
+    });
+    let count = args.iter().position(|a| a == "--count").map(|i| {
+        let n: usize = args.get(i + 1).and_then(|s| s.parse().ok()).expect("--count N");
+        args.drain(i..i + 2);
+        n
+    });
     let name = args.get(1).map_or("ci", String::as_str);
     let stride: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(1).max(1);
     let offset: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(0);
@@ -34,16 +50,22 @@ fn main() {
         .expect("thesis data");
     let (mut gen_total, mut diag_total, mut n) = (0.0, 0.0, 0);
     let w0 = std::time::Instant::now();
-    for case in battery.cases.iter().skip(offset).step_by(stride) {
+    for case in battery.cases.iter().skip(offset).step_by(stride).take(count.unwrap_or(usize::MAX)) {
         let c0 = cpu_s();
         let campaign = case.generate(&battery.protocol).expect("generate");
         let c1 = cpu_s();
-        let result = rig_diagnose::diagnose_campaign(&campaign, Some(&thesis), &opts)
+        let value = rig_diagnose::diagnose_campaign(&campaign, Some(&thesis), &opts)
             .map_err(|e| e.to_string())
-            .and_then(|d| serde_json::to_value(&d).map_err(|e| e.to_string()))
+            .and_then(|d| serde_json::to_value(&d).map_err(|e| e.to_string()));
+        let result = value
+            .clone()
             .and_then(|v| serde_json::from_value::<DiagnosisResult>(v).map_err(|e| e.to_string()))
             .map(ExactResult::from);
         let c2 = cpu_s();
+        if let (Some(dir), Ok(v)) = (&json_dir, &value) {
+            let text = serde_json::to_string_pretty(v).expect("diagnosis JSON");
+            std::fs::write(dir.join(format!("{}.json", case.id)), text + "\n").expect("--json DIR: write");
+        }
         gen_total += c1 - c0;
         diag_total += c2 - c1;
         n += 1;

@@ -85,6 +85,11 @@
 //! free-run fit, (folds + 1) × at most [`DWELL_FIT_EVALS`] free runs of the
 //! training runs (the CI ageing case: 2.4 → 14 s on a loaded 2-core
 //! machine). Only an `unexplained` verdict with a baseline model pays it.
+//! Those free runs hold the extension's break-away terms alone (its slip
+//! coefficients are 0), so on a final model without vocabulary effects the
+//! simulator takes exact steps for them (rig-model's docs, "Integrator"):
+//! an `outside` case's diagnosis −42 % (docs/performance.md, fifteenth
+//! session).
 
 pub mod drift;
 pub mod dwell;
