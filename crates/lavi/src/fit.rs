@@ -586,8 +586,24 @@ fn law_by_simulation_with(
             let mut step = vec![0.2, 0.5, 0.5, 2.0];
             x0.extend(extra.iter().map(|e| e.0));
             step.extend(extra.iter().map(|e| e.1));
-            let score = |x: &[f64]| build(x).map_or(ERROR_CAP, |m| ev.misfit(&m, cal));
-            let (x, v, n) = nelder_mead(score, &x0, &step, max_evals);
+            // Coulomb's jump has no Stribeck speed (`law_of` fixes it): its simplex leaves that
+            // coordinate out, a direction along which nothing moves but the simplex's iterations.
+            let dead = (family == 0.0).then_some(2);
+            let full = |y: &[f64]| -> Vec<f64> {
+                let mut x = y.to_vec();
+                if let Some(k) = dead {
+                    x.insert(k, x0[k]);
+                }
+                x
+            };
+            let (mut y0, mut ystep) = (x0.clone(), step.clone());
+            if let Some(k) = dead {
+                y0.remove(k);
+                ystep.remove(k);
+            }
+            let score = |y: &[f64]| build(&full(y)).map_or(ERROR_CAP, |m| ev.misfit(&m, cal));
+            let (y, v, n) = nelder_mead(score, &y0, &ystep, max_evals);
+            let x = full(&y);
             (v, build(&x), n, family, x[4..].to_vec())
         })
         .collect();

@@ -273,5 +273,20 @@ pub fn trial_section(s: &crate::study::Study, r: &TrialReport, id: &str) -> Stri
         side(&r.same_step),
         if r.step1.is_empty() { String::new() } else { format!(" Every step-1 candidate: {}.", side(&r.step1)) }
     );
+    // The rule's own test applied to each rival in place of the model the trial extends.
+    let unbeaten: Vec<String> = r
+        .same_step
+        .iter()
+        .chain(&r.step1)
+        .filter(|(_, cmp, _)| !s.selection.rule.admits(cmp))
+        .map(|(c, cmp, _)| format!("`{}` (gain {:.3}, t {:.2})", c.id(), cmp.gain, cmp.t))
+        .collect();
+    let _ = writeln!(
+        md,
+        "By the rule's own test (gain ≥ {:.0} %, t ≥ {}), `{id}`'s model does not beat, side by side: {}.\n",
+        100.0 * s.selection.rule.min_relative_gain,
+        s.selection.rule.min_t,
+        if unbeaten.is_empty() { "none".to_string() } else { unbeaten.join(", ") }
+    );
     md
 }
