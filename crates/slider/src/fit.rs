@@ -1,7 +1,8 @@
 //! Candidate friction laws as parameter vectors with bounds, the misfit of a
 //! law against measured features (defined once here), and the fit:
-//! Nelder–Mead (`rig_types::minimize::nelder_mead`) on the bounded search
-//! axes from the best-scored physical starts, on the calibration runs only.
+//! Nelder–Mead (a fixed count, or to convergence:
+//! `rig_types::minimize::nelder_mead_converged`, [`FitTolerance`]) on the bounded search axes from the best-scored
+//! physical starts, on the calibration runs only.
 //!
 //! Misfit of one run (dimensionless, in units of the targets, RMS
 //! over the terms both records carry):
@@ -32,7 +33,7 @@
 
 use crate::features::{Features, Regime};
 use crate::sim::{Law, Structure};
-use rig_types::minimize::nelder_mead;
+use rig_types::minimize::{SimplexTolerance, nelder_mead, nelder_mead_converged};
 use serde::Serialize;
 
 /// A candidate law family.
@@ -434,13 +435,41 @@ pub fn repeats(f: &Features) -> bool {
     dispersion(f).is_some_and(|d| d.iter().all(|&x| x < REPEAT_TOLERANCE))
 }
 
-/// Nelder–Mead (`rig_types::minimize::nelder_mead`, the workspace's one
-/// simplex) from `start` on the search axes (the log of a parameter flagged
-/// `log`, else the parameter), each axis scaled to its bounds' range and the
-/// simplex's first edges a tenth of it; a point outside the bounds is clamped
-/// onto them before the law sees it. At most `max_evals` evaluations.
-/// Returns the best vector (within its bounds) and its cost.
-pub fn fit(specs: &[ParamSpec], start: &[f64], max_evals: usize, cost: impl Fn(&[f64]) -> f64) -> (Vec<f64>, f64) {
+/// How far a fit searches ([`fit`]). With `tolerance` 0: `max_evals`
+/// evaluations of the simplex (`rig_types::minimize::nelder_mead`, a fixed
+/// count, reported as not converged). Above 0: until the simplex has
+/// converged ([`rig_types::minimize::nelder_mead_converged`]): the spread of
+/// the simplex's misfits at most `tolerance` (the misfit's units, those of
+/// the bounds) and every vertex within `tolerance` of the best on
+/// every search axis (a fraction of the parameter's bound width, in log for
+/// a log parameter), then restarted from the best until a restart lowers the
+/// misfit by at most `tolerance`; `max_evals` is then a safeguard over the
+/// whole search (pipeline.toml's `[slider]` `fit_tolerance`, `fit_evals`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FitTolerance {
+    pub tolerance: f64,
+    pub max_evals: usize,
+}
+
+/// A fit's result ([`fit`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitResult {
+    /// The best vector (within its bounds) and its cost.
+    pub x: Vec<f64>,
+    pub cost: f64,
+    /// Evaluations of the cost (restarts included).
+    pub evals: usize,
+    /// False when `max_evals` stopped the search first.
+    pub converged: bool,
+}
+
+/// Nelder–Mead ([`FitTolerance`]: a fixed count, or to convergence; the
+/// workspace's one simplex, `rig_types::minimize`) from `start` on the search axes (the log
+/// of a parameter flagged `log`, else the parameter), each axis scaled to
+/// its bounds' range and the simplex's first edges (at the start and at
+/// every restart) a tenth of it, inward; a point outside the bounds is
+/// clamped onto them before the law sees it.
+pub fn fit(specs: &[ParamSpec], start: &[f64], tol: &FitTolerance, cost: impl Fn(&[f64]) -> f64) -> FitResult {
     let axis = |s: &ParamSpec, v: f64| if s.log { (v.ln(), s.lo.ln(), s.hi.ln()) } else { (v, s.lo, s.hi) };
     // u in [0, 1] per axis: (axis value − lo)/(hi − lo).
     let to_u = |x: &[f64]| -> Vec<f64> {
@@ -465,7 +494,12 @@ pub fn fit(specs: &[ParamSpec], start: &[f64], max_evals: usize, cost: impl Fn(&
             .collect()
     };
     let u0 = to_u(start);
-    let step: Vec<f64> = u0.iter().map(|&u| if u > 0.9 { -0.1 } else { 0.1 }).collect();
-    let (u, c, _) = nelder_mead(|u| cost(&from_u(u)), &u0, &step, max_evals);
-    (from_u(&u), c)
+    let step = |u: &[f64]| -> Vec<f64> { u.iter().map(|&u| if u > 0.9 { -0.1 } else { 0.1 }).collect() };
+    if tol.tolerance <= 0.0 {
+        let (u, c, n) = nelder_mead(|u| cost(&from_u(u)), &u0, &step(&u0), tol.max_evals);
+        return FitResult { x: from_u(&u), cost: c, evals: n, converged: false };
+    }
+    let stop = SimplexTolerance { f_tol: tol.tolerance, x_tol: tol.tolerance, max_evals: tol.max_evals };
+    let r = nelder_mead_converged(|u| cost(&from_u(u)), &u0, step, &stop);
+    FitResult { x: from_u(&r.x), cost: r.f, evals: r.evals, converged: r.converged }
 }

@@ -1391,6 +1391,7 @@ fn markdown(s: &Study) -> String {
         100.0 * p.selection.min_relative_gain,
         p.selection.min_t
     );
+    let _ = writeln!(md, "{}\n", search_note(s));
     let _ =
         writeln!(md, "| step | from | tried | held-out misfit (mean) | RMS before → after | gain | paired t | kept |");
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
@@ -1573,4 +1574,39 @@ fn markdown(s: &Study) -> String {
         SetupCandidate::SeriesCompliance.id()
     );
     md
+}
+
+/// slider.md's sentence on how far every fit searched: the fixed count, or
+/// the convergence criterion (`fit_tolerance`, pipeline.toml), with the fits'
+/// evaluations and how many the safeguard stopped.
+fn search_note(s: &Study) -> String {
+    let p = &s.params;
+    let fits: Vec<&crate::study::Fitted> = s.candidates.iter().flat_map(CandidateResult::fits).collect();
+    let evals = fits.iter().map(|f| f.evals).sum::<usize>();
+    if p.fit_tolerance <= 0.0 {
+        return format!(
+            "Every fit runs Nelder–Mead (`rig_types::minimize::nelder_mead`) for {} evaluations from each of the {} \
+             best-scored of its starts, the better kept ({} fits, {evals} misfit evaluations): a fixed count, not a \
+             convergence criterion. The fits are not converged at it, and the verdict moves with the search, under a \
+             fixed count and under a convergence criterion alike (`fit_tolerance`, pipeline.toml; docs/findings.md, \
+             fourteenth and fifteenth sessions).",
+            p.fit_evals,
+            p.fit_starts,
+            fits.len()
+        );
+    }
+    format!(
+        "Every fit runs Nelder–Mead (`rig_types::minimize::nelder_mead_converged`) to a stated convergence criterion, \
+         not an evaluation count (`fit_tolerance` = {tol}, pipeline.toml): until the simplex's calibration misfits lie \
+         within {tol} of each other (the misfit's units) and its vertices within {tol} of each parameter's bound width, \
+         then restarted from its best point with a fresh simplex until a restart lowers the misfit by no more than {tol} \
+         (Press et al., Numerical Recipes 3rd ed., §10.5); from the candidate's starts in the order of their scores, at \
+         least {}, on while a start lowers the best misfit by more than {tol}; the best kept. Here {} fits, {evals} \
+         misfit evaluations; {} stopped by the safeguard of {} evaluations per start before converging.",
+        p.fit_starts,
+        fits.len(),
+        fits.iter().filter(|f| !f.converged).count(),
+        p.fit_evals,
+        tol = p.fit_tolerance
+    )
 }

@@ -16,7 +16,8 @@
 use crate::SliderError;
 use crate::features::{FeatureOptions, Features, Regime, RunConstants, Spread, features, spectral_period_s};
 use crate::fit::{
-    CANDIDATES, Candidate, Model, SETUPS, SetupCandidate, StartHints, critical_stiffness_guess_n_m, fit, run_misfit,
+    CANDIDATES, Candidate, FitResult, FitTolerance, Model, SETUPS, SetupCandidate, StartHints,
+    critical_stiffness_guess_n_m, fit, run_misfit,
 };
 use crate::sim::{Setup, simulate_more};
 use rayon::prelude::*;
@@ -49,10 +50,19 @@ pub struct StudyParams {
     pub warmup_fraction: f64,
     /// Integration steps per natural period.
     pub steps_per_period: f64,
-    /// Nelder–Mead evaluations per start...
-    pub fit_evals: usize,
-    /// ...from this many starts (the best-scored of the candidate's starts), the best result kept.
+    /// A fit runs Nelder–Mead from this many starts (the best-scored of the
+    /// candidate's starts), the best result kept...
     pub fit_starts: usize,
+    /// ...each for `fit_evals` evaluations when `fit_tolerance` is 0 (a
+    /// fixed count: not converged, docs/findings.md); when it is above 0,
+    /// each to convergence ([`crate::fit::FitTolerance`]: the simplex's
+    /// misfits within `fit_tolerance`, the misfit's units, and its vertices
+    /// within `fit_tolerance` of the bound widths, restarted until a restart
+    /// gains at most `fit_tolerance`; `fit_evals` a safeguard per start),
+    /// and from more starts in the order of their scores while the last one
+    /// lowered the best misfit by more than `fit_tolerance`.
+    pub fit_tolerance: f64,
+    pub fit_evals: usize,
     /// An extension must pass the workspace's step rule (pipeline.toml's
     /// `[shared.selection]`, `rig_types::select::compare`: the campaign
     /// diagnosis' and the LAVI study's rule too)...
@@ -116,6 +126,10 @@ pub struct Fitted {
     pub calibration_misfit: f64,
     /// Parameters at (within 1 % of the log or linear range of) a bound.
     pub at_bounds: Vec<&'static str>,
+    /// Cost evaluations of the fit (every start scored, every search).
+    pub evals: usize,
+    /// Whether every start's search met the convergence criterion.
+    pub converged: bool,
 }
 
 /// A model's record.
@@ -133,6 +147,15 @@ pub struct CandidateResult {
     /// Per held-out run: (run index, misfit, predicted features) under the fold that held it out.
     pub heldout: Vec<(usize, f64, Features)>,
     pub heldout_mean: f64,
+}
+
+impl CandidateResult {
+    /// Every fit made of the model once: the folds', and the one on every
+    /// calibration run when it is not a fold's.
+    pub fn fits(&self) -> impl Iterator<Item = &Fitted> {
+        let own = self.fitted.as_ref().filter(|f| !self.fold_fits.iter().any(|g| g.train == f.train));
+        self.fold_fits.iter().chain(own)
+    }
 }
 
 /// One forward step: from a model, the extensions tried and the one kept.
@@ -493,18 +516,33 @@ fn fit_on(model: Model, runs: &[Measured], train: &[usize], nested: Option<&Fitt
         c
     };
     let specs = model.params();
-    // Multi-start: every start scored, Nelder–Mead from the best
-    // `fit_starts`, the best result kept.
+    // Multi-start: every start scored, then Nelder–Mead from each in the
+    // order of its score: `fit_starts` of them; converged fits
+    // (`fit_tolerance` > 0) on while the last one lowered the best misfit by
+    // more than the tolerance (the restart rule of `nelder_mead_converged`,
+    // over starts). The best result kept (the first of equals).
     let mut starts = nested.map_or_else(Vec::new, |f| warm_starts(model, f, &hints));
     starts.extend(model.starts(&hints));
     let mut scored: Vec<(f64, Vec<f64>)> = starts.into_iter().map(|x| (cost(&x), x)).collect();
     scored.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let (params, calibration_misfit) = scored
-        .iter()
-        .take(p.fit_starts.max(1))
-        .map(|(_, x)| fit(&specs, x, p.fit_evals, cost))
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .expect("every model has a start");
+    let tol = FitTolerance { tolerance: p.fit_tolerance, max_evals: p.fit_evals };
+    let (mut evals, mut converged) = (scored.len(), true);
+    let mut best: Option<FitResult> = None;
+    for (k, (_, x)) in scored.iter().enumerate() {
+        let r = fit(&specs, x, &tol, cost);
+        evals += r.evals;
+        converged &= r.converged;
+        let before = best.as_ref().map_or(f64::INFINITY, |b| b.cost);
+        let improved = r.cost < before - p.fit_tolerance;
+        if r.cost < before {
+            best = Some(r);
+        }
+        if k + 1 >= p.fit_starts.max(1) && (p.fit_tolerance <= 0.0 || !improved) {
+            break;
+        }
+    }
+    let best = best.expect("every model has a start");
+    let (params, calibration_misfit) = (best.x, best.cost);
     let at_bounds = specs
         .iter()
         .zip(&params)
@@ -514,7 +552,7 @@ fn fit_on(model: Model, runs: &[Measured], train: &[usize], nested: Option<&Fitt
         })
         .map(|(s, _)| s.name)
         .collect();
-    Fitted { model, train: train.to_vec(), params, calibration_misfit, at_bounds }
+    Fitted { model, train: train.to_vec(), params, calibration_misfit, at_bounds, evals, converged }
 }
 
 /// Starts from a nested fit: its law with each of `model`'s set-up starts

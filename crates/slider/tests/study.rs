@@ -3,7 +3,7 @@
 //! (calibrate on one stiffness, predict the other). The last two read
 //! ../shared and are skipped with a message when it is absent.
 
-use rig_slider::fit::{Candidate, Model, SetupCandidate, dispersion, fit, repeats, run_misfit};
+use rig_slider::fit::{Candidate, FitTolerance, Model, SetupCandidate, dispersion, fit, repeats, run_misfit};
 use rig_slider::study::{Measured, predict};
 use rig_slider::{Regime, StudyParams, render, run_study};
 use std::path::{Path, PathBuf};
@@ -63,7 +63,11 @@ fn round_trip_recovers_a_coulomb_law() {
     let cost = |x: &[f64]| {
         runs.iter().map(|r| run_misfit(&r.features, &predict(Model::BASELINE, x, r, &p))).sum::<f64>() / 3.0
     };
-    let (x, c) = fit(&Model::BASELINE.params(), &[0.35, 0.03], 80, cost);
+    // To convergence (pipeline.toml ships the fixed count: this is the criterion's round trip).
+    let tol = FitTolerance { tolerance: 0.01, max_evals: 2000 };
+    let r = fit(&Model::BASELINE.params(), &[0.35, 0.03], &tol, cost);
+    assert!(r.converged, "{r:?}");
+    let (x, c) = (r.x, r.cost);
     assert!((x[0] - truth[0]).abs() < 0.01, "mu_static {} (truth {})", x[0], truth[0]);
     assert!((x[1] / truth[1] - 1.0).abs() < 0.1, "mu_drop {} (truth {})", x[1], truth[1]);
     assert!(c < 0.1, "misfit at the recovered law {c}");
