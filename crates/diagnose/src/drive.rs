@@ -10,6 +10,7 @@
 use crate::prepare::RunSignals;
 use rig_estimate::linear::Normal;
 use rig_types::minimize::brent_min;
+use rig_types::order::{from_total_key_u64, total_key_u64};
 
 /// The JSON key [`fit_limit`]'s limit is reported under (the drive term's
 /// one parameter, [`crate::effects::Term::DriveLimit`]).
@@ -93,8 +94,12 @@ impl Prepared {
         let hull = convex_hull(&mut pts);
         let e_max = e_rad_s.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let i_max = i0_rad.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let mut order: Vec<usize> = (0..n).collect();
-        order.sort_unstable_by(|&a, &b| s.voltage_v[a].abs().total_cmp(&s.voltage_v[b].abs()).then(a.cmp(&b)));
+        // Ascending |V| (total_cmp), ties by index: the keys are distinct, so
+        // one order whichever sort; integer keys sort faster than the comparator.
+        let mut keys: Vec<u128> =
+            (0..n).map(|k| (u128::from(total_key_u64(s.voltage_v[k].abs())) << 64) | k as u128).collect();
+        keys.sort_unstable();
+        let order: Vec<usize> = keys.iter().map(|&k| k as u64 as usize).collect();
         let v_abs_sorted = order.iter().map(|&k| s.voltage_v[k].abs()).collect();
         let mut cum = Vec::with_capacity(n + 1);
         let mut acc = [0.0; 6];
@@ -131,9 +136,19 @@ impl Prepared {
     }
 }
 
-/// Andrew's monotone chain: the convex hull's vertices of `pts` (sorted in place).
+/// Andrew's monotone chain: the convex hull's vertices of `pts` (sorted in
+/// place by x, then y, in total_cmp's order: as (x, y) pairs of
+/// [`rig_types::order`] keys, which sort as the comparator does and give
+/// the same sequence, since equal keys are equal points; the comparator
+/// sort of 20 000 points per run was 1.2 % of a ladder rung's CPU in
+/// `perf`, issue 23).
 fn convex_hull(pts: &mut [[f64; 2]]) -> Vec<[f64; 2]> {
-    pts.sort_unstable_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
+    let mut keys: Vec<u128> =
+        pts.iter().map(|p| (u128::from(total_key_u64(p[0])) << 64) | u128::from(total_key_u64(p[1]))).collect();
+    keys.sort_unstable();
+    for (p, k) in pts.iter_mut().zip(keys) {
+        *p = [from_total_key_u64((k >> 64) as u64), from_total_key_u64(k as u64)];
+    }
     if pts.len() < 3 {
         return pts.to_vec();
     }
@@ -346,8 +361,8 @@ pub fn fit_limit_gains(runs: &[&RunSignals], supply_v: f64) -> Option<Pi> {
 fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi, f64, usize, f64)> {
     // Every trial limit refits the gains from the unlimited fit (warm start).
     let p0 = fit_gains_from(runs, supply_v, None)?;
-    let eval_from =
-        |l: f64, start: &Pi| fit_gains_from(runs, l, Some(start)).map(|p| rss_of(&p, runs).0).unwrap_or(f64::INFINITY);
+    let fits = FitMemo::default();
+    let eval_from = |l: f64, start: &Pi| fits.fit(runs, l, start).map_or(f64::INFINITY, |f| f.1);
     // A limit that binds nowhere gives the same arithmetic as any other such
     // limit (the clamp and the exclusion of saturated samples are the only
     // places the limit enters), so those trials reuse one evaluation.
@@ -380,7 +395,7 @@ fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi,
     let l_free = free.map_or(f64::INFINITY, |f| f.0);
     let mut start = p0;
     if grid[best] < l_free
-        && let Some(p1) = fit_gains_from(runs, grid[best], Some(&p0))
+        && let Some((p1, _)) = fits.fit(runs, grid[best], &p0)
     {
         start = p1;
         for j in best + 1..grid.len() {
@@ -390,7 +405,7 @@ fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi,
             scores[j] = scores[j].min(eval_from(grid[j], &p1));
         }
         best = (0..grid.len()).min_by(|&a, &b| scores[a].total_cmp(&scores[b]))?;
-        if let Some(p) = fit_gains_from(runs, grid[best], Some(&p1)) {
+        if let Some((p, _)) = fits.fit(runs, grid[best], &p1) {
             start = p;
         }
     }
@@ -422,10 +437,11 @@ fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi,
         Some((l_free, _)) if l >= l_free => l_free,
         _ => l,
     };
-    let fit_at = |p: &Pi| fit_gains_from(runs, l, Some(p)).map(|pi| (rss_of(&pi, runs), pi));
-    let ((rss, n), pi) = match (fit_at(&p0), if two { fit_at(&start) } else { None }) {
+    let n = runs.iter().map(|r| r.p.e_rad_s.len()).sum::<usize>();
+    let fit_at = |p: &Pi| fits.fit(runs, l, p).map(|(pi, rss)| (rss, pi));
+    let (rss, pi) = match (fit_at(&p0), if two { fit_at(&start) } else { None }) {
         (Some(a), Some(b)) => {
-            if b.0.0 < a.0.0 {
+            if b.0 < a.0 {
                 b
             } else {
                 a
@@ -441,6 +457,40 @@ fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi,
     let d2 = (eval(l + h) - 2.0 * rss + eval(l - h)) / (h * h);
     let se = if d2 > 0.0 { (2.0 * (rss / n as f64) / d2).sqrt() } else { f64::NAN };
     Some((pi, rss, n, se))
+}
+
+/// The gains [`fit_gains_from`] reaches at a trial limit from a start, with
+/// their voltage RSS ([`rss_of`]), kept for the rest of one limit search:
+/// the search asks for some (limit, start) pairs more than once — the grid's
+/// best point again from the unlimited fit for the second start, the best
+/// point after the second start's rescoring again from it, and Brent's last
+/// point from both starts for the reported gains — and each fit is eight
+/// passes of the clamped runs' recursion (nearly every trial reaches
+/// [`fit_gains_path`]'s pass limit: 29–53 fits per fold search of a
+/// clipped ladder rung, 4–9 of them repeats; the search was 61 % of such a
+/// rung's CPU in `perf`, issue 23). A fit is a function of the limit and
+/// the start's gains alone (the start's own limit is replaced), so a repeat
+/// is the same gains and RSS to the bit.
+#[derive(Default)]
+struct FitMemo {
+    /// (limit, start's kp, start's ki) bits, and the fit with its RSS.
+    done: std::cell::RefCell<Vec<MemoEntry>>,
+}
+
+/// An entry of [`FitMemo`].
+type MemoEntry = ([u64; 3], Option<(Pi, f64)>);
+
+impl FitMemo {
+    /// [`fit_gains_from`] at `limit_v` from `start`, with its RSS.
+    fn fit(&self, runs: &[Recording], limit_v: f64, start: &Pi) -> Option<(Pi, f64)> {
+        let key = [limit_v.to_bits(), start.kp_v_s_rad.to_bits(), start.ki_v_rad.to_bits()];
+        if let Some((_, f)) = self.done.borrow().iter().find(|(k, _)| *k == key) {
+            return *f;
+        }
+        let f = fit_gains_from(runs, limit_v, Some(start)).map(|p| (p, rss_of(&p, runs).0));
+        self.done.borrow_mut().push((key, f));
+        f
+    }
 }
 
 /// A lower bound of the voltage RSS (noise units, as [`voltage_rss`]) of any
@@ -635,6 +685,50 @@ mod tests {
             }
         }
         assert!(idle_seen >= 6 && clamped_seen >= 3, "{idle_seen} idle, {clamped_seen} clamped");
+    }
+
+    /// The hull's key sort ([`rig_types::order`]'s keys of (x, y)) is the
+    /// comparator sort, point for point, signed zeros, NaNs, infinities and
+    /// repeated points included.
+    #[test]
+    fn the_hulls_key_sort_is_the_comparator_sort() {
+        let mut xs = vec![0.0, -0.0, 1.0, -1.0, f64::INFINITY, f64::NEG_INFINITY, f64::NAN, -f64::NAN];
+        let mut seed = 7u64;
+        for _ in 0..2000 {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            xs.push(f64::from_bits(seed));
+            xs.push((seed >> 40) as f64 * if seed & 1 == 0 { 1e-3 } else { -1e-3 });
+        }
+        // Points with repeated coordinates: the same sequence as the comparator's sort.
+        let mut pts: Vec<[f64; 2]> = xs.iter().zip(xs.iter().rev()).map(|(&x, &y)| [(x * 4.0).round(), y]).collect();
+        pts.extend(pts.clone());
+        let mut by_cmp = pts.clone();
+        by_cmp.sort_unstable_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
+        convex_hull(&mut pts);
+        let bits = |v: &[[f64; 2]]| v.iter().map(|p| p.map(f64::to_bits)).collect::<Vec<_>>();
+        assert_eq!(bits(&pts), bits(&by_cmp));
+    }
+
+    /// The search's memo answers a repeated (limit, start) with the fit and
+    /// RSS computed the first time, the same bits as fitting again, and
+    /// keeps one entry per pair; a start differing only in its own limit
+    /// (which the fit replaces) is the same pair.
+    #[test]
+    fn a_repeated_fit_of_the_search_is_the_fit_again() {
+        let rs = runs(Pi { kp_v_s_rad: 2.0, ki_v_rad: 10.0, limit_v: 5.0 }, &[1.0, 2.0, 3.0]);
+        let r: Vec<&RunSignals> = rs.iter().collect();
+        let rec = Recording::all(&r);
+        let start = fit_gains(&r, 24.0).expect("unlimited fit");
+        let memo = FitMemo::default();
+        let bits =
+            |f: Option<(Pi, f64)>| f.map(|(p, rss)| [p.kp_v_s_rad, p.ki_v_rad, p.limit_v, rss].map(f64::to_bits));
+        for l in [4.8, 5.2, 4.8] {
+            let direct = fit_gains_from(&rec, l, Some(&start)).map(|p| (p, rss_of(&p, &rec).0));
+            assert!(direct.is_some_and(|(p, _)| !rec.iter().all(|x| x.p.idle(&p))), "a clamping fit at {l} V");
+            assert_eq!(bits(memo.fit(&rec, l, &start)), bits(direct));
+            assert_eq!(bits(memo.fit(&rec, l, &Pi { limit_v: 1.0, ..start })), bits(direct));
+        }
+        assert_eq!(memo.done.borrow().len(), 2);
     }
 
     /// The limit search's reported RSS is its gains' RSS to the bit, and a

@@ -84,10 +84,14 @@ struct Cv<'a> {
     /// of every selection step (each fit built them anew: 4–5 % of a
     /// full-protocol diagnosis's CPU in `perf`, with their page faults).
     fold_data: Vec<(SlipData, Vec<(usize, SlipData)>)>,
-    /// Per fold, the cold Stribeck fits of its training data, shared by
-    /// every friction set whose first pass starts from them
-    /// ([`composite::ColdStribeck`]).
-    cold: Vec<composite::ColdStribeck>,
+    /// Per fold, what every friction set's fit of its training data
+    /// computes alike ([`composite::DataMemo`]: the cold Stribeck fits, the
+    /// angle modulation's sin and cos by order).
+    cold: Vec<composite::DataMemo>,
+    /// Per fold and held-out run (in `fold_data`'s order), the sin and cos
+    /// of its angle modulation by order, shared by every friction set that
+    /// predicts it ([`crate::friction::AngleTrig`]).
+    held_angles: Vec<Vec<crate::friction::AngleTrig>>,
 }
 
 /// One fold's friction fit: the model fitted on its training runs and, per
@@ -214,9 +218,9 @@ impl Cv<'_> {
         let model =
             composite::fit_composite_model_from_cached(d, set, &self.freqs, self.max_order, start, &self.cold[f]);
         let mut held = Vec::new();
-        for (i, dr) in held_data {
+        for ((i, dr), angles) in held_data.iter().zip(&self.held_angles[f]) {
             let (e, ph) = match &model {
-                Some(m) => composite::heldout_fit(m, dr),
+                Some(m) => composite::heldout_fit_with(m, dr, Some(angles)),
                 None => (None, (0.0, 0.0)),
             };
             held.push((*i, e, ph));
@@ -401,8 +405,9 @@ pub(crate) fn select_over<'a>(
         (0..=n).map(|j| opts.freq_min_hz + opts.freq_step_hz * j as f64).collect()
     };
     let fold_data = Cv::fold_data(runs, folds, opts.fold_fit_spacing_s);
-    let cold = (0..folds).map(|_| composite::ColdStribeck::default()).collect();
-    let cv = Cv { runs, folds, supply_v, freqs, max_order: opts.max_order, fold_data, cold };
+    let cold = (0..folds).map(|_| composite::DataMemo::default()).collect();
+    let held_angles = fold_data.iter().map(|f| f.1.iter().map(|_| Default::default()).collect()).collect();
+    let cv = Cv { runs, folds, supply_v, freqs, max_order: opts.max_order, fold_data, cold, held_angles };
 
     // Forward selection on the one engine: the runs are the units, fold f
     // holds out the runs of fold f and trains on the others; the baseline

@@ -21,9 +21,7 @@ use serde::{Deserialize, Serialize};
 /// (the same order; equal keys are equal bits). The same order statistic of
 /// the same samples, so the same values, bit for bit.
 pub fn running_median(x: &[f64], window: usize) -> Vec<f64> {
-    // `f64::total_cmp`'s key: the bits as i64, the magnitude flipped for negatives (an involution).
-    let flip = |k: i64| k ^ ((((k >> 63) as u64) >> 1) as i64);
-    let key = |v: f64| flip(v.to_bits() as i64);
+    let key = rig_types::order::total_key;
     let h = window / 2;
     let n = x.len();
     let position = |buf: &[i64], v: i64| buf.partition_point(|&b| b < v);
@@ -85,7 +83,7 @@ pub fn running_median(x: &[f64], window: usize) -> Vec<f64> {
                 }
             }
             (from, to) = (lo, hi);
-            f64::from_bits(flip(buf[len / 2]) as u64)
+            rig_types::order::from_total_key(buf[len / 2])
         });
     }
     out

@@ -2,8 +2,9 @@
 //! trivial accessors, the unit conversions ([`units`]), the sensor model
 //! ([`sensor`]: encoder quantisation and the speed differentiators, the one
 //! home every crate that reads or simulates an encoder uses), the bracketed
-//! scalar minimiser every fitting crate shares ([`minimize`]) and the one
-//! forward-selection engine every rig's study selects with ([`select`]).
+//! scalar minimiser every fitting crate shares ([`minimize`]), the one
+//! forward-selection engine every rig's study selects with ([`select`]) and
+//! `total_cmp`'s order as integer keys ([`order`]).
 //! Units are in field names (`_rad_s`, `_nm`, `_v`).
 
 mod campaign;
@@ -12,6 +13,7 @@ pub mod cpu;
 mod figure;
 pub mod linear;
 pub mod minimize;
+pub mod order;
 mod params;
 pub mod select;
 pub mod sensor;

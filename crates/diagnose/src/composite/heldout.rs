@@ -5,8 +5,9 @@
 //! once per run (`HeldOut`).
 
 use super::{Composite, Phases};
-use crate::friction::{self, SlipData};
+use crate::friction::{self, AngleTrig, SlipData};
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 /// A held-out run's samples as its phase fits and its error read them under
 /// a fixed composite: per sample the speed law μ_speed(Ω) and the sin and cos
@@ -20,18 +21,25 @@ use std::f64::consts::PI;
 /// (with the error, 9.6 % of a ladder rung's CPU in `perf`, issue 23). The
 /// factors differ from `Composite::time_factor` / `angle_factor` by the
 /// rounding of the angle addition (≈ 10⁻¹⁶).
+/// The angle part does not depend on the model beyond its order, so a run
+/// held out under several models reads it from the run's memo when given
+/// one ([`friction::AngleTrig`]: the same numbers).
 struct HeldOut {
     speed: Vec<f64>,
     time: Vec<(f64, f64)>,
-    angle: Vec<(f64, f64)>,
+    angle: Arc<Vec<(f64, f64)>>,
 }
 
 impl HeldOut {
-    fn of(m: &Composite, d: &SlipData) -> Self {
+    fn of(m: &Composite, d: &SlipData, angles: Option<&AngleTrig>) -> Self {
         HeldOut {
             speed: d.omega.iter().map(|&w| m.speed_mu(w)).collect(),
             time: m.time_mod.map_or(Vec::new(), |(_, f)| d.t.iter().map(|t| (2.0 * PI * f * t).sin_cos()).collect()),
-            angle: m.angle_mod.map_or(Vec::new(), |(_, n)| d.phi.iter().map(|p| (n as f64 * p).sin_cos()).collect()),
+            angle: match (m.angle_mod, angles) {
+                (None, _) => Arc::default(),
+                (Some((_, n)), Some(memo)) => memo.get(d, n),
+                (Some((_, n)), None) => Arc::new(d.phi.iter().map(|p| (n as f64 * p).sin_cos()).collect()),
+            },
         }
     }
 
@@ -60,7 +68,7 @@ impl HeldOut {
 /// (the vocabulary frees θ per run, nothing else): alternating single-phase
 /// fits, each exact for its factor.
 pub fn heldout_phases(m: &Composite, d: &SlipData) -> Phases {
-    phases_on(m, d, &HeldOut::of(m, d))
+    phases_on(m, d, &HeldOut::of(m, d, None))
 }
 
 /// [`heldout_phases`] on the run's [`HeldOut`] values.
@@ -97,7 +105,13 @@ fn phases_on(m: &Composite, d: &SlipData, h: &HeldOut) -> Phases {
 /// μ error at them ([`relative_mu_error`]), from one [`HeldOut`]: what a
 /// cross-validation fold computes for each run it holds out.
 pub fn heldout_fit(m: &Composite, d: &SlipData) -> (Option<f64>, Phases) {
-    let h = HeldOut::of(m, d);
+    heldout_fit_with(m, d, None)
+}
+
+/// [`heldout_fit`] reading the angle modulation's sin and cos from `angles`,
+/// the run's memo (the same numbers, so the same phases and error).
+pub(crate) fn heldout_fit_with(m: &Composite, d: &SlipData, angles: Option<&AngleTrig>) -> (Option<f64>, Phases) {
+    let h = HeldOut::of(m, d, angles);
     let ph = phases_on(m, d, &h);
     let (tf, af) = h.both(m, ph);
     (friction::relative_rms(&d.mu, |i| h.speed[i] * tf[i] * af[i]), ph)
@@ -161,5 +175,14 @@ mod tests {
         };
         assert!(off(ph.0, 2.5) < 0.05 && off(ph.1, 1.1) < 0.1, "{ph:?}");
         assert!(e.unwrap() < 0.05, "{e:?}");
+        // Read from the run's memo (filled by the first model, read by a
+        // second of the same order): each the fit computed alone, to the bit.
+        let memo = AngleTrig::default();
+        let other = Composite { time_mod: None, angle_mod: Some((0.05, 3)), ..m.clone() };
+        let bits = |(e, ph): (Option<f64>, Phases)| (e.map(f64::to_bits), ph.0.to_bits(), ph.1.to_bits());
+        for model in [&m, &other, &m] {
+            assert_eq!(bits(heldout_fit_with(model, &held, Some(&memo))), bits(heldout_fit(model, &held)));
+        }
+        assert_eq!(memo.get(&held, 3).as_slice(), angle_trig.as_slice(), "the memo's values are sin_cos(3·φ)");
     }
 }

@@ -34,6 +34,7 @@
 mod heldout;
 mod joint;
 
+pub(crate) use heldout::heldout_fit_with;
 pub use heldout::{heldout_fit, heldout_phases, relative_mu_error};
 use joint::{joint_params, refine_speed_time};
 
@@ -211,36 +212,43 @@ pub fn fit_composite_model_from(
     fit_composite_with(d, set, freqs_hz, max_order, false, start, None).map(|f| f.model)
 }
 
-/// The cold Stribeck fits of one data set, [`friction::fit_stribeck`] of
-/// `d` itself without and with the viscous column, each computed once on
-/// first use. A composite's first pass fits its speed law before any
-/// modulation, on μ/(1·1) = μ to the bit, so every set with the Stribeck
-/// term and no warm-started speed (`{stribeck}` of the first selection
-/// step, `{time, stribeck}` and `{angle, stribeck}` of the second) starts
-/// from the same fit of the same fold: built once per fold, bit-identical
-/// to fitting it again (a cold fit is a 41-point grid and Brent's search).
+/// What every composite fit of one data set computes alike, computed once
+/// on first use (each a fold's training runs, shared by every friction set
+/// of every selection step):
+///
+/// - The cold Stribeck fits, [`friction::fit_stribeck`] of `d` itself
+///   without and with the viscous column. A composite's first pass fits
+///   its speed law before any modulation, on μ/(1·1) = μ to the bit, so
+///   every set with the Stribeck term and no warm-started speed
+///   (`{stribeck}` of the first selection step, `{time, stribeck}` and
+///   `{angle, stribeck}` of the second) starts from the same fit of the
+///   same fold: bit-identical to fitting it again (a cold fit is a
+///   41-point grid and Brent's search).
+/// - The sin and cos of n·φ1 of every sample at each order the angle
+///   block fits ([`friction::AngleTrig`]).
 #[derive(Debug, Default)]
-pub struct ColdStribeck {
+pub struct DataMemo {
     fits: [std::sync::OnceLock<Option<FrictionFit>>; 2],
+    angles: friction::AngleTrig,
 }
 
-impl ColdStribeck {
+impl DataMemo {
     /// `friction::fit_stribeck(d, with_viscous)`, the first time for this `d`.
     fn get(&self, d: &SlipData, with_viscous: bool) -> Option<FrictionFit> {
         self.fits[usize::from(with_viscous)].get_or_init(|| friction::fit_stribeck(d, with_viscous)).clone()
     }
 }
 
-/// [`fit_composite_model_from`] with `cold`, the cold Stribeck fits of `d`
-/// ([`ColdStribeck`]: the same `d` on every call that shares it), so the
-/// same model to the bit.
+/// [`fit_composite_model_from`] with `cold`, the memo of what every fit of
+/// `d` computes alike ([`DataMemo`]: the same `d` on every call that
+/// shares it), so the same model to the bit.
 pub fn fit_composite_model_from_cached(
     d: &SlipData,
     set: FrictionSet,
     freqs_hz: &[f64],
     max_order: u32,
     start: Option<&Composite>,
-    cold: &ColdStribeck,
+    cold: &DataMemo,
 ) -> Option<Composite> {
     fit_composite_with(d, set, freqs_hz, max_order, false, start, Some(cold)).map(|f| f.model)
 }
@@ -266,7 +274,7 @@ fn fit_composite_with(
     max_order: u32,
     errors: bool,
     start: Option<&Composite>,
-    cold: Option<&ColdStribeck>,
+    cold: Option<&DataMemo>,
 ) -> Option<CompositeFit> {
     if d.is_empty() {
         return None;
@@ -395,7 +403,7 @@ fn fit_composite_with(
                 (_, Some(n)) if pass == 0 => n..=n,
                 _ => 1..=max_order,
             };
-            let f = friction::fit_sine(da, false, &[], orders)?;
+            let f = friction::fit_sine_with(da, false, &[], orders, cold.map(|c| &c.angles))?;
             let FrictionModel::AngleSine { mu_k: s, a, order } = f.model else { unreachable!() };
             m.angle_mod = Some((a, order));
             m.scale(s);
@@ -472,8 +480,9 @@ mod tests {
         crate::friction::tests::synth_noisy(runs, 7, 0.003, law)
     }
 
-    /// The sets that share one cold Stribeck fit get the models they get
-    /// fitted alone, bit for bit, whichever of them fills the memo first.
+    /// The sets that share one memo of the data (the cold Stribeck fit, the
+    /// angle block's sin and cos by order) get the models they get fitted
+    /// alone, bit for bit, whichever of them fills the memo first.
     #[test]
     fn a_shared_cold_stribeck_fit_is_each_fit_alone() {
         let d = synth(4, |r, t, _, w| {
@@ -498,7 +507,7 @@ mod tests {
                 })
             )
         };
-        let cold = ColdStribeck::default();
+        let cold = DataMemo::default();
         for set in sets {
             let alone = fit_composite_model_from(&d, set, &freqs, 4, None);
             assert!(alone.as_ref().is_some_and(|m| m.stribeck.is_some()), "{set:?}");
@@ -506,6 +515,13 @@ mod tests {
             assert_eq!(bits(shared), bits(alone), "{set:?}");
         }
         assert!(cold.fits.iter().all(|f| f.get().is_some()));
+        // The angle block at its order on every pass, from the memo the
+        // `{stribeck, angle}` set filled.
+        let set = FrictionSet::default().with(Term::AngleSine).with(Term::TimeSine);
+        let alone = fit_composite_model_from(&d, set, &freqs, 4, None);
+        let n = alone.as_ref().and_then(|m| m.angle_mod).expect("an angle order").1;
+        assert_eq!(bits(fit_composite_model_from_cached(&d, set, &freqs, 4, None, &cold)), bits(alone));
+        assert_eq!(cold.angles.get(&d, n).len(), d.len());
     }
 
     #[test]

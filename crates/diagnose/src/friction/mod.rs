@@ -20,8 +20,9 @@ mod stribeck;
 
 pub use heldout::{autocorr_inflation, heldout_phase, inflation_of, relative_mu_error, relative_rms};
 pub(crate) use line_search::{LineStart, near_stationary};
-pub(crate) use scan::{SinCosSchedule, time_scan};
+pub(crate) use scan::{AngleTrig, SinCosSchedule, time_scan};
 pub use sine::fit_sine;
+pub(crate) use sine::fit_sine_with;
 pub use stribeck::{fit_stribeck, fit_stribeck_near};
 
 use crate::prepare::RunSignals;

@@ -363,6 +363,42 @@ pub(super) fn order_scan(d: &SlipData, orders: &RangeInclusive<u32>) -> Vec<(f64
     out
 }
 
+/// sin and cos of n·φ1 of every sample of one data set, per order n, each
+/// computed once: the angle sine's regressor at its order ([`super::fit_sine`]'s
+/// start and Gauss–Newton, a held-out run's angle factor). A composite
+/// with the angle modulation refits its angle block at the same order on
+/// every pass (up to six) and in every friction set of a selection step
+/// with it, on the same fold's training runs, and each fold's held-out runs
+/// are refitted under every such set: each was a `sin_cos` of every sample
+/// again (3.4 % of an angle-periodic ladder rung's CPU in `perf` in the
+/// fits, 0.9 % in the held-out runs; issue 23). The same products
+/// `f64::from(n) · φ1` and the same `sin_cos`, so the same bits. The memo
+/// belongs to one data set: every `get` must pass the same `d` (or one
+/// sharing its φ1).
+#[derive(Debug, Default)]
+pub(crate) struct AngleTrig {
+    by_order: std::sync::Mutex<std::collections::BTreeMap<u32, SinCos>>,
+}
+
+/// (sin, cos) of every sample, shared.
+type SinCos = std::sync::Arc<Vec<(f64, f64)>>;
+
+impl AngleTrig {
+    /// (sin, cos) of n·φ1 of every sample of `d`, computed the first time.
+    pub(crate) fn get(&self, d: &SlipData, n: u32) -> SinCos {
+        if let Some(v) = self.by_order.lock().expect("angle trig").get(&n) {
+            return v.clone();
+        }
+        let v = std::sync::Arc::new(angle_sin_cos(d, f64::from(n)));
+        self.by_order.lock().expect("angle trig").entry(n).or_insert(v).clone()
+    }
+}
+
+/// (sin, cos) of ψ·φ1 of every sample of `d` (ψ an order).
+pub(crate) fn angle_sin_cos(d: &SlipData, psi: f64) -> Vec<(f64, f64)> {
+    d.phi.iter().map(|p| (psi * p).sin_cos()).collect()
+}
+
 /// Samples between exact re-synchronisations of [`SinCosSchedule`].
 const RESYNC_EVERY: usize = 64;
 

@@ -6,11 +6,12 @@
 //! search of `line_search.rs`.
 
 use super::line_search::{LineStart, near_stationary};
-use super::scan::{SinCosSchedule, order_scan, sine_rss_from, time_scan, ywy};
+use super::scan::{AngleTrig, SinCosSchedule, angle_sin_cos, order_scan, sine_rss_from, time_scan, ywy};
 use super::{FrictionFit, FrictionModel, SlipData};
 use rig_estimate::linear::{ArrowNormal, Normal};
 use std::f64::consts::PI;
 use std::ops::RangeInclusive;
+use std::sync::Arc;
 
 /// Sine models: scan the frequency (time kind, grid of `freqs_hz`) or the
 /// order (angle kind, `orders`, usually 1..=max_order), then Gauss–Newton on
@@ -31,12 +32,23 @@ use std::ops::RangeInclusive;
 /// iteration and still 0.3 σ² after the 30th; with the exact Hessian,
 /// including f's terms, 2–4 iterations reach the stop rule).
 pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeInclusive<u32>) -> Option<FrictionFit> {
+    fit_sine_with(d, time_kind, freqs_hz, orders, None)
+}
+
+/// [`fit_sine`] reading the angle kind's sin and cos of n·φ1 from `angles`,
+/// the memo of `d`'s ([`AngleTrig`]; the same numbers, so the same fit).
+pub(crate) fn fit_sine_with(
+    d: &SlipData,
+    time_kind: bool,
+    freqs_hz: &[f64],
+    orders: RangeInclusive<u32>,
+    angles: Option<&AngleTrig>,
+) -> Option<FrictionFit> {
     if d.is_empty() {
         return None;
     }
     // Frequency parameters before the per-run phases: f (time kind) or none.
     let nf = usize::from(time_kind);
-    let xarg = |psi: f64, i: usize| if time_kind { 2.0 * PI * psi * d.t[i] } else { psi * d.phi[i] };
     // A single candidate — a warm start's frequency or order, or the one a
     // composite's later pass refines (`composite::fit_composite_with`) — is
     // the scan's best whatever its RSS, so it is not scanned: the scan of one
@@ -66,13 +78,15 @@ pub fn fit_sine(d: &SlipData, time_kind: bool, freqs_hz: &[f64], orders: RangeIn
     // sample). Time kind: sin/cos of 2πf·t by rotation along each run's
     // uniform sample steps ([`SinCosSchedule`]), recomputed for each trial f.
     let schedule = time_kind.then(|| SinCosSchedule::of(d));
-    let sc0: Vec<(f64, f64)> = match &schedule {
-        Some(sch) => {
+    let sc0: Arc<Vec<(f64, f64)>> = match (&schedule, angles) {
+        (Some(sch), _) => {
             let mut base = Vec::with_capacity(d.len());
             sch.visit(&d.t, psi0, |_, v| base.push(v));
-            base
+            Arc::new(base)
         }
-        None => (0..d.len()).map(|i| xarg(psi0, i).sin_cos()).collect(),
+        // ψ0 is an order (the scan's points and a single candidate are f64::from(n)).
+        (None, Some(memo)) => memo.get(d, psi0 as u32),
+        (None, None) => Arc::new(angle_sin_cos(d, psi0)),
     };
     let (rss0, p) = sine_rss_from(d, &sc0, ywy(d))?;
     if single.is_some() {

@@ -117,27 +117,42 @@ pub fn fit_stribeck_near(d: &SlipData, with_viscous: bool, vs_near: f64) -> Opti
 /// Brent's search for ln vs on [lo, hi], then the linear fit and the covariance at it.
 fn stribeck_in(d: &SlipData, with_viscous: bool, lo: f64, hi: f64) -> Option<FrictionFit> {
     let ncol = if with_viscous { 3 } else { 2 };
-    let lin = |vs: f64| {
-        linear_fit(d, ncol, |i, r| {
-            r[0] = 1.0;
-            r[1] = rig_model::friction::stribeck_decay(d.omega[i], vs);
-            if with_viscous {
-                r[2] = d.omega[i];
-            }
-        })
-    };
     let mut fine = StribeckRss::new(d, with_viscous);
+    // The decay g of every sample at the lowest RSS Brent has seen, which
+    // is the point it returns (its x, replaced by a trial whose RSS is not
+    // higher): the linear fit and the covariance at the returned vs read
+    // these same numbers (each was an `exp` per sample again, two passes
+    // of the ≈ 20 a search makes; issue 23). Should the returned point not
+    // be the one kept, g is computed at it.
+    let mut kept: Option<(f64, f64)> = None;
+    let mut g = vec![0.0; d.len()];
     // ln vs to 10⁻⁶ (golden section's 25 steps on this bracket reached 2·10⁻⁶).
-    let lv = brent_min(lo, hi, 1e-6, 27, |lv| fine.at(lv.exp()));
+    let lv = brent_min(lo, hi, 1e-6, 27, |lv| {
+        let rss = fine.at(lv.exp());
+        if kept.is_none_or(|k| rss <= k.1) {
+            kept = Some((lv, rss));
+            std::mem::swap(&mut g, &mut fine.g);
+        }
+        rss
+    });
     let vs = lv.exp();
-    let (p, _, rss) = lin(vs)?;
+    if kept.is_none_or(|k| k.0.to_bits() != lv.to_bits()) {
+        g = d.omega.iter().map(|&w| rig_model::friction::stribeck_decay(w, vs)).collect();
+    }
+    let (p, _, rss) = linear_fit(d, ncol, |i, r| {
+        r[0] = 1.0;
+        r[1] = g[i];
+        if with_viscous {
+            r[2] = d.omega[i];
+        }
+    })?;
     let (mu_k, dmu) = (p[0], p[1]);
     let c = if with_viscous { p[2] } else { 0.0 };
     // Gauss–Newton covariance over (μk, Δ, vs[, c]).
     let np = ncol + 1;
     let mut ne = Normal::new(np);
     for i in 0..d.len() {
-        let g = rig_model::friction::stribeck_decay(d.omega[i], vs);
+        let g = g[i];
         let dg_dvs = g * 2.0 * d.omega[i].powi(2) / vs.powi(3);
         let sw = d.w(i).sqrt();
         if with_viscous {
@@ -184,5 +199,33 @@ mod tests {
         assert!((mu_k - 0.4).abs() < 1e-3 && (mu_s - 0.6).abs() < 5e-3 && (vs - 2.0).abs() < 0.05, "{:?}", f.model);
         // The Coulomb baseline is much worse on the same data.
         assert!(fit_coulomb(&d).rss_w > 10.0 * f.rss_w);
+    }
+
+    /// The linear fit and the covariance at the speed Brent returns read the
+    /// decay kept from its search: the same numbers, to the bit, as the
+    /// decay computed at that speed anew (with and without the viscous column).
+    #[test]
+    fn the_fit_at_the_returned_speed_is_the_fit_with_its_decay_anew() {
+        let d = synth(3, |_, _, _, w| 0.4 + 0.2 * rig_model::friction::stribeck_decay(w, 1.3f64) + 0.002 * w);
+        for with_viscous in [false, true] {
+            let f = fit_stribeck(&d, with_viscous).unwrap();
+            let FrictionModel::Stribeck { mu_k, mu_s, vs, c } = f.model else { panic!() };
+            let (p, _, rss) = linear_fit(&d, 2 + usize::from(with_viscous), |i, r| {
+                r[0] = 1.0;
+                r[1] = rig_model::friction::stribeck_decay(d.omega[i], vs);
+                if with_viscous {
+                    r[2] = d.omega[i];
+                }
+            })
+            .unwrap();
+            let c_anew = if with_viscous { p[2] } else { 0.0 };
+            let bits = |v: [f64; 4]| v.map(f64::to_bits);
+            assert_eq!(
+                bits([mu_k, mu_s, c, f.rss_w]),
+                bits([p[0], p[0] + p[1], c_anew, rss]),
+                "viscous {with_viscous}"
+            );
+            assert!(f.converged && f.params.iter().all(|x| x.2.is_finite() && x.2 > 0.0), "{:?}", f.params);
+        }
     }
 }
