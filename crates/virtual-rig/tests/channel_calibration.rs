@@ -304,11 +304,14 @@ fn shipped_campaign_with_baseline_and_extended_model() {
 /// shared by the diagnosis' baseline, extended and final free runs) gives
 /// the pairs and checks of measuring it per call, to the bit: every feature,
 /// floor, trace and check of two models (the drive-limit campaign, the force
-/// channel read through the calibration line).
+/// channel read through the calibration line), and each run's misfit alone
+/// (`free_run_misfit_measured`, the structure's held-out free runs) the
+/// pair's.
 #[test]
 fn free_runs_on_records_measured_once_are_the_same_to_the_bit() {
     use rig_diagnose::channels::{
-        FreeRunPair, FreeRunSettings, MeasuredRuns, free_run_checks_of, free_run_pairs_by, free_run_pairs_measured,
+        FreeRunPair, FreeRunSettings, MeasuredRuns, free_run_checks_of, free_run_misfit, free_run_misfit_measured,
+        free_run_pairs_by, free_run_pairs_measured, speed_floor_rad_s,
     };
     let th = thesis();
     let dopts = opts();
@@ -334,7 +337,16 @@ fn free_runs_on_records_measured_once_are_the_same_to_the_bit() {
         assert_eq!(bits(&by), bits(&once));
         let (kb, ko) = (free_run_checks_of(&c, &by, &s, &o), free_run_checks_of(&c, &once, &s, &o));
         assert_eq!(format!("{kb:?}"), format!("{ko:?}"));
+        // The structure's held-out free runs: one run's misfit without the
+        // features it does not read, the pair's misfit to the bit.
+        let floor = speed_floor_rad_s(&c, &s);
+        let misfits: Vec<Option<u64>> =
+            once.iter().map(|q| free_run_misfit_measured(&c, &s, &m, &q.id, p, floor).map(f64::to_bits)).collect();
+        let of_pairs: Vec<Option<u64>> = once.iter().map(|q| free_run_misfit(q, floor).map(f64::to_bits)).collect();
+        assert!(of_pairs.iter().all(Option::is_some), "every pair has a misfit");
+        assert_eq!(misfits, of_pairs);
     }
+    assert_eq!(free_run_misfit_measured(&c, &s, &m, "no such run", &base, 1.0), None);
     // Every other run held out: the runs without a model are skipped alike.
     let held = |id: &str| id.ends_with(['0', '2', '4', '6', '8']);
     let by = free_run_pairs_by(&c, &s, |id| held(id).then(|| base.clone()));

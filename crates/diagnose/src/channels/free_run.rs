@@ -544,12 +544,32 @@ pub fn free_run_pairs_measured(
         .map(|(r, mr)| {
             let mr = mr.as_ref()?;
             debug_assert_eq!(mr.id, r.id);
-            params_of(&r.id).map(|p| simulate_pair(c, r, mr, &p, s))
+            params_of(&r.id).map(|p| simulate_pair(c, r, mr, &p, s, false))
         })
         .collect::<Vec<_>>()
         .into_iter()
         .flatten()
         .collect()
+}
+
+/// [`free_run_misfit`] of the run `id` simulated with `p`, against its
+/// record measured under `s` (`m` from [`MeasuredRuns::of`] with `s`): the
+/// same value to the bit as [`free_run_pairs_measured`]'s pair gives, without
+/// the features that misfit does not read (the force's, the break-away
+/// peaks, the dwell row). `None` where that pair would be missing or have no
+/// misfit.
+pub fn free_run_misfit_measured(
+    c: &Campaign,
+    s: &FreeRunSettings,
+    m: &MeasuredRuns,
+    id: &str,
+    p: &RigParams,
+    floor_rad_s: f64,
+) -> Option<f64> {
+    assert!(m.settings == *s, "free_run_misfit_measured: records measured under other settings");
+    let (r, mr) = c.runs_of("operating_point").zip(&m.runs).find(|(r, _)| r.id == id)?;
+    let mr = mr.as_ref()?;
+    free_run_misfit(&simulate_pair(c, r, mr, p, s, true), floor_rad_s)
 }
 
 /// Features of one run: measured from the encoders, the voltage and force
@@ -558,7 +578,7 @@ pub fn free_run_pairs_measured(
 /// same on both sides; the force smoothed over the rotor-speed window).
 fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) -> Option<Pair> {
     let m = measure(c, run, s)?;
-    Some(simulate_pair(c, run, &m, p, s))
+    Some(simulate_pair(c, run, &m, p, s, false))
 }
 
 /// The record's side of [`pair`]: features, floors and trace of one run.
@@ -659,7 +679,17 @@ fn dwell_of(id: &str, t: &[f64], w1: &[f64], force_n: &[f64], h1: usize, slip_sp
 }
 
 /// The model's side of [`pair`]: run `p` on the record `m` was measured from.
-fn simulate_pair(c: &Campaign, run: &rig_types::Run, m: &MeasuredRun, p: &RigParams, s: &FreeRunSettings) -> Pair {
+/// `rotor_only`: the features [`free_run_misfit`] reads and no others (the
+/// force's, its break-away peaks and the dwell row are left out: NaN, empty,
+/// `None`), for [`free_run_misfit_measured`] alone.
+fn simulate_pair(
+    c: &Campaign,
+    run: &rig_types::Run,
+    m: &MeasuredRun,
+    p: &RigParams,
+    s: &FreeRunSettings,
+    rotor_only: bool,
+) -> Pair {
     let t = &run.data.time_s;
     let MeasuredRun { from, to, h1, h2, dt, stride, regime_from, normal_force_n, .. } = *m;
     let tt = &t[..to];
@@ -673,19 +703,24 @@ fn simulate_pair(c: &Campaign, run: &rig_types::Run, m: &MeasuredRun, p: &RigPar
     let sim = rig_model::simulate(p, &m.input, t, &s.integrator).ok().map(|tr| {
         let (w1, w2) =
             (centred_speed(tt, &tr.rotor_angle_rad[..to], h1), centred_speed(tt, &tr.motor_angle_rad[..to], h2));
-        let force: Vec<f64> = tr.friction_torque_nm[..to].iter().map(|x| x / p.brake_disc_radius_m).collect();
-        let force_smooth = m.has_force.then(|| centred_moving_average(&force, h1)[from..].to_vec());
+        let has_force = m.has_force && !rotor_only;
+        let force: Vec<f64> = if has_force {
+            tr.friction_torque_nm[..to].iter().map(|x| x / p.brake_disc_radius_m).collect()
+        } else {
+            Vec::new()
+        };
+        let force_smooth = has_force.then(|| centred_moving_average(&force, h1)[from..].to_vec());
         // The simulated angle through the encoder, as the record's: the
         // window's first `to` samples for the peaks, the whole run for the
         // dwell row (only where the record has one).
-        let peaks = if m.has_force {
+        let peaks = if has_force {
             let ticks = rig_types::sensor::encoder_ticks(&tr.rotor_angle_rad[..to], c.rig.encoder_ticks_per_rev);
             let enc = ticks_to_rad(&ticks, c.rig.encoder_ticks_per_rev);
             breakaway_peaks(tt, &enc, &force, from, normal_force_n, &s.stick_episodes)
         } else {
             Vec::new()
         };
-        let dwell = m.dwell.as_ref().and_then(|_| {
+        let dwell = m.dwell.as_ref().filter(|_| !rotor_only).and_then(|_| {
             let ticks = rig_types::sensor::encoder_ticks(&tr.rotor_angle_rad, c.rig.encoder_ticks_per_rev);
             let enc = ticks_to_rad(&ticks, c.rig.encoder_ticks_per_rev);
             let all: Vec<f64> = tr.friction_torque_nm.iter().map(|x| x / p.brake_disc_radius_m).collect();

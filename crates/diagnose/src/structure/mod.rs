@@ -182,7 +182,7 @@ pub use channel_delay::DelayedChannel;
 
 use crate::DiagnoseOptions;
 use crate::channels::{
-    BalanceData, BalanceFit, FreeRunPair, FreeRunSettings, MeasuredRuns, free_run_misfit, free_run_pairs_measured,
+    BalanceData, BalanceFit, FreeRunPair, FreeRunSettings, MeasuredRuns, free_run_misfit, free_run_misfit_measured,
     with_run_phases,
 };
 use crate::result::{Finding, ParamAtBound, StructureScore, round_sig};
@@ -545,8 +545,7 @@ impl rig_types::select::ViewStudy<Structured> for Study<'_> {
                 // Compared only where the extended model's free run has a misfit.
                 self.ext_free_run[unit]?;
                 let p = with_run_phases(&REGISTRY[m.k].apply(&self.models[m.k], &m.fit), self.runs[unit].phases_rad);
-                let pairs = free_run_pairs_measured(self.c, self.s, self.measured, |r| (r == id).then(|| p.clone()));
-                pairs.first().and_then(|q| free_run_misfit(q, self.floor_rad_s))
+                free_run_misfit_measured(self.c, self.s, self.measured, id, &p, self.floor_rad_s)
             }
         }
     }
