@@ -471,6 +471,27 @@ impl ImplicitFriction for RateStateAgeing {
 /// [0, min(|p|/(hn a), asinh(|p|/s))], the interval that holds the root;
 /// started below the root, the first step lands above it (convexity) and
 /// the iteration then descends monotonically.
+///
+/// That descent is slow where the first step overshoots far: above the root
+/// s sinh u dominates and Newton gains about one unit of u per iteration, so
+/// a start far below the root (u = 0 at the first step of a run, the first
+/// step landing near |p|/(hn a), hundreds above the root) can use up the 100
+/// iterations; and where u is below ~1e-4 the two exponentials of s sinh u
+/// cancel to a few digits (to none when u is below an ulp of ln s, as for
+/// every speed of a contact with s ≫ 1) and Newton does not meet its
+/// tolerance. The u reached is then no solution (|v| ≫ |p|, which the
+/// equation forbids: a slider at 4.3 mm/s given 1.75 m/s, whose state
+/// θ = Dc/|v| then made s overflow and s sinh u = ∞ − ∞ a NaN two steps
+/// later; or v = 0 for |v| ≈ |p|); so a search that has not converged in
+/// 100 iterations starts again from the interval's upper end, above the
+/// root, with s sinh u as e^{ln s} sinh u below u = 1. A search that
+/// converges in the first 100 is the one it always was. A result that still does not
+/// converge, or a NaN in `p` or `ln_s`, is returned as a NaN speed, which the
+/// integrator's finite-state check turns into [`ModelError::IntegratorFailed`].
+/// Where s itself overflows (ln s above ~709.78: a contact so young that the
+/// law's friction N a asinh(|v|/s) vanishes to the last digit) the root is
+/// v = p/(1 + hn a/s) in closed form (u = |v|/s, no Newton), where
+/// ½(e^{u + ln s} − e^{ln s − u}) would be ∞ − ∞.
 pub fn rate_state_implicit_speed(p: f64, hn: f64, a: f64, ln_s: f64, u_guess: f64) -> (f64, f64) {
     let (sign, p) = (p.signum(), p.abs());
     if p == 0.0 {
@@ -485,16 +506,51 @@ pub fn rate_state_implicit_speed(p: f64, hn: f64, a: f64, ln_s: f64, u_guess: f6
     // asinh(p/s) = ln(p/s + √((p/s)² + 1)), ≈ ln(2p) − ln s when p/s is large.
     let ratio_ln = p.ln() - ln_s;
     let upper = if ratio_ln > 20.0 { std::f64::consts::LN_2 + ratio_ln } else { ratio_ln.exp().asinh() };
-    let mut u = u_guess.clamp(0.0, (p / c).min(upper));
-    for _ in 0..100 {
-        let (sh, ch) = s_sinh_cosh(u);
-        let step = (sh + c * u - p) / (ch + c);
-        u -= step;
-        if step.abs() <= 1e-12 * u.abs().max(1e-300) {
-            break;
-        }
+    let hi = (p / c).min(upper);
+    if hi.is_nan() {
+        return (f64::NAN, f64::NAN);
     }
-    (sign * s_sinh_cosh(u).0, u)
+    if ln_s.exp() == f64::INFINITY {
+        // s sinh u = s u to the last digit (u < e^{ln p − ln s} < e^{−300}).
+        let v = p / (1.0 + c * (-ln_s).exp());
+        return (sign * v, (v.ln() - ln_s).exp());
+    }
+    // The same, without the cancellation of the two exponentials for u < 1
+    // (there s sinh u = e^{ln s} sinh u, finite: e^{ln s} overflows above).
+    let s_sinh_cosh_small = |u: f64| {
+        if u < 1.0 {
+            let s = ln_s.exp();
+            (s * u.sinh(), s * u.cosh())
+        } else {
+            s_sinh_cosh(u)
+        }
+    };
+    let newton = |mut u: f64, s_sinh_cosh: &dyn Fn(f64) -> (f64, f64)| {
+        for _ in 0..100 {
+            let (sh, ch) = s_sinh_cosh(u);
+            let step = (sh + c * u - p) / (ch + c);
+            u -= step;
+            if step.abs() <= 1e-12 * u.abs().max(1e-300) {
+                return Some(u);
+            }
+        }
+        None
+    };
+    // u_guess into [0, hi] (hi ≥ 0 and not NaN here; a NaN u_guess stays NaN).
+    let start = if u_guess < 0.0 {
+        0.0
+    } else if u_guess > hi {
+        hi
+    } else {
+        u_guess
+    };
+    if let Some(u) = newton(start, &s_sinh_cosh) {
+        return (sign * s_sinh_cosh(u).0, u);
+    }
+    match newton(hi, &s_sinh_cosh_small) {
+        Some(u) => (sign * s_sinh_cosh_small(u).0, u),
+        None => (f64::NAN, f64::NAN),
+    }
 }
 
 /// The ageing law dθ/dt = 1 − v θ/Dc advanced exactly over `h_s` at constant
