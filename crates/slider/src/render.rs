@@ -1129,12 +1129,8 @@ fn adequate(s: &Study, c: &CandidateResult) -> bool {
 /// ([`Margin::resolved`]).
 fn misses_resolved(s: &Study, h: &(usize, f64, Features)) -> bool {
     let meas = &s.runs[h.0].features;
-    if h.2.regime != meas.regime {
-        return true;
-    }
-    let b = bounds(meas, &h.2);
-    let oks = [b.inertial_period, b.period, b.drop, b.onset];
-    oks.iter().zip(margins(meas, &h.2)).any(|(ok, m)| *ok == Some(false) && m.is_some_and(|m| m.resolved()))
+    // A check fails exactly where its margin is negative ([`margins`]).
+    h.2.regime != meas.regime || margins(meas, &h.2).iter().flatten().any(|m| m.margin < 0.0 && m.resolved())
 }
 
 fn regimes_heldout(s: &Study, c: &CandidateResult) -> usize {
