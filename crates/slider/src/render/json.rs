@@ -1,0 +1,147 @@
+//! `slider-diagnosis.json` in the schema of ../shared/spec/diagnosis.md.
+
+use super::*;
+
+pub(super) fn heldout_names(s: &Study, c: &CandidateResult) -> Vec<String> {
+    c.heldout.iter().map(|h| s.runs[h.0].name.clone()).collect()
+}
+
+/// The elements a forward step added: the memory law or the set-up that
+/// differs, both (`law+set-up`) after the engine's pair step.
+pub(super) fn added(from: Model, to: Model) -> String {
+    match (from.friction != to.friction, from.setup != to.setup) {
+        (true, true) => format!("{}+{}", to.friction.id(), to.setup.id()),
+        (true, false) => to.friction.id().to_string(),
+        _ => to.setup.id().to_string(),
+    }
+}
+
+/// The parameters of the element `to` adds over `from`, by name.
+pub(super) fn added_params(from: Model, c: &CandidateResult, values: Option<&[f64]>) -> Value {
+    let n = c.model.friction.params().len();
+    let all = c.model.params();
+    let keep = |j: usize| if j < n { from.friction != c.model.friction } else { from.setup != c.model.setup };
+    Value::Object(
+        all.iter()
+            .enumerate()
+            .filter(|(j, _)| keep(*j))
+            .map(|(j, p)| (p.name.to_string(), values.map_or(Value::Null, |v| json!(v[j]))))
+            .collect(),
+    )
+}
+
+/// The kept steps, in order.
+pub(super) fn kept_steps(s: &Study) -> impl Iterator<Item = &Step> {
+    s.steps.iter().filter(|st| st.kept)
+}
+
+pub(super) fn diagnosis_json(s: &Study) -> Value {
+    let base = &s.candidates[0];
+    let mut findings = Vec::new();
+    for st in kept_steps(s) {
+        let (from, to) = (&s.candidates[st.from], &s.candidates[st.best]);
+        findings.push(json!({
+            "effect": added(from.model, to.model),
+            "model": to.model.id(),
+            "params": added_params(from.model, to, Some(&full_fit(to).params)),
+            "params_stderr": added_params(from.model, to, None),
+            "evidence": evidence(s, st),
+            "heldout_runs": heldout_names(s, to),
+            "heldout_misfit_baseline": from.heldout_mean,
+            "heldout_misfit_extended": to.heldout_mean,
+            "heldout_misfit_rms_baseline": st.gain.before,
+            "heldout_misfit_rms_extended": st.gain.after,
+            "relative_gain": st.gain.gain,
+            "relative_gain_fold_sd": st.gain.gain_fold_sd,
+            "paired_t": st.gain.t,
+        }));
+    }
+    let final_c = s.chosen.map(|c| &s.candidates[c]).unwrap_or(base);
+    let adequate = adequate(s, final_c);
+    if !adequate {
+        let where_: Vec<String> = final_c
+            .heldout
+            .iter()
+            .filter(|h| h.1 > s.params.adequacy_threshold || misses_resolved(s, h))
+            .map(|h| s.runs[h.0].name.clone())
+            .collect();
+        let ext = extension(s);
+        findings.push(json!({
+            "effect": "unexplained",
+            "evidence": format!(
+                "the final model ({1}) has a mean held-out misfit of {0:.2} (adequacy threshold {2}) and misses the regime, a check it resolves or the threshold at: {3}",
+                final_c.heldout_mean, final_c.model.id(), s.params.adequacy_threshold, where_.join(", ")),
+            "residual_over_noise": final_c.heldout_mean / s.params.adequacy_threshold,
+            "where": where_,
+            "signature": [],
+            "heldout_misfit_baseline": base.heldout_mean,
+            "heldout_misfit_extended": ext.heldout_mean,
+        }));
+    }
+    let verdict = match (kept_steps(s).next(), adequate) {
+        (_, false) => "unexplained".to_string(),
+        (Some(st), true) => added(s.candidates[st.from].model, s.candidates[st.best].model),
+        (None, true) => "none".to_string(),
+    };
+    // Every fit that pressed a parameter against its bound (on every calibration run, or on a fold: which runs it saw).
+    let at_bounds: Vec<Value> = s
+        .candidates
+        .iter()
+        .flat_map(|c| {
+            let specs = c.model.params();
+            c.fitted.iter().chain(&c.fold_fits).flat_map(move |f| {
+                let specs = specs.clone();
+                f.at_bounds.iter().map(move |p| {
+                    let j = specs.iter().position(|q| q.name == *p).expect("a parameter of the model");
+                    let (spec, v) = (specs[j], f.params[j]);
+                    let ks = distinct(f.train.iter().map(|&i| s.runs[i].stiffness_n_m));
+                    json!({
+                        "parameter": format!("{}.{}", c.model.id(), p),
+                        "fitted_on_stiffnesses_n_m": ks,
+                        "bound": if (v - spec.lo).abs() < (v - spec.hi).abs() { spec.lo } else { spec.hi },
+                        "unconstrained": Value::Null,
+                        "meaning": "the fit pressed this parameter against its bound: the model cannot reach what these runs want there",
+                    })
+                })
+            })
+        })
+        .collect();
+    json!({
+        "campaign": s.folder_name,
+        "verdict": verdict,
+        "findings": findings,
+        "candidates": s.candidates.iter().skip(1).map(|c| json!({
+            "effect": c.model.id(),
+            "heldout_misfit_extended": c.heldout_mean,
+            // The calibration misfit on every calibration run, else the mean of the folds' own.
+            "criterion": c.fitted.as_ref().map_or_else(
+                || c.fold_fits.iter().map(|f| f.calibration_misfit).sum::<f64>() / c.fold_fits.len().max(1) as f64,
+                |f| f.calibration_misfit,
+            ),
+        })).collect::<Vec<_>>(),
+        "structure": {
+            "notes": "one mass on one spring with an imposed drive speed; a model is a friction law on a set-up (the README's m and k, or an effective mass, a compliance in series, a scaled spring)",
+            "final_model": final_c.model.id(),
+        },
+        "parameters_at_bounds": at_bounds,
+    })
+}
+
+pub(super) fn evidence(s: &Study, st: &Step) -> String {
+    let (from, to) = (&s.candidates[st.from], &s.candidates[st.best]);
+    format!(
+        "held out ({}), {} lowers the RMS misfit of {} from {:.2} to {:.2} (gain {:.1} %, paired t {:.2} over {} runs) and gets {}/{} regimes right against {}/{} (tables/slider-heldout.csv)",
+        if s.leave_one_out { "leave one stiffness out" } else { "runs at stiffnesses outside the calibration list" },
+        added(from.model, to.model),
+        from.model.id(),
+        st.gain.before,
+        st.gain.after,
+        100.0 * st.gain.gain,
+        st.gain.t,
+        to.heldout.len(),
+        regimes_heldout(s, to),
+        to.heldout.len(),
+        regimes_heldout(s, from),
+        from.heldout.len(),
+    )
+}
