@@ -36,7 +36,8 @@ use rig_types::minimize::brent_min;
 /// was read at 4.11 V, 0.17 V low, which slowed every clipped run of the
 /// free run). So the grid points between the first pass's best and the flat
 /// stretch are scored again from the best point's gains, and Brent's
-/// search tries both starts at every trial, keeping the lower RSS.
+/// search starts every trial from the gains at the best grid point after
+/// that rescoring.
 pub fn fit_limit(runs: &[&RunSignals], supply_v: f64) -> Option<(Pi, f64, usize, f64)> {
     search_limit(&Recording::all(runs), supply_v, true)
 }
@@ -104,13 +105,14 @@ fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi,
             start = p;
         }
     }
-    // Brent's trials from both starts, the better fixed point kept (the
-    // second start alone lost a fold of the registry test's clipped runs).
-    let two = start != p0;
-    let eval = |l: f64| {
-        let a = eval_with(l, &p0);
-        if two { a.min(eval_with(l, &start)) } else { a }
-    };
+    // Brent's trials from the best grid point's gains alone (`start`, the
+    // unlimited fit where the grid found no binding best): with the
+    // alternation the unlimited fit was a second start at every trial (the
+    // best point's alone lost a fold of the registry test's clipped runs);
+    // with the gains' RSS minimum it gave the same answers to the bit on
+    // drive-limit rungs 1, 4 and 5 and the strided samples, at 29 % more
+    // of rung 1's CPU (docs/performance.md, sixteenth session).
+    let eval = |l: f64| eval_with(l, &start);
     let lo = grid[best.saturating_sub(1)];
     let hi = grid[(best + 1).min(grid.len() - 1)];
     // Vmax to 10⁻⁷ of the supply (golden section's 24 steps on this bracket reached 5·10⁻⁷).
@@ -133,17 +135,7 @@ fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi,
         _ => l,
     };
     let n = runs.iter().map(|r| r.p.e_rad_s.len()).sum::<usize>();
-    let fit_at = |p: &Pi| fits.fit(runs, l, p).map(|(pi, rss)| (rss, pi));
-    let (rss, pi) = match (fit_at(&p0), if two { fit_at(&start) } else { None }) {
-        (Some(a), Some(b)) => {
-            if b.0 < a.0 {
-                b
-            } else {
-                a
-            }
-        }
-        (a, b) => a.or(b)?,
-    };
+    let (pi, rss) = fits.fit(runs, l, &start)?;
     if !with_se {
         return Some((pi, rss, n, f64::NAN));
     }
