@@ -150,8 +150,8 @@ fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi,
 /// their voltage RSS, kept for the rest of one limit search: the search
 /// asks for some (limit, start) pairs more than once — the grid's best
 /// point again from the unlimited fit for the second start, the best point
-/// after the second start's rescoring again from it, and Brent's last point
-/// from both starts for the reported gains (with the alternation of eight
+/// after the second start's rescoring again from it, and Brent's returned
+/// point for the reported gains (with the alternation of eight
 /// passes the fits were 61 % of a clipped ladder rung's CPU in `perf`, 4–9
 /// of a fold search's 29–53 fits repeats, issue 23). A fit is a function
 /// of the limit and the start's gains alone (the start's own limit is
