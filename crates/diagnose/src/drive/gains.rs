@@ -23,13 +23,15 @@
 //! # The solver and its stop rule
 //!
 //! Levenberg–Marquardt with Marquardt's scaling (the step solves
-//! (JᵀJ + λ·diag JᵀJ)·δ = Jᵀr by `rig_types::linear`'s [`Normal`]; λ ÷ 3 on
-//! an accepted step, × 4 on a rejected one, as `rig_estimate::lsq` does with
-//! Nielsen's update). It stops when (1) the undamped Gauss–Newton step is
-//! within a tenth of a standard error of the local model's minimum
-//! (`crate::friction::near_stationary`, the workspace's Gauss–Newton stop
-//! rule; RSS in noise units, σ² = RSS/(n − 2)): that step is taken if it
-//! lowers the RSS; (2) an accepted step lowers the RSS by less than
+//! (JᵀJ + λ·diag JᵀJ)·δ = Jᵀr by `rig_types::linear`'s [`Normal`]; λ from
+//! 10⁻³, Nielsen's update as `rig_estimate::lsq` does: × max(1/3,
+//! 1 − (2ρ − 1)³) on an accepted step, ρ the RSS decrease over the linear
+//! model's, × ν on a rejected one, ν doubling). It stops when (1) the
+//! undamped Gauss–Newton step is within a tenth of a standard error of the
+//! local model's minimum (`crate::friction::near_stationary`, the
+//! workspace's Gauss–Newton stop rule; RSS in noise units, σ² = RSS/(n −
+//! 2)): that step is taken if it lowers the RSS, and the fit ends either
+//! way (a step that raises it crossed a kink within that tenth); (2) an accepted step lowers the RSS by less than
 //! [`FTOL`] of itself, or a step is below [`XTOL`] of the gains (MINPACK's
 //! `ftol` and `xtol` tests, Moré, Garbow & Hillstrom, *User Guide for
 //! MINPACK-1*, 1980, §2.3, as `rig_estimate::lsq::SolverOptions` states
@@ -54,7 +56,7 @@ pub(super) const MAX_ITERATIONS: usize = 40;
 pub(super) struct GainsFit {
     pub pi: Pi,
     pub rss: f64,
-    /// Read by the tests and when tracing a search (docs/performance.md).
+    /// Read by the tests.
     #[allow(dead_code)]
     pub evaluations: usize,
     #[allow(dead_code)]

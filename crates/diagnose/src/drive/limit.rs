@@ -15,7 +15,7 @@ use rig_types::minimize::brent_min;
 /// # The gains at a trial limit
 ///
 /// At every trial limit the gains are the voltage RSS's minimum in (kp, ki)
-/// ([`super::gains`]: Levenberg–Marquardt on the clamped recursion's exact
+/// (`drive/gains.rs`: Levenberg–Marquardt on the clamped recursion's exact
 /// sensitivities), so Brent minimises the profile RSS(Vmax) = min over the
 /// gains. Until the sixteenth session they were the 8th iterate of an
 /// alternation (clamp pattern ↔ least squares on the unclamped samples,

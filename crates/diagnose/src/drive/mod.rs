@@ -9,10 +9,10 @@
 //!
 //! The law is rig-model's drive (its docs, "Drive": the thesis names the PI
 //! loop in §4.1 and writes no equation for it), with back-calculation
-//! anti-windup ([`visit`]). At a trial limit of the drive-limit search
-//! ([`limit`]) the gains are the voltage RSS's minimum, found by
+//! anti-windup (`visit`). At a trial limit of the drive-limit search
+//! (`drive/limit.rs`) the gains are the voltage RSS's minimum, found by
 //! Levenberg–Marquardt on the clamped recursion's exact forward
-//! sensitivities with a stated stop rule ([`gains`]); the baseline's gains
+//! sensitivities with a stated stop rule (`drive/gains.rs`); the baseline's gains
 //! at the supply by [`fit_gains`].
 
 use crate::prepare::RunSignals;
@@ -288,9 +288,9 @@ fn idle_sse(pi: &Pi, s: &[f64; 6]) -> f64 {
 /// those gains clamp no run and no sample reaches 0.999 of the supply (every
 /// campaign but a drive clipped near the supply), the first pass is the
 /// least squares of a model linear in the gains, the second confirms it, and
-/// that is the RSS minimum [`gains`] would reach. Not a descent of the RSS
+/// that is the RSS minimum `drive/gains.rs` would reach. Not a descent of the RSS
 /// where the clamp acts (docs/findings.md, issue 23): the drive-limit
-/// search fits its gains by [`gains`] instead.
+/// search fits its gains by `drive/gains.rs` instead.
 pub fn fit_gains(runs: &[&RunSignals], limit_v: f64) -> Option<Pi> {
     fit_gains_from(&Recording::all(runs), limit_v, None)
 }
