@@ -127,6 +127,17 @@ pub(crate) struct System<'a> {
     /// exact steps apply ([`System::region`]; module `sim` advances the pad
     /// state, the time since the last event, by each exact step's length).
     static_extension_only: bool,
+    /// Whether the brake is open (N0 = 0) and every effect acts through the
+    /// contact alone: a normal-force or angle-periodic modulation, harmonic
+    /// friction, the static coefficient's ageing, the diagnosis' friction
+    /// extension. T1 = μ·N·r is then 0 whatever N and μ would be
+    /// ([`System::friction_torque_nm`]), so the motion is the plain model's
+    /// and exact steps apply ([`System::region`]): e.g. the voltage steps of
+    /// the motor-side refits of a model that carries N's modulation. Of the
+    /// pad state only the extension's time since the last event moves (at
+    /// the rate of time, [`System::exact_steps_age`]); the contact age
+    /// stays, as there is no stick.
+    open_contact_only: bool,
     /// Half the backlash gap b, rad (0: no backlash).
     half_gap_rad: f64,
     /// β of the cubic shaft, 1/rad² (0: linear).
@@ -200,6 +211,16 @@ impl<'a> System<'a> {
                 && p.effects.iter().all(|e| matches!(e, Effect::FrictionExtension { .. }))
                 && Extension::of(&p.effects)
                     .is_some_and(|x| x.slip_speed_per_rad_s == 0.0 && x.breakaway_transient == 0.0),
+            open_contact_only: n0 == 0.0
+                && p.effects.iter().all(|e| {
+                    matches!(
+                        e,
+                        Effect::NormalForceModulation { .. }
+                            | Effect::AnglePeriodicFriction { .. }
+                            | Effect::StaticFrictionAging { .. }
+                            | Effect::FrictionExtension { .. }
+                    )
+                }),
             inv_ki_tracking: 1.0 / (p.drive.ki_v_rad * ANTI_WINDUP_TRACKING_S),
         }
     }
@@ -224,9 +245,10 @@ impl<'a> System<'a> {
 
     /// Whether exact steps must advance the pad state (the friction
     /// extension's time since the last event, dt/dt = 1 in both modes): a
-    /// region exists with it only under [`System::static_extension_only`]'s condition.
+    /// region exists with it only under [`System::static_extension_only`]'s
+    /// or [`System::open_contact_only`]'s condition.
     pub fn exact_steps_age(&self) -> bool {
-        self.static_extension_only
+        self.static_extension_only || (self.open_contact_only && self.extension.is_some())
     }
 
     /// Whether friction can act at all (brake closed).

@@ -15,12 +15,14 @@ impl System<'_> {
     /// The affine region of (mode, t, y), or `None` where the right-hand side
     /// is not affine there: effects or harmonic friction present (but for the
     /// friction extension's break-away terms alone, which leave the motion
-    /// the plain model's and change only the stick mode's event), the Stribeck
+    /// the plain model's and change only the stick mode's event, and for
+    /// effects through the contact alone while the brake is open,
+    /// [`System::open_contact_only`]), the Stribeck
     /// law in slip, the rig model's motor friction off its saturated branch
     /// (|n Ω2| < [`MOTOR_FRICTION_SATURATED`] rad/s), the thermal state.
     #[inline(always)]
     pub fn region(&self, mode: Mode, t: f64, y: &Vector) -> Option<Region> {
-        if !(self.plain || self.static_extension_only)
+        if !(self.plain || self.static_extension_only || self.open_contact_only)
             || !self.linear_shaft
             || self.fade.is_some()
             || self.current_limit_a.is_some()
