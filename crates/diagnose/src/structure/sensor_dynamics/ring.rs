@@ -107,52 +107,67 @@ fn ring_average(run: &RecordedRun, rate_hz: f64) -> Option<Vec<f64>> {
 /// Each ring average's misfit, N (module docs): the smallest RMS residual
 /// over the drop's time τ and width of the least-squares fit of the five
 /// amplitudes with the basis through `q` (`None`: as recorded).
+///
+/// The basis 1 does not depend on τ or the width and t (time from the drop)
+/// not on the width, so each is put through `q` once (and its products with
+/// the records summed once), the ramp s once per sample for its three
+/// columns, and X'X's lower triangle is its upper one's mirror: the same
+/// operations on the same values as every point building its own five
+/// columns and 25 sums, so the same misfits to the bit (test
+/// `ring_misfits_are_each_points_own_fit_to_the_bit`).
 fn ring_misfits(y: &[&[f64]], q: Option<Biquad>, rate_hz: f64) -> Vec<f64> {
     let len = y.first().map_or(0, |v| v.len());
     let (pre, lead) = (nominal_window_samples(RING_PRE_S, rate_hz), nominal_window_samples(RING_LEAD_IN_S, rate_hz));
     let dt = 1.0 / rate_hz;
     let mut best = vec![f64::INFINITY; y.len()];
+    // A column of the true force's basis on the lead-in and the window, through `q`.
+    let through = |u: Vec<f64>| -> Vec<f64> {
+        let v = q.map_or(u.clone(), |q| filtered(&u, q));
+        v[lead..].to_vec()
+    };
+    let dot = |a: &[f64], b: &[f64]| -> f64 { a.iter().zip(b).map(|(a, v)| a * v).sum() };
+    let one = through(vec![1.0; lead + len]);
+    let one_y: Vec<f64> = y.iter().map(|yr| dot(&one, yr)).collect();
+    let yty: Vec<f64> = y.iter().map(|yr| yr.iter().map(|v| v * v).sum()).collect();
     let taus = -(nominal_window_samples(RING_STEP_LEAD_S, rate_hz) as i64)
         ..=nominal_window_samples(RING_STEP_LAG_S, rate_hz) as i64;
     for tau in taus {
         let at = pre as i64 + lead as i64 + tau;
+        let times: Vec<f64> = (0..(lead + len) as i64).map(|k| (k - at) as f64 * dt).collect();
+        let t_col = through(times.clone());
+        let t_y: Vec<f64> = y.iter().map(|yr| dot(&t_col, yr)).collect();
         for width_s in RING_RAMPS_S {
             let m = (width_s * rate_hz).round() as i64;
-            // The true force's basis on the lead-in and the window: 1, t, and
-            // after the drop (ramp s from `at` over m samples) s, s·t', s·t'².
-            let basis: Vec<Vec<f64>> = (0..5)
-                .map(|j| {
-                    let u: Vec<f64> = (0..(lead + len) as i64)
-                        .map(|k| {
-                            let t = (k - at) as f64 * dt;
-                            let s = if k < at {
-                                0.0
-                            } else if k >= at + m {
-                                1.0
-                            } else {
-                                0.5 - 0.5 * (std::f64::consts::PI * (k - at) as f64 / m as f64).cos()
-                            };
-                            [1.0, t, s, s * t, s * t * t][j]
-                        })
-                        .collect();
-                    let v = q.map_or(u.clone(), |q| filtered(&u, q));
-                    v[lead..].to_vec()
-                })
-                .collect();
+            // After the drop (ramp s from `at` over m samples): s, s·t', s·t'².
+            let mut cols = [(); 3].map(|_| Vec::with_capacity(lead + len));
+            for (k, &t) in (0..(lead + len) as i64).zip(&times) {
+                let s = if k < at {
+                    0.0
+                } else if k >= at + m {
+                    1.0
+                } else {
+                    0.5 - 0.5 * (std::f64::consts::PI * (k - at) as f64 / m as f64).cos()
+                };
+                cols[0].push(s);
+                cols[1].push(s * t);
+                cols[2].push(s * t * t);
+            }
+            let [s_col, st_col, stt_col] = cols.map(through);
+            let basis: [&[f64]; 5] = [&one, &t_col, &s_col, &st_col, &stt_col];
             let mut xtx = [0.0; 25];
             for i in 0..5 {
-                for j in 0..5 {
-                    xtx[5 * i + j] = basis[i].iter().zip(&basis[j]).map(|(a, b)| a * b).sum();
+                for j in i..5 {
+                    let v = dot(basis[i], basis[j]);
+                    (xtx[5 * i + j], xtx[5 * j + i]) = (v, v);
                 }
             }
             let Some(inv) = rig_estimate::linear::Normal::from_row_major(5, &xtx, vec![0.0; 5]).inverse() else {
                 continue;
             };
             for (r, yr) in y.iter().enumerate() {
-                let xty: Vec<f64> = basis.iter().map(|b| b.iter().zip(*yr).map(|(a, v)| a * v).sum()).collect();
-                let yty: f64 = yr.iter().map(|v| v * v).sum();
+                let xty = [one_y[r], t_y[r], dot(&s_col, yr), dot(&st_col, yr), dot(&stt_col, yr)];
                 let fitted: f64 = (0..5).map(|i| xty[i] * (0..5).map(|j| inv[5 * i + j] * xty[j]).sum::<f64>()).sum();
-                let rms = ((yty - fitted).max(0.0) / len as f64).sqrt();
+                let rms = ((yty[r] - fitted).max(0.0) / len as f64).sqrt();
                 if rms < best[r] {
                     best[r] = rms;
                 }
@@ -164,7 +179,118 @@ fn ring_misfits(y: &[&[f64]], q: Option<Biquad>, rate_hz: f64) -> Vec<f64> {
 
 #[cfg(test)]
 mod tests {
-    use super::{Biquad, filtered, ring_misfits};
+    use super::{
+        Biquad, RING_LEAD_IN_S, RING_POST_S, RING_PRE_S, RING_RAMPS_S, RING_STEP_LAG_S, RING_STEP_LEAD_S, filtered,
+        ring_misfits,
+    };
+    use rig_types::sensor::nominal_window_samples;
+
+    /// [`ring_misfits`] as it was before its shared columns: every point
+    /// builds its own five columns and 25 sums.
+    fn each_points_own(y: &[&[f64]], q: Option<Biquad>, rate_hz: f64) -> Vec<f64> {
+        let len = y.first().map_or(0, |v| v.len());
+        let (pre, lead) =
+            (nominal_window_samples(RING_PRE_S, rate_hz), nominal_window_samples(RING_LEAD_IN_S, rate_hz));
+        let dt = 1.0 / rate_hz;
+        let mut best = vec![f64::INFINITY; y.len()];
+        let taus = -(nominal_window_samples(RING_STEP_LEAD_S, rate_hz) as i64)
+            ..=nominal_window_samples(RING_STEP_LAG_S, rate_hz) as i64;
+        for tau in taus {
+            let at = pre as i64 + lead as i64 + tau;
+            for width_s in RING_RAMPS_S {
+                let m = (width_s * rate_hz).round() as i64;
+                // The true force's basis on the lead-in and the window: 1, t, and
+                // after the drop (ramp s from `at` over m samples) s, s·t', s·t'².
+                let basis: Vec<Vec<f64>> = (0..5)
+                    .map(|j| {
+                        let u: Vec<f64> = (0..(lead + len) as i64)
+                            .map(|k| {
+                                let t = (k - at) as f64 * dt;
+                                let s = if k < at {
+                                    0.0
+                                } else if k >= at + m {
+                                    1.0
+                                } else {
+                                    0.5 - 0.5 * (std::f64::consts::PI * (k - at) as f64 / m as f64).cos()
+                                };
+                                [1.0, t, s, s * t, s * t * t][j]
+                            })
+                            .collect();
+                        let v = q.map_or(u.clone(), |q| filtered(&u, q));
+                        v[lead..].to_vec()
+                    })
+                    .collect();
+                let mut xtx = [0.0; 25];
+                for i in 0..5 {
+                    for j in 0..5 {
+                        xtx[5 * i + j] = basis[i].iter().zip(&basis[j]).map(|(a, b)| a * b).sum();
+                    }
+                }
+                let Some(inv) = rig_estimate::linear::Normal::from_row_major(5, &xtx, vec![0.0; 5]).inverse() else {
+                    continue;
+                };
+                for (r, yr) in y.iter().enumerate() {
+                    let xty: Vec<f64> = basis.iter().map(|b| b.iter().zip(*yr).map(|(a, v)| a * v).sum()).collect();
+                    let yty: f64 = yr.iter().map(|v| v * v).sum();
+                    let fitted: f64 =
+                        (0..5).map(|i| xty[i] * (0..5).map(|j| inv[5 * i + j] * xty[j]).sum::<f64>()).sum();
+                    let rms = ((yty - fitted).max(0.0) / len as f64).sqrt();
+                    if rms < best[r] {
+                        best[r] = rms;
+                    }
+                }
+            }
+        }
+        best
+    }
+
+    /// The shared columns change no misfit's bit: synthetic averages (a
+    /// drop through a sensor, a late drop, a ramp with a slow swing, a flat
+    /// line), as recorded and through sensors of the grid's range, at
+    /// 500 and 1000 Hz.
+    #[test]
+    fn ring_misfits_are_each_points_own_fit_to_the_bit() {
+        for rate in [500.0, 1000.0] {
+            let (pre, post) = (nominal_window_samples(RING_PRE_S, rate), nominal_window_samples(RING_POST_S, rate));
+            let lead = nominal_window_samples(RING_LEAD_IN_S, rate);
+            let n = pre + post + 1;
+            let drop = |shift: f64, width_s: f64| -> Vec<f64> {
+                (0..lead + n)
+                    .map(|k| {
+                        let t = (k as f64 - (lead + pre) as f64) / rate - shift;
+                        let s = if t < 0.0 {
+                            0.0
+                        } else if t >= width_s {
+                            1.0
+                        } else {
+                            0.5 - 0.5 * (std::f64::consts::PI * t / width_s).cos()
+                        };
+                        40.0 + 5.0 * t - s * (10.0 + 2.0 * t) + 0.3 * (2.0 * std::f64::consts::PI * 1.3 * t).sin()
+                    })
+                    .collect()
+            };
+            let sensor = Biquad::new(rate, 8.0, 0.25, false);
+            let ys: Vec<Vec<f64>> = vec![
+                filtered(&drop(0.0, 0.0), sensor)[lead..].to_vec(),
+                drop(0.01, 0.0)[lead..].to_vec(),
+                drop(-0.02, 0.02)[lead..].to_vec(),
+                vec![12.5; n],
+            ];
+            let y: Vec<&[f64]> = ys.iter().map(|v| v.as_slice()).collect();
+            for q in [
+                None,
+                Some(sensor),
+                Some(Biquad::new(rate, 2.0, 0.05, false)),
+                Some(Biquad::new(rate, 20.0, 0.4, false)),
+            ] {
+                let (a, b) = (ring_misfits(&y, q, rate), each_points_own(&y, q, rate));
+                assert_eq!(a.len(), 4);
+                for (x, r) in a.iter().zip(&b) {
+                    assert_eq!(x.to_bits(), r.to_bits(), "{rate} Hz: {a:?} vs {b:?}");
+                }
+            }
+        }
+    }
 
     /// The ring's fit (module docs) on synthetic averages: a friction drop
     /// of 10 N with a slow slip after it, recorded through a 8 Hz, ζ 0.25
