@@ -145,7 +145,12 @@
 //!   its break-away terms alone: the motion is the plain model's, its
 //!   threshold is the stick mode's event, and an exact step advances its pad
 //!   state, the time since the last event, by the step's length; test
-//!   `break_away_terms_alone_take_exact_steps_and_age_the_contact`). There,
+//!   `break_away_terms_alone_take_exact_steps_and_age_the_contact`; and,
+//!   with the brake open, effects that act through the contact alone — N's
+//!   modulations, harmonic friction, ageing, the extension — where T1 = 0
+//!   leaves the plain model's motion: a voltage step of such a model, e.g.
+//!   a motor-side refit's, takes the plain model's steps, tests
+//!   `open_brake.rs`). There,
 //!   with z = [q, t, 1], ż = M z and a step
 //!   is z(t + h) = e^{M h} z(t), exact to rounding whatever h and however stiff
 //!   the drive (the armature's R/L and the PI loop, −300…−600 1/s, or the

@@ -84,9 +84,9 @@
 //! (H(s) = ω²/(s² + 2ζωs + ω²), the model above); a late channel shows the
 //! same drop, later, and does not ring. So per run ([`Ring`]): every
 //! stick→slip transition of the rotor encoder (the balance's), the recorded
-//! force aligned on its steepest change within ±[`RING_SEARCH_S`] (the force
-//! smoothed over ±[`RING_LOCATE_HALF_S`] to locate it), averaged over the
-//! run's transitions from −[`RING_PRE_S`] to +[`RING_POST_S`] (transitions
+//! force aligned on its steepest change within ±[`RING_SEARCH_S`](ring::RING_SEARCH_S) (the force
+//! smoothed over ±[`RING_LOCATE_HALF_S`](ring::RING_LOCATE_HALF_S) to locate it), averaged over the
+//! run's transitions from −[`RING_PRE_S`](ring::RING_PRE_S) to +[`RING_POST_S`](ring::RING_POST_S) (transitions
 //! whose next stick comes earlier are left out; at least
 //! [`crate::channels::MIN_EVENTS`]): an event-triggered average at full
 //! rate, in which what every break-away shares stays and the force noise
@@ -112,11 +112,15 @@
 //! comparison ([`super`]).
 
 use super::{Fitted, ParamSpec, StructureCandidate, StructureData};
-use crate::channels::{BalanceData, MIN_EVENTS, Recorded, RecordedRun};
+use crate::channels::{BalanceData, Recorded};
 use rayon::prelude::*;
 use rig_types::RigParams;
 use rig_types::sensor::{centred_moving_average, nominal_window_samples};
 use std::borrow::Cow;
+
+mod ring;
+pub use ring::Ring;
+pub(super) use ring::ring;
 
 /// The force sensor's finding id.
 pub const FORCE_SENSOR_ID: &str = "force_sensor_dynamics";
@@ -428,103 +432,6 @@ fn fit_sensor(sensor: Sensor, data: &StructureData, include: &dyn Fn(&str) -> bo
     Some(Fitted { values, balance: best_fit, aligned: None, sensor: best, footprint: None })
 }
 
-/// Seconds of the ring average before the aligned drop.
-pub const RING_PRE_S: f64 = 0.05;
-/// Seconds of the ring average after it: 1.6 periods at 8 Hz, 3.5 decay
-/// times 1/(ζω) at 8 Hz, ζ 0.25.
-pub const RING_POST_S: f64 = 0.2;
-/// The drop is looked for within ± this of the encoder's transition, s
-/// (the documented differentiator smooths over ±40 ms in all).
-pub const RING_SEARCH_S: f64 = 0.08;
-/// Half-width of the smoothing the drop is located on, s.
-pub const RING_LOCATE_HALF_S: f64 = 0.005;
-/// The true drop's time τ relative to the aligned one: from −this, s (a
-/// step through a sensor is steepest up to a quarter period later: 50 ms at
-/// 5 Hz) …
-pub const RING_STEP_LEAD_S: f64 = 0.06;
-/// … to +this, s.
-pub const RING_STEP_LAG_S: f64 = 0.01;
-/// Widths of the true drop's raised-cosine ramp, s (a Stribeck decay
-/// passed in a few to tens of milliseconds as the rotor speeds up).
-pub const RING_RAMPS_S: [f64; 3] = [0.0, 0.01, 0.03];
-/// Seconds of lead-in before the window over which the model's basis is
-/// filtered (so the sensor's response to the line before the drop has
-/// settled: 6 decay times at 2 Hz, ζ 0.4).
-const RING_LEAD_IN_S: f64 = 0.2;
-
-/// Every run's ring misfit after its break-aways (module docs), as
-/// recorded and through every force-sensor point of the grid.
-#[derive(Debug, Clone, Default)]
-pub struct Ring {
-    /// The runs with a ring average, campaign order.
-    ids: Vec<String>,
-    /// Their ring misfits as recorded, N·m (the force's times the disc radius).
-    recorded: Vec<f64>,
-    /// Per point of [`StructureData::sensors`]: the runs' misfits through
-    /// it (`None` for a point that leaves the force as recorded).
-    through: Vec<Option<Vec<f64>>>,
-}
-
-impl Ring {
-    /// Each run's ring misfit, N·m, through grid point `point` (`None`: as
-    /// recorded), over the runs `include` accepts that have a ring average.
-    pub fn run_rms(&self, point: Option<usize>, include: &dyn Fn(&str) -> bool) -> Vec<(String, f64)> {
-        let v = point.and_then(|i| self.through.get(i)?.as_ref()).unwrap_or(&self.recorded);
-        self.ids.iter().zip(v).filter(|(id, _)| include(id)).map(|(id, r)| (id.clone(), *r)).collect()
-    }
-}
-
-/// The ring of every run of `rec` (module docs) for the grid `sensors`.
-pub(super) fn ring(rec: &Recorded, rate_hz: f64, sensors: &[SensorPoint]) -> Ring {
-    let avgs: Vec<(String, Vec<f64>)> =
-        rec.runs.iter().filter_map(|r| Some((r.id.clone(), ring_average(r, rate_hz)?))).collect();
-    if avgs.is_empty() {
-        return Ring { through: vec![None; sensors.len()], ..Ring::default() };
-    }
-    let y: Vec<&[f64]> = avgs.iter().map(|a| a.1.as_slice()).collect();
-    let r_m = rec.disc_radius_m();
-    let torque = |v: Vec<f64>| v.into_iter().map(|x| r_m * x).collect::<Vec<f64>>();
-    let recorded = torque(ring_misfits(&y, None, rate_hz));
-    let through = sensors
-        .par_iter()
-        .map(|p| {
-            (p.sensor == Sensor::Force).then(|| {
-                torque(ring_misfits(
-                    &y,
-                    Some(Biquad::new(rate_hz, p.natural_frequency_hz, p.damping_ratio, false)),
-                    rate_hz,
-                ))
-            })
-        })
-        .collect();
-    Ring { ids: avgs.into_iter().map(|a| a.0).collect(), recorded, through }
-}
-
-/// The run's recorded force averaged over its break-aways, aligned on the
-/// force's steepest change (module docs); `None` with fewer than
-/// [`MIN_EVENTS`] in the record.
-fn ring_average(run: &RecordedRun, rate_hz: f64) -> Option<Vec<f64>> {
-    let f = &run.force_n;
-    let n = f.len();
-    let (pre, post) = (nominal_window_samples(RING_PRE_S, rate_hz), nominal_window_samples(RING_POST_S, rate_hz));
-    let search = nominal_window_samples(RING_SEARCH_S, rate_hz);
-    let sm = centred_moving_average(f, nominal_window_samples(RING_LOCATE_HALF_S, rate_hz));
-    let slope = |k: usize| (sm[k + 1] - sm[k]).abs();
-    let (mut sum, mut count) = (vec![0.0; pre + post + 1], 0usize);
-    for (e, next) in run.breakaways() {
-        let (lo, hi) = (e.saturating_sub(search), (e + search).min(n.saturating_sub(1)));
-        let Some(a) = (lo..hi).max_by(|&i, &j| slope(i).total_cmp(&slope(j))) else { continue };
-        if a < pre || a + post >= n.min(next) {
-            continue;
-        }
-        for (s, x) in sum.iter_mut().zip(&f[a - pre..=a + post]) {
-            *s += x;
-        }
-        count += 1;
-    }
-    (count >= MIN_EVENTS).then(|| sum.into_iter().map(|s| s / count as f64).collect())
-}
-
 /// `u` through `q` from rest at u[0] (unit DC gain).
 fn filtered(u: &[f64], q: Biquad) -> Vec<f64> {
     let Biquad { c: [c0, c1, c2], e: [e1, e2] } = q;
@@ -537,64 +444,6 @@ fn filtered(u: &[f64], q: Biquad) -> Vec<f64> {
             y
         })
         .collect()
-}
-
-/// Each ring average's misfit, N (module docs): the smallest RMS residual
-/// over the drop's time τ and width of the least-squares fit of the five
-/// amplitudes with the basis through `q` (`None`: as recorded).
-fn ring_misfits(y: &[&[f64]], q: Option<Biquad>, rate_hz: f64) -> Vec<f64> {
-    let len = y.first().map_or(0, |v| v.len());
-    let (pre, lead) = (nominal_window_samples(RING_PRE_S, rate_hz), nominal_window_samples(RING_LEAD_IN_S, rate_hz));
-    let dt = 1.0 / rate_hz;
-    let mut best = vec![f64::INFINITY; y.len()];
-    let taus = -(nominal_window_samples(RING_STEP_LEAD_S, rate_hz) as i64)
-        ..=nominal_window_samples(RING_STEP_LAG_S, rate_hz) as i64;
-    for tau in taus {
-        let at = pre as i64 + lead as i64 + tau;
-        for width_s in RING_RAMPS_S {
-            let m = (width_s * rate_hz).round() as i64;
-            // The true force's basis on the lead-in and the window: 1, t, and
-            // after the drop (ramp s from `at` over m samples) s, s·t', s·t'².
-            let basis: Vec<Vec<f64>> = (0..5)
-                .map(|j| {
-                    let u: Vec<f64> = (0..(lead + len) as i64)
-                        .map(|k| {
-                            let t = (k - at) as f64 * dt;
-                            let s = if k < at {
-                                0.0
-                            } else if k >= at + m {
-                                1.0
-                            } else {
-                                0.5 - 0.5 * (std::f64::consts::PI * (k - at) as f64 / m as f64).cos()
-                            };
-                            [1.0, t, s, s * t, s * t * t][j]
-                        })
-                        .collect();
-                    let v = q.map_or(u.clone(), |q| filtered(&u, q));
-                    v[lead..].to_vec()
-                })
-                .collect();
-            let mut xtx = [0.0; 25];
-            for i in 0..5 {
-                for j in 0..5 {
-                    xtx[5 * i + j] = basis[i].iter().zip(&basis[j]).map(|(a, b)| a * b).sum();
-                }
-            }
-            let Some(inv) = rig_estimate::linear::Normal::from_row_major(5, &xtx, vec![0.0; 5]).inverse() else {
-                continue;
-            };
-            for (r, yr) in y.iter().enumerate() {
-                let xty: Vec<f64> = basis.iter().map(|b| b.iter().zip(*yr).map(|(a, v)| a * v).sum()).collect();
-                let yty: f64 = yr.iter().map(|v| v * v).sum();
-                let fitted: f64 = (0..5).map(|i| xty[i] * (0..5).map(|j| inv[5 * i + j] * xty[j]).sum::<f64>()).sum();
-                let rms = ((yty - fitted).max(0.0) / len as f64).sqrt();
-                if rms < best[r] {
-                    best[r] = rms;
-                }
-            }
-        }
-    }
-    best
 }
 
 impl StructureCandidate for SensorCandidate {
@@ -679,7 +528,7 @@ impl StructureCandidate for SensorCandidate {
 
 #[cfg(test)]
 mod tests {
-    use super::{Biquad, corrected_pairs, filtered, force_through_inverse, ring_misfits};
+    use super::{Biquad, corrected_pairs, filtered, force_through_inverse};
     use std::f64::consts::PI;
 
     /// A force of the stick-slip's band (1 and 4 Hz) recorded through a
@@ -749,35 +598,6 @@ mod tests {
                 assert!((amp - expect).abs() < 5e-3 * expect, "{f_in} Hz {rate_term}: {amp} vs {expect}");
             }
         }
-    }
-
-    /// The ring's fit (module docs) on synthetic averages: a friction drop
-    /// of 10 N with a slow slip after it, recorded through a 8 Hz, ζ 0.25
-    /// sensor, is fitted through that sensor to within the normal
-    /// equations' rounding (1e-4 N of 40 N) and leaves
-    /// a ring as recorded; the same drop 10 ms late through no sensor (a
-    /// delay) fits as recorded, and through the sensor it does not.
-    #[test]
-    fn a_ring_is_fitted_by_its_sensor_and_a_delay_is_not() {
-        let rate = 500.0;
-        let (pre, post) = (25usize, 100usize);
-        let lead = 100usize;
-        let force = |shift: usize| -> Vec<f64> {
-            (0..lead + pre + post + 1)
-                .map(|k| {
-                    let t = (k as f64 - (lead + pre + shift) as f64) / rate;
-                    if t < 0.0 { 40.0 + 5.0 * t } else { 30.0 - 2.0 * t + 4.0 * t * t }
-                })
-                .collect()
-        };
-        let sensor = Biquad::new(rate, 8.0, 0.25, false);
-        let rings = filtered(&force(0), sensor)[lead..].to_vec();
-        let late = force(5)[lead..].to_vec();
-        let m = |y: &[f64], q: Option<Biquad>| ring_misfits(&[y], q, rate)[0];
-        assert!(m(&rings, Some(sensor)) < 1e-4, "{}", m(&rings, Some(sensor)));
-        assert!(m(&rings, None) > 0.3, "{}", m(&rings, None));
-        assert!(m(&late, None) < 1e-4, "{}", m(&late, None));
-        assert!(m(&late, Some(sensor)) > 0.3, "{}", m(&late, Some(sensor)));
     }
 
     /// The coupling's placebo (the filter run backwards in time,
