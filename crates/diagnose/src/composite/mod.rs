@@ -488,15 +488,41 @@ fn fit_composite_with(
         }
     }
     // Correlated residuals: standard errors × √τ (effective sample size).
+    let mut fit = CompositeFit { model: m, phases, params, rss_w: rss, converged, scan };
     if errors {
-        let tau = autocorr_inflation(d, &m, &phases).sqrt();
-        for p in params.iter_mut() {
-            if p.1 != "order" {
-                p.3 *= tau;
-            }
+        inflate_errors(d, &mut fit);
+    }
+    Some(fit)
+}
+
+/// [`fit_composite`] with the standard errors not yet inflated for
+/// correlated residuals and, where a pass ends the fit anyway, without the
+/// closing RSS (`rss_w` NaN): what the selection's fits on every run
+/// compute for the admissibility rules, which read the model alone; the
+/// one the report reads then gets [`inflate_errors`] (the same fit to the
+/// bit as [`fit_composite`]'s, test `a_deferred_fit_inflated_is_the_full_fit`).
+/// The autocorrelation pass and the closing RSS over every slip sample
+/// (each a `sin` or `exp` per sample) were made for every admissibility
+/// check's set (issue 23).
+pub fn fit_composite_deferred(
+    d: &SlipData,
+    set: FrictionSet,
+    freqs_hz: &[f64],
+    max_order: u32,
+) -> Option<CompositeFit> {
+    fit_composite_with(d, set, freqs_hz, max_order, false, None, None)
+}
+
+/// Correlated residuals: the standard errors of `fit` (fitted on `d`) × √τ,
+/// τ the effective-sample-size factor of its weighted residuals
+/// ([`autocorr_inflation`]); the order, an integer, has none.
+pub fn inflate_errors(d: &SlipData, fit: &mut CompositeFit) {
+    let tau = autocorr_inflation(d, &fit.model, &fit.phases).sqrt();
+    for p in fit.params.iter_mut() {
+        if p.1 != "order" {
+            p.3 *= tau;
         }
     }
-    Some(CompositeFit { model: m, phases, params, rss_w: rss, converged, scan })
 }
 
 /// τ = 1 + 2 Σ ρ_k of the weighted residuals within runs (see
@@ -574,6 +600,35 @@ mod tests {
         }
         let near = cold.near.lock().unwrap();
         assert_eq!(near.len(), 2, "one search without and one with the viscous column: {:?}", near.keys());
+    }
+
+    /// The selection's fit on every run, deferred and then inflated, is
+    /// [`fit_composite`]'s: the same model, phases, parameters and standard
+    /// errors, scan and convergence, to the bit, for every set of terms.
+    #[test]
+    fn a_deferred_fit_inflated_is_the_full_fit() {
+        let d = synth(4, |r, t, phi, w| {
+            (0.4 + 0.2 * rig_model::friction::stribeck_decay(w, 2.0f64) + 0.003 * w)
+                * (1.0 + 0.1 * (2.0 * PI * 1.3 * t + 0.7 * r as f64).sin())
+                * (1.0 + 0.08 * (2.0 * phi + 0.3 * r as f64).sin())
+        });
+        let freqs: Vec<f64> = (0..200).map(|j| 0.5 + 0.01 * j as f64).collect();
+        let terms = [Term::TimeSine, Term::AngleSine, Term::Stribeck, Term::Viscous];
+        let bits = |f: &CompositeFit| {
+            let b = |x: f64| x.to_bits();
+            let params: Vec<_> = f.params.iter().map(|p| (p.0, p.1, b(p.2), b(p.3))).collect();
+            let phases: Vec<_> = f.phases.iter().map(|p| (b(p.0), b(p.1))).collect();
+            let scan: Vec<_> = f.scan.iter().map(|p| (b(p.0), b(p.1))).collect();
+            (format!("{:?}", f.model), phases, params, scan, f.converged)
+        };
+        for mask in 0..16u32 {
+            let set = (0..4).filter(|b| mask >> b & 1 == 1).fold(FrictionSet::default(), |s, b| s.with(terms[b]));
+            let full = fit_composite(&d, set, &freqs, 4).expect("the full fit");
+            let mut deferred = fit_composite_deferred(&d, set, &freqs, 4).expect("the deferred fit");
+            inflate_errors(&d, &mut deferred);
+            assert_eq!(bits(&deferred), bits(&full), "{set:?}");
+            assert!(full.params.iter().all(|p| p.1 == "order" || p.3 > 0.0), "{set:?}: {:?}", full.params);
+        }
     }
 
     /// A fit asked for its model alone (a fold's) skips the closing RSS and
