@@ -151,12 +151,15 @@ impl Vocabulary<'_, '_> {
         cached(&self.drives, (limit, f), || self.cv.fold_drive(limit, f))
     }
 
-    /// The joint fit of `set` on every run (memoised).
+    /// The joint fit of `set` on every run (memoised), its standard errors
+    /// not yet inflated ([`composite::fit_composite_deferred`]: the
+    /// admissibility rules read its model; the report's, the retained
+    /// set's, is inflated once, [`composite::inflate_errors`]).
     fn fit_all(&self, set: FrictionSet) -> Option<CompositeFit> {
         if let Some(fit) = self.all_fits.lock().expect("joint fits").get(&set) {
             return fit.clone();
         }
-        let fit = composite::fit_composite(self.d_all, set, &self.cv.freqs, self.cv.max_order);
+        let fit = composite::fit_composite_deferred(self.d_all, set, &self.cv.freqs, self.cv.max_order);
         self.all_fits.lock().expect("joint fits").entry(set).or_insert(fit).clone()
     }
 }
@@ -465,9 +468,10 @@ pub(crate) fn select_over<'a>(
     let (base_ms, cur_ms) = (sel.baseline_misfits, sel.final_misfits);
 
     // Final joint fit on every run for the reported parameters.
-    let full = study
+    let mut full = study
         .fit_all(current.friction)
         .ok_or(DiagnoseError::Singular("the joint fit of the retained friction effects"))?;
+    composite::inflate_errors(&d_all, &mut full);
     drop(study);
     let limit_fit = if current.limit { drive::fit_limit(&all, supply_v) } else { None };
     let pi_base = drive::fit_gains(&all, supply_v).ok_or(DiagnoseError::Singular("PI gains of the baseline drive"))?;
@@ -546,8 +550,10 @@ impl Selection<'_> {
                 continue;
             }
             let set = self.current.with(e);
-            let fit_all = || composite::fit_composite(&self.d_all, set.friction, &self.cv.freqs, self.cv.max_order);
-            if e.inadmissible(&mut || fit_all().map(|f| f.model)).is_some() {
+            // The rule reads the model alone (`fit_composite_model`: the same model to the bit).
+            let mut fit_all =
+                || composite::fit_composite_model(&self.d_all, set.friction, &self.cv.freqs, self.cv.max_order);
+            if e.inadmissible(&mut fit_all).is_some() {
                 continue;
             }
             let effects: Vec<EffectId> = self.accepted.iter().map(|a| a.0).chain([e]).collect();

@@ -142,6 +142,7 @@ pub struct CompositeFit {
     pub phases: Vec<Phases>,
     /// (term, JSON key, value, standard error).
     pub params: Vec<(Term, &'static str, f64, f64)>,
+    /// The weighted RSS (NaN in a fit asked for its model alone: it is not computed).
     pub rss_w: f64,
     pub converged: bool,
     /// Frequency scan of the time modulation on the first pass: (Hz, weighted RSS).
@@ -224,18 +225,36 @@ pub fn fit_composite_model_from(
 ///   `{angle, stribeck}` of the second) starts from the same fit of the
 ///   same fold: bit-identical to fitting it again (a cold fit is a
 ///   41-point grid and Brent's search).
+/// - The warm-started Stribeck fits of the first pass,
+///   [`friction::fit_stribeck_near`] of `d` itself at the start's speed:
+///   the first pass's target is μ/(1·1) = μ there too, and the sets a
+///   step adds to a model with the Stribeck term start from the same
+///   model's vs (`{stribeck, time}` and `{stribeck, angle}` after
+///   `{stribeck}`: the same search on the same numbers, ≈ 20 passes of an
+///   `exp` per sample each; issue 23).
 /// - The sin and cos of n·φ1 of every sample at each order the angle
 ///   block fits ([`friction::AngleTrig`]).
 #[derive(Debug, Default)]
 pub struct DataMemo {
     fits: [std::sync::OnceLock<Option<FrictionFit>>; 2],
+    /// By (with_viscous, the start's vs as bits); each filled once, outside the map's lock.
+    near: std::sync::Mutex<NearFits>,
     angles: friction::AngleTrig,
 }
+
+/// [`DataMemo`]'s warm-started Stribeck fits by (with_viscous, bits of vs).
+type NearFits = std::collections::BTreeMap<(bool, u64), std::sync::Arc<std::sync::OnceLock<Option<FrictionFit>>>>;
 
 impl DataMemo {
     /// `friction::fit_stribeck(d, with_viscous)`, the first time for this `d`.
     fn get(&self, d: &SlipData, with_viscous: bool) -> Option<FrictionFit> {
         self.fits[usize::from(with_viscous)].get_or_init(|| friction::fit_stribeck(d, with_viscous)).clone()
+    }
+
+    /// `friction::fit_stribeck_near(d, with_viscous, vs)`, the first time for this `d` and vs.
+    fn near(&self, d: &SlipData, with_viscous: bool, vs: f64) -> Option<FrictionFit> {
+        let cell = self.near.lock().expect("near fits").entry((with_viscous, vs.to_bits())).or_default().clone();
+        cell.get_or_init(|| friction::fit_stribeck_near(d, with_viscous, vs)).clone()
     }
 }
 
@@ -322,13 +341,27 @@ fn fit_composite_with(
             None
         };
         let joint_converged = joint.as_ref().map(|j| j.4);
+        // A pass that fitted every parameter of the set jointly ends the fit: a
+        // single modulation without a speed law (fit_sine fits its level, amplitude,
+        // frequency or order and phases together), or the joint block without an
+        // angle modulation. Otherwise the blocks alternate until the RSS settles.
+        let one_block =
+            if set.angle_mod { !set.time_mod && !speed_law } else { !speed_law || joint_converged.is_some() };
+        // Where this pass ends the fit whatever its RSS, a fit asked for its
+        // model alone (a fold's, `errors` false) needs neither the last
+        // block's modulation factors nor the closing RSS (`rss_w` is NaN
+        // then): each a `sin` or an `exp` per sample, and the model the same
+        // to the bit (issue 23).
+        let model_only_end = !errors && (!modulated || one_block);
         if let Some((jm, th, jrss, ne, _)) = joint {
             m = jm;
             for (r, t) in th.iter().enumerate() {
                 phases[r].0 = *t;
             }
             params.extend(joint_params(&m, &ne, jrss, d.len()));
-            tf = factors(&|i| m.time_factor(d.t[i], phases[d.run[i]].0));
+            if !model_only_end {
+                tf = factors(&|i| m.time_factor(d.t[i], phases[d.run[i]].0));
+            }
         } else {
             // Speed block on μ / (modulations).
             set_mu(&mut work, |i| d.mu[i] / (tf[i] * af[i]));
@@ -338,8 +371,11 @@ fn fit_composite_with(
                 // first pass's grid found (friction::fit_stribeck_near).
                 let f = match (m.stribeck, start_vs) {
                     (Some((_, vs)), _) if pass > 0 => friction::fit_stribeck_near(ds, set.viscous, vs)?,
-                    (_, Some(vs)) if pass == 0 => friction::fit_stribeck_near(ds, set.viscous, vs)?,
-                    // The first pass's target is μ/(1·1) = μ: the cold fit of `d` itself.
+                    // The first pass's target is μ/(1·1) = μ: the fits of `d` itself.
+                    (_, Some(vs)) if pass == 0 => match cold {
+                        Some(cold) => cold.near(d, set.viscous, vs)?,
+                        None => friction::fit_stribeck_near(ds, set.viscous, vs)?,
+                    },
                     _ => match cold.filter(|_| pass == 0) {
                         Some(cold) => cold.get(d, set.viscous)?,
                         None => friction::fit_stribeck(ds, set.viscous)?,
@@ -390,7 +426,9 @@ fn fit_composite_with(
                 for (k, v, e) in f.params {
                     params.push((Term::TimeSine, k, v, e));
                 }
-                tf = factors(&|i| m.time_factor(d.t[i], phases[d.run[i]].0));
+                if !model_only_end {
+                    tf = factors(&|i| m.time_factor(d.t[i], phases[d.run[i]].0));
+                }
             }
         }
         // Angle modulation on μ / (speed law · time factor).
@@ -413,7 +451,14 @@ fn fit_composite_with(
             for (k, v, e) in f.params {
                 params.push((Term::AngleSine, k, v, e));
             }
-            af = factors(&|i| m.angle_factor(d.phi[i], phases[d.run[i]].1));
+            if !model_only_end {
+                af = factors(&|i| m.angle_factor(d.phi[i], phases[d.run[i]].1));
+            }
+        }
+        if model_only_end {
+            rss = f64::NAN;
+            converged = joint_converged.unwrap_or(true);
+            break;
         }
         // weighted_rss(d, &m, &phases) with the cached factors (same products, same order).
         let next: f64 = (0..d.len())
@@ -422,12 +467,6 @@ fn fit_composite_with(
                 d.w(i) * e * e
             })
             .sum();
-        // A pass that fitted every parameter of the set jointly ends the fit: a
-        // single modulation without a speed law (fit_sine fits its level, amplitude,
-        // frequency or order and phases together), or the joint block without an
-        // angle modulation. Otherwise the blocks alternate until the RSS settles.
-        let one_block =
-            if set.angle_mod { !set.time_mod && !speed_law } else { !speed_law || joint_converged.is_some() };
         let done = !modulated || one_block || (pass > 0 && (rss - next).abs() <= 1e-7 * rss.max(f64::MIN_POSITIVE));
         rss = next;
         if done {
@@ -449,15 +488,41 @@ fn fit_composite_with(
         }
     }
     // Correlated residuals: standard errors × √τ (effective sample size).
+    let mut fit = CompositeFit { model: m, phases, params, rss_w: rss, converged, scan };
     if errors {
-        let tau = autocorr_inflation(d, &m, &phases).sqrt();
-        for p in params.iter_mut() {
-            if p.1 != "order" {
-                p.3 *= tau;
-            }
+        inflate_errors(d, &mut fit);
+    }
+    Some(fit)
+}
+
+/// [`fit_composite`] with the standard errors not yet inflated for
+/// correlated residuals and, where a pass ends the fit anyway, without the
+/// closing RSS (`rss_w` NaN): what the selection's fits on every run
+/// compute for the admissibility rules, which read the model alone; the
+/// one the report reads then gets [`inflate_errors`] (the same fit to the
+/// bit as [`fit_composite`]'s, test `a_deferred_fit_inflated_is_the_full_fit`).
+/// The autocorrelation pass and the closing RSS over every slip sample
+/// (each a `sin` or `exp` per sample) were made for every admissibility
+/// check's set (issue 23).
+pub fn fit_composite_deferred(
+    d: &SlipData,
+    set: FrictionSet,
+    freqs_hz: &[f64],
+    max_order: u32,
+) -> Option<CompositeFit> {
+    fit_composite_with(d, set, freqs_hz, max_order, false, None, None)
+}
+
+/// Correlated residuals: the standard errors of `fit` (fitted on `d`) × √τ,
+/// τ the effective-sample-size factor of its weighted residuals
+/// ([`autocorr_inflation`]); the order, an integer, has none.
+pub fn inflate_errors(d: &SlipData, fit: &mut CompositeFit) {
+    let tau = autocorr_inflation(d, &fit.model, &fit.phases).sqrt();
+    for p in fit.params.iter_mut() {
+        if p.1 != "order" {
+            p.3 *= tau;
         }
     }
-    Some(CompositeFit { model: m, phases, params, rss_w: rss, converged, scan })
 }
 
 /// τ = 1 + 2 Σ ρ_k of the weighted residuals within runs (see
@@ -522,6 +587,79 @@ mod tests {
         let n = alone.as_ref().and_then(|m| m.angle_mod).expect("an angle order").1;
         assert_eq!(bits(fit_composite_model_from_cached(&d, set, &freqs, 4, None, &cold)), bits(alone));
         assert_eq!(cold.angles.get(&d, n).len(), d.len());
+        // The sets a step adds to `{stribeck}`, warm-started from its model:
+        // the first pass's Stribeck search from the memo (filled by whichever
+        // set comes first) is each set's own search, bit for bit.
+        let start = fit_composite_model_from(&d, s, &freqs, 4, None).expect("the Stribeck fit");
+        let cold = DataMemo::default();
+        for set in [s.with(Term::TimeSine), s.with(Term::AngleSine), s.with(Term::Viscous), s.with(Term::TimeSine)] {
+            let alone = fit_composite_model_from(&d, set, &freqs, 4, Some(&start));
+            assert!(alone.as_ref().is_some_and(|m| m.stribeck.is_some()), "{set:?}");
+            let shared = fit_composite_model_from_cached(&d, set, &freqs, 4, Some(&start), &cold);
+            assert_eq!(bits(shared), bits(alone), "{set:?}");
+        }
+        let near = cold.near.lock().unwrap();
+        assert_eq!(near.len(), 2, "one search without and one with the viscous column: {:?}", near.keys());
+    }
+
+    /// The selection's fit on every run, deferred and then inflated, is
+    /// [`fit_composite`]'s: the same model, phases, parameters and standard
+    /// errors, scan and convergence, to the bit, for every set of terms.
+    #[test]
+    fn a_deferred_fit_inflated_is_the_full_fit() {
+        let d = synth(4, |r, t, phi, w| {
+            (0.4 + 0.2 * rig_model::friction::stribeck_decay(w, 2.0f64) + 0.003 * w)
+                * (1.0 + 0.1 * (2.0 * PI * 1.3 * t + 0.7 * r as f64).sin())
+                * (1.0 + 0.08 * (2.0 * phi + 0.3 * r as f64).sin())
+        });
+        let freqs: Vec<f64> = (0..200).map(|j| 0.5 + 0.01 * j as f64).collect();
+        let terms = [Term::TimeSine, Term::AngleSine, Term::Stribeck, Term::Viscous];
+        let bits = |f: &CompositeFit| {
+            let b = |x: f64| x.to_bits();
+            let params: Vec<_> = f.params.iter().map(|p| (p.0, p.1, b(p.2), b(p.3))).collect();
+            let phases: Vec<_> = f.phases.iter().map(|p| (b(p.0), b(p.1))).collect();
+            let scan: Vec<_> = f.scan.iter().map(|p| (b(p.0), b(p.1))).collect();
+            (format!("{:?}", f.model), phases, params, scan, f.converged)
+        };
+        for mask in 0..16u32 {
+            let set = (0..4).filter(|b| mask >> b & 1 == 1).fold(FrictionSet::default(), |s, b| s.with(terms[b]));
+            let full = fit_composite(&d, set, &freqs, 4).expect("the full fit");
+            let mut deferred = fit_composite_deferred(&d, set, &freqs, 4).expect("the deferred fit");
+            inflate_errors(&d, &mut deferred);
+            assert_eq!(bits(&deferred), bits(&full), "{set:?}");
+            assert!(full.params.iter().all(|p| p.1 == "order" || p.3 > 0.0), "{set:?}: {:?}", full.params);
+        }
+    }
+
+    /// A fit asked for its model alone (a fold's) skips the closing RSS and
+    /// the last block's factors where the pass ends the fit anyway: the
+    /// same model, to the bit, as the full fit's, for every set of terms.
+    #[test]
+    fn the_model_alone_is_the_full_fits_model() {
+        let d = synth(4, |r, t, phi, w| {
+            (0.4 + 0.2 * rig_model::friction::stribeck_decay(w, 2.0f64) + 0.003 * w)
+                * (1.0 + 0.1 * (2.0 * PI * 1.3 * t + 0.7 * r as f64).sin())
+                * (1.0 + 0.08 * (2.0 * phi + 0.3 * r as f64).sin())
+        });
+        let freqs: Vec<f64> = (0..200).map(|j| 0.5 + 0.01 * j as f64).collect();
+        let terms = [Term::TimeSine, Term::AngleSine, Term::Stribeck, Term::Viscous];
+        for mask in 0..16u32 {
+            let set = (0..4).filter(|b| mask >> b & 1 == 1).fold(FrictionSet::default(), |s, b| s.with(terms[b]));
+            let full = fit_composite(&d, set, &freqs, 4).map(|f| f.model);
+            let alone = fit_composite_model(&d, set, &freqs, 4);
+            assert!(full.is_some(), "{set:?}");
+            assert_eq!(format!("{alone:?}"), format!("{full:?}"), "{set:?}");
+            let bits = |m: &Composite| {
+                let f = |x: f64| x.to_bits();
+                (
+                    f(m.mu_k),
+                    m.stribeck.map(|(a, b)| (f(a), f(b))),
+                    m.viscous.map(f),
+                    m.time_mod.map(|(a, b)| (f(a), f(b))),
+                )
+            };
+            assert_eq!(bits(&alone.unwrap()), bits(&full.unwrap()), "{set:?}");
+        }
     }
 
     #[test]
