@@ -96,16 +96,12 @@ pub fn fit(current: &Model, ev: &Evaluator, params: &mut BTreeMap<String, f64>) 
     let cal = ev.calibration();
     let reference = reference_n(ev.data, &ev.windows[cal]);
     // The spans in parallel, collected in order; the first of equal misfits (the shorter span) kept.
-    let best = SPANS_S
-        .par_iter()
-        .map(|&window_s| {
-            let m = Model { wob_level: Some(WobLevel { window_s, reference_n: reference }), ..*current };
-            (ev.misfit(&m, cal), m)
-        })
-        .collect::<Vec<_>>()
-        .into_iter()
-        .reduce(|a, b| if b.0 < a.0 { b } else { a })
-        .expect("spans");
+    let models: Vec<Model> = SPANS_S
+        .iter()
+        .map(|&window_s| Model { wob_level: Some(WobLevel { window_s, reference_n: reference }), ..*current })
+        .collect();
+    let misfits = ev.misfits(&models.iter().map(|m| (m, cal)).collect::<Vec<_>>());
+    let best = misfits.into_iter().zip(models).reduce(|a, b| if b.0 < a.0 { b } else { a }).expect("spans");
     params.insert("wob_level_window_s".into(), best.1.wob_level.map_or(f64::NAN, |l| l.window_s));
     params.insert("reference_wob_n".into(), reference);
     Ok((best.1, SPANS_S.len()))
@@ -148,7 +144,8 @@ fn start_resolution(
             let q = StudyParams { warmup_s, heldout_starts_s: Vec::new(), ..p.clone() };
             let wins = crate::data::windows(ev.data, &q)?;
             let e = Evaluator::new(ev.data, wins, ev.fopts, ev.substeps, ev.slip_speed_rpm, p.drive_ref_window_s)?;
-            Ok([warmup_s, e.misfit(before, 0), e.misfit(after, 0)])
+            let m = e.misfits(&[(before, 0), (after, 0)]);
+            Ok([warmup_s, m[0], m[1]])
         })
         .collect()
 }
@@ -163,10 +160,11 @@ pub fn report(
     let Some((trial, before_model, t)) = trial_report(ev, sel, baseline, Candidate::WobLevel) else { return Ok(None) };
     let Some(level) = t.fitted.model.wob_level else { return Ok(None) };
     let cal = ev.calibration();
-    let span_misfits = SPANS_S
-        .par_iter()
-        .map(|&window_s| ev.misfit(&Model { wob_level: Some(WobLevel { window_s, ..level }), ..before_model }, cal))
+    let spans: Vec<Model> = SPANS_S
+        .iter()
+        .map(|&window_s| Model { wob_level: Some(WobLevel { window_s, ..level }), ..before_model })
         .collect();
+    let span_misfits = ev.misfits(&spans.iter().map(|m| (m, cal)).collect::<Vec<_>>());
     let d = ev.data;
     let wob_n = ev
         .windows
