@@ -156,10 +156,8 @@ pub fn report(
     let Some((trial, before_model, t)) = trial_report(ev, sel, baseline, Candidate::WobLevel) else { return Ok(None) };
     let Some(level) = t.fitted.model.wob_level else { return Ok(None) };
     let cal = ev.calibration();
-    let spans: Vec<Model> = SPANS_S
-        .iter()
-        .map(|&window_s| Model { wob_level: Some(level_at(ev, window_s)), ..before_model })
-        .collect();
+    let spans: Vec<Model> =
+        SPANS_S.iter().map(|&window_s| Model { wob_level: Some(level_at(ev, window_s)), ..before_model }).collect();
     let span_misfits = ev.misfits(&spans.iter().map(|m| (m, cal)).collect::<Vec<_>>());
     let d = ev.data;
     let wob_n = ev

@@ -353,7 +353,8 @@ mod tests {
         let holed = |x: &[f64]| if x[0] > 2.0 { f64::NAN } else { (x[0] - 1.5).powi(2) };
         // A point minimum on a plateau: every reflection and contraction fails, the simplex shrinks.
         let spike = |x: &[f64]| if x.iter().all(|v| *v == 0.0) { 0.0 } else { 1.0 };
-        let fs: [&dyn Fn(&[f64]) -> f64; 4] = [&rosen, &kink, &holed, &spike];
+        type Objective<'a> = &'a dyn Fn(&[f64]) -> f64;
+        let fs: [Objective; 4] = [&rosen, &kink, &holed, &spike];
         let starts: [(&[f64], &[f64]); 4] = [
             (&[-1.2, 1.0], &[0.5, 0.5]),
             (&[2.0, -1.0, 1.0], &[1.0, 1.0, 1.0]),
