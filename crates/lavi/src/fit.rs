@@ -8,8 +8,8 @@ use crate::eom::{Damping, EomFit, TorqueScan, fit_equation_of_motion};
 use crate::score::{ERROR_CAP, Evaluator};
 use crate::sim::{Drive, FrictionLaw, MidDof, Model};
 use crate::{Candidate, LaviError};
-use rayon::prelude::*;
 use rig_spectra::stickslip::fit_weakening;
+use rig_types::minimize::nelder_mead_many;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -438,7 +438,7 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
         Candidate::FrictionMemory => {
             // The lag is kept within 0.1 ms-1 s (longer than a cycle is no memory but a frozen friction).
             let build = |x: &[f64]| Model { friction_lag_s: x[0].clamp(-9.2, 0.0).exp(), ..*current };
-            let (x, _, n) = nelder_mead(|x| misfit(&build(x)), &[(0.02f64).ln()], &[1.0], max_evals);
+            let (x, _, n) = fit_by_simulation(ev, build, &[(0.02f64).ln()], &[1.0], max_evals);
             let m = build(&x);
             if !(-9.2..0.0).contains(&x[0]) {
                 at_bounds.push(AtBound {
@@ -463,7 +463,7 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
                 mid: Some(MidDof { inertia_kgm2: j * x[0].exp(), split: logistic(x[1]).clamp(0.02, 0.98) }),
                 ..*current
             };
-            let (x, _, n) = nelder_mead(|x| misfit(&build(x)), &[0.0, 0.0], &[1.0, 1.0], max_evals);
+            let (x, _, n) = fit_by_simulation(ev, build, &[0.0, 0.0], &[1.0, 1.0], max_evals);
             let m = build(&x);
             let mid = m.mid.expect("set above");
             if !(0.02..0.98).contains(&logistic(x[1])) {
@@ -516,7 +516,7 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
                 }),
                 ..*current
             };
-            let (x, _, n) = nelder_mead(|x| misfit(&build(x)), &[0.0, 0.0, 0.0], &[1.0, 1.0, 1.0], max_evals);
+            let (x, _, n) = fit_by_simulation(ev, build, &[0.0, 0.0, 0.0], &[1.0, 1.0, 1.0], max_evals);
             // The law is kept: refitted by simulation on top of the drive (tried) it lowered the
             // calibration misfit (1.003 -> 0.964) and raised the held-out one (3.69 -> 4.03), for
             // twice the cost.
@@ -535,6 +535,25 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
         at_bounds.extend(info.at_bounds);
     }
     Ok(Fitted { model, at_bounds, params, calibration_misfit, evaluations: evals, top_scan })
+}
+
+/// Nelder–Mead ([`nelder_mead`]) of the calibration misfit of `build(x)`
+/// from `x0` with edges `step`, each round's points (the first simplex, a
+/// shrink) one batch of free runs ([`Evaluator::misfits`]): the search
+/// `nelder_mead` makes of `|x| ev.misfit(&build(x), cal)`, to the bit.
+fn fit_by_simulation(
+    ev: &Evaluator,
+    build: impl Fn(&[f64]) -> Model,
+    x0: &[f64],
+    step: &[f64],
+    max_evals: usize,
+) -> (Vec<f64>, f64, usize) {
+    let cal = ev.calibration();
+    let score = |pts: &[(usize, &[f64])]| {
+        let models: Vec<Model> = pts.iter().map(|p| build(p.1)).collect();
+        ev.misfits(&models.iter().map(|m| (m, cal)).collect::<Vec<_>>())
+    };
+    nelder_mead_many(score, &[(x0, step)], max_evals).pop().expect("one search gives one result")
 }
 
 /// The friction law refitted by simulation on the calibration window on top
@@ -566,45 +585,60 @@ fn law_by_simulation_with(
 ) -> Option<(Model, usize, f64, Vec<f64>)> {
     let cal = ev.calibration();
     let f0 = current.friction;
-    let fits: Vec<FamilyFit> = [0.0, 1.0, 2.0]
-        .par_iter()
+    const FAMILIES: [f64; 3] = [0.0, 1.0, 2.0];
+    let law_of = |family: f64, x: &[f64]| -> Model {
+        let ts = x[0].exp();
+        let law = FrictionLaw {
+            static_nm: ts,
+            kinetic_nm: ts * logistic(x[1]),
+            stribeck_speed_rad_s: if family == 0.0 { 0.01 } else { x[2].exp() },
+            shape_exponent: if family == 0.0 { 1.0 } else { family },
+            viscous_nm_s_rad: x[3].exp(),
+        };
+        Model { friction: law, ..*current }
+    };
+    let build = |family: f64, x: &[f64]| apply(&law_of(family, x), &x[4..]);
+    let ratio = (f0.kinetic_nm / f0.static_nm).clamp(0.05, 0.95);
+    let mut x0 = vec![f0.static_nm.ln(), logit(ratio), f0.stribeck_speed_rad_s.ln(), (1e-4f64).ln()];
+    let mut step = vec![0.2, 0.5, 0.5, 2.0];
+    x0.extend(extra.iter().map(|e| e.0));
+    step.extend(extra.iter().map(|e| e.1));
+    // Coulomb's jump has no Stribeck speed (`law_of` fixes it): its simplex leaves that
+    // coordinate out, a direction along which nothing moves but the simplex's iterations.
+    let dead = |family: f64| (family == 0.0).then_some(2);
+    let full = |family: f64, y: &[f64]| -> Vec<f64> {
+        let mut x = y.to_vec();
+        if let Some(k) = dead(family) {
+            x.insert(k, x0[k]);
+        }
+        x
+    };
+    let starts: Vec<(Vec<f64>, Vec<f64>)> = FAMILIES
+        .iter()
         .map(|&family| {
-            let law_of = |x: &[f64]| -> Model {
-                let ts = x[0].exp();
-                let law = FrictionLaw {
-                    static_nm: ts,
-                    kinetic_nm: ts * logistic(x[1]),
-                    stribeck_speed_rad_s: if family == 0.0 { 0.01 } else { x[2].exp() },
-                    shape_exponent: if family == 0.0 { 1.0 } else { family },
-                    viscous_nm_s_rad: x[3].exp(),
-                };
-                Model { friction: law, ..*current }
-            };
-            let build = |x: &[f64]| apply(&law_of(x), &x[4..]);
-            let ratio = (f0.kinetic_nm / f0.static_nm).clamp(0.05, 0.95);
-            let mut x0 = vec![f0.static_nm.ln(), logit(ratio), f0.stribeck_speed_rad_s.ln(), (1e-4f64).ln()];
-            let mut step = vec![0.2, 0.5, 0.5, 2.0];
-            x0.extend(extra.iter().map(|e| e.0));
-            step.extend(extra.iter().map(|e| e.1));
-            // Coulomb's jump has no Stribeck speed (`law_of` fixes it): its simplex leaves that
-            // coordinate out, a direction along which nothing moves but the simplex's iterations.
-            let dead = (family == 0.0).then_some(2);
-            let full = |y: &[f64]| -> Vec<f64> {
-                let mut x = y.to_vec();
-                if let Some(k) = dead {
-                    x.insert(k, x0[k]);
-                }
-                x
-            };
             let (mut y0, mut ystep) = (x0.clone(), step.clone());
-            if let Some(k) = dead {
+            if let Some(k) = dead(family) {
                 y0.remove(k);
                 ystep.remove(k);
             }
-            let score = |y: &[f64]| build(&full(y)).map_or(ERROR_CAP, |m| ev.misfit(&m, cal));
-            let (y, v, n) = nelder_mead(score, &y0, &ystep, max_evals);
-            let x = full(&y);
-            (v, build(&x), n, family, x[4..].to_vec())
+            (y0, ystep)
+        })
+        .collect();
+    // The three families' simplexes side by side, each round's points one batch of free runs
+    // (`Evaluator::misfits`); each family's search the one it makes alone.
+    let score = |pts: &[(usize, &[f64])]| -> Vec<f64> {
+        let models: Vec<Option<Model>> = pts.iter().map(|&(i, y)| build(FAMILIES[i], &full(FAMILIES[i], y))).collect();
+        let pairs: Vec<(&Model, usize)> = models.iter().flatten().map(|m| (m, cal)).collect();
+        let mut misfits = ev.misfits(&pairs).into_iter();
+        models.iter().map(|m| m.as_ref().map_or(ERROR_CAP, |_| misfits.next().expect("one misfit per model"))).collect()
+    };
+    let starts_ref: Vec<(&[f64], &[f64])> = starts.iter().map(|(a, b)| (a.as_slice(), b.as_slice())).collect();
+    let fits: Vec<FamilyFit> = nelder_mead_many(score, &starts_ref, max_evals)
+        .into_iter()
+        .zip(FAMILIES)
+        .map(|((y, v, n), family)| {
+            let x = full(family, &y);
+            (v, build(family, &x), n, family, x[4..].to_vec())
         })
         .collect();
     let total = fits.iter().map(|f| f.2).sum();

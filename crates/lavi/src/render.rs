@@ -73,7 +73,7 @@ const EFFECT_IDS: [(&str, &str); 14] = [
     ),
     (
         "wob_level",
-        "the contact's normal force is the weight on bit's slow level: the law kept at the calibration window's mean WOB W_ref, the friction scaled by W̄(t)/W_ref, W̄ the measured WOB's centred moving mean over a span chosen on the calibration window among 0.5, 1, 2 and 4 s (at least a stick-slip cycle: the fast part, in the record's phase rather than the free run's, left out) (`wob_level_window_s`, `reference_wob_n`).",
+        "the contact's normal force is the weight on bit's slow level: the law kept, the friction scaled by W̄(t)/W_ref, W̄ the measured WOB's centred moving mean over a span chosen on the calibration window among 0.5, 1, 2 and 4 s and W_ref its mean over the calibration window (at least a stick-slip cycle: the fast part, in the record's phase rather than the free run's, left out) (`wob_level_window_s`, `reference_wob_n`).",
     ),
     (
         "static_friction",

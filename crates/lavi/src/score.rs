@@ -30,7 +30,7 @@ use crate::data::{Prepared, RPM_TO_RAD_S, WindowSpec, derivative};
 use crate::features::{
     FeatureOptions, Features, N_FEATURES, StickTorque, stick_torque, window_features, window_features_and_stick,
 };
-use crate::sim::{Inputs, Model, Run, Start, delay_samples, read_late, simulate};
+use crate::sim::{Inputs, Job, Model, Run, Start, delay_samples, read_late, simulate_batch};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::Mutex;
@@ -90,6 +90,23 @@ pub fn misfit_of(meas: &Features, sim: &Features) -> f64 {
 /// What a free run of a model on a window is judged by: its features and the
 /// torque through its stick phases, or the sample where it diverged.
 type Outcome = Result<(Features, StickTorque), usize>;
+
+/// Free runs one batch of the core holds ([`Evaluator::outcomes`]): the
+/// runs advance together, overlapping their chains (docs/performance.md,
+/// sixteenth session: four at once cost about half of four one by one).
+pub const BATCH: usize = 4;
+
+/// A free run of a model on a window as the core takes it ([`Evaluator::simulate_many`]).
+struct WindowRun<'e> {
+    /// The model as run (`wob_level` as its scaled reference).
+    model: Model,
+    top: std::borrow::Cow<'e, [f64]>,
+    top_ref: std::borrow::Cow<'e, [f64]>,
+    /// The weight on bit's slow level over the whole record (`wob_level`).
+    level: Option<std::borrow::Cow<'e, [f64]>>,
+    span: std::ops::Range<usize>,
+    start: Start,
+}
 
 /// Everything a free run and its score need, per window.
 ///
@@ -199,54 +216,127 @@ impl<'a> Evaluator<'a> {
 
     /// Free run of `m` over window `wi`'s span (warm-up included), from the measured state at its start.
     pub fn simulate(&self, m: &Model, wi: usize) -> Result<Run, LaviError> {
+        self.simulate_many(&[(m, wi)]).pop().expect("a batch of one gives one run")
+    }
+
+    /// [`Evaluator::simulate`] of every (model, window) pair, in order: one
+    /// batch of the core (`sim::simulate_batch`), the same bits as one by one.
+    pub fn simulate_many(&self, pairs: &[(&Model, usize)]) -> Vec<Result<Run, LaviError>> {
+        let setups: Vec<WindowRun> = pairs.iter().map(|&(m, wi)| self.window_run(m, wi)).collect();
+        let jobs: Vec<Job> = setups
+            .iter()
+            .map(|w| {
+                let u = Inputs {
+                    fs_hz: self.data.fs_hz,
+                    top_rad_s: &w.top,
+                    wob_n: &w.level.as_deref().unwrap_or(&self.data.wob_n)[w.span.clone()],
+                    top_ref_rad_s: &w.top_ref,
+                };
+                (&w.model, u, w.start)
+            })
+            .collect();
+        simulate_batch(&jobs, self.substeps)
+    }
+
+    /// What the free run of `m` on window `wi` reads (the model as run, its inputs and start).
+    fn window_run(&self, m: &Model, wi: usize) -> WindowRun<'_> {
         let s = self.windows[wi].span.clone();
         // The top speed on the bit's clock: the channel read τ_top later when it is late by τ_top.
         let k = delay_samples(m.structure.top_delay_s, self.data.fs_hz);
         let (top, top_ref) = (read_late(&self.top_rad_s, &s, k), read_late(&self.top_ref_rad_s, &s, k));
         // `wob_level`: the friction scaled by the weight on bit's slow level over its reference.
         let level = m.wob_level.map(|l| self.wob_level_n(&l));
-        let scaled = m.wob_level.map(|l| Model { wob_ref_n: Some(l.reference_n), wob_level: None, ..*m });
-        let m = scaled.as_ref().unwrap_or(m);
-        let u = Inputs {
-            fs_hz: self.data.fs_hz,
-            top_rad_s: &top,
-            wob_n: &level.as_deref().unwrap_or(&self.data.wob_n)[s.clone()],
-            top_ref_rad_s: &top_ref,
+        let model = match m.wob_level {
+            Some(l) => Model { wob_ref_n: Some(l.reference_n), wob_level: None, ..*m },
+            None => *m,
         };
         // The contact torque at the start as the channel reads it: τ later when the channel is late by τ.
-        let at = (s.start as isize + delay_samples(m.torque_delay_s, self.data.fs_hz))
+        let at = (s.start as isize + delay_samples(model.torque_delay_s, self.data.fs_hz))
             .clamp(0, self.data.len() as isize - 1) as usize;
         let start = Start {
             bit_rad_s: self.data.bit_rpm[s.start] * RPM_TO_RAD_S,
             bit_acc_rad_s2: self.bit_acc_rad_s2[s.start],
             torque_nm: self.data.torque_nm[at],
         };
-        simulate(m, &u, start, self.substeps)
+        WindowRun { model, top, top_ref, level, span: s, start }
     }
 
     /// Features and stick torque of the free run of `m` on window `wi` (the
     /// same functions as for the measurement), made once per model and window
     /// (type docs); a run that diverges is kept as such, any other error is not.
     pub fn outcome(&self, m: &Model, wi: usize) -> Result<(Features, StickTorque), LaviError> {
-        let key = (format!("{m:?}"), wi);
-        if let Some(o) = self.outcomes.lock().expect("no thread panicked holding the cache").get(&key) {
-            self.reused.fetch_add(1, Ordering::Relaxed);
-            return o.map_err(|sample| LaviError::Diverged { sample });
+        self.outcomes(&[(m, wi)]).pop().expect("one pair gives one outcome")
+    }
+
+    /// [`Evaluator::outcome`] of every (model, window) pair, in order: the
+    /// runs not kept yet are made in batches of [`BATCH`] free runs
+    /// (`sim::simulate_batch`), the batches in parallel; the same numbers as
+    /// one by one, on any thread count.
+    pub fn outcomes(&self, pairs: &[(&Model, usize)]) -> Vec<Result<(Features, StickTorque), LaviError>> {
+        let keys: Vec<(String, usize)> = pairs.iter().map(|(m, wi)| (format!("{m:?}"), *wi)).collect();
+        let mut found: Vec<Option<Result<(Features, StickTorque), LaviError>>> =
+            (0..pairs.len()).map(|_| None).collect();
+        // The pairs to run: not kept yet, each key once.
+        let mut todo: Vec<usize> = Vec::new();
+        {
+            let kept = self.outcomes.lock().expect("no thread panicked holding the cache");
+            for (j, key) in keys.iter().enumerate() {
+                if let Some(o) = kept.get(key) {
+                    self.reused.fetch_add(1, Ordering::Relaxed);
+                    found[j] = Some(o.map_err(|sample| LaviError::Diverged { sample }));
+                } else if !todo.iter().any(|&t| keys[t] == *key) {
+                    todo.push(j);
+                }
+            }
         }
-        self.made.fetch_add(1, Ordering::Relaxed);
-        let o = self.simulate(m, wi).and_then(|r| {
-            let rpm: Vec<f64> = r.bit_rad_s.iter().map(|v| v / RPM_TO_RAD_S).collect();
-            window_features_and_stick(&rpm, &r.torque_nm, self.windows[wi].window.clone(), &self.fopts)
-        });
-        let kept = match &o {
-            Ok(x) => Some(Ok(*x)),
-            Err(LaviError::Diverged { sample }) => Some(Err(*sample)),
-            Err(_) => None,
-        };
-        if let Some(k) = kept {
-            self.outcomes.lock().expect("no thread panicked holding the cache").insert(key, k);
+        self.made.fetch_add(todo.len(), Ordering::Relaxed);
+        let made: Vec<Result<(Features, StickTorque), LaviError>> = todo
+            .par_chunks(BATCH)
+            .flat_map_iter(|chunk| {
+                let batch: Vec<(&Model, usize)> = chunk.iter().map(|&j| pairs[j]).collect();
+                let runs = self.simulate_many(&batch);
+                chunk
+                    .iter()
+                    .zip(runs)
+                    .map(|(&j, r)| r.and_then(|r| self.outcome_of_run(&r, pairs[j].1)))
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        {
+            let mut kept = self.outcomes.lock().expect("no thread panicked holding the cache");
+            for (&j, o) in todo.iter().zip(&made) {
+                let k = match o {
+                    Ok(x) => Some(Ok(*x)),
+                    Err(LaviError::Diverged { sample }) => Some(Err(*sample)),
+                    Err(_) => None,
+                };
+                if let Some(k) = k {
+                    kept.insert(keys[j].clone(), k);
+                }
+            }
         }
-        o
+        for (&j, o) in todo.iter().zip(made) {
+            found[j] = Some(o);
+        }
+        // A pair whose key came twice in `pairs`: the first's outcome (made once, as one by one).
+        (0..pairs.len())
+            .map(|j| match found[j].take() {
+                Some(o) => o,
+                None => {
+                    let first = todo.iter().copied().find(|&t| keys[t] == keys[j]).expect("a key not kept is run");
+                    match &found[first] {
+                        Some(Ok(x)) => Ok(*x),
+                        _ => self.outcome(pairs[j].0, pairs[j].1),
+                    }
+                }
+            })
+            .collect()
+    }
+
+    /// Features and stick torque of a free run on window `wi` (the same functions as for the measurement).
+    fn outcome_of_run(&self, r: &Run, wi: usize) -> Result<(Features, StickTorque), LaviError> {
+        let rpm: Vec<f64> = r.bit_rad_s.iter().map(|v| v / RPM_TO_RAD_S).collect();
+        window_features_and_stick(&rpm, &r.torque_nm, self.windows[wi].window.clone(), &self.fopts)
     }
 
     /// Free runs made so far and outcomes reused instead of a run (a developer's count: `profile_study`).
@@ -281,16 +371,31 @@ impl<'a> Evaluator<'a> {
         }
     }
 
+    /// [`Evaluator::misfit`] of every (model, window) pair, in order, their
+    /// free runs made together ([`Evaluator::outcomes`]).
+    pub fn misfits(&self, pairs: &[(&Model, usize)]) -> Vec<f64> {
+        self.outcomes(pairs)
+            .into_iter()
+            .zip(pairs)
+            .map(|(o, &(_, w))| match o {
+                Ok((f, _)) => misfit_of(&self.measured[w], &f),
+                Err(_) => ERROR_CAP,
+            })
+            .collect()
+    }
+
     /// Misfits on every held-out window, in window order (run in parallel,
     /// collected in order: the same numbers on any thread count).
     pub fn heldout_misfits(&self, m: &Model) -> Vec<f64> {
-        self.heldout().into_par_iter().map(|w| self.misfit(m, w)).collect()
+        let pairs: Vec<(&Model, usize)> = self.heldout().into_iter().map(|w| (m, w)).collect();
+        self.misfits(&pairs)
     }
 
     /// Features of the free run on every window (calibration first), in
     /// parallel and in window order; a run that fails has NaN features.
     pub fn all_features(&self, m: &Model) -> Vec<Features> {
-        (0..self.windows.len()).into_par_iter().map(|w| self.features(m, w).unwrap_or(Features::NAN)).collect()
+        let pairs: Vec<(&Model, usize)> = (0..self.windows.len()).map(|w| (m, w)).collect();
+        self.outcomes(&pairs).into_iter().map(|o| o.map_or(Features::NAN, |o| o.0)).collect()
     }
 }
 

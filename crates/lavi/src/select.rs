@@ -39,7 +39,11 @@ impl engine::Candidate<Lavi<'_, '_>, Fitted> for Candidate {
         if train != [s.ev.calibration()] {
             return Err(format!("fitted on the calibration window only, not on windows {train:?}"));
         }
-        fit_candidate(*self, &current.model, s.ev, s.max_evals).map_err(|e| e.to_string())
+        let fitted = fit_candidate(*self, &current.model, s.ev, s.max_evals).map_err(|e| e.to_string())?;
+        // The engine scores the fitted model on every held-out window next: its free runs made
+        // here as one batch (`Evaluator::outcomes`), the engine's scores then read them back.
+        s.ev.heldout_misfits(&fitted.model);
+        Ok(fitted)
     }
 
     fn inadmissible(&self, _: &Lavi<'_, '_>, current: &[Fitted], fitted: &[Fitted]) -> Option<String> {
@@ -118,6 +122,8 @@ pub fn forward_select(
         evaluations: 0,
         top_scan: Vec::new(),
     };
+    // The baseline's held-out free runs as one batch (the engine scores them first).
+    ev.heldout_misfits(baseline);
     let study = Lavi { ev, max_evals };
     let cands: Vec<&dyn engine::Candidate<Lavi, Fitted>> =
         candidates.iter().map(|c| c as &dyn engine::Candidate<Lavi, Fitted>).collect();

@@ -203,8 +203,28 @@ pub fn read_late<'x>(x: &'x [f64], s: &std::ops::Range<usize>, k: isize) -> std:
 }
 
 /// Integrates `m` from `start` under `u` (see the module docs) on the one
-/// simulator core, rig_model::one_dof; the sensor's inertia and delay act on its torque channel.
+/// simulator core, rig_model::one_dof; the sensor's inertia and delay act on
+/// its torque channel. A batch of one ([`simulate_batch`]).
 pub fn simulate(m: &Model, u: &Inputs, start: Start, substeps: usize) -> Result<Run, LaviError> {
+    simulate_batch(&[(m, *u, start)], substeps).pop().expect("a batch of one gives one run")
+}
+
+/// One free run of [`simulate_batch`]: the model, what drives it, where it starts.
+pub type Job<'m, 'u> = (&'m Model, Inputs<'u>, Start);
+
+/// A model mapped onto the core: the shaft, the contact, the initial state
+/// and the series the core reads (owned where the model transforms the input).
+struct Setup {
+    shaft: Shaft,
+    contact: Contact,
+    state: OneDofState,
+    /// W(t)/W_ref per sample (`wob_ref_n` Some).
+    scale: Option<Vec<f64>>,
+    /// The drive's reference shifted by T_0/K_p (a load offset T_0 ≠ 0).
+    shifted: Option<Vec<f64>>,
+}
+
+fn setup(m: &Model, u: &Inputs, start: Start) -> Result<Setup, LaviError> {
     let n = u.top_rad_s.len();
     if u.wob_n.len() != n || u.top_ref_rad_s.len() != n || n < 2 {
         return Err(LaviError::Input { what: "simulate", rule: "inputs must have equal lengths >= 2".into() });
@@ -247,33 +267,81 @@ pub fn simulate(m: &Model, u: &Inputs, start: Start, substeps: usize) -> Result<
         .drive
         .filter(|d| d.load_nm != 0.0)
         .map(|d| u.top_ref_rad_s.iter().map(|r| r + d.load_nm / d.kp_nm_s_rad).collect());
-    let drive = match m.drive {
-        Some(d) => one_dof::Drive::SpeedLoop {
-            inertia_kgm2: d.inertia_kgm2,
-            kp_nm_s_rad: d.kp_nm_s_rad,
-            ki_nm_rad: d.ki_nm_rad,
-            reference_rad_s: shifted.as_deref().unwrap_or(u.top_ref_rad_s),
-        },
-        None => one_dof::Drive::Speed(u.top_rad_s),
-    };
     let contact = Contact { law: m.friction, lag_s: m.friction_lag_s, static_nm: m.static_level_nm() };
-    let r =
-        one_dof::simulate(&shaft, &contact, drive, scale.as_deref(), state, u.fs_hz, n, substeps).map_err(
-            |e| match e {
+    Ok(Setup { shaft, contact, state, scale, shifted })
+}
+
+/// Integrates every job as [`simulate`] would, results in job order: one
+/// batch of the core (`one_dof::simulate_batch`: the runs advance substep by
+/// substep in one loop, each run's bits its own).
+pub fn simulate_batch(jobs: &[Job<'_, '_>], substeps: usize) -> Vec<Result<Run, LaviError>> {
+    let setups: Vec<Result<Setup, LaviError>> = jobs.iter().map(|(m, u, start)| setup(m, u, *start)).collect();
+    // The jobs that set up, as the core's.
+    let (mut core, mut of) = (Vec::with_capacity(jobs.len()), Vec::with_capacity(jobs.len()));
+    for (j, s) in setups.iter().enumerate() {
+        let Ok(s) = s else { continue };
+        let (m, u, _) = &jobs[j];
+        let drive = match m.drive {
+            Some(d) => one_dof::Drive::SpeedLoop {
+                inertia_kgm2: d.inertia_kgm2,
+                kp_nm_s_rad: d.kp_nm_s_rad,
+                ki_nm_rad: d.ki_nm_rad,
+                reference_rad_s: s.shifted.as_deref().unwrap_or(u.top_ref_rad_s),
+            },
+            None => one_dof::Drive::Speed(u.top_rad_s),
+        };
+        core.push(one_dof::OneDofJob {
+            shaft: s.shaft,
+            law: &s.contact,
+            drive,
+            normal_scale: s.scale.as_deref(),
+            start: s.state,
+            samples: u.top_rad_s.len(),
+        });
+        of.push(j);
+    }
+    // Every job's core run is made together: same sample rate across the batch.
+    let fs_hz = jobs.first().map_or(1.0, |j| j.1.fs_hz);
+    let mut runs: Vec<Option<Result<one_dof::OneDofRun, rig_model::ModelError>>> =
+        (0..jobs.len()).map(|_| None).collect();
+    if jobs.iter().all(|j| j.1.fs_hz == fs_hz) {
+        for (j, r) in of.into_iter().zip(one_dof::simulate_batch(&core, fs_hz, substeps)) {
+            runs[j] = Some(r);
+        }
+    } else {
+        for (j, job) in of.into_iter().zip(&core) {
+            runs[j] = one_dof::simulate_batch(std::slice::from_ref(job), jobs[j].1.fs_hz, substeps).pop();
+        }
+    }
+    setups
+        .into_iter()
+        .zip(runs)
+        .zip(jobs)
+        .map(|((s, r), (m, u, start))| {
+            s?;
+            let r = r.expect("every job that set up was run").map_err(|e| match e {
                 rig_model::ModelError::IntegratorFailed { time_s, .. } => {
                     LaviError::Diverged { sample: (time_s * u.fs_hz).round() as usize }
                 }
                 e => LaviError::Model(e),
-            },
-        )?;
+            })?;
+            Ok(sensor_run(m, r, *start, u.fs_hz))
+        })
+        .collect()
+}
+
+/// The core's run as the rig's channels read it: the sensor's inertia and
+/// the torque channel's delay applied.
+fn sensor_run(m: &Model, r: one_dof::OneDofRun, start: Start, fs_hz: f64) -> Run {
+    let n = r.bit_rad_s.len();
     let mut sensor: Vec<f64> =
         r.friction_nm.iter().zip(&r.accel_rad_s2).map(|(f, a)| f + m.sensor_inertia_kgm2 * a).collect();
     sensor[0] = start.torque_nm;
     // A torque channel late by `torque_delay_s` reads, at sample i, the torque of sample i − d
     // (d < 0: early; the run's first and last samples stand in beyond its ends).
-    let d = delay_samples(m.torque_delay_s, u.fs_hz);
+    let d = delay_samples(m.torque_delay_s, fs_hz);
     let torque_nm = (0..n).map(|i| sensor[(i as isize - d).clamp(0, n as isize - 1) as usize]).collect();
-    Ok(Run { bit_rad_s: r.bit_rad_s, torque_nm, top_rad_s: r.top_rad_s })
+    Run { bit_rad_s: r.bit_rad_s, torque_nm, top_rad_s: r.top_rad_s }
 }
 
 #[cfg(test)]
@@ -374,6 +442,37 @@ pub(crate) mod tests {
         let r = run(&m, 20.0, 60.0);
         let n = r.top_rad_s.len() - 1;
         assert!((r.top_rad_s[n] - 21.0).abs() < 1e-3 && (r.bit_rad_s[n] - 21.0).abs() < 1e-3, "{}", r.top_rad_s[n]);
+    }
+
+    #[test]
+    fn a_batch_of_models_gives_each_its_own_runs_bits() {
+        // The baseline and every extension, one batch: each run bit for bit the run alone.
+        let mut ext = base();
+        ext.mid = Some(MidDof { inertia_kgm2: 0.02, split: 0.5 });
+        ext.drive = Some(Drive { inertia_kgm2: 0.1, kp_nm_s_rad: 2.0, ki_nm_rad: 5.0, load_nm: 0.3 });
+        ext.friction_lag_s = 0.02;
+        ext.sensor_inertia_kgm2 = 0.01;
+        ext.torque_delay_s = 0.01;
+        ext.wob_ref_n = Some(450.0);
+        let models = [base(), ext, Model { static_excess_nm: 0.3, ..base() }, Model { inertia_kgm2: -1.0, ..base() }];
+        let n = 5000;
+        let top: Vec<f64> = (0..n).map(|i| 1.0 + 0.5 * (i as f64 * 0.002).sin()).collect();
+        let w: Vec<f64> = (0..n).map(|i| 500.0 + 40.0 * (i as f64 * 0.001).cos()).collect();
+        let inp = Inputs { fs_hz: 1000.0, top_rad_s: &top, wob_n: &w, top_ref_rad_s: &top };
+        let start = Start { bit_rad_s: 0.0, bit_acc_rad_s2: 0.0, torque_nm: 1.0 };
+        let jobs: Vec<Job> = models.iter().map(|m| (m, inp, start)).collect();
+        let batch = simulate_batch(&jobs, 5);
+        let bits = |r: &Result<Run, LaviError>| match r {
+            Ok(r) => format!(
+                "{:?}",
+                [&r.bit_rad_s, &r.torque_nm, &r.top_rad_s].map(|c| c.iter().map(|v| v.to_bits()).collect::<Vec<_>>())
+            ),
+            Err(e) => e.to_string(),
+        };
+        for (m, b) in models.iter().zip(&batch) {
+            assert_eq!(bits(b), bits(&simulate(m, &inp, start, 5)));
+        }
+        assert!(batch[..3].iter().all(|r| r.is_ok()) && batch[3].is_err());
     }
 
     #[test]

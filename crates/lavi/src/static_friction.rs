@@ -44,7 +44,6 @@ use crate::score::Evaluator;
 use crate::select::{Selection, TrialReport, trial_report, trial_section};
 use crate::sim::Model;
 use crate::{Candidate, LaviError};
-use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -68,7 +67,8 @@ pub fn with_fraction(current: &Model, fraction: f64) -> Model {
 /// The calibration misfit at every grid point on top of `current` (grid order).
 pub fn grid_misfits(current: &Model, ev: &Evaluator) -> Vec<f64> {
     let cal = ev.calibration();
-    fractions().par_iter().map(|&f| ev.misfit(&with_fraction(current, f), cal)).collect()
+    let models: Vec<Model> = fractions().iter().map(|&f| with_fraction(current, f)).collect();
+    ev.misfits(&models.iter().map(|m| (m, cal)).collect::<Vec<_>>())
 }
 
 /// Fits `static_friction` on top of `current` (module docs); fills the

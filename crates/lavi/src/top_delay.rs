@@ -96,7 +96,8 @@ fn point(ev: &Evaluator, current: &Model, top_delay_s: f64) -> Result<(ScanPoint
         damping_nm_s_rad: der.free.damping_nm_s_rad,
         law_static_nm: m.friction.slip_nm(0.0),
         law_at_max_nm: m.friction.slip_nm(vmax),
-        calibration_misfit: ev.misfit(&m, cal),
+        // Made with the scan's other points ([`scan_models`]).
+        calibration_misfit: f64::NAN,
     };
     Ok((p, m))
 }
@@ -117,7 +118,14 @@ fn scan_models(ev: &Evaluator, current: &Model) -> Result<(Vec<(ScanPoint, Model
     let step = whole(COARSE_S).max(1);
     let coarse: Vec<isize> = (-m..=m).filter(|k| k % step == 0).collect();
     let run = |ks: &[isize]| -> Result<Vec<(ScanPoint, Model)>, LaviError> {
-        ks.par_iter().map(|&k| point(ev, current, k as f64 / fs)).collect()
+        let mut pts: Vec<(ScanPoint, Model)> =
+            ks.par_iter().map(|&k| point(ev, current, k as f64 / fs)).collect::<Result<_, _>>()?;
+        let cal = ev.calibration();
+        let misfits = ev.misfits(&pts.iter().map(|p| (&p.1, cal)).collect::<Vec<_>>());
+        for (p, v) in pts.iter_mut().zip(misfits) {
+            p.0.calibration_misfit = v;
+        }
+        Ok(pts)
     };
     let mut pts = run(&coarse)?;
     let best_k = |pts: &[(ScanPoint, Model)]| -> isize {

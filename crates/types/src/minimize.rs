@@ -159,7 +159,7 @@ pub fn nelder_mead_converged(
 
 /// The simplex of [`nelder_mead`] and [`nelder_mead_converged`]: stops when
 /// `done` holds of the vertices sorted by value (best first) or after
-/// `max_evals` evaluations.
+/// `max_evals` evaluations. One search of [`simplex_many`].
 fn simplex(
     f: impl Fn(&[f64]) -> f64,
     x0: &[f64],
@@ -167,61 +167,227 @@ fn simplex(
     max_evals: usize,
     done: impl Fn(&[(Vec<f64>, f64)]) -> bool,
 ) -> (Vec<f64>, f64, usize) {
-    let n = x0.len();
-    let fx = |x: &[f64]| {
-        let v = f(x);
-        if v.is_finite() { v } else { 1e9 }
-    };
-    let mut pts: Vec<(Vec<f64>, f64)> = Vec::with_capacity(n + 1);
-    pts.push((x0.to_vec(), fx(x0)));
-    for i in 0..n {
-        let mut x = x0.to_vec();
-        x[i] += step[i];
-        let v = fx(&x);
-        pts.push((x, v));
-    }
-    let mut evals = n + 1;
-    while evals < max_evals {
-        pts.sort_by(|a, b| a.1.total_cmp(&b.1));
-        if done(&pts) {
+    let all = |pts: &[(usize, &[f64])]| pts.iter().map(|p| f(p.1)).collect();
+    simplex_many(all, &[(x0, step)], max_evals, done).pop().expect("one search gives one result")
+}
+
+/// [`nelder_mead`] from each start (x0, step) of `starts`, every search its
+/// own, run side by side: at each round every search that is not done asks
+/// for the points it needs next (its first n + 1 vertices, a reflection, an
+/// expansion, a contraction, or a shrink's n vertices), and `f` gets them all
+/// at once as (search, point) pairs, values in the same order. A caller whose
+/// points are independent and costly (free runs of a model) evaluates them
+/// together; each search takes the same points and decisions as alone.
+/// Returns each search's (x, f(x), evaluations), in start order.
+pub fn nelder_mead_many(
+    f: impl Fn(&[(usize, &[f64])]) -> Vec<f64>,
+    starts: &[(&[f64], &[f64])],
+    max_evals: usize,
+) -> Vec<(Vec<f64>, f64, usize)> {
+    simplex_many(f, starts, max_evals, |pts| (pts[pts.len() - 1].1 - pts[0].1).abs() < 1e-6 * (1.0 + pts[0].1.abs()))
+}
+
+/// The simplexes of [`nelder_mead_many`] with the stop `done` (see [`simplex`]).
+fn simplex_many(
+    f: impl Fn(&[(usize, &[f64])]) -> Vec<f64>,
+    starts: &[(&[f64], &[f64])],
+    max_evals: usize,
+    done: impl Fn(&[(Vec<f64>, f64)]) -> bool,
+) -> Vec<(Vec<f64>, f64, usize)> {
+    let mut searches: Vec<Search> = starts.iter().map(|(x0, step)| Search::new(x0, step)).collect();
+    loop {
+        let asked: Vec<(usize, &[f64])> =
+            searches.iter().enumerate().flat_map(|(i, s)| s.asked.iter().map(move |x| (i, x.as_slice()))).collect();
+        if asked.is_empty() {
             break;
         }
-        let centroid: Vec<f64> = (0..n).map(|k| pts[..n].iter().map(|p| p.0[k]).sum::<f64>() / n as f64).collect();
-        let along = |t: f64| -> Vec<f64> { (0..n).map(|k| centroid[k] + t * (pts[n].0[k] - centroid[k])).collect() };
-        let xr = along(-1.0);
-        let fr = fx(&xr);
-        evals += 1;
-        if fr < pts[0].1 {
-            let xe = along(-2.0);
-            let fe = fx(&xe);
-            evals += 1;
-            pts[n] = if fe < fr { (xe, fe) } else { (xr, fr) };
-        } else if fr < pts[n - 1].1 {
-            pts[n] = (xr, fr);
-        } else {
-            let xc = if fr < pts[n].1 { along(-0.5) } else { along(0.5) };
-            let fc = fx(&xc);
-            evals += 1;
-            if fc < fr.min(pts[n].1) {
-                pts[n] = (xc, fc);
-            } else {
-                let best = pts[0].0.clone();
-                for p in pts.iter_mut().skip(1) {
-                    let x: Vec<f64> = (0..n).map(|k| best[k] + 0.5 * (p.0[k] - best[k])).collect();
-                    *p = (x.clone(), fx(&x));
-                    evals += 1;
-                }
+        let values = f(&asked);
+        assert_eq!(values.len(), asked.len(), "one value per point asked");
+        let mut values = values.into_iter().map(|v| if v.is_finite() { v } else { 1e9 });
+        for s in searches.iter_mut() {
+            let k = s.asked.len();
+            if k > 0 {
+                let mine: Vec<f64> = values.by_ref().take(k).collect();
+                s.tell(&mine, max_evals, &done);
             }
         }
     }
-    pts.sort_by(|a, b| a.1.total_cmp(&b.1));
-    let (x, v) = pts.swap_remove(0);
-    (x, v, evals)
+    searches
+        .into_iter()
+        .map(|mut s| {
+            s.pts.sort_by(|a, b| a.1.total_cmp(&b.1));
+            let (x, v) = s.pts.swap_remove(0);
+            (x, v, s.evals)
+        })
+        .collect()
+}
+
+/// What a simplex waits on (Nelder & Mead's steps; coefficients 1, 2, ½, ½).
+enum Wait {
+    /// The n + 1 vertices of the first simplex.
+    Start,
+    /// The reflection of the worst vertex through the centroid of the others.
+    Reflect,
+    /// The expansion, after the reflection `xr` gave `fr` below the best.
+    Expand {
+        xr: Vec<f64>,
+        fr: f64,
+    },
+    /// The contraction, after the reflection gave `fr`.
+    Contract {
+        fr: f64,
+    },
+    /// The shrink's n vertices toward the best.
+    Shrink,
+    Finished,
+}
+
+/// One simplex of [`simplex_many`]: its vertices (sorted, best first, when a
+/// step is asked), the evaluations spent, and the points it asked for.
+struct Search {
+    pts: Vec<(Vec<f64>, f64)>,
+    evals: usize,
+    centroid: Vec<f64>,
+    wait: Wait,
+    asked: Vec<Vec<f64>>,
+}
+
+impl Search {
+    fn new(x0: &[f64], step: &[f64]) -> Self {
+        let mut asked = vec![x0.to_vec()];
+        for i in 0..x0.len() {
+            let mut x = x0.to_vec();
+            x[i] += step[i];
+            asked.push(x);
+        }
+        Search { pts: Vec::with_capacity(x0.len() + 1), evals: 0, centroid: Vec::new(), wait: Wait::Start, asked }
+    }
+
+    /// The point centroid + t (worst − centroid).
+    fn along(&self, t: f64) -> Vec<f64> {
+        let n = self.centroid.len();
+        (0..n).map(|k| self.centroid[k] + t * (self.pts[n].0[k] - self.centroid[k])).collect()
+    }
+
+    /// Takes the values of the points asked (in order, non-finite already 1e9) and asks the next.
+    fn tell(&mut self, values: &[f64], max_evals: usize, done: &impl Fn(&[(Vec<f64>, f64)]) -> bool) {
+        let asked = std::mem::take(&mut self.asked);
+        let n = asked[0].len();
+        match std::mem::replace(&mut self.wait, Wait::Finished) {
+            Wait::Start => {
+                self.pts = asked.into_iter().zip(values.iter().copied()).collect();
+                self.evals = n + 1;
+            }
+            Wait::Reflect => {
+                let (xr, fr) = (asked.into_iter().next().expect("a reflection"), values[0]);
+                let n = self.pts.len() - 1;
+                self.evals += 1;
+                if fr < self.pts[0].1 {
+                    self.asked = vec![self.along(-2.0)];
+                    self.wait = Wait::Expand { xr, fr };
+                    return;
+                } else if fr < self.pts[n - 1].1 {
+                    self.pts[n] = (xr, fr);
+                } else {
+                    self.asked = vec![if fr < self.pts[n].1 { self.along(-0.5) } else { self.along(0.5) }];
+                    self.wait = Wait::Contract { fr };
+                    return;
+                }
+            }
+            Wait::Expand { xr, fr } => {
+                let (xe, fe) = (asked.into_iter().next().expect("an expansion"), values[0]);
+                self.evals += 1;
+                let n = self.pts.len() - 1;
+                self.pts[n] = if fe < fr { (xe, fe) } else { (xr, fr) };
+            }
+            Wait::Contract { fr } => {
+                let (xc, fc) = (asked.into_iter().next().expect("a contraction"), values[0]);
+                self.evals += 1;
+                let n = self.pts.len() - 1;
+                if fc < fr.min(self.pts[n].1) {
+                    self.pts[n] = (xc, fc);
+                } else {
+                    let best = &self.pts[0].0;
+                    self.asked = self.pts[1..]
+                        .iter()
+                        .map(|p| (0..n).map(|k| best[k] + 0.5 * (p.0[k] - best[k])).collect())
+                        .collect();
+                    self.wait = Wait::Shrink;
+                    return;
+                }
+            }
+            Wait::Shrink => {
+                for (p, (x, v)) in self.pts.iter_mut().skip(1).zip(asked.into_iter().zip(values.iter().copied())) {
+                    *p = (x, v);
+                }
+                self.evals += n;
+            }
+            Wait::Finished => return,
+        }
+        // The next step: the loop's test of the single simplex, then a reflection.
+        if self.evals >= max_evals {
+            return;
+        }
+        self.pts.sort_by(|a, b| a.1.total_cmp(&b.1));
+        if done(&self.pts) {
+            return;
+        }
+        let n = self.pts.len() - 1;
+        self.centroid = (0..n).map(|k| self.pts[..n].iter().map(|p| p.0[k]).sum::<f64>() / n as f64).collect();
+        self.asked = vec![self.along(-1.0)];
+        self.wait = Wait::Reflect;
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn searches_side_by_side_are_each_the_search_alone_to_the_bit() {
+        // Rosenbrock (reflections, expansions, contractions), a kinked valley, a NaN
+        // region, a shrinking simplex, dimensions 1 to 3, and budgets
+        // that stop searches at different rounds.
+        let rosen = |x: &[f64]| (1.0 - x[0]).powi(2) + 100.0 * (x[1] - x[0] * x[0]).powi(2);
+        let kink = |x: &[f64]| x[0].abs() + 3.0 * (x[1] - 0.5).abs() + (x[2] + x[0]).abs().sqrt();
+        let holed = |x: &[f64]| if x[0] > 2.0 { f64::NAN } else { (x[0] - 1.5).powi(2) };
+        // A point minimum on a plateau: every reflection and contraction fails, the simplex shrinks.
+        let spike = |x: &[f64]| if x.iter().all(|v| *v == 0.0) { 0.0 } else { 1.0 };
+        type Objective<'a> = &'a dyn Fn(&[f64]) -> f64;
+        let fs: [Objective; 4] = [&rosen, &kink, &holed, &spike];
+        let starts: [(&[f64], &[f64]); 4] = [
+            (&[-1.2, 1.0], &[0.5, 0.5]),
+            (&[2.0, -1.0, 1.0], &[1.0, 1.0, 1.0]),
+            (&[0.0], &[3.0]),
+            (&[0.0, 0.0], &[1.0, 1.0]),
+        ];
+        for max_evals in [3, 40, 400] {
+            // Per round, the most points one search asked for (after the first round: a shrink).
+            let rounds = std::cell::RefCell::new(Vec::new());
+            let many = nelder_mead_many(
+                |pts| {
+                    let most = (0..4).map(|i| pts.iter().filter(|p| p.0 == i).count()).max().unwrap_or(0);
+                    rounds.borrow_mut().push(most);
+                    pts.iter().map(|&(i, x)| fs[i](x)).collect()
+                },
+                &starts,
+                max_evals,
+            );
+            for (i, (x0, step)) in starts.iter().enumerate() {
+                let alone = nelder_mead(fs[i], x0, step, max_evals);
+                let bits = |r: &(Vec<f64>, f64, usize)| {
+                    (r.0.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), r.1.to_bits(), r.2)
+                };
+                assert_eq!(bits(&many[i]), bits(&alone), "search {i}, budget {max_evals}");
+            }
+            // Fewer rounds than evaluations: the searches' points came together.
+            let (rounds, evals) = (rounds.into_inner(), many.iter().map(|r| r.2).sum::<usize>());
+            assert!(rounds.len() < evals, "{} rounds for {evals} evaluations", rounds.len());
+            if max_evals == 400 {
+                assert!(rounds[1..].iter().any(|&k| k > 1), "a shrink was asked for side by side");
+            }
+        }
+    }
 
     #[test]
     fn nelder_mead_finds_a_quadratic_minimum() {
