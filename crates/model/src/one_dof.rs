@@ -818,16 +818,10 @@ pub fn simulate_implicit_batch<F: ImplicitFriction, S: ImplicitSink>(
     // A batch of one: its lane's steps in their loop alone (the same steps;
     // the batch's bookkeeping measured +5 % of the slider's CPU on one run).
     if let [Ok(lane)] = lanes.as_mut_slice() {
-        let (k, c, ca, h, h_j, steps, law, drive) =
-            (lane.k, lane.c, lane.ca, lane.h, lane.h_j, lane.steps, lane.job.law, lane.job.drive);
         for i in lane.from..lane.job.samples {
-            let s = &mut *lane.job.state;
-            let (mut acc, mut fric) = (0.0, 0.0);
-            for sub in 0..steps {
-                let top = implicit_top(drive, i, (sub as f64 + 0.5) / steps as f64);
-                (acc, fric) = implicit_substep(law, s, top, k, c, ca, h, h_j);
+            for sub in 0..lane.steps {
+                lane.substep(i, sub);
             }
-            (lane.acc, lane.fric) = (acc, fric);
             if let Err(e) = lane.end_sample(i) {
                 return vec![Err(e)];
             }
@@ -855,48 +849,6 @@ pub fn simulate_implicit_batch<F: ImplicitFriction, S: ImplicitSink>(
         }
     }
     lanes.into_iter().map(|l| l.map(|_| ())).collect()
-}
-
-/// The imposed top speed at sample `i`, a fraction `a` of the way from
-/// sample i − 1 (linear between samples; `a` = 0: the sample's own); the
-/// drive's shape is checked in [`ImplicitLane::begin`].
-#[inline(always)]
-fn implicit_top(drive: Drive, i: usize, a: f64) -> f64 {
-    match drive {
-        Drive::Speed(u) => {
-            if a == 0.0 {
-                u[i]
-            } else {
-                u[i - 1] + a * (u[i] - u[i - 1])
-            }
-        }
-        Drive::ConstantSpeed(v) => v,
-        Drive::SpeedLoop { .. } => unreachable!("refused in begin"),
-    }
-}
-
-/// One implicit substep of `h` s at the top speed `top`: the free-flight
-/// speed p, the law's implicit step (Moreau) and the twist at the new
-/// speed; returns the bit's acceleration over the substep and the contact's
-/// torque. The one step of every implicit run, batched or alone.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn implicit_substep<F: ImplicitFriction>(
-    law: &F,
-    s: &mut OneDofState,
-    top: f64,
-    k: f64,
-    c: f64,
-    ca: f64,
-    h: f64,
-    h_j: f64,
-) -> (f64, f64) {
-    let om = s.bit_rad_s;
-    let p = om + h_j * (k * s.twist_rad + c * (top - om) - ca * om);
-    let (next, torque) = law.implicit_step(&mut s.friction_state, &mut s.stuck, p, h_j, h);
-    s.bit_rad_s = next;
-    s.twist_rad += h * (top - next);
-    ((next - om) / h, torque)
 }
 
 /// One run of [`simulate_implicit_batch`] under way: its job, the step's
@@ -972,16 +924,36 @@ impl<'j, 'a, F: ImplicitFriction, S: ImplicitSink> ImplicitLane<'j, 'a, F, S> {
         Ok(lane)
     }
 
-    /// [`implicit_top`] of this run's drive.
+    /// The imposed top speed at sample `i`, a fraction `a` of the way from
+    /// sample i − 1 (linear between samples; `a` = 0: the sample's own); the
+    /// drive's shape is checked in [`Self::begin`].
     fn top_at(&self, i: usize, a: f64) -> f64 {
-        implicit_top(self.job.drive, i, a)
+        match self.job.drive {
+            Drive::Speed(u) => {
+                if a == 0.0 {
+                    u[i]
+                } else {
+                    u[i - 1] + a * (u[i] - u[i - 1])
+                }
+            }
+            Drive::ConstantSpeed(v) => v,
+            Drive::SpeedLoop { .. } => unreachable!("refused in begin"),
+        }
     }
 
-    /// Substep `sub` towards sample `i` ([`implicit_substep`]).
+    /// Substep `sub` towards sample `i`: the free-flight speed p, then the
+    /// law's implicit step (Moreau) and the twist at the new speed.
     fn substep(&mut self, i: usize, sub: usize) {
         let top = self.top_at(i, (sub as f64 + 0.5) / self.steps as f64);
-        (self.acc, self.fric) =
-            implicit_substep(self.job.law, self.job.state, top, self.k, self.c, self.ca, self.h, self.h_j);
+        let (k, c, ca, h, h_j) = (self.k, self.c, self.ca, self.h, self.h_j);
+        let s = &mut *self.job.state;
+        let om = s.bit_rad_s;
+        let p = om + h_j * (k * s.twist_rad + c * (top - om) - ca * om);
+        let (next, torque) = self.job.law.implicit_step(&mut s.friction_state, &mut s.stuck, p, h_j, h);
+        self.acc = (next - om) / h;
+        self.fric = torque;
+        s.bit_rad_s = next;
+        s.twist_rad += h * (top - next);
     }
 
     /// Ends sample `i`: refuses a state out of the physical range, else puts the sample.
