@@ -815,19 +815,6 @@ pub fn simulate_implicit_batch<F: ImplicitFriction, S: ImplicitSink>(
 ) -> Vec<Result<(), ModelError>> {
     let mut lanes: Vec<Result<ImplicitLane<'_, '_, F, S>, ModelError>> =
         jobs.iter_mut().map(ImplicitLane::begin).collect();
-    // A batch of one: its lane's steps in their loop alone (the same steps;
-    // the batch's bookkeeping measured +5 % of the slider's CPU on one run).
-    if let [Ok(lane)] = lanes.as_mut_slice() {
-        for i in lane.from..lane.job.samples {
-            for sub in 0..lane.steps {
-                lane.substep(i, sub);
-            }
-            if let Err(e) = lane.end_sample(i) {
-                return vec![Err(e)];
-            }
-        }
-        return vec![Ok(())];
-    }
     let longest = lanes.iter().flatten().map(|l| l.job.samples).max().unwrap_or(0);
     let most_steps = lanes.iter().flatten().map(|l| l.steps).max().unwrap_or(1);
     for i in 1..longest {
