@@ -774,10 +774,9 @@ impl ImplicitSink for OneDofRun {
 /// starts at `state`, as [`simulate_implicit_into`] from it). Every step is
 /// the one the longer run from the start would take, so a run made in
 /// pieces is bit for bit the run made at once (a caller that lengthens a
-/// simulated stretch pays only for the added samples). A batch of one
-/// ([`simulate_implicit_batch`]): the same steps, the same bits.
+/// simulated stretch pays only for the added samples).
 #[allow(clippy::too_many_arguments)]
-pub fn simulate_implicit_extend<F: ImplicitFriction, S: ImplicitSink>(
+pub fn simulate_implicit_extend<F: ImplicitFriction>(
     shaft: &Shaft,
     law: &F,
     drive: Drive,
@@ -785,192 +784,69 @@ pub fn simulate_implicit_extend<F: ImplicitFriction, S: ImplicitSink>(
     fs_hz: f64,
     samples: usize,
     substeps: usize,
-    out: &mut S,
+    out: &mut impl ImplicitSink,
 ) -> Result<(), ModelError> {
-    let mut job = [ImplicitJob { shaft: *shaft, law, drive, fs_hz, samples, substeps, state, out }];
-    simulate_implicit_batch(&mut job).pop().expect("a batch of one gives one result")
-}
-
-/// One run of an implicit batch ([`simulate_implicit_batch`]):
-/// [`simulate_implicit_extend`]'s arguments, its state and sink borrowed.
-pub struct ImplicitJob<'a, F, S> {
-    pub shaft: Shaft,
-    pub law: &'a F,
-    pub drive: Drive<'a>,
-    pub fs_hz: f64,
-    pub samples: usize,
-    pub substeps: usize,
-    pub state: &'a mut OneDofState,
-    pub out: &'a mut S,
-}
-
-/// Continues every job of `jobs` as [`simulate_implicit_extend`] would, each
-/// run's result in job order. The runs are independent (each its own shaft,
-/// law, drive, rate, substeps, length and sink): they advance sample by
-/// sample and substep by substep in one loop, so the core overlaps their
-/// dependency chains, and each run's operations are its own, in its own
-/// order: a run's bits do not depend on its batch (as [`simulate_batch`]).
-pub fn simulate_implicit_batch<F: ImplicitFriction, S: ImplicitSink>(
-    jobs: &mut [ImplicitJob<'_, F, S>],
-) -> Vec<Result<(), ModelError>> {
-    let mut lanes: Vec<Result<ImplicitLane<'_, '_, F, S>, ModelError>> =
-        jobs.iter_mut().map(ImplicitLane::begin).collect();
-    // A batch of one: its lane's steps in their loop alone (the same steps;
-    // the batch's bookkeeping measured +5 % of the slider's CPU on one run).
-    if let [Ok(lane)] = lanes.as_mut_slice() {
-        for i in lane.from..lane.job.samples {
-            for sub in 0..lane.steps {
-                lane.substep(i, sub);
-            }
-            if let Err(e) = lane.end_sample(i) {
-                return vec![Err(e)];
-            }
-        }
-        return vec![Ok(())];
+    if samples < 2 {
+        return Err(invalid("samples", samples as f64, "at least 2"));
     }
-    let longest = lanes.iter().flatten().map(|l| l.job.samples).max().unwrap_or(0);
-    let most_steps = lanes.iter().flatten().map(|l| l.steps).max().unwrap_or(1);
-    for i in 1..longest {
-        for sub in 0..most_steps {
-            for lane in lanes.iter_mut().flatten() {
-                if i >= lane.from && i < lane.job.samples && sub < lane.steps {
-                    lane.substep(i, sub);
-                }
+    if shaft.mid.is_some() {
+        return Err(invalid("mid", f64::NAN, "the implicit contact is for a shaft without mid inertia"));
+    }
+    let top_at = |i: usize, a: f64| -> Result<f64, ModelError> {
+        match drive {
+            Drive::ConstantSpeed(v) => Ok(v),
+            Drive::Speed(u) if u.len() == samples => Ok(if a == 0.0 { u[i] } else { u[i - 1] + a * (u[i] - u[i - 1]) }),
+            Drive::Speed(u) => Err(invalid("drive speed", u.len() as f64, "one value per sample")),
+            Drive::SpeedLoop { .. } => {
+                Err(invalid("drive", f64::NAN, "the implicit contact takes an imposed speed, not a speed loop"))
             }
         }
-        for slot in lanes.iter_mut() {
-            if let Ok(lane) = slot
-                && i >= lane.from
-                && i < lane.job.samples
-                && let Err(e) = lane.end_sample(i)
-            {
-                *slot = Err(e);
-            }
+    };
+    for (name, v) in
+        [("inertia_kgm2", shaft.inertia_kgm2), ("stiffness_nm_rad", shaft.stiffness_nm_rad), ("fs_hz", fs_hz)]
+    {
+        if !(v > 0.0 && v.is_finite()) {
+            return Err(invalid(name, v, "must be finite and > 0"));
         }
     }
-    lanes.into_iter().map(|l| l.map(|_| ())).collect()
-}
-
-/// One run of [`simulate_implicit_batch`] under way: its job, the step's
-/// constants and the sample it resumes at.
-struct ImplicitLane<'j, 'a, F, S> {
-    job: &'j mut ImplicitJob<'a, F, S>,
-    /// Substeps per sample, the substep (s) and substep over inertia.
-    steps: usize,
-    h: f64,
-    h_j: f64,
-    /// k, c, c_a of the shaft.
-    k: f64,
-    c: f64,
-    ca: f64,
-    /// The first sample this call steps to.
-    from: usize,
-    /// The bit's acceleration and the contact's torque at the last substep.
-    acc: f64,
-    fric: f64,
-}
-
-impl<'j, 'a, F: ImplicitFriction, S: ImplicitSink> ImplicitLane<'j, 'a, F, S> {
-    /// Checks `job` and, for an empty sink, puts its sample 0 (module docs).
-    fn begin(job: &'j mut ImplicitJob<'a, F, S>) -> Result<Self, ModelError> {
-        let (shaft, fs_hz, samples) = (&job.shaft, job.fs_hz, job.samples);
-        if samples < 2 {
-            return Err(invalid("samples", samples as f64, "at least 2"));
+    let steps = substeps.max(1);
+    let h = 1.0 / (fs_hz * steps as f64);
+    let (k, c, ca, j) =
+        (shaft.stiffness_nm_rad, shaft.twist_damping_nm_s_rad, shaft.absolute_damping_nm_s_rad, shaft.inertia_kgm2);
+    let h_j = h / j;
+    let s = state;
+    let first = out.samples();
+    out.reserve(samples.saturating_sub(first));
+    if first == 0 {
+        s.top_rad_s = top_at(0, 0.0)?;
+        if s.stuck {
+            s.bit_rad_s = 0.0;
         }
-        if shaft.mid.is_some() {
-            return Err(invalid("mid", f64::NAN, "the implicit contact is for a shaft without mid inertia"));
-        }
-        for (name, v) in
-            [("inertia_kgm2", shaft.inertia_kgm2), ("stiffness_nm_rad", shaft.stiffness_nm_rad), ("fs_hz", fs_hz)]
-        {
-            if !(v > 0.0 && v.is_finite()) {
-                return Err(invalid(name, v, "must be finite and > 0"));
-            }
-        }
-        let steps = job.substeps.max(1);
-        let h = 1.0 / (fs_hz * steps as f64);
-        let (k, c, ca, j) =
-            (shaft.stiffness_nm_rad, shaft.twist_damping_nm_s_rad, shaft.absolute_damping_nm_s_rad, shaft.inertia_kgm2);
-        let first = job.out.samples();
-        job.out.reserve(samples.saturating_sub(first));
-        let from = first.max(1);
-        // The drive is read at sample 0 (an empty sink) and at every sample stepped to.
-        if first == 0 || from < samples {
-            match job.drive {
-                Drive::ConstantSpeed(_) => {}
-                Drive::Speed(u) if u.len() == samples => {}
-                Drive::Speed(u) => return Err(invalid("drive speed", u.len() as f64, "one value per sample")),
-                Drive::SpeedLoop { .. } => {
-                    return Err(invalid(
-                        "drive",
-                        f64::NAN,
-                        "the implicit contact takes an imposed speed, not a speed loop",
-                    ));
-                }
-            }
-        }
-        let lane = ImplicitLane { steps, h, h_j: h / j, k, c, ca, from, acc: 0.0, fric: 0.0, job };
-        if first == 0 {
-            let top = lane.top_at(0, 0.0);
-            let s = &mut *lane.job.state;
-            s.top_rad_s = top;
-            if s.stuck {
-                s.bit_rad_s = 0.0;
-            }
-            // At sample 0 the contact is taken to balance the shaft (quasi-static start).
-            let torque = k * s.twist_rad + c * (s.top_rad_s - s.bit_rad_s) - ca * s.bit_rad_s;
-            lane.job.out.push(s, torque, 0.0);
-        }
-        Ok(lane)
+        // At sample 0 the contact is taken to balance the shaft (quasi-static start).
+        out.push(s, k * s.twist_rad + c * (s.top_rad_s - s.bit_rad_s) - ca * s.bit_rad_s, 0.0);
     }
-
-    /// The imposed top speed at sample `i`, a fraction `a` of the way from
-    /// sample i − 1 (linear between samples; `a` = 0: the sample's own); the
-    /// drive's shape is checked in [`Self::begin`].
-    fn top_at(&self, i: usize, a: f64) -> f64 {
-        match self.job.drive {
-            Drive::Speed(u) => {
-                if a == 0.0 {
-                    u[i]
-                } else {
-                    u[i - 1] + a * (u[i] - u[i - 1])
-                }
-            }
-            Drive::ConstantSpeed(v) => v,
-            Drive::SpeedLoop { .. } => unreachable!("refused in begin"),
+    for i in first.max(1)..samples {
+        let (mut acc, mut fric) = (0.0, 0.0);
+        for sub in 0..steps {
+            let top = top_at(i, (sub as f64 + 0.5) / steps as f64)?;
+            let om = s.bit_rad_s;
+            let p = om + h_j * (k * s.twist_rad + c * (top - om) - ca * om);
+            let (next, torque) = law.implicit_step(&mut s.friction_state, &mut s.stuck, p, h_j, h);
+            acc = (next - om) / h;
+            fric = torque;
+            s.bit_rad_s = next;
+            s.twist_rad += h * (top - next);
         }
-    }
-
-    /// Substep `sub` towards sample `i`: the free-flight speed p, then the
-    /// law's implicit step (Moreau) and the twist at the new speed.
-    fn substep(&mut self, i: usize, sub: usize) {
-        let top = self.top_at(i, (sub as f64 + 0.5) / self.steps as f64);
-        let (k, c, ca, h, h_j) = (self.k, self.c, self.ca, self.h, self.h_j);
-        let s = &mut *self.job.state;
-        let om = s.bit_rad_s;
-        let p = om + h_j * (k * s.twist_rad + c * (top - om) - ca * om);
-        let (next, torque) = self.job.law.implicit_step(&mut s.friction_state, &mut s.stuck, p, h_j, h);
-        self.acc = (next - om) / h;
-        self.fric = torque;
-        s.bit_rad_s = next;
-        s.twist_rad += h * (top - next);
-    }
-
-    /// Ends sample `i`: refuses a state out of the physical range, else puts the sample.
-    fn end_sample(&mut self, i: usize) -> Result<(), ModelError> {
-        let fs_hz = self.job.fs_hz;
-        let top = self.top_at(i, 0.0);
-        let s = &mut *self.job.state;
         if !(s.bit_rad_s.is_finite() && s.twist_rad.is_finite()) {
             return Err(ModelError::IntegratorFailed {
                 time_s: i as f64 / fs_hz,
                 reason: format!("state left the physical range at sample {i}"),
             });
         }
-        s.top_rad_s = top;
-        self.job.out.push(s, self.fric, self.acc);
-        Ok(())
+        s.top_rad_s = top_at(i, 0.0)?;
+        out.push(s, fric, acc);
     }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -1204,91 +1080,6 @@ mod tests {
             simulate_implicit_extend(&sh, &LAW, drive, &mut state, FS, n, 4, &mut run).unwrap();
         }
         assert_eq!(run, whole);
-    }
-
-    #[test]
-    fn an_implicit_batch_gives_each_run_its_single_runs_bits() {
-        // Rate-and-state runs of different laws, rates, substeps and lengths, one
-        // continued from a shorter run, one refused and one that leaves the
-        // physical range: in one batch (and reversed) each is bit for bit the run
-        // `simulate_implicit_extend` makes of it alone, its state as well.
-        let sh = Shaft { twist_damping_nm_s_rad: 0.0, ..shaft() };
-        let mid = Shaft { mid: Some(MidInertia { inertia_kgm2: 0.02, split: 0.5 }), ..sh };
-        let rs = RateStateAgeing { normal_nm: 1.0, mu0: 1.0, a: 0.01, b: 0.015, dc_rad: 1e-3, v_ref_rad_s: 0.1 };
-        let weak = RateStateAgeing { b: 0.012, dc_rad: 3e-3, ..rs };
-        let n = 9_000;
-        let wavy: Vec<f64> = (0..n).map(|i| 0.2 + 0.1 * (i as f64 * 0.002).sin()).collect();
-        let mut broken = wavy.clone();
-        broken[4_000] = f64::NAN;
-        let start = |law: &RateStateAgeing| OneDofState {
-            stuck: true,
-            twist_rad: 0.5,
-            friction_state: law.initial_state(0.2),
-            ..Default::default()
-        };
-        // (shaft, law, drive, rate, samples, substeps, samples made before)
-        let specs: [(Shaft, &RateStateAgeing, Drive, f64, usize, usize, usize); 6] = [
-            (sh, &rs, Drive::ConstantSpeed(0.2), FS, n, 4, 0),
-            (sh, &weak, Drive::Speed(&wavy), FS, n, 7, 0),
-            (sh, &rs, Drive::ConstantSpeed(0.2), 500.0, 4_000, 3, 1_500),
-            (sh, &weak, Drive::ConstantSpeed(0.3), FS, 2_500, 1, 0),
-            (mid, &rs, Drive::ConstantSpeed(0.2), FS, n, 4, 0),
-            (sh, &rs, Drive::Speed(&broken), FS, n, 4, 0),
-        ];
-        type Made = (Result<(), ModelError>, OneDofState, OneDofRun);
-        let begin = |spec: &(Shaft, &RateStateAgeing, Drive, f64, usize, usize, usize)| {
-            let (shaft, law, drive, fs, _, steps, before) = *spec;
-            let (mut state, mut run) = (start(law), OneDofRun::default());
-            if before > 0 {
-                simulate_implicit_extend(&shaft, law, drive, &mut state, fs, before, steps, &mut run).unwrap();
-            }
-            (state, run)
-        };
-        let alone: Vec<Made> = specs
-            .iter()
-            .map(|spec| {
-                let (shaft, law, drive, fs, samples, steps, _) = *spec;
-                let (mut state, mut run) = begin(spec);
-                let r = simulate_implicit_extend(&shaft, law, drive, &mut state, fs, samples, steps, &mut run);
-                (r, state, run)
-            })
-            .collect();
-        assert!(alone[..4].iter().all(|m| m.0.is_ok()) && alone[4].0.is_err(), "four runs, one refusal");
-        assert!(matches!(alone[5].0, Err(ModelError::IntegratorFailed { .. })), "{:?}", alone[5].0);
-        let speed = &alone[0].2.bit_rad_s;
-        let (lo, hi) = speed.iter().fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(*v), h.max(*v)));
-        assert!(hi - lo > 0.1, "the bit's speed moves: {lo}..{hi}");
-        let bits = |m: &Made| {
-            let r = &m.2;
-            format!(
-                "{:?} {:?} {:?} {:?}",
-                m.0,
-                [m.1.bit_rad_s, m.1.twist_rad, m.1.top_rad_s, m.1.friction_state[0]].map(f64::to_bits),
-                [&r.bit_rad_s, &r.top_rad_s, &r.twist_rad, &r.friction_nm, &r.accel_rad_s2]
-                    .map(|c| c.iter().map(|v| v.to_bits()).collect::<Vec<u64>>()),
-                (&r.stuck, m.1.stuck)
-            )
-        };
-        for reversed in [false, true] {
-            let mut order: Vec<usize> = (0..specs.len()).collect();
-            if reversed {
-                order.reverse();
-            }
-            let mut made: Vec<(OneDofState, OneDofRun)> = order.iter().map(|&i| begin(&specs[i])).collect();
-            let mut jobs: Vec<ImplicitJob<'_, RateStateAgeing, OneDofRun>> = order
-                .iter()
-                .zip(made.iter_mut())
-                .map(|(&i, (state, out))| {
-                    let (shaft, law, drive, fs_hz, samples, substeps, _) = specs[i];
-                    ImplicitJob { shaft, law, drive, fs_hz, samples, substeps, state, out }
-                })
-                .collect();
-            let results = simulate_implicit_batch(&mut jobs);
-            drop(jobs);
-            for ((&i, r), (state, run)) in order.iter().zip(results).zip(made) {
-                assert_eq!(bits(&(r, state, run)), bits(&alone[i]), "job {i}, reversed: {reversed}");
-            }
-        }
     }
 
     #[test]
