@@ -88,6 +88,8 @@ pub(super) fn refine_speed_time(
     let mut converged = false;
     let mut ne_last = None;
     let mut start = friction::LineStart::default();
+    // Each accepted iteration's realised RSS decrease (the crawl rule, `friction::crawling`).
+    let mut gains = Vec::new();
     for _ in 0..30 {
         // Columns 0..i_p shared, the sample's run's phase its block: an arrow
         // (ArrowNormal: the sums add_sparse would make, bit for bit).
@@ -132,6 +134,7 @@ pub(super) fn refine_speed_time(
             let r2 = eval(&cand, &mut g_cand, &mut sc_cand);
             if r2 <= rss {
                 let rel = (rss - r2) / rss.max(f64::MIN_POSITIVE);
+                gains.push(rss - r2);
                 theta = cand;
                 rss = r2;
                 std::mem::swap(&mut g, &mut g_cand);
@@ -143,7 +146,7 @@ pub(super) fn refine_speed_time(
             }
             lambda *= 0.5;
         }
-        if !improved || near {
+        if !improved || near || friction::crawling(&gains, rss, d.len(), theta.len()) {
             converged = true;
         }
         if converged {

@@ -19,7 +19,7 @@ mod sine;
 mod stribeck;
 
 pub use heldout::{autocorr_inflation, heldout_phase, inflation_of, relative_mu_error, relative_rms};
-pub(crate) use line_search::{LineStart, near_stationary};
+pub(crate) use line_search::{LineStart, crawling, near_stationary};
 pub(crate) use scan::{AngleTrig, SinCosSchedule, time_scan};
 pub use sine::fit_sine;
 pub(crate) use sine::fit_sine_with;
