@@ -490,7 +490,7 @@ fn forward_selection_has_one_engine() {
 /// before they moved onto `select_on_views`).
 const SELECTIONS: [(&str, &str); 5] = [
     ("crates/diagnose/src/select.rs", "the thesis rig's vocabulary effects"),
-    ("crates/diagnose/src/structure/mod.rs", "the thesis rig's structural candidates (three views)"),
+    ("crates/diagnose/src/structure/selection.rs", "the thesis rig's structural candidates (three views)"),
     ("crates/diagnose/src/extension/mod.rs", "the `unexplained` answer's extension (library signals, free run)"),
     ("crates/lavi/src/select.rs", "the LAVI study's candidates"),
     ("crates/slider/src/study.rs", "the slider's friction laws"),
@@ -538,11 +538,11 @@ fn a_planted_selection_loop_is_seen() {
     assert_eq!(seen.len(), 2, "{seen:?}");
     // The structure's selection off the engine (its former pick) is seen; on it, not.
     let off = "let winner = (1..REGISTRY.len()).filter_map(|k| scored[k].as_ref().map(|x| (k, x)));";
-    let seen = selections_off_the_engine(&squeeze(off, "crates/diagnose/src/structure/mod.rs"));
-    assert!(seen.iter().any(|p| p.starts_with("crates/diagnose/src/structure/mod.rs: ")), "{seen:?}");
+    let seen = selections_off_the_engine(&squeeze(off, "crates/diagnose/src/structure/selection.rs"));
+    assert!(seen.iter().any(|p| p.starts_with("crates/diagnose/src/structure/selection.rs: ")), "{seen:?}");
     let on = "let sel = select_on_views(&study, &cand_refs, &baselines, &folds, &rule, &search);";
-    let seen = selections_off_the_engine(&squeeze(on, "crates/diagnose/src/structure/mod.rs"));
-    assert!(!seen.iter().any(|p| p.starts_with("crates/diagnose/src/structure/mod.rs")), "{seen:?}");
+    let seen = selections_off_the_engine(&squeeze(on, "crates/diagnose/src/structure/selection.rs"));
+    assert!(!seen.iter().any(|p| p.starts_with("crates/diagnose/src/structure/selection.rs")), "{seen:?}");
 }
 
 /// pipeline.toml keys that two stages declare with the same value on purpose:
