@@ -164,6 +164,40 @@ fn damped_step(jtj: &Mat<f64>, g: &[f64], lambda: f64) -> Option<Vec<f64>> {
     crate::linear::spd_solve(&a, &minus_g)
 }
 
+/// Marquardt's damping λ (λ·diag(JᵀJ) added to the normal equations) with
+/// Nielsen's update (H. B. Nielsen, *Damping parameter in Marquardt's
+/// method*, IMM-REP-1999-05; Madsen, Nielsen & Tingleff 2004, §3.2): a
+/// step that lowers the cost with gain ratio ρ (actual over predicted
+/// decrease) scales λ by max(1/3, 1 − (2ρ − 1)³) and resets ν to 2; a step
+/// refused, or none, scales λ by ν and doubles ν. The one home of the
+/// update: this crate's solver and the drive's gains fit
+/// (`rig_diagnose::drive::gains`) both step it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Damping {
+    /// The current λ.
+    pub lambda: f64,
+    nu: f64,
+}
+
+impl Damping {
+    /// λ = `lambda`, ν = 2.
+    pub fn new(lambda: f64) -> Damping {
+        Damping { lambda, nu: 2.0 }
+    }
+
+    /// A step accepted with gain ratio `rho`.
+    pub fn accept(&mut self, rho: f64) {
+        self.lambda *= (1.0_f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
+        self.nu = 2.0;
+    }
+
+    /// A step refused, or no step (a singular damped system).
+    pub fn refuse(&mut self) {
+        self.lambda *= self.nu;
+        self.nu *= 2.0;
+    }
+}
+
 /// Levenberg–Marquardt (Marquardt scaling, Nielsen's damping update) from
 /// `x0`. Trial points where the residuals fail are rejected steps.
 pub fn levenberg_marquardt<P: LsqProblem>(
@@ -253,8 +287,7 @@ fn solve<P: LsqProblem>(
     evals += 2 * p;
     let (mut jtj, mut g) = normal_equations(&jac, &r);
     // Marquardt scaling (λ·diag(A)) makes λ dimensionless.
-    let mut lambda = opts.initial_lambda;
-    let mut nu = 2.0;
+    let mut damping = Damping::new(opts.initial_lambda);
     let mut converged = false;
     let mut stop_reason = format!("reached max_iterations = {}", opts.max_iterations);
     let mut iterations = 0;
@@ -275,9 +308,8 @@ fn solve<P: LsqProblem>(
         // Inner loop: raise the damping until a step lowers the cost.
         let mut accepted = false;
         for _ in 0..30 {
-            let Some(step) = damped_step(&jtj, &g, lambda) else {
-                lambda *= nu;
-                nu *= 2.0;
+            let Some(step) = damped_step(&jtj, &g, damping.lambda) else {
+                damping.refuse();
                 continue;
             };
             let step_norm = step.iter().map(|v| v * v).sum::<f64>().sqrt();
@@ -301,8 +333,7 @@ fn solve<P: LsqProblem>(
                 theta = trial;
                 r = trial_r.expect("finite cost implies residuals");
                 cost = trial_cost;
-                lambda *= (1.0_f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
-                nu = 2.0;
+                damping.accept(rho);
                 accepted = true;
                 if rel_drop < opts.ftol {
                     converged = true;
@@ -310,8 +341,7 @@ fn solve<P: LsqProblem>(
                 }
                 break;
             }
-            lambda *= nu;
-            nu *= 2.0;
+            damping.refuse();
         }
         if accepted && converged && !final_jacobian {
             // The search ends here and nothing reads the Jacobian at theta.
@@ -327,10 +357,15 @@ fn solve<P: LsqProblem>(
             stop_reason = "no damped step lowers the SSR (local minimum to solver precision)".into();
             // Cannot improve further: treat as converged only if the gradient is small.
             converged = gradient_small(&jtj, &g, cost);
-            history.push(IterationRecord { iteration: iterations, ssr: cost, lambda, evaluations: evals });
+            history.push(IterationRecord {
+                iteration: iterations,
+                ssr: cost,
+                lambda: damping.lambda,
+                evaluations: evals,
+            });
             break;
         }
-        history.push(IterationRecord { iteration: iterations, ssr: cost, lambda, evaluations: evals });
+        history.push(IterationRecord { iteration: iterations, ssr: cost, lambda: damping.lambda, evaluations: evals });
     }
 
     Ok(LsqSolution {

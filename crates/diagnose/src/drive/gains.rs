@@ -24,7 +24,7 @@
 //!
 //! Levenberg–Marquardt with Marquardt's scaling (the step solves
 //! (JᵀJ + λ·diag JᵀJ)·δ = Jᵀr by `rig_types::linear`'s [`Normal`]; λ from
-//! 10⁻³, Nielsen's update as `rig_estimate::lsq` does: × max(1/3,
+//! 10⁻³, Nielsen's update, `rig_estimate::lsq::Damping` (the one home of it): × max(1/3,
 //! 1 − (2ρ − 1)³) on an accepted step, ρ the RSS decrease over the linear
 //! model's, × ν on a rejected one, ν doubling). It stops when (1) the
 //! undamped Gauss–Newton step is within a tenth of a standard error of the
@@ -42,6 +42,7 @@
 use super::{Pi, Recording, idle_sse, visit};
 use crate::friction::near_stationary;
 use rig_estimate::linear::Normal;
+use rig_estimate::lsq::Damping;
 
 /// Relative RSS decrease of an accepted step below which the fit stops.
 pub(super) const FTOL: f64 = 1e-12;
@@ -134,7 +135,7 @@ pub(super) fn fit_gains_lm(
         return None;
     }
     let mut evaluations = 1;
-    let (mut lambda, mut nu) = (1e-3, 2.0);
+    let mut damping = Damping::new(1e-3);
     let mut converged = false;
     while !converged && evaluations < MAX_ITERATIONS {
         let gn = ne.solve();
@@ -142,13 +143,12 @@ pub(super) fn fit_gains_lm(
         let step = if near {
             gn
         } else {
-            let d = [ne.ata[(0, 0)], ne.ata[(1, 1)]].map(|x| lambda * x.max(1e-12 * (1.0 + x)));
+            let d = [ne.ata[(0, 0)], ne.ata[(1, 1)]].map(|x| damping.lambda * x.max(1e-12 * (1.0 + x)));
             let damped = [ne.ata[(0, 0)] + d[0], ne.ata[(0, 1)], ne.ata[(1, 0)], ne.ata[(1, 1)] + d[1]];
             Normal::from_row_major(2, &damped, ne.atb.clone()).solve()
         };
         let Some(step) = step else {
-            lambda *= nu;
-            nu *= 2.0;
+            damping.refuse();
             evaluations += 1;
             continue;
         };
@@ -172,8 +172,7 @@ pub(super) fn fit_gains_lm(
             let rho = if pred > 0.0 { (rss - t_rss) / pred } else { 0.0 };
             converged = near || (rss - t_rss) < FTOL * rss;
             (pi, rss, ne) = (trial, t_rss, t_ne);
-            lambda *= (1.0_f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
-            nu = 2.0;
+            damping.accept(rho);
         } else if near {
             // The Gauss–Newton step to within a tenth of a standard error
             // crossed a kink (a sample entering or leaving the clamp) and
@@ -181,8 +180,7 @@ pub(super) fn fit_gains_lm(
             // minimum, and the damped steps would crawl along the kink.
             converged = true;
         } else {
-            lambda *= nu;
-            nu *= 2.0;
+            damping.refuse();
         }
     }
     Some(GainsFit { pi, rss, evaluations, converged })
