@@ -4,7 +4,7 @@
 //! feature misfit, starting from the current model.
 
 use crate::data::{Prepared, RPM_TO_RAD_S, WindowSpec, derivative};
-use crate::eom::{Damping, EomFit, TorqueScan, fit_equation_of_motion};
+use crate::eom::{Damping, EomFit, fit_equation_of_motion};
 use crate::score::{ERROR_CAP, Evaluator};
 use crate::sim::{Drive, FrictionLaw, MidDof, Model};
 use crate::{Candidate, LaviError};
@@ -12,6 +12,11 @@ use rig_spectra::stickslip::fit_weakening;
 use rig_types::minimize::nelder_mead_many;
 use serde::Serialize;
 use std::collections::BTreeMap;
+
+mod balance;
+pub use balance::{ChannelBalance, LoopSpread, best_delay_s, channel_balance, loop_spread, narrowest_loop, top_rad_s};
+#[cfg(test)]
+pub(crate) mod tests;
 
 /// How the equation of motion is fitted: where the damping acts, and what
 /// the torque sensor reads relative to the contact (the structural candidates).
@@ -191,131 +196,6 @@ fn derive_with(
     };
     let info = Derivation { structure: st, free, used: dof, at_bounds, law_rmse_nm, law_constant_rmse_nm };
     Ok((model, info))
-}
-
-/// The top speed over samples `r`, rad/s, on the bit speed's clock when the
-/// top-speed channel is late by `top_delay_s` (negative: early): sample i is the
-/// channel's sample i + τ_top f_s (whole samples, the record's ends standing in beyond them).
-pub fn top_rad_s(d: &Prepared, r: std::ops::Range<usize>, top_delay_s: f64) -> Vec<f64> {
-    let k = crate::sim::delay_samples(top_delay_s, d.fs_hz);
-    crate::sim::read_late(&d.top_rpm, &r, k).iter().map(|v| v * RPM_TO_RAD_S).collect()
-}
-
-/// The torque channel's delay on the speed channels that fits the equation of
-/// motion best (least residual of the unconstrained fit under `st`'s damping and
-/// sensor inertia) on the calibration window, over ±`max_s` in steps of one sample.
-pub fn best_delay_s(d: &Prepared, cal: &WindowSpec, st: Structure, max_s: f64) -> f64 {
-    let r = (cal.span.start + cal.window.start)..(cal.span.start + cal.window.end);
-    let t = &d.time_s[r.clone()];
-    let bit: Vec<f64> = d.bit_rpm[r.clone()].iter().map(|v| v * RPM_TO_RAD_S).collect();
-    let top = top_rad_s(d, r.clone(), st.top_delay_s);
-    let acc = derivative(&bit, d.fs_hz);
-    let m = (max_s * d.fs_hz).round() as isize;
-    // The design's columns but the torque's are the same at every delay: made once
-    // (the same R² as a fit per delay, bit for bit: eom::TorqueScan).
-    let scan = TorqueScan::new(t, &top, &bit, &acc, st.damping);
-    let mut tf = vec![0.0; acc.len()];
-    let mut best = (f64::NEG_INFINITY, 0.0);
-    for k in -m..=m {
-        let at = |i: usize| d.torque_nm[(i as isize + k).clamp(0, d.len() as isize - 1) as usize];
-        for ((x, i), a) in tf.iter_mut().zip(r.clone()).zip(&acc) {
-            *x = at(i) - st.sensor_inertia_kgm2 * a;
-        }
-        if acc.len() >= 8
-            && let Some(r2) = scan.r_squared(&tf)
-            && r2 > best.0
-        {
-            best = (r2, k as f64 / d.fs_hz);
-        }
-    }
-    best.1
-}
-
-/// What the torque channel reads, tested teacher-forced on one window: the
-/// bit's Newton balance (Real et al. 2018's 1-DOF equation, the one of
-/// [`crate::eom`]) with a model's J, k, c, c_a, the torque predicted as
-/// T̂ = k Δφ + c (Ω_top − Ω) − c_a Ω − J Ω̇ + T_0 and compared with the channel
-/// read `torque_delay_s` later (T_0, the shaft's torque at the window's first
-/// sample, the one constant fitted per window: the twist's offset). A term
-/// the balance lacks (a drag outside the contact the model's dampings do not
-/// carry, a torque that is no function of the bit's state) stays in the
-/// residual. An inertia J_s between sensor and contact stays there only when
-/// J is known: fitted on the same torque it lowers J by J_s instead.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct ChannelBalance {
-    /// 1 − Σ(T − T̂)² / Σ(T − mean T)² over the window.
-    pub r_squared: f64,
-    /// RMS of T − T̂, N m.
-    pub residual_rms_nm: f64,
-}
-
-/// [`ChannelBalance`] of window `w` (its `window` samples) under `m`'s J, k, c, c_a and torque delay.
-pub fn channel_balance(d: &Prepared, w: &WindowSpec, m: &Model) -> ChannelBalance {
-    let r = (w.span.start + w.window.start)..(w.span.start + w.window.end);
-    let bit: Vec<f64> = d.bit_rpm[r.clone()].iter().map(|v| v * RPM_TO_RAD_S).collect();
-    let top = top_rad_s(d, r.clone(), m.structure.top_delay_s);
-    let acc = derivative(&bit, d.fs_hz);
-    let dphi = rig_model::one_dof::integrated_twist_rad(&d.time_s[r.clone()], &top, &bit);
-    let shift = crate::sim::delay_samples(m.torque_delay_s, d.fs_hz);
-    let measured: Vec<f64> =
-        r.map(|i| d.torque_nm[(i as isize + shift).clamp(0, d.len() as isize - 1) as usize]).collect();
-    let shaft: Vec<f64> = (0..bit.len())
-        .map(|i| {
-            m.stiffness_nm_rad * dphi[i] + m.damping_nm_s_rad * (top[i] - bit[i])
-                - m.absolute_damping_nm_s_rad * bit[i]
-                - m.inertia_kgm2 * acc[i]
-        })
-        .collect();
-    let n = measured.len() as f64;
-    let t0 = measured.iter().zip(&shaft).map(|(t, p)| t - p).sum::<f64>() / n;
-    let mean = measured.iter().sum::<f64>() / n;
-    let sse: f64 = measured.iter().zip(&shaft).map(|(t, p)| (t - p - t0).powi(2)).sum();
-    let sst: f64 = measured.iter().map(|t| (t - mean).powi(2)).sum();
-    ChannelBalance { r_squared: 1.0 - sse / sst, residual_rms_nm: (sse / n).sqrt() }
-}
-
-/// How far the torque–bit-speed cloud of the calibration window's slip
-/// samples is from a curve when the torque is read `shift_s` later: the
-/// standard deviation of the torque in each of `bins` equal bit-speed bins
-/// (0 to the window's largest bit speed; bins with fewer than 10 samples left
-/// out), its RMS and largest value. A single-valued law T(Ω) leaves only the
-/// noise; a loop leaves its width.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct LoopSpread {
-    pub shift_s: f64,
-    pub rms_bin_std_nm: f64,
-    pub max_bin_std_nm: f64,
-}
-
-/// [`LoopSpread`] of the calibration window at `shift_s`.
-pub fn loop_spread(d: &Prepared, cal: &WindowSpec, slip_speed_rpm: f64, bins: usize, shift_s: f64) -> LoopSpread {
-    let r = (cal.span.start + cal.window.start)..(cal.span.start + cal.window.end);
-    let shift = (shift_s * d.fs_hz).round() as isize;
-    let (v, t): (Vec<f64>, Vec<f64>) = r
-        .filter(|&i| d.bit_rpm[i] > slip_speed_rpm)
-        .map(|i| (d.bit_rpm[i], d.torque_nm[(i as isize + shift).clamp(0, d.len() as isize - 1) as usize]))
-        .unzip();
-    let vmax = v.iter().cloned().fold(0.0, f64::max);
-    let stds: Vec<f64> = rig_spectra::stickslip::bin_means(&v, &t, 0.0, vmax * (1.0 + 1e-9), bins.max(1))
-        .iter()
-        .filter(|b| b.count >= 10)
-        .map(|b| b.std)
-        .collect();
-    LoopSpread {
-        shift_s: shift as f64 / d.fs_hz,
-        rms_bin_std_nm: (stds.iter().map(|x| x * x).sum::<f64>() / stds.len().max(1) as f64).sqrt(),
-        max_bin_std_nm: stds.iter().cloned().fold(0.0, f64::max),
-    }
-}
-
-/// The shift within ±`max_s` (one-sample steps) at which the cloud is closest
-/// to a curve (least RMS bin spread of [`loop_spread`]).
-pub fn narrowest_loop(d: &Prepared, cal: &WindowSpec, slip_speed_rpm: f64, bins: usize, max_s: f64) -> LoopSpread {
-    let m = (max_s * d.fs_hz).round() as isize;
-    (-m..=m)
-        .map(|k| loop_spread(d, cal, slip_speed_rpm, bins, k as f64 / d.fs_hz))
-        .reduce(|a, b| if b.rms_bin_std_nm < a.rms_bin_std_nm { b } else { a })
-        .expect("at least the zero shift")
 }
 
 /// A candidate fitted on the calibration window.
@@ -708,139 +588,3 @@ fn law_is_derived(current: &Model, ev: &Evaluator) -> Result<bool, LaviError> {
 
 /// The workspace's Nelder–Mead (moved to `rig_types::minimize`, its one home; the slider fits with it too).
 pub use rig_types::minimize::nelder_mead;
-
-#[cfg(test)]
-pub(crate) mod tests {
-    use super::*;
-
-    /// The test records' shaft: J 0.01 kg m2, k 4 N m/rad, c 0.01 N m s/rad on the twist rate.
-    pub(crate) fn shaft() -> rig_model::one_dof::Shaft {
-        rig_model::one_dof::Shaft {
-            inertia_kgm2: 0.01,
-            stiffness_nm_rad: 4.0,
-            twist_damping_nm_s_rad: 0.01,
-            absolute_damping_nm_s_rad: 0.0,
-            mid: None,
-        }
-    }
-
-    /// A record at 1 kHz of these channels (the raw ones equal to them, no dips, no repairs).
-    pub(crate) fn prepared(time_s: Vec<f64>, top_rpm: Vec<f64>, bit_rpm: Vec<f64>, torque_nm: Vec<f64>) -> Prepared {
-        let n = time_s.len();
-        Prepared {
-            fs_hz: 1000.0,
-            time_s,
-            top_rpm,
-            wob_n: vec![500.0; n],
-            bit_raw_rpm: bit_rpm.clone(),
-            torque_raw_nm: torque_nm.clone(),
-            bit_rpm,
-            torque_nm,
-            glitches: rig_spectra::stickslip::GlitchReport { runs: 0, samples: 0, longest_run: 0 },
-            top_noise_rad_s: 0.0,
-            twist_excursion_rad: (0.0, 0.0),
-            repairs: Vec::new(),
-        }
-    }
-
-    /// 10 s at 1 kHz: bit speed 80 + 60 sin(2π 2 t) rpm, and a torque channel that
-    /// reads the single-valued law 3 − 0.01 Ω(t − 0.025 s) (late by 25 ms).
-    fn late_channel() -> (Prepared, WindowSpec) {
-        let n = 10_000;
-        let time_s: Vec<f64> = (0..n).map(|i| i as f64 / 1000.0).collect();
-        let speed = |t: f64| 80.0 + 60.0 * (std::f64::consts::TAU * 2.0 * t).sin();
-        let bit_rpm: Vec<f64> = time_s.iter().map(|t| speed(*t)).collect();
-        let torque_nm: Vec<f64> = time_s.iter().map(|t| 3.0 - 0.01 * speed(t - 0.025)).collect();
-        let d = prepared(time_s, vec![80.0; n], bit_rpm, torque_nm);
-        let cal = WindowSpec {
-            label: "3-7".into(),
-            split: crate::data::Split::Train,
-            start_s: 3.0,
-            end_s: 7.0,
-            span: 2000..7000,
-            window: 1000..5000,
-        };
-        (d, cal)
-    }
-
-    /// The calibration-like window 4-8 s of a 12 s test record at 1 kHz (warm-up from 1 s).
-    pub(crate) fn window_4_8() -> WindowSpec {
-        WindowSpec {
-            label: "4-8".into(),
-            split: crate::data::Split::Train,
-            start_s: 4.0,
-            end_s: 8.0,
-            span: 1000..8000,
-            window: 3000..7000,
-        }
-    }
-
-    /// 12 s of stick-slip simulated by the one core (J 0.01 kg m2, k 4 N m/rad, c 0.01 N m s/rad, Coulomb
-    /// 2.5/1.5 N m, top 2 + sin(2π 0.5 t) rad/s), its contact torque recorded `late` samples late
-    /// plus `js` times the bit's acceleration; the calibration-like window 4-8 s.
-    fn simulated_record(late: usize, js: f64) -> (Prepared, WindowSpec, Model) {
-        use rig_model::one_dof::{Coulomb, Drive, OneDofState, simulate};
-        let (n, fs) = (12_000, 1000.0);
-        let top: Vec<f64> = (0..n).map(|i| 2.0 + (std::f64::consts::TAU * 0.5 * i as f64 / fs).sin()).collect();
-        let shaft = shaft();
-        let law = Coulomb { static_nm: 2.5, kinetic_nm: 1.5 };
-        let r = simulate(&shaft, &law, Drive::Speed(&top), None, OneDofState::default(), fs, n, 10).unwrap();
-        let torque_nm: Vec<f64> = (0..n)
-            .map(|i| r.friction_nm[i.saturating_sub(late)] + js * r.accel_rad_s2[i.saturating_sub(late)])
-            .collect();
-        let rpm = |x: &[f64]| x.iter().map(|v| v / RPM_TO_RAD_S).collect::<Vec<f64>>();
-        let (top_rpm, bit_rpm) = (rpm(&top), rpm(&r.bit_rad_s));
-        let d = prepared((0..n).map(|i| i as f64 / fs).collect(), top_rpm, bit_rpm, torque_nm);
-        let w = window_4_8();
-        let law = FrictionLaw {
-            static_nm: 2.5,
-            kinetic_nm: 1.5,
-            stribeck_speed_rad_s: 0.01,
-            shape_exponent: 1.0,
-            viscous_nm_s_rad: 0.0,
-        };
-        let m = Model {
-            inertia_kgm2: 0.01,
-            stiffness_nm_rad: 4.0,
-            damping_nm_s_rad: 0.01,
-            torque_delay_s: late as f64 / fs,
-            friction: law,
-            ..crate::sim::tests::base()
-        };
-        (d, w, m)
-    }
-
-    #[test]
-    fn the_balance_reads_a_late_channel_and_sees_what_lies_between() {
-        // Read with its delay, the channel is the balance (differences across a stick/slip kink only).
-        let (d, w, m) = simulated_record(30, 0.0);
-        let on = channel_balance(&d, &w, &m);
-        assert!(on.r_squared > 0.99, "{on:?}");
-        // Read as recorded (no delay), the same channel is not.
-        let off = channel_balance(&d, &w, &Model { torque_delay_s: 0.0, ..m });
-        assert!(off.r_squared < on.r_squared - 0.05, "{off:?} {on:?}");
-        // With the bit's J known, an inertia of a tenth of it between sensor and contact is left in the residual.
-        let (d, w, m) = simulated_record(30, 0.001);
-        let js = channel_balance(&d, &w, &m);
-        assert!(js.residual_rms_nm > 2.0 * on.residual_rms_nm, "{js:?} {on:?}");
-    }
-
-    #[test]
-    fn a_late_channel_draws_a_loop_that_its_delay_closes() {
-        let (d, cal) = late_channel();
-        // As recorded, the torque at a given speed differs between acceleration and deceleration:
-        // Ω(t − τ) − Ω(t) ≈ −τ Ω̇, up to 0.01 · 0.025 · 60 · 4π ≈ 0.19 N m apart.
-        let raw = loop_spread(&d, &cal, 5.0, 20, 0.0);
-        assert!(raw.max_bin_std_nm > 0.05, "{raw:?}");
-        // Read 25 ms later it is the law again: the spread left is the law across a bin's width,
-        // 0.01 N m/rpm over 140/20 = 7 rpm: a std of 0.07/√12 = 0.020 N m for evenly spread speeds,
-        // never above half the bin's torque range, 0.035 N m.
-        let aligned = loop_spread(&d, &cal, 5.0, 20, 0.025);
-        assert!(
-            aligned.max_bin_std_nm < 0.035 && aligned.rms_bin_std_nm < 0.2 * raw.rms_bin_std_nm,
-            "{aligned:?} {raw:?}"
-        );
-        let best = narrowest_loop(&d, &cal, 5.0, 20, MAX_DELAY_S);
-        assert!((best.shift_s - 0.025).abs() < 1.5e-3, "{best:?}");
-    }
-}
