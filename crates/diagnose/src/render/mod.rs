@@ -5,9 +5,9 @@ use crate::ChannelCheck;
 use crate::result::{Diagnosis, Features, round_sig};
 use rig_types::{AxisScale, FigureSpec, Panel, Series, SeriesStyle, Sheet, Table, fmt_fixed};
 
-mod figures;
+mod evidence;
 mod markdown;
-pub use figures::figures;
+pub use evidence::figures;
 pub use markdown::markdown;
 
 fn f4(x: f64) -> String {
