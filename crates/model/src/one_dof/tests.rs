@@ -252,3 +252,89 @@ fn a_sink_that_keeps_the_twist_alone_gets_the_runs_twist() {
     let (lo, hi) = whole.twist_rad.iter().fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(*v), h.max(*v)));
     assert!(hi - lo > 0.01, "the twist moves: {lo}..{hi}");
 }
+
+#[test]
+fn an_implicit_batch_gives_each_run_its_single_runs_bits() {
+    // Rate-and-state runs of different laws, rates, substeps and lengths, one
+    // continued from a shorter run, one refused and one that leaves the
+    // physical range: in one batch (and reversed) each is bit for bit the run
+    // `simulate_implicit_extend` makes of it alone, its state as well.
+    let sh = Shaft { twist_damping_nm_s_rad: 0.0, ..shaft() };
+    let mid = Shaft { mid: Some(MidInertia { inertia_kgm2: 0.02, split: 0.5 }), ..sh };
+    let rs = RateStateAgeing { normal_nm: 1.0, mu0: 1.0, a: 0.01, b: 0.015, dc_rad: 1e-3, v_ref_rad_s: 0.1 };
+    let weak = RateStateAgeing { b: 0.012, dc_rad: 3e-3, ..rs };
+    let n = 9_000;
+    let wavy: Vec<f64> = (0..n).map(|i| 0.2 + 0.1 * (i as f64 * 0.002).sin()).collect();
+    let mut broken = wavy.clone();
+    broken[4_000] = f64::NAN;
+    let start = |law: &RateStateAgeing| OneDofState {
+        stuck: true,
+        twist_rad: 0.5,
+        friction_state: law.initial_state(0.2),
+        ..Default::default()
+    };
+    type Spec<'a> = (Shaft, &'a RateStateAgeing, Drive<'a>, f64, usize, usize, usize);
+    // (shaft, law, drive, rate, samples, substeps, samples made before)
+    let specs: [Spec; 6] = [
+        (sh, &rs, Drive::ConstantSpeed(0.2), FS, n, 4, 0),
+        (sh, &weak, Drive::Speed(&wavy), FS, n, 7, 0),
+        (sh, &rs, Drive::ConstantSpeed(0.2), 500.0, 4_000, 3, 1_500),
+        (sh, &weak, Drive::ConstantSpeed(0.3), FS, 2_500, 1, 0),
+        (mid, &rs, Drive::ConstantSpeed(0.2), FS, n, 4, 0),
+        (sh, &rs, Drive::Speed(&broken), FS, n, 4, 0),
+    ];
+    type Made = (Result<(), ModelError>, OneDofState, OneDofRun);
+    let begin = |spec: &Spec| {
+        let (shaft, law, drive, fs, _, steps, before) = *spec;
+        let (mut state, mut run) = (start(law), OneDofRun::default());
+        if before > 0 {
+            simulate_implicit_extend(&shaft, law, drive, &mut state, fs, before, steps, &mut run).unwrap();
+        }
+        (state, run)
+    };
+    let alone: Vec<Made> = specs
+        .iter()
+        .map(|spec| {
+            let (shaft, law, drive, fs, samples, steps, _) = *spec;
+            let (mut state, mut run) = begin(spec);
+            let r = simulate_implicit_extend(&shaft, law, drive, &mut state, fs, samples, steps, &mut run);
+            (r, state, run)
+        })
+        .collect();
+    assert!(alone[..4].iter().all(|m| m.0.is_ok()) && alone[4].0.is_err(), "four runs, one refusal");
+    assert!(matches!(alone[5].0, Err(ModelError::IntegratorFailed { .. })), "{:?}", alone[5].0);
+    let speed = &alone[0].2.bit_rad_s;
+    let (lo, hi) = speed.iter().fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(*v), h.max(*v)));
+    assert!(hi - lo > 0.1, "the bit's speed moves: {lo}..{hi}");
+    let bits = |m: &Made| {
+        let r = &m.2;
+        format!(
+            "{:?} {:?} {:?} {:?}",
+            m.0,
+            [m.1.bit_rad_s, m.1.twist_rad, m.1.top_rad_s, m.1.friction_state[0]].map(f64::to_bits),
+            [&r.bit_rad_s, &r.top_rad_s, &r.twist_rad, &r.friction_nm, &r.accel_rad_s2]
+                .map(|c| c.iter().map(|v| v.to_bits()).collect::<Vec<u64>>()),
+            (&r.stuck, m.1.stuck)
+        )
+    };
+    for reversed in [false, true] {
+        let mut order: Vec<usize> = (0..specs.len()).collect();
+        if reversed {
+            order.reverse();
+        }
+        let mut made: Vec<(OneDofState, OneDofRun)> = order.iter().map(|&i| begin(&specs[i])).collect();
+        let mut jobs: Vec<ImplicitJob<'_, RateStateAgeing, OneDofRun>> = order
+            .iter()
+            .zip(made.iter_mut())
+            .map(|(&i, (state, out))| {
+                let (shaft, law, drive, fs_hz, samples, substeps, _) = specs[i];
+                ImplicitJob { shaft, law, drive, fs_hz, samples, substeps, state, out }
+            })
+            .collect();
+        let results = simulate_implicit_batch(&mut jobs);
+        drop(jobs);
+        for ((&i, r), (state, run)) in order.iter().zip(results).zip(made) {
+            assert_eq!(bits(&(r, state, run)), bits(&alone[i]), "job {i}, reversed: {reversed}");
+        }
+    }
+}
