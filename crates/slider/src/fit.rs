@@ -33,7 +33,7 @@
 
 use crate::features::{Features, Regime};
 use crate::sim::{Law, Structure};
-use rig_types::minimize::{SimplexTolerance, nelder_mead, nelder_mead_converged, nelder_mead_many};
+use rig_types::minimize::{SimplexTolerance, nelder_mead, nelder_mead_converged};
 use serde::Serialize;
 
 /// A candidate law family.
@@ -470,69 +470,36 @@ pub struct FitResult {
 /// every restart) a tenth of it, inward; a point outside the bounds is
 /// clamped onto them before the law sees it.
 pub fn fit(specs: &[ParamSpec], start: &[f64], tol: &FitTolerance, cost: impl Fn(&[f64]) -> f64) -> FitResult {
-    let u0 = to_u(specs, start);
+    let axis = |s: &ParamSpec, v: f64| if s.log { (v.ln(), s.lo.ln(), s.hi.ln()) } else { (v, s.lo, s.hi) };
+    // u in [0, 1] per axis: (axis value − lo)/(hi − lo).
+    let to_u = |x: &[f64]| -> Vec<f64> {
+        specs
+            .iter()
+            .zip(x)
+            .map(|(s, &v)| {
+                let (a, lo, hi) = axis(s, v.clamp(s.lo, s.hi));
+                (a - lo) / (hi - lo)
+            })
+            .collect()
+    };
+    let from_u = |u: &[f64]| -> Vec<f64> {
+        specs
+            .iter()
+            .zip(u)
+            .map(|(s, &u)| {
+                let (_, lo, hi) = axis(s, s.lo);
+                let a = lo + u.clamp(0.0, 1.0) * (hi - lo);
+                if s.log { a.exp() } else { a }
+            })
+            .collect()
+    };
+    let u0 = to_u(start);
+    let step = |u: &[f64]| -> Vec<f64> { u.iter().map(|&u| if u > 0.9 { -0.1 } else { 0.1 }).collect() };
     if tol.tolerance <= 0.0 {
-        let (u, c, n) = nelder_mead(|u| cost(&from_u(specs, u)), &u0, &first_edges(&u0), tol.max_evals);
-        return FitResult { x: from_u(specs, &u), cost: c, evals: n, converged: false };
+        let (u, c, n) = nelder_mead(|u| cost(&from_u(u)), &u0, &step(&u0), tol.max_evals);
+        return FitResult { x: from_u(&u), cost: c, evals: n, converged: false };
     }
     let stop = SimplexTolerance { f_tol: tol.tolerance, x_tol: tol.tolerance, max_evals: tol.max_evals };
-    let r = nelder_mead_converged(|u| cost(&from_u(specs, u)), &u0, first_edges, &stop);
-    FitResult { x: from_u(specs, &r.x), cost: r.f, evals: r.evals, converged: r.converged }
-}
-
-/// [`fit`] with a fixed count (`max_evals` evaluations per search) from
-/// every start of `starts`, the searches side by side
-/// ([`rig_types::minimize::nelder_mead_many`]): `cost` gets every point the
-/// searches ask for in a round at once (their free runs can be simulated
-/// together) and returns their misfits in order. Each result is the one
-/// [`fit`] gives from its start alone, in the order of `starts`.
-pub fn fit_many(
-    specs: &[ParamSpec],
-    starts: &[&[f64]],
-    max_evals: usize,
-    cost: impl Fn(&[Vec<f64>]) -> Vec<f64>,
-) -> Vec<FitResult> {
-    let u0: Vec<Vec<f64>> = starts.iter().map(|x| to_u(specs, x)).collect();
-    let edges: Vec<Vec<f64>> = u0.iter().map(|u| first_edges(u)).collect();
-    let searches: Vec<(&[f64], &[f64])> = u0.iter().zip(&edges).map(|(u, e)| (u.as_slice(), e.as_slice())).collect();
-    let asked = |pts: &[(usize, &[f64])]| cost(&pts.iter().map(|(_, u)| from_u(specs, u)).collect::<Vec<_>>());
-    nelder_mead_many(asked, &searches, max_evals)
-        .into_iter()
-        .map(|(u, c, n)| FitResult { x: from_u(specs, &u), cost: c, evals: n, converged: false })
-        .collect()
-}
-
-/// A parameter's search axis and its bounds on it: the log of a parameter flagged `log`.
-fn axis(s: &ParamSpec, v: f64) -> (f64, f64, f64) {
-    if s.log { (v.ln(), s.lo.ln(), s.hi.ln()) } else { (v, s.lo, s.hi) }
-}
-
-/// The search coordinates of `x`, u in [0, 1] per axis: (axis value − lo)/(hi − lo), clamped into the bounds.
-fn to_u(specs: &[ParamSpec], x: &[f64]) -> Vec<f64> {
-    specs
-        .iter()
-        .zip(x)
-        .map(|(s, &v)| {
-            let (a, lo, hi) = axis(s, v.clamp(s.lo, s.hi));
-            (a - lo) / (hi - lo)
-        })
-        .collect()
-}
-
-/// The parameters at search coordinates `u` (clamped onto the bounds).
-fn from_u(specs: &[ParamSpec], u: &[f64]) -> Vec<f64> {
-    specs
-        .iter()
-        .zip(u)
-        .map(|(s, &u)| {
-            let (_, lo, hi) = axis(s, s.lo);
-            let a = lo + u.clamp(0.0, 1.0) * (hi - lo);
-            if s.log { a.exp() } else { a }
-        })
-        .collect()
-}
-
-/// The simplex's first edges at `u`: a tenth of each axis, inward.
-fn first_edges(u: &[f64]) -> Vec<f64> {
-    u.iter().map(|&u| if u > 0.9 { -0.1 } else { 0.1 }).collect()
+    let r = nelder_mead_converged(|u| cost(&from_u(u)), &u0, step, &stop);
+    FitResult { x: from_u(&r.x), cost: r.f, evals: r.evals, converged: r.converged }
 }

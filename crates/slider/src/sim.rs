@@ -158,101 +158,38 @@ pub fn simulate_into(law: &Law, s: &Setup, out: &mut Vec<f64>) -> Result<(), Mod
 /// simulated at once (`one_dof::simulate_implicit_extend`): a caller that
 /// lengthens a stretch pays for the added samples only.
 pub fn simulate_more(law: &Law, s: &Setup, state: &mut OneDofState, out: &mut Vec<f64>) -> Result<(), ModelError> {
-    let Some(run) = Prepared::new(law, s, state, out) else { return Ok(()) };
-    let mut sink = ForceOverWeight { out, per_m: run.per_m };
-    let drive = Drive::ConstantSpeed(run.drive_m_s);
-    one_dof::simulate_implicit_extend(&run.shaft, &run.contact, drive, state, run.fs_hz, run.n_out, run.sub, &mut sink)
-}
-
-/// [`simulate_more`] of several independent stretches side by side (each
-/// its own law, set-up, state and buffer): one_dof's implicit batch
-/// ([`one_dof::simulate_implicit_batch`]) advances them substep by substep
-/// in one loop, each to the bit [`simulate_more`] makes of it alone; each
-/// stretch's result in order.
-pub fn simulate_more_batch(jobs: &mut [(Law, Setup, &mut OneDofState, &mut Vec<f64>)]) -> Vec<Result<(), ModelError>> {
-    let prepared: Vec<Option<Prepared>> =
-        jobs.iter_mut().map(|(law, s, state, out)| Prepared::new(law, s, state, out)).collect();
-    let mut sinks: Vec<ForceOverWeight> = Vec::with_capacity(jobs.len());
-    let mut states: Vec<&mut OneDofState> = Vec::with_capacity(jobs.len());
-    for ((_, _, state, out), run) in jobs.iter_mut().zip(&prepared) {
-        if let Some(run) = run {
-            sinks.push(ForceOverWeight { out, per_m: run.per_m });
-            states.push(state);
-        }
+    let n_out = (s.duration_s * s.sample_rate_hz).floor() as usize;
+    if n_out < 2 || out.len() < 2 {
+        out.clear();
     }
-    let mut batch: Vec<one_dof::ImplicitJob<'_, Contact, ForceOverWeight>> = prepared
-        .iter()
-        .flatten()
-        .zip(states)
-        .zip(sinks.iter_mut())
-        .map(|((run, state), out)| one_dof::ImplicitJob {
-            shaft: run.shaft,
-            law: &run.contact,
-            drive: Drive::ConstantSpeed(run.drive_m_s),
-            fs_hz: run.fs_hz,
-            samples: run.n_out,
-            substeps: run.sub,
-            state,
-            out,
-        })
-        .collect();
-    let mut results = one_dof::simulate_implicit_batch(&mut batch).into_iter();
-    prepared
-        .iter()
-        .map(|run| if run.is_some() { results.next().expect("one result per job") } else { Ok(()) })
-        .collect()
-}
-
-/// A stretch of [`simulate_more`] ready for one_dof: the shaft (the set-up's
-/// mass and chain), the contact, the drive speed, the rate, the samples to
-/// reach and the steps per sample, and the force per metre of extension.
-struct Prepared {
-    shaft: Shaft,
-    contact: Contact,
-    drive_m_s: f64,
-    fs_hz: f64,
-    n_out: usize,
-    sub: usize,
-    per_m: f64,
-}
-
-impl Prepared {
-    /// Clears `out` when it cannot be continued, puts the state at rest when
-    /// it is empty; None when there is nothing to simulate (fewer than two
-    /// samples: `out` then holds the initial force).
-    fn new(law: &Law, s: &Setup, state: &mut OneDofState, out: &mut Vec<f64>) -> Option<Prepared> {
-        let n_out = (s.duration_s * s.sample_rate_hz).floor() as usize;
-        if n_out < 2 || out.len() < 2 {
-            out.clear();
-        }
-        if n_out < 2 {
-            out.extend(std::iter::repeat_n(s.initial_force_over_weight, n_out));
-            return None;
-        }
-        let dt_out = 1.0 / s.sample_rate_hz;
-        // An integer number of steps per output sample, at least the requested density.
-        let sub = ((dt_out / (s.natural_period_s() / s.steps_per_period)).ceil() as usize).max(1);
-        let weight_n = s.mass_kg * s.gravity_m_s2;
-        let (inertia_kg, chain_n_m) = s.structure.effective(s.mass_kg, s.stiffness_n_m);
-        let shaft = Shaft {
-            inertia_kgm2: inertia_kg,
-            stiffness_nm_rad: chain_n_m,
-            twist_damping_nm_s_rad: 0.0,
-            absolute_damping_nm_s_rad: 0.0,
-            mid: None,
+    if n_out < 2 {
+        out.extend(std::iter::repeat_n(s.initial_force_over_weight, n_out));
+        return Ok(());
+    }
+    let dt_out = 1.0 / s.sample_rate_hz;
+    // An integer number of steps per output sample, at least the requested density.
+    let sub = ((dt_out / (s.natural_period_s() / s.steps_per_period)).ceil() as usize).max(1);
+    let weight_n = s.mass_kg * s.gravity_m_s2;
+    let (inertia_kg, chain_n_m) = s.structure.effective(s.mass_kg, s.stiffness_n_m);
+    let shaft = Shaft {
+        inertia_kgm2: inertia_kg,
+        stiffness_nm_rad: chain_n_m,
+        twist_damping_nm_s_rad: 0.0,
+        absolute_damping_nm_s_rad: 0.0,
+        mid: None,
+    };
+    let contact = Contact { law: *law, weight_n };
+    if out.is_empty() {
+        *state = OneDofState {
+            twist_rad: s.initial_force_over_weight * weight_n / chain_n_m,
+            stuck: true,
+            friction_state: contact.initial_state(s.drive_speed_m_s),
+            ..OneDofState::default()
         };
-        let contact = Contact { law: *law, weight_n };
-        if out.is_empty() {
-            *state = OneDofState {
-                twist_rad: s.initial_force_over_weight * weight_n / chain_n_m,
-                stuck: true,
-                friction_state: contact.initial_state(s.drive_speed_m_s),
-                ..OneDofState::default()
-            };
-        }
-        let (drive_m_s, fs_hz, per_m) = (s.drive_speed_m_s, s.sample_rate_hz, chain_n_m / weight_n);
-        Some(Prepared { shaft, contact, drive_m_s, fs_hz, n_out, sub, per_m })
     }
+    let drive = Drive::ConstantSpeed(s.drive_speed_m_s);
+    let mut sink = ForceOverWeight { out, per_m: chain_n_m / weight_n };
+    one_dof::simulate_implicit_extend(&shaft, &contact, drive, state, s.sample_rate_hz, n_out, sub, &mut sink)
 }
 
 /// The one channel the slider reads, as one_dof's samples come: the spring

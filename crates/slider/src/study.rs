@@ -17,7 +17,7 @@ use crate::SliderError;
 use crate::features::{FeatureOptions, Features, Regime, RunConstants, Spread, features, spectral_period_s};
 use crate::fit::{
     CANDIDATES, Candidate, FitResult, FitTolerance, Model, SETUPS, SetupCandidate, StartHints,
-    critical_stiffness_guess_n_m, fit, fit_many, run_misfit,
+    critical_stiffness_guess_n_m, fit, run_misfit,
 };
 use crate::sim::{Setup, simulate_more};
 use rayon::prelude::*;
@@ -390,92 +390,42 @@ fn window_s(m: &Measured, p: &StudyParams) -> f64 {
 ///   misfit's spread term ([`crate::fit::spread_term`]) reads quartiles of
 ///   that many events (a cycle that repeats has its dispersion from two).
 pub fn predict(model: Model, x: &[f64], m: &Measured, p: &StudyParams) -> Features {
-    predict_many(model, &[x], m, p).pop().expect("one point gives one prediction")
-}
-
-/// [`predict`] of `model` at every parameter vector of `xs` at one run, the
-/// stretches simulated side by side ([`crate::sim::simulate_more_batch`]:
-/// each to the bit it is alone, so each prediction is [`predict`]'s), each
-/// lengthened by [`predict`]'s rule until none is; in the order of `xs`.
-pub fn predict_many(model: Model, xs: &[&[f64]], m: &Measured, p: &StudyParams) -> Vec<Features> {
     let cap = p.sim_max_window_s.min(m.duration_s);
-    let windows: Vec<f64> = xs
-        .iter()
-        .map(|x| {
-            let window = window_s(m, p);
-            // A law with a track covers enough of it for the events' statistics.
-            if let (crate::sim::Law::Track(t), _) = model.law(x) {
-                window.max(t.min_window_s(m.drive_speed_um_s * 1e-6)).min(cap)
-            } else {
-                window
-            }
-        })
-        .collect();
-    SCRATCH.with_borrow_mut(|lanes| {
-        // Per point: the state at the last sample, the force, the stretch and, once read, its features.
-        if lanes.len() < xs.len() {
-            lanes.resize_with(xs.len(), Default::default);
+    let mut window = window_s(m, p);
+    // A law with a track covers enough of it for the events' statistics.
+    if let (crate::sim::Law::Track(t), _) = model.law(x) {
+        window = window.max(t.min_window_s(m.drive_speed_um_s * 1e-6)).min(cap);
+    }
+    // The first stretch from the start; a longer one continues it (bit for
+    // bit the stretch simulated at once: `sim::simulate_more`).
+    SCRATCH.with_borrow_mut(|(_, force, _)| force.clear());
+    loop {
+        let f = SCRATCH.with_borrow_mut(|(state, force, time)| {
+            // A law whose simulation leaves the physical range predicts nothing: no slip.
+            let Ok(skip) = simulate_window(model, x, m, p, window, state, force) else {
+                return Features::default_steady();
+            };
+            time.clear();
+            time.extend((skip..force.len()).map(|i| i as f64 / m.sample_rate_hz));
+            features(time, &force[skip..], &m.constants(p), &p.features)
+        });
+        let slow_slips = f.regime == Regime::SteadySliding && f.events > 0;
+        let periods = f.period_s.n;
+        let few = f.events > 0 && periods < p.spread_periods && !crate::fit::repeats(&f);
+        if !(slow_slips || few) || window >= cap {
+            return f;
         }
-        let lanes = &mut lanes[..xs.len()];
-        let mut pending: Vec<(usize, f64)> = windows.into_iter().enumerate().collect();
-        let mut done: Vec<Option<Features>> = vec![None; xs.len()];
-        for (_, force) in lanes.iter_mut() {
-            // The first stretch from the start; a longer one continues it (bit for
-            // bit the stretch simulated at once: `sim::simulate_more`).
-            force.clear();
-        }
-        while !pending.is_empty() {
-            let setups: Vec<(crate::sim::Law, Setup, usize)> =
-                pending.iter().map(|&(i, window)| window_setup(model, xs[i], m, p, window)).collect();
-            let mut jobs: Vec<(crate::sim::Law, Setup, &mut OneDofState, &mut Vec<f64>)> = Vec::new();
-            let mut at = pending.iter().map(|&(i, _)| i).peekable();
-            for (i, (state, force)) in lanes.iter_mut().enumerate() {
-                if at.peek() == Some(&i) {
-                    at.next();
-                    let (law, setup, _) = setups[jobs.len()];
-                    jobs.push((law, setup, state, force));
-                }
-            }
-            let results = crate::sim::simulate_more_batch(&mut jobs);
-            drop(jobs);
-            let mut next = Vec::new();
-            let mut time = Vec::new();
-            for ((&(i, window), r), (_, _, warmup_s)) in pending.iter().zip(results).zip(&setups) {
-                // A law whose simulation leaves the physical range predicts nothing: no slip.
-                if r.is_err() {
-                    done[i] = Some(Features::default_steady());
-                    continue;
-                }
-                let force = &lanes[i].1;
-                let skip = (*warmup_s).min(force.len());
-                time.clear();
-                time.extend((skip..force.len()).map(|k| k as f64 / m.sample_rate_hz));
-                let f = features(&time, &force[skip..], &m.constants(p), &p.features);
-                let slow_slips = f.regime == Regime::SteadySliding && f.events > 0;
-                let periods = f.period_s.n;
-                let few = f.events > 0 && periods < p.spread_periods && !crate::fit::repeats(&f);
-                if !(slow_slips || few) || window >= cap {
-                    done[i] = Some(f);
-                    continue;
-                }
-                // Periods in a stretch grow with it: n + 1 maxima in the window.
-                let grow = if slow_slips || periods < 2 {
-                    2.0
-                } else {
-                    1.1 * (p.spread_periods + 1) as f64 / (periods + 1) as f64
-                };
-                next.push((i, (grow.max(1.25) * window).min(cap)));
-            }
-            pending = next;
-        }
-        done.into_iter().map(|f| f.expect("every stretch read")).collect()
-    })
+        // Periods in a stretch grow with it: n + 1 maxima in the window.
+        let grow =
+            if slow_slips || periods < 2 { 2.0 } else { 1.1 * (p.spread_periods + 1) as f64 / (periods + 1) as f64 };
+        window = (grow.max(1.25) * window).min(cap);
+    }
 }
 
 thread_local! {
-    /// Each thread's simulation buffers, one per point of a batch (the state
-    /// at the last sample, force over weight), reused across evaluations.
-    static SCRATCH: std::cell::RefCell<Vec<(OneDofState, Vec<f64>)>> = Default::default();
+    /// Each thread's simulation buffers (the state at the last sample, force
+    /// over weight, time), reused across evaluations.
+    static SCRATCH: std::cell::RefCell<(OneDofState, Vec<f64>, Vec<f64>)> = Default::default();
 }
 
 /// The simulated force of `cand` at run `m` after its warm-up, thinned to about `points` (for figures).
@@ -487,32 +437,6 @@ pub fn predict_trace(model: Model, x: &[f64], m: &Measured, p: &StudyParams, poi
     let step = ((f.len() - skip) / points.max(1)).max(1);
     let t: Vec<f64> = (skip..f.len()).step_by(step).map(|i| (i - skip) as f64 / m.sample_rate_hz).collect();
     (t, f[skip..].iter().step_by(step).copied().collect())
-}
-
-/// The law, set-up and warm-up samples of `window` s of run `m` after a
-/// warm-up of `warmup_fraction` of it: what [`simulate_window`] and
-/// [`predict_many`] simulate.
-fn window_setup(
-    model: Model,
-    x: &[f64],
-    m: &Measured,
-    p: &StudyParams,
-    window: f64,
-) -> (crate::sim::Law, Setup, usize) {
-    let warmup_s = p.warmup_fraction * window;
-    let (law, structure) = model.law(x);
-    let setup = Setup {
-        stiffness_n_m: m.stiffness_n_m,
-        drive_speed_m_s: m.drive_speed_um_s * 1e-6,
-        mass_kg: p.mass_kg,
-        gravity_m_s2: p.gravity_m_s2,
-        structure,
-        duration_s: warmup_s + window,
-        sample_rate_hz: m.sample_rate_hz,
-        steps_per_period: p.steps_per_period,
-        initial_force_over_weight: law.sliding_level(),
-    };
-    (law, setup, (warmup_s * m.sample_rate_hz).round() as usize)
 }
 
 /// Simulates `window` s of run `m` after a warm-up of `warmup_fraction` of it
@@ -528,9 +452,21 @@ fn simulate_window(
     state: &mut OneDofState,
     force: &mut Vec<f64>,
 ) -> Result<usize, rig_model::ModelError> {
-    let (law, setup, warmup) = window_setup(model, x, m, p, window);
+    let warmup_s = p.warmup_fraction * window;
+    let (law, structure) = model.law(x);
+    let setup = Setup {
+        stiffness_n_m: m.stiffness_n_m,
+        drive_speed_m_s: m.drive_speed_um_s * 1e-6,
+        mass_kg: p.mass_kg,
+        gravity_m_s2: p.gravity_m_s2,
+        structure,
+        duration_s: warmup_s + window,
+        sample_rate_hz: m.sample_rate_hz,
+        steps_per_period: p.steps_per_period,
+        initial_force_over_weight: law.sliding_level(),
+    };
     simulate_more(&law, &setup, state, force)?;
-    Ok(warmup.min(force.len()))
+    Ok(((warmup_s * m.sample_rate_hz).round() as usize).min(force.len()))
 }
 
 /// Fits `model` on the runs `train` (indices into `runs`): Nelder–Mead from
@@ -568,68 +504,41 @@ fn fit_on(model: Model, runs: &[Measured], train: &[usize], nested: Option<&Fitt
     // Each point costed once per fit: Nelder–Mead re-evaluates its start
     // (scored among the starts) and, clamped at a bound, may step onto a
     // point it has costed (the same bits, the same simulations, the same value).
-    // The points not costed yet are simulated together, run by run
-    // ([`predict_many`]): each misfit the one the point alone would get.
     let costed: std::cell::RefCell<Vec<(Vec<u64>, f64)>> = Default::default();
-    let key = |x: &[f64]| -> Vec<u64> { x.iter().map(|v| v.to_bits()).collect() };
-    let known = |k: &[u64]| costed.borrow().iter().find(|(c, _)| c.as_slice() == k).map(|&(_, c)| c);
-    let cost_many = |xs: &[Vec<f64>]| -> Vec<f64> {
-        let mut todo: Vec<&[f64]> = Vec::new();
-        for x in xs {
-            if known(&key(x)).is_none() && !todo.iter().any(|t| key(t) == key(x)) {
-                todo.push(x);
-            }
+    let cost = |x: &[f64]| {
+        let key: Vec<u64> = x.iter().map(|v| v.to_bits()).collect();
+        if let Some(&(_, c)) = costed.borrow().iter().find(|(k, _)| *k == key) {
+            return c;
         }
-        if !todo.is_empty() {
-            let per_run: Vec<Vec<f64>> = on
-                .par_iter()
-                .map(|r| predict_many(model, &todo, r, p).iter().map(|f| run_misfit(&r.features, f)).collect())
-                .collect();
-            let mut c = costed.borrow_mut();
-            for (j, x) in todo.iter().enumerate() {
-                let m: Vec<f64> = per_run.iter().map(|run| run[j]).collect();
-                c.push((key(x), m.iter().sum::<f64>() / m.len() as f64));
-            }
-        }
-        xs.iter().map(|x| known(&key(x)).expect("every point costed")).collect()
+        let m: Vec<f64> = on.par_iter().map(|r| run_misfit(&r.features, &predict(model, x, r, p))).collect();
+        let c = m.iter().sum::<f64>() / m.len() as f64;
+        costed.borrow_mut().push((key, c));
+        c
     };
-    let cost = |x: &[f64]| cost_many(&[x.to_vec()])[0];
     let specs = model.params();
     // Multi-start: every start scored, then Nelder–Mead from each in the
-    // order of its score: `fit_starts` of them, side by side for a fixed
-    // count ([`fit_many`]); converged fits (`fit_tolerance` > 0) one after
-    // another, on while the last one lowered the best misfit by more than
-    // the tolerance (the restart rule of `nelder_mead_converged`, over
-    // starts). The best result kept (the first of equals).
+    // order of its score: `fit_starts` of them; converged fits
+    // (`fit_tolerance` > 0) on while the last one lowered the best misfit by
+    // more than the tolerance (the restart rule of `nelder_mead_converged`,
+    // over starts). The best result kept (the first of equals).
     let mut starts = nested.map_or_else(Vec::new, |f| warm_starts(model, f, &hints));
     starts.extend(model.starts(&hints));
-    let mut scored: Vec<(f64, Vec<f64>)> = cost_many(&starts).into_iter().zip(starts).collect();
+    let mut scored: Vec<(f64, Vec<f64>)> = starts.into_iter().map(|x| (cost(&x), x)).collect();
     scored.sort_by(|a, b| a.0.total_cmp(&b.0));
     let tol = FitTolerance { tolerance: p.fit_tolerance, max_evals: p.fit_evals };
     let (mut evals, mut converged) = (scored.len(), true);
     let mut best: Option<FitResult> = None;
-    if p.fit_tolerance <= 0.0 {
-        let first: Vec<&[f64]> = scored.iter().take(p.fit_starts.max(1)).map(|(_, x)| x.as_slice()).collect();
-        for r in fit_many(&specs, &first, p.fit_evals, cost_many) {
-            evals += r.evals;
-            converged &= r.converged;
-            if r.cost < best.as_ref().map_or(f64::INFINITY, |b| b.cost) {
-                best = Some(r);
-            }
+    for (k, (_, x)) in scored.iter().enumerate() {
+        let r = fit(&specs, x, &tol, cost);
+        evals += r.evals;
+        converged &= r.converged;
+        let before = best.as_ref().map_or(f64::INFINITY, |b| b.cost);
+        let improved = r.cost < before - p.fit_tolerance;
+        if r.cost < before {
+            best = Some(r);
         }
-    } else {
-        for (k, (_, x)) in scored.iter().enumerate() {
-            let r = fit(&specs, x, &tol, cost);
-            evals += r.evals;
-            converged &= r.converged;
-            let before = best.as_ref().map_or(f64::INFINITY, |b| b.cost);
-            let improved = r.cost < before - p.fit_tolerance;
-            if r.cost < before {
-                best = Some(r);
-            }
-            if k + 1 >= p.fit_starts.max(1) && !improved {
-                break;
-            }
+        if k + 1 >= p.fit_starts.max(1) && (p.fit_tolerance <= 0.0 || !improved) {
+            break;
         }
     }
     let best = best.expect("every model has a start");
