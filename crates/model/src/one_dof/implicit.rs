@@ -326,9 +326,7 @@ impl ImplicitSink for OneDofRun {
 /// starts at `state`, as [`simulate_implicit_into`] from it). Every step is
 /// the one the longer run from the start would take, so a run made in
 /// pieces is bit for bit the run made at once (a caller that lengthens a
-/// simulated stretch pays only for the added samples). Several independent
-/// runs side by side: [`simulate_implicit_batch`], the same steps
-/// ([`implicit_substep`]) and bits.
+/// simulated stretch pays only for the added samples).
 #[allow(clippy::too_many_arguments)]
 pub fn simulate_implicit_extend<F: ImplicitFriction>(
     shaft: &Shaft,
@@ -340,206 +338,65 @@ pub fn simulate_implicit_extend<F: ImplicitFriction>(
     substeps: usize,
     out: &mut impl ImplicitSink,
 ) -> Result<(), ModelError> {
-    let c = ImplicitConstants::begin(shaft, drive, state, fs_hz, samples, substeps, out)?;
+    if samples < 2 {
+        return Err(invalid("samples", samples as f64, "at least 2"));
+    }
+    if shaft.mid.is_some() {
+        return Err(invalid("mid", f64::NAN, "the implicit contact is for a shaft without mid inertia"));
+    }
+    let top_at = |i: usize, a: f64| -> Result<f64, ModelError> {
+        match drive {
+            Drive::ConstantSpeed(v) => Ok(v),
+            Drive::Speed(u) if u.len() == samples => Ok(if a == 0.0 { u[i] } else { u[i - 1] + a * (u[i] - u[i - 1]) }),
+            Drive::Speed(u) => Err(invalid("drive speed", u.len() as f64, "one value per sample")),
+            Drive::SpeedLoop { .. } => {
+                Err(invalid("drive", f64::NAN, "the implicit contact takes an imposed speed, not a speed loop"))
+            }
+        }
+    };
+    for (name, v) in
+        [("inertia_kgm2", shaft.inertia_kgm2), ("stiffness_nm_rad", shaft.stiffness_nm_rad), ("fs_hz", fs_hz)]
+    {
+        if !(v > 0.0 && v.is_finite()) {
+            return Err(invalid(name, v, "must be finite and > 0"));
+        }
+    }
+    let steps = substeps.max(1);
+    let h = 1.0 / (fs_hz * steps as f64);
+    let (k, c, ca, j) =
+        (shaft.stiffness_nm_rad, shaft.twist_damping_nm_s_rad, shaft.absolute_damping_nm_s_rad, shaft.inertia_kgm2);
+    let h_j = h / j;
     let s = state;
-    for i in c.from..samples {
+    let first = out.samples();
+    out.reserve(samples.saturating_sub(first));
+    if first == 0 {
+        s.top_rad_s = top_at(0, 0.0)?;
+        if s.stuck {
+            s.bit_rad_s = 0.0;
+        }
+        // At sample 0 the contact is taken to balance the shaft (quasi-static start).
+        out.push(s, k * s.twist_rad + c * (s.top_rad_s - s.bit_rad_s) - ca * s.bit_rad_s, 0.0);
+    }
+    for i in first.max(1)..samples {
         let (mut acc, mut fric) = (0.0, 0.0);
-        for sub in 0..c.steps {
-            let top = implicit_top(drive, i, (sub as f64 + 0.5) / c.steps as f64);
-            (acc, fric) = implicit_substep(law, s, top, &c);
+        for sub in 0..steps {
+            let top = top_at(i, (sub as f64 + 0.5) / steps as f64)?;
+            let om = s.bit_rad_s;
+            let p = om + h_j * (k * s.twist_rad + c * (top - om) - ca * om);
+            let (next, torque) = law.implicit_step(&mut s.friction_state, &mut s.stuck, p, h_j, h);
+            acc = (next - om) / h;
+            fric = torque;
+            s.bit_rad_s = next;
+            s.twist_rad += h * (top - next);
         }
-        implicit_end_sample(drive, s, fs_hz, i, fric, acc, out)?;
+        if !(s.bit_rad_s.is_finite() && s.twist_rad.is_finite()) {
+            return Err(ModelError::IntegratorFailed {
+                time_s: i as f64 / fs_hz,
+                reason: format!("state left the physical range at sample {i}"),
+            });
+        }
+        s.top_rad_s = top_at(i, 0.0)?;
+        out.push(s, fric, acc);
     }
     Ok(())
-}
-
-/// One run's step constants ([`simulate_implicit_extend`]): substeps per
-/// sample, the substep h (s) and h/J, the shaft's k, c, c_a, and the first
-/// sample the call steps to.
-struct ImplicitConstants {
-    steps: usize,
-    h: f64,
-    h_j: f64,
-    k: f64,
-    c: f64,
-    ca: f64,
-    from: usize,
-}
-
-impl ImplicitConstants {
-    /// Checks a run's arguments and, for an empty sink, puts its sample 0
-    /// (the contact taken to balance the shaft: a quasi-static start).
-    fn begin(
-        shaft: &Shaft,
-        drive: Drive,
-        s: &mut OneDofState,
-        fs_hz: f64,
-        samples: usize,
-        substeps: usize,
-        out: &mut impl ImplicitSink,
-    ) -> Result<ImplicitConstants, ModelError> {
-        if samples < 2 {
-            return Err(invalid("samples", samples as f64, "at least 2"));
-        }
-        if shaft.mid.is_some() {
-            return Err(invalid("mid", f64::NAN, "the implicit contact is for a shaft without mid inertia"));
-        }
-        for (name, v) in
-            [("inertia_kgm2", shaft.inertia_kgm2), ("stiffness_nm_rad", shaft.stiffness_nm_rad), ("fs_hz", fs_hz)]
-        {
-            if !(v > 0.0 && v.is_finite()) {
-                return Err(invalid(name, v, "must be finite and > 0"));
-            }
-        }
-        let steps = substeps.max(1);
-        let h = 1.0 / (fs_hz * steps as f64);
-        let (k, c, ca, j) =
-            (shaft.stiffness_nm_rad, shaft.twist_damping_nm_s_rad, shaft.absolute_damping_nm_s_rad, shaft.inertia_kgm2);
-        let first = out.samples();
-        out.reserve(samples.saturating_sub(first));
-        let from = first.max(1);
-        // The drive is read at sample 0 (an empty sink) and at every sample stepped to.
-        if first == 0 || from < samples {
-            match drive {
-                Drive::ConstantSpeed(_) => {}
-                Drive::Speed(u) if u.len() == samples => {}
-                Drive::Speed(u) => return Err(invalid("drive speed", u.len() as f64, "one value per sample")),
-                Drive::SpeedLoop { .. } => {
-                    return Err(invalid(
-                        "drive",
-                        f64::NAN,
-                        "the implicit contact takes an imposed speed, not a speed loop",
-                    ));
-                }
-            }
-        }
-        if first == 0 {
-            s.top_rad_s = implicit_top(drive, 0, 0.0);
-            if s.stuck {
-                s.bit_rad_s = 0.0;
-            }
-            out.push(s, k * s.twist_rad + c * (s.top_rad_s - s.bit_rad_s) - ca * s.bit_rad_s, 0.0);
-        }
-        Ok(ImplicitConstants { steps, h, h_j: h / j, k, c, ca, from })
-    }
-}
-
-/// The imposed top speed at sample `i`, a fraction `a` of the way from
-/// sample i − 1 (linear between samples; `a` = 0: the sample's own); the
-/// drive's shape is checked in [`ImplicitConstants::begin`].
-#[inline(always)]
-fn implicit_top(drive: Drive, i: usize, a: f64) -> f64 {
-    match drive {
-        Drive::ConstantSpeed(v) => v,
-        Drive::Speed(u) => {
-            if a == 0.0 {
-                u[i]
-            } else {
-                u[i - 1] + a * (u[i] - u[i - 1])
-            }
-        }
-        Drive::SpeedLoop { .. } => unreachable!("refused in ImplicitConstants::begin"),
-    }
-}
-
-/// One implicit substep at the top speed `top`, the equation of
-/// [`simulate_implicit`]: the free-flight speed p, the law's implicit step
-/// (Moreau) and the twist at the new speed; returns the bit's acceleration
-/// over the substep and the contact's torque. The one step of every implicit
-/// run, alone or in a batch.
-#[inline(always)]
-fn implicit_substep<F: ImplicitFriction>(law: &F, s: &mut OneDofState, top: f64, c: &ImplicitConstants) -> (f64, f64) {
-    let om = s.bit_rad_s;
-    let p = om + c.h_j * (c.k * s.twist_rad + c.c * (top - om) - c.ca * om);
-    let (next, torque) = law.implicit_step(&mut s.friction_state, &mut s.stuck, p, c.h_j, c.h);
-    s.bit_rad_s = next;
-    s.twist_rad += c.h * (top - next);
-    ((next - om) / c.h, torque)
-}
-
-/// Ends sample `i`: refuses a state out of the physical range, else puts the sample.
-#[inline(always)]
-fn implicit_end_sample(
-    drive: Drive,
-    s: &mut OneDofState,
-    fs_hz: f64,
-    i: usize,
-    fric: f64,
-    acc: f64,
-    out: &mut impl ImplicitSink,
-) -> Result<(), ModelError> {
-    if !(s.bit_rad_s.is_finite() && s.twist_rad.is_finite()) {
-        return Err(ModelError::IntegratorFailed {
-            time_s: i as f64 / fs_hz,
-            reason: format!("state left the physical range at sample {i}"),
-        });
-    }
-    s.top_rad_s = implicit_top(drive, i, 0.0);
-    out.push(s, fric, acc);
-    Ok(())
-}
-
-/// One run of an implicit batch ([`simulate_implicit_batch`]):
-/// [`simulate_implicit_extend`]'s arguments, its state and sink borrowed.
-pub struct ImplicitJob<'a, F, S> {
-    pub shaft: Shaft,
-    pub law: &'a F,
-    pub drive: Drive<'a>,
-    pub fs_hz: f64,
-    pub samples: usize,
-    pub substeps: usize,
-    pub state: &'a mut OneDofState,
-    pub out: &'a mut S,
-}
-
-/// Continues every job of `jobs` as [`simulate_implicit_extend`] would, each
-/// run's result in job order. The runs are independent (each its own shaft,
-/// law, drive, rate, substeps, length and sink): they advance sample by
-/// sample and substep by substep in one loop, so the core overlaps their
-/// dependency chains (the rate-and-state step's Newton iterations, the
-/// exponentials), and each run's operations are its own, in its own order:
-/// a run's bits do not depend on its batch (as [`super::simulate_batch`]).
-/// A batch of one is [`simulate_implicit_extend`]'s loop.
-pub fn simulate_implicit_batch<F: ImplicitFriction, S: ImplicitSink>(
-    jobs: &mut [ImplicitJob<'_, F, S>],
-) -> Vec<Result<(), ModelError>> {
-    if let [j] = jobs {
-        return vec![simulate_implicit_extend(
-            &j.shaft, j.law, j.drive, j.state, j.fs_hz, j.samples, j.substeps, j.out,
-        )];
-    }
-    // Each lane: its job, its constants (or its refusal), and the last substep's (acc, fric).
-    let mut lanes: Vec<(&mut ImplicitJob<'_, F, S>, Result<ImplicitConstants, ModelError>, (f64, f64))> = jobs
-        .iter_mut()
-        .map(|j| {
-            let c = ImplicitConstants::begin(&j.shaft, j.drive, j.state, j.fs_hz, j.samples, j.substeps, j.out);
-            (j, c, (0.0, 0.0))
-        })
-        .collect();
-    let longest = lanes.iter().filter(|l| l.1.is_ok()).map(|l| l.0.samples).max().unwrap_or(0);
-    let most_steps = lanes.iter().filter_map(|l| l.1.as_ref().ok()).map(|c| c.steps).max().unwrap_or(1);
-    for i in 1..longest {
-        for sub in 0..most_steps {
-            for (job, c, last) in lanes.iter_mut() {
-                if let Ok(c) = c
-                    && i >= c.from
-                    && i < job.samples
-                    && sub < c.steps
-                {
-                    let top = implicit_top(job.drive, i, (sub as f64 + 0.5) / c.steps as f64);
-                    *last = implicit_substep(job.law, job.state, top, c);
-                }
-            }
-        }
-        for (job, c, (acc, fric)) in lanes.iter_mut() {
-            if let Ok(k) = c
-                && i >= k.from
-                && i < job.samples
-                && let Err(e) = implicit_end_sample(job.drive, job.state, job.fs_hz, i, *fric, *acc, job.out)
-            {
-                *c = Err(e);
-            }
-        }
-    }
-    lanes.into_iter().map(|l| l.1.map(|_| ())).collect()
 }
