@@ -1,9 +1,12 @@
 //! The slider study at a fit tolerance (issue 26: the verdict must not turn
 //! on the search): every step's trials (gain, paired t, kept), the verdict,
 //! every fit's evaluations and whether it converged, and the process's CPU.
-//! `cargo run -p rig-slider --example converge -- [TOLERANCE] [STARTS] [DIR]`
-//! from the workspace root (default: pipeline.toml's `fit_tolerance` and
-//! `fit_starts`; a tolerance above 0 with a safeguard of 2000 evaluations per start, ../shared/data/ens-lyon-slider-2019).
+//! `cargo run -p rig-slider --example converge -- [TOLERANCE] [STARTS] [DIR] [EVALS]`
+//! from the workspace root (default: pipeline.toml's `fit_tolerance`,
+//! `fit_starts` and `fit_evals`; a tolerance above 0 with a safeguard of 2000
+//! evaluations per start, ../shared/data/ens-lyon-slider-2019). The
+//! calibration fits come first (`cal` lines: every fit's misfit on the runs
+//! it was fitted on, what a budget is chosen on), the held-out selection after.
 
 use rig_slider::{StudyParams, run_study};
 
@@ -22,9 +25,33 @@ fn main() {
     if let Some(s) = args.get(2) {
         p.fit_starts = s.parse().expect("STARTS: a count");
     }
+    if let Some(e) = args.get(4) {
+        p.fit_evals = e.parse().expect("EVALS: a count");
+    }
     let dir = args.get(3).cloned().unwrap_or_else(|| "../shared/data/ens-lyon-slider-2019".into());
     let s = run_study(std::path::Path::new(&dir), &p).unwrap_or_else(|e| panic!("{e}"));
-    println!("fit_tolerance {} fit_starts {}", p.fit_tolerance, p.fit_starts);
+    println!("fit_tolerance {} fit_starts {} fit_evals {}", p.fit_tolerance, p.fit_starts, p.fit_evals);
+    // Calibration only: each fit as (step, the model it extends, model, training stiffnesses).
+    let from_of = |i: usize| {
+        s.steps
+            .iter()
+            .find(|st| st.tried.contains(&i))
+            .map_or((0, "-".to_string()), |st| (st.step, s.candidates[st.from].model.id()))
+    };
+    for (i, c) in s.candidates.iter().enumerate() {
+        let (step, from) = from_of(i);
+        for f in c.fits() {
+            let mut ks: Vec<f64> = f.train.iter().map(|&r| s.runs[r].stiffness_n_m).collect();
+            ks.dedup();
+            println!(
+                "cal step {step} from {from} model {} train {ks:?} misfit {:.4} evals {}",
+                c.model.id(),
+                f.calibration_misfit,
+                f.evals
+            );
+        }
+    }
+    println!("--- held out below ---");
     for st in &s.steps {
         for (i, c) in st.tried.iter().zip(&st.compared) {
             let cand = &s.candidates[*i];

@@ -3,6 +3,7 @@
 //! (slider.md's prose).
 
 use super::*;
+use crate::study::Measured;
 
 /// What the literature says a Coulomb law misses on paper on paper, and what
 /// this study could and could not show of it (the text of slider.md).
@@ -163,6 +164,9 @@ pub(super) fn causes(s: &Study) -> String {
             );
         }
     }
+    for (i, r) in s.runs.iter().enumerate().filter(|(_, r)| r.features.regime == Regime::Creep) {
+        let _ = writeln!(out, "- {}", creep_resolution(s, i, r));
+    }
     let base = &s.candidates[0];
     let light = Model { friction: Candidate::Coulomb, setup: SetupCandidate::EffectiveMass };
     if let Some(c) = s.candidates.iter().find(|c| c.model == light) {
@@ -188,6 +192,61 @@ pub(super) fn causes(s: &Study) -> String {
         );
     }
     out
+}
+
+/// What the data can resolve of a creeping run `r` (index `i`): the
+/// stiffnesses recorded at its drive speed on either side that do not creep
+/// (the bracket the creep's onset lies in at that speed, one run on each
+/// side), and which of the study's models predict its regime held out.
+fn creep_resolution(s: &Study, i: usize, r: &Measured) -> String {
+    let same_v: Vec<&Measured> = s
+        .runs
+        .iter()
+        .filter(|q| q.drive_speed_um_s == r.drive_speed_um_s && q.features.regime != Regime::Creep)
+        .collect();
+    let nearest = |below: bool| {
+        same_v
+            .iter()
+            .filter(|q| if below { q.stiffness_n_m < r.stiffness_n_m } else { q.stiffness_n_m > r.stiffness_n_m })
+            .min_by(|a, b| {
+                (a.stiffness_n_m - r.stiffness_n_m).abs().total_cmp(&(b.stiffness_n_m - r.stiffness_n_m).abs())
+            })
+            .map(|q| format!("{} ({})", q.name, q.features.regime.label()))
+    };
+    let lower = nearest(true).map_or_else(
+        || "is not bounded from below (no softer spring recorded at this speed)".to_string(),
+        |q| format!("lies between {q} and this run's {:.0} N/m", r.stiffness_n_m),
+    );
+    let upper = nearest(false).map_or_else(
+        || "is not bounded (no stiffer spring recorded at this speed)".to_string(),
+        |q| format!("lies between this run's {:.0} N/m and {q}", r.stiffness_n_m),
+    );
+    let mut by_regime: Vec<(Regime, Vec<String>)> = Vec::new();
+    for c in &s.candidates {
+        if let Some((_, _, f)) = c.heldout.iter().find(|h| h.0 == i) {
+            match by_regime.iter_mut().find(|(g, _)| *g == f.regime) {
+                Some((_, ids)) => ids.push(c.model.id()),
+                None => by_regime.push((f.regime, vec![c.model.id()])),
+            }
+        }
+    }
+    let predicted: Vec<String> =
+        by_regime.iter().map(|(g, ids)| format!("{} by {} ({})", g.label(), ids.len(), ids.join(", "))).collect();
+    let creeping = by_regime.iter().find(|(g, _)| *g == Regime::Creep).map_or(0, |(_, ids)| ids.len());
+    let count = if creeping == 0 { "none".to_string() } else { creeping.to_string() };
+    format!(
+        "What the data can resolve of {}'s creep: it is one run. At {:.0} µm/s the creep band's lower end {}, its upper \
+         end {}: one run on each side of an end brackets it, it does not place it, and a law whose creep band starts \
+         anywhere in the bracket fits the records alike — a threshold that varies along the paper (a stiff spring \
+         follows it, creeping) and a memory law with a creep band there cannot be told apart, nor the creep of this \
+         interface from that of another strip of paper. Held out, {count} of the study's {} models predict it: {}.",
+        r.name,
+        r.drive_speed_um_s,
+        lower,
+        upper,
+        s.candidates.len(),
+        predicted.join("; ")
+    )
 }
 
 /// What no model reaches held out: per run, the checks every model fails,
