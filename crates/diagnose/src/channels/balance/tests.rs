@@ -150,3 +150,82 @@ fn a_force_combination_is_the_combined_force_balance() {
     let moved = f0.force_combination(&[(0.8, &g1), (1583.0, &g2)]);
     assert!(moved.runs[0].rows.iter().zip(&f0.runs[0].rows).any(|(a, b)| (a.1 - b.1).abs() > 1e-6));
 }
+
+/// Channels handed over sample by sample ([`super::Recorded::balance_lanes_streamed`])
+/// give the balance of the same channels stored ([`super::Recorded::balance_lanes`]),
+/// every row, event-locked row and sum to the bit: lanes of their own motor
+/// angle and force on one rotor angle, steady states from the first sample
+/// and later, transitions before the first window, inside and past the
+/// record's end.
+#[test]
+fn streamed_lanes_are_the_stored_balance() {
+    let (n, dt, w, r_m) = (4000, 0.002, 50, 0.09);
+    let t = |k: usize| k as f64 * dt;
+    let run = |j: usize, from: usize| {
+        let rotor_rad: Vec<f64> = (0..n).map(|k| 2.0 * t(k) + 0.05 * (9.0 * t(k) + j as f64).sin()).collect();
+        let motor_rad: Vec<f64> = (0..n).map(|k| 2.0 * t(k) + 0.4 + 0.01 * (3.0 * t(k)).cos()).collect();
+        let force_n: Vec<f64> =
+            (0..n).map(|k| 30.0 + (6.0 * t(k)).sin() + ((k * 7919 + j) % 101) as f64 * 0.003).collect();
+        RecordedRun {
+            id: format!("op-{j}"),
+            rotor_rad,
+            motor_rad,
+            force_n,
+            from,
+            transitions: vec![(1, 30), (0, 400), (1, 430), (0, 900), (1, 1500), (0, 2100), (1, 3880), (0, 3920)],
+            force_noise_n: 0.01,
+        }
+    };
+    let rec = Recorded { runs: vec![run(0, 0), run(1, 120), run(2, 37)], w, dt, r_m, kernel_gain: 0.5, j1_kgm2: 0.02 };
+    // Three lanes of their own motor angle and force, as a filter leaves them.
+    let lane = |r: &RecordedRun, l: usize| -> (Vec<f64>, Vec<f64>) {
+        let a = 0.001 * (l + 1) as f64;
+        (
+            r.motor_rad.iter().enumerate().map(|(k, x)| x + a * (11.0 * t(k)).sin()).collect(),
+            r.force_n.iter().enumerate().map(|(k, x)| x * (1.0 + a) - a * (5.0 * t(k)).cos()).collect(),
+        )
+    };
+    let stored = rec.balance_lanes(|_, r| {
+        std::array::from_fn::<_, 3, _>(|l| {
+            let (phi2, f) = lane(r, l);
+            (Cow::Borrowed(r.rotor_rad.as_slice()), Cow::Owned(phi2), Cow::Owned(f))
+        })
+    });
+    let streamed: [_; 3] = rec.balance_lanes_streamed(|_, r, rows| {
+        let lanes: [(Vec<f64>, Vec<f64>); 3] = std::array::from_fn(|l| lane(r, l));
+        for k in 0..n {
+            rows.push(std::array::from_fn(|l| (lanes[l].0[k], lanes[l].1[k])));
+        }
+    });
+    let bits = |r: &[Row]| r.iter().flat_map(|(x, y)| x.iter().chain([y]).map(|v| v.to_bits())).collect::<Vec<_>>();
+    for (l, (s, d)) in streamed.iter().zip(&stored).enumerate() {
+        for (a, b) in s.runs.iter().zip(&d.runs) {
+            assert!(
+                b.rows.len() > 50 && b.events.len() == 6,
+                "lane {l}: {} rows, {} events",
+                b.rows.len(),
+                b.events.len()
+            );
+            assert_eq!(bits(&a.rows), bits(&b.rows), "lane {l}, {}", b.id);
+            assert_eq!(a.events.len(), b.events.len());
+            for (ea, eb) in a.events.iter().zip(&b.events) {
+                assert_eq!((ea.0, bits(&ea.1)), (eb.0, bits(&eb.1)), "lane {l}, {}", b.id);
+            }
+            assert_eq!(a.angle_rad, b.angle_rad);
+            let sums = |r: &super::RunRows| {
+                r.ata.iter().chain(&r.atb).chain([&r.yty]).map(|v| v.to_bits()).collect::<Vec<_>>()
+            };
+            assert_eq!(sums(a), sums(b), "lane {l}, {}", b.id);
+        }
+    }
+    assert!(stored[0].runs[0].rows != stored[1].runs[0].rows, "the lanes differ");
+    // A record shorter than its first window: no rows, no events, as stored.
+    let short = Recorded { runs: vec![run(0, 3960)], w, dt, r_m, kernel_gain: 0.5, j1_kgm2: 0.02 };
+    let [s] = short.balance_lanes_streamed(|_, r, rows| {
+        for k in 0..n {
+            rows.push([(r.motor_rad[k], r.force_n[k])]);
+        }
+    });
+    assert!(s.runs[0].rows.is_empty());
+    assert_eq!(s.runs[0].events.len(), short.balance().runs[0].events.len());
+}
