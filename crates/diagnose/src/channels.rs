@@ -39,8 +39,8 @@ mod step;
 mod twist;
 
 pub use balance::{
-    BalanceData, BalanceFit, Channels, MIN_EVENTS, Recorded, RecordedRun, StreamRows, TICK_LOSS_CHECK, advanced,
-    balance_data, tick_loss_check_of, torque_balance_check, torque_balance_check_of,
+    BalanceData, BalanceFit, Channels, MIN_EVENTS, Recorded, RecordedRun, TICK_LOSS_CHECK, advanced, balance_data,
+    tick_loss_check_of, torque_balance_check, torque_balance_check_of,
 };
 pub use drive_balance::drive_balance_check;
 pub use force_linearity::{force_linearity_check, force_parabola};

@@ -183,55 +183,36 @@ impl Biquad {
 /// Two channels through `L` filters as corrections, x + (F − 1)[x̃] with x̃
 /// the smoothed channel (module docs), each recursion from rest at x̃[0]
 /// (unit DC gain): one pass over the channels, the 2·L recursions
-/// interleaved, each sample's `L` corrected pairs handed to `sink` in
-/// sample order. Each recursion is latency-bound (its last output enters
+/// interleaved. Each recursion is latency-bound (its last output enters
 /// its next), and they are independent, so the processor overlaps them: one
 /// campaign's grid runs 120 points × 2 channels × every run through it, and
 /// a lane is its own filter's result to the bit (the same operations in the
 /// same order as one recursion alone).
-fn corrected_pairs_each<const L: usize>(
-    a: (&[f64], &[f64]),
-    b: (&[f64], &[f64]),
-    q: [Biquad; L],
-    mut sink: impl FnMut([(f64, f64); L]),
-) {
-    let n = a.0.len().min(a.1.len()).min(b.0.len()).min(b.1.len());
-    let (Some(&sa), Some(&sb)) = (a.1.first(), b.1.first()) else {
-        return;
-    };
-    let (mut ua, mut ub) = ([[sa; 2]; L], [[sb; 2]; L]);
-    let (mut ya, mut yb) = ([[sa; 2]; L], [[sb; 2]; L]);
-    for k in 0..n {
-        let (ra, xa, rb, xb) = (a.0[k], a.1[k], b.0[k], b.1[k]);
-        let mut out = [(0.0, 0.0); L];
-        for l in 0..L {
-            let Biquad { c: [c0, c1, c2], e: [e1, e2] } = q[l];
-            // The last sample's output enters last: one product and one
-            // subtraction on the recursion's critical path.
-            let na = (c0 * xa + c1 * ua[l][0] + c2 * ua[l][1] - e2 * ya[l][1]) - e1 * ya[l][0];
-            let nb = (c0 * xb + c1 * ub[l][0] + c2 * ub[l][1] - e2 * yb[l][1]) - e1 * yb[l][0];
-            out[l] = (ra + (na - xa), rb + (nb - xb));
-            (ua[l], ub[l], ya[l], yb[l]) = ([xa, ua[l][0]], [xb, ub[l][0]], [na, ya[l][0]], [nb, yb[l][0]]);
-        }
-        sink(out);
-    }
-}
-
-/// [`corrected_pairs_each`]'s corrected channels stored: each lane's two
-/// channels whole (the placebo's; the grid streams them into its rows).
 fn corrected_pairs<const L: usize>(
     a: (&[f64], &[f64]),
     b: (&[f64], &[f64]),
     q: [Biquad; L],
 ) -> [(Vec<f64>, Vec<f64>); L] {
     let n = a.0.len().min(a.1.len()).min(b.0.len()).min(b.1.len());
-    let mut out: [(Vec<f64>, Vec<f64>); L] = std::array::from_fn(|_| (Vec::with_capacity(n), Vec::with_capacity(n)));
-    corrected_pairs_each(a, b, q, |pairs| {
-        for ((x, y), (u, v)) in out.iter_mut().zip(pairs) {
-            x.push(u);
-            y.push(v);
+    let (Some(&sa), Some(&sb)) = (a.1.first(), b.1.first()) else {
+        return std::array::from_fn(|_| (Vec::new(), Vec::new()));
+    };
+    let mut out: [(Vec<f64>, Vec<f64>); L] = std::array::from_fn(|_| (vec![0.0; n], vec![0.0; n]));
+    let (mut ua, mut ub) = ([[sa; 2]; L], [[sb; 2]; L]);
+    let (mut ya, mut yb) = ([[sa; 2]; L], [[sb; 2]; L]);
+    for k in 0..n {
+        let (ra, xa, rb, xb) = (a.0[k], a.1[k], b.0[k], b.1[k]);
+        for l in 0..L {
+            let Biquad { c: [c0, c1, c2], e: [e1, e2] } = q[l];
+            // The last sample's output enters last: one product and one
+            // subtraction on the recursion's critical path.
+            let na = (c0 * xa + c1 * ua[l][0] + c2 * ua[l][1] - e2 * ya[l][1]) - e1 * ya[l][0];
+            let nb = (c0 * xb + c1 * ub[l][0] + c2 * ub[l][1] - e2 * yb[l][1]) - e1 * yb[l][0];
+            out[l].0[k] = ra + (na - xa);
+            out[l].1[k] = rb + (nb - xb);
+            (ua[l], ub[l], ya[l], yb[l]) = ([xa, ua[l][0]], [xb, ub[l][0]], [na, ya[l][0]], [nb, yb[l][0]]);
         }
-    });
+    }
     out
 }
 
@@ -290,9 +271,7 @@ fn force_differences(force_n: &[f64]) -> (Vec<f64>, Vec<f64>) {
 /// coupling's from the channels it touches, smoothed once per run
 /// ([`SMOOTH_HALF_S`]), through its filter as a correction, the points of
 /// one natural frequency (every damping ratio) built together
-/// ([`corrected_pairs_each`]), their rows summed as the filters run
-/// ([`Recorded::balance_lanes_streamed`]: the corrected channels are not
-/// stored).
+/// ([`corrected_pairs`], [`Recorded::balance_lanes`]).
 pub(super) fn grid(rec: &Recorded, rate_hz: f64) -> Vec<SensorPoint> {
     let half = nominal_window_samples(SMOOTH_HALF_S, rate_hz);
     let smooth: Vec<[Vec<f64>; 2]> =
@@ -313,10 +292,11 @@ pub(super) fn grid(rec: &Recorded, rate_hz: f64) -> Vec<SensorPoint> {
     let coupling: Vec<Vec<SensorPoint>> = FREQUENCIES_HZ
         .par_iter()
         .map(|&f_n| {
-            let q = DAMPING_RATIOS.map(|zeta| Biquad::new(rate_hz, f_n, zeta, true));
-            let data = rec.balance_lanes_streamed(|i, r, rows| {
+            let data = rec.balance_lanes(|i, r| {
                 let [s2, sf] = &smooth[i];
-                corrected_pairs_each((&r.motor_rad, s2), (&r.force_n, sf), q, |pairs| rows.push(pairs));
+                let q = DAMPING_RATIOS.map(|zeta| Biquad::new(rate_hz, f_n, zeta, true));
+                corrected_pairs((&r.motor_rad, s2), (&r.force_n, sf), q)
+                    .map(|(phi2, f)| (r.rotor_rad.as_slice().into(), phi2.into(), f.into()))
             });
             DAMPING_RATIOS
                 .iter()
@@ -548,11 +528,7 @@ impl StructureCandidate for SensorCandidate {
 
 #[cfg(test)]
 mod tests {
-    use super::{
-        Biquad, DAMPING_RATIOS, SMOOTH_HALF_S, corrected_pairs, corrected_pairs_each, filtered, force_through_inverse,
-    };
-    use crate::channels::{BalanceData, Recorded};
-    use rig_types::sensor::{centred_moving_average, nominal_window_samples};
+    use super::{Biquad, corrected_pairs, filtered, force_through_inverse};
     use std::f64::consts::PI;
 
     /// A force of the stick-slip's band (1 and 4 Hz) recorded through a
@@ -603,52 +579,6 @@ mod tests {
         }
         // The lanes are different filters, not one copied.
         assert!(lanes[0].0 != lanes[1].0 && lanes[0].1 != lanes[4].1);
-    }
-
-    /// The coupling's grid points with the filters streamed into their
-    /// rows ([`super::grid`], `Recorded::balance_lanes_streamed`) are the
-    /// balances of the corrected channels stored, to the bit: every fit,
-    /// per-run RMS and per-run event-locked RMS (the balance-level test
-    /// compares the rows themselves, events included).
-    #[test]
-    fn streamed_coupling_balances_are_the_stored_channels() {
-        let rate = 500.0;
-        let t = |k: usize| k as f64 / rate;
-        let runs = (0..3)
-            .map(|j| {
-                let rotor: Vec<f64> = (0..6000).map(|k| 2.0 * t(k) + 0.05 * (9.0 * t(k) + j as f64).sin()).collect();
-                let motor: Vec<f64> = (0..6000).map(|k| 2.0 * t(k) + 0.4 + 0.02 * (3.0 * t(k)).cos()).collect();
-                let force: Vec<f64> =
-                    (0..6000).map(|k| 30.0 + (6.0 * t(k)).sin() + ((k * 7919 + j) % 101) as f64 * 0.003).collect();
-                (format!("op-{j}"), rotor, motor, force)
-            })
-            .collect();
-        let rec = Recorded::of_channels(runs, rate, 0.1, 0.09, 0.02);
-        let half = nominal_window_samples(SMOOTH_HALF_S, rate);
-        for f_n in [2.0, 7.0, 20.0] {
-            let q = DAMPING_RATIOS.map(|zeta| Biquad::new(rate, f_n, zeta, true));
-            let smooth =
-                |r: &crate::channels::RecordedRun| [&r.motor_rad, &r.force_n].map(|x| centred_moving_average(x, half));
-            let stored = rec.balance_lanes(|_, r| {
-                let [s2, sf] = smooth(r);
-                corrected_pairs((&r.motor_rad, &s2), (&r.force_n, &sf), q)
-                    .map(|(phi2, f)| (r.rotor_rad.as_slice().into(), phi2.into(), f.into()))
-            });
-            let streamed = rec.balance_lanes_streamed(|_, r, rows| {
-                let [s2, sf] = smooth(r);
-                corrected_pairs_each((&r.motor_rad, &s2), (&r.force_n, &sf), q, |pairs| rows.push(pairs));
-            });
-            for (l, (a, b)) in streamed.iter().zip(&stored).enumerate() {
-                // Debug prints every f64 to its shortest round trip: equal text, equal bits.
-                let fits = |d: &BalanceData| {
-                    let fit = d.fit(|_| true, true, true).expect("a regular balance");
-                    format!("{fit:?} {:?} {:?}", d.run_rms(&fit, |_| true), d.run_event_rms(&fit, |_| true))
-                };
-                assert_eq!(fits(a), fits(b), "f_n {f_n}, lane {l}");
-                assert_eq!(format!("{a:?}"), format!("{b:?}"), "f_n {f_n}, lane {l}");
-            }
-            assert!(format!("{:?}", stored[0]) != format!("{:?}", stored[4]), "the lanes differ");
-        }
     }
 
     /// A sine through the filter, after its transient: the amplitude of the

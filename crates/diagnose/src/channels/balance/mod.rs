@@ -1,8 +1,7 @@
 //! Torque balance of rotor 1 in the measured channels of the operating
 //! points: encoders and force sensor must satisfy the rotor equation.
 //!
-//! `rows.rs` the window rows and their running box sums, `stream.rs` the
-//! same rows of channels handed over sample by sample, `recorded.rs` the
+//! `rows.rs` the window rows and their running box sums, `recorded.rs` the
 //! operating points' channels read once and the balances built from them,
 //! `checks.rs` the torque-balance and tick-loss checks; here the balance's
 //! data and its fits.
@@ -14,7 +13,6 @@ use rig_types::Campaign;
 mod checks;
 mod recorded;
 mod rows;
-mod stream;
 #[cfg(test)]
 mod tests;
 
@@ -22,7 +20,6 @@ use super::ChannelOptions;
 use crate::DiagnoseOptions;
 pub use checks::{TICK_LOSS_CHECK, tick_loss_check_of, torque_balance_check, torque_balance_check_of};
 pub use recorded::{Channels, Recorded, RecordedRun};
-pub use stream::StreamRows;
 
 /// Regressors of one window boundary: [⟨Ω̇1⟩, ⟨φ2−φ1⟩, ⟨Ω2−Ω1⟩, ⟨Ω1⟩, 1] and r⟨F⟩.
 type Row = ([f64; 5], f64);

@@ -3,7 +3,6 @@
 
 use super::super::stuck_stretches;
 use super::rows::{row_at, rows_lanes};
-use super::stream::StreamRows;
 use super::{BalanceData, EVENT_ROWS, Row, RunRows};
 use crate::DiagnoseOptions;
 use crate::channels::ChannelOptions;
@@ -165,35 +164,11 @@ impl Recorded {
         lanes.map(|runs| BalanceData { runs, j1_kgm2: self.j1_kgm2 })
     }
 
-    /// `L` balances of channel sets that read the recorded rotor angle
-    /// and each its own motor angle and force, which `produce` hands to a
-    /// [`StreamRows`] sample by sample (the encoder coupling's grid points,
-    /// filter outputs, `crate::structure`): each lane is the balance
-    /// [`Recorded::balance_lanes`] builds from those channels stored, to the
-    /// bit (the same rows, events and sums), without storing them.
-    pub fn balance_lanes_streamed<const L: usize>(
-        &self,
-        produce: impl Fn(usize, &RecordedRun, &mut StreamRows<'_, L>),
-    ) -> [BalanceData; L] {
-        let mut lanes: [Vec<RunRows>; L] = std::array::from_fn(|_| Vec::with_capacity(self.runs.len()));
-        for (i, run) in self.runs.iter().enumerate() {
-            let mut stream = StreamRows::new(&run.rotor_rad, self.dt, self.w, self.r_m, run.from, &run.transitions);
-            produce(i, run, &mut stream);
-            let (grids, mut events) = stream.finish();
-            for (l, (lane, grid)) in lanes.iter_mut().zip(grids).enumerate() {
-                let lane_events = (run.transitions.iter().zip(&mut events))
-                    .filter_map(|(&(kind, _), e)| e.as_mut().map(|rows| (kind, std::mem::take(&mut rows[l]))))
-                    .collect();
-                lane.push(self.run_rows_of(run, &run.rotor_rad, lane_events, grid));
-            }
-        }
-        lanes.map(|runs| BalanceData { runs, j1_kgm2: self.j1_kgm2 })
-    }
-
     /// One run's [`RunRows`] from its channels `(phi1, phi2, f)` and their
     /// grid rows (`rows` of the channels from `run.from`).
     fn run_rows(&self, run: &RecordedRun, (phi1, phi2, f): Channels<'_>, grid: Vec<Row>) -> RunRows {
         let (w, dt, r_m) = (self.w, self.dt, self.r_m);
+        let angle_rad = (0..grid.len()).map(|j| phi1[run.from.max(w) + j * w]).collect();
         let events = run
             .transitions
             .iter()
@@ -203,14 +178,6 @@ impl Recorded {
                 rows.map(|r| (kind, r))
             })
             .collect();
-        self.run_rows_of(run, &phi1, events, grid)
-    }
-
-    /// One run's [`RunRows`] from its rotor angle, event-locked rows and
-    /// grid rows: the rotor angle at the boundaries and the normal equations.
-    fn run_rows_of(&self, run: &RecordedRun, phi1: &[f64], events: Vec<(usize, Vec<Row>)>, grid: Vec<Row>) -> RunRows {
-        let w = self.w;
-        let angle_rad = (0..grid.len()).map(|j| phi1[run.from.max(w) + j * w]).collect();
         let (mut ata, mut atb, mut yty) = ([0.0; 25], [0.0; 5], 0.0);
         for (x, y) in &grid {
             let y = y + self.j1_kgm2 * x[0];
