@@ -36,8 +36,8 @@ use rig_types::minimize::brent_min;
 /// was read at 4.11 V, 0.17 V low, which slowed every clipped run of the
 /// free run). So the grid points between the first pass's best and the flat
 /// stretch are scored again from the best point's gains, and Brent's
-/// search starts every trial from the gains at the best grid point after
-/// that rescoring.
+/// search starts from the gains at the best grid point after that
+/// rescoring, each later trial from the nearest earlier trial's gains.
 pub fn fit_limit(runs: &[&RunSignals], supply_v: f64) -> Option<(Pi, f64, usize, f64)> {
     search_limit(&Recording::all(runs), supply_v, true)
 }
@@ -177,7 +177,7 @@ fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi,
 /// asks for some (limit, start) pairs more than once — the grid's best
 /// point again from the unlimited fit for the second start, the best point
 /// after the second start's rescoring again from it, and Brent's returned
-/// point for the reported gains (with the alternation of eight
+/// trial (from the start it had) for the reported gains (with the alternation of eight
 /// passes the fits were 61 % of a clipped ladder rung's CPU in `perf`, 4–9
 /// of a fold search's 29–53 fits repeats, issue 23). A fit is a function
 /// of the limit and the start's gains alone (the start's own limit is
