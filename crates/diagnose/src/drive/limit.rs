@@ -36,8 +36,8 @@ use rig_types::minimize::brent_min;
 /// was read at 4.11 V, 0.17 V low, which slowed every clipped run of the
 /// free run). So the grid points between the first pass's best and the flat
 /// stretch are scored again from the best point's gains, and Brent's
-/// search starts every trial from the gains at the best grid point after
-/// that rescoring.
+/// search starts from the gains at the best grid point after that
+/// rescoring, each later trial from the nearest earlier trial's gains.
 pub fn fit_limit(runs: &[&RunSignals], supply_v: f64) -> Option<(Pi, f64, usize, f64)> {
     search_limit(&Recording::all(runs), supply_v, true)
 }
@@ -90,6 +90,8 @@ fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi,
     // binding grid points above it.
     let l_free = free.map_or(f64::INFINITY, |f| f.0);
     let mut start = p0;
+    // The best grid point's fit as Brent's first neighbour: (limit, its start, its gains).
+    let mut seed = None;
     if grid[best] < l_free
         && let Some((p1, _)) = fits.fit(runs, grid[best], &p0)
     {
@@ -103,16 +105,37 @@ fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi,
         best = (0..grid.len()).min_by(|&a, &b| scores[a].total_cmp(&scores[b]))?;
         if let Some((p, _)) = fits.fit(runs, grid[best], &p1) {
             start = p;
+            seed = Some((grid[best], p1, p));
         }
     }
-    // Brent's trials from the best grid point's gains alone (`start`, the
-    // unlimited fit where the grid found no binding best): with the
-    // alternation the unlimited fit was a second start at every trial (the
-    // best point's alone lost a fold of the registry test's clipped runs);
-    // with the gains' RSS minimum it gave the same answers to the bit on
-    // drive-limit rungs 1, 4 and 5 and the strided samples, at 29 % more
-    // of rung 1's CPU (docs/performance.md, sixteenth session).
-    let eval = |l: f64| eval_with(l, &start);
+    // Brent's trials, each warm-started from the fitted gains of the trial
+    // nearest in limit so far (the first of equally near ones; the best grid
+    // point's fit, `start`, seeds them where the grid's best binds; `start`
+    // alone where nothing was fitted yet): the fit is the RSS minimum to its
+    // stop rule's tenth of a standard error (`drive/gains.rs`), so the start
+    // moves it only within that, and a neighbour's gains are a few RSS
+    // evaluations closer to it than the grid point's (docs/performance.md,
+    // seventeenth session). Each trial keeps (limit, start, fit): the
+    // memo's key is the start, so the reported gains are the trial's own.
+    // With the alternation the unlimited fit was a second start at every
+    // trial; with the gains' RSS minimum it gave the same answers to the
+    // bit on drive-limit rungs 1, 4 and 5 and the strided samples, at 29 %
+    // more of rung 1's CPU (sixteenth session).
+    let trials = std::cell::RefCell::new(Vec::<(f64, Pi, Pi)>::from_iter(seed));
+    let warm = |l: f64| {
+        trials.borrow().iter().min_by(|a, b| (a.0 - l).abs().total_cmp(&(b.0 - l).abs())).map_or(start, |t| t.2)
+    };
+    let eval = |l: f64| match free {
+        Some((l_free, rss)) if l >= l_free => rss,
+        _ => {
+            let s = warm(l);
+            let fit = fits.fit(runs, l, &s);
+            if let Some((p, _)) = fit {
+                trials.borrow_mut().push((l, s, p));
+            }
+            fit.map_or(f64::INFINITY, |f| f.1)
+        }
+    };
     let lo = grid[best.saturating_sub(1)];
     let hi = grid[(best + 1).min(grid.len() - 1)];
     // Vmax to 10⁻⁷ of the supply (golden section's 24 steps on this bracket reached 5·10⁻⁷).
@@ -135,7 +158,10 @@ fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi,
         _ => l,
     };
     let n = runs.iter().map(|r| r.p.e_rad_s.len()).sum::<usize>();
-    let (pi, rss) = fits.fit(runs, l, &start)?;
+    // The gains at the returned limit: Brent's own trial there (the memo's
+    // entry for its start); at the flat stretch's end, from `start`.
+    let at = trials.borrow().iter().find(|t| t.0.to_bits() == l.to_bits()).map_or(start, |t| t.1);
+    let (pi, rss) = fits.fit(runs, l, &at)?;
     if !with_se {
         return Some((pi, rss, n, f64::NAN));
     }
@@ -151,7 +177,7 @@ fn search_limit(runs: &[Recording], supply_v: f64, with_se: bool) -> Option<(Pi,
 /// asks for some (limit, start) pairs more than once — the grid's best
 /// point again from the unlimited fit for the second start, the best point
 /// after the second start's rescoring again from it, and Brent's returned
-/// point for the reported gains (with the alternation of eight
+/// trial (from the start it had) for the reported gains (with the alternation of eight
 /// passes the fits were 61 % of a clipped ladder rung's CPU in `perf`, 4–9
 /// of a fold search's 29–53 fits repeats, issue 23). A fit is a function
 /// of the limit and the start's gains alone (the start's own limit is
