@@ -3,7 +3,9 @@
 //! No IO: parameters in, trajectory out.
 //!
 //! CONTRACT (other crates code against these names; extend, do not rename):
-//! - [`simulate`] one run at the recording's sample times;
+//! - [`simulate`] one run at the recording's sample times ([`simulate_channels`]:
+//!   without the friction torque's channel, for a caller that reads only the
+//!   motion and the drive);
 //! - [`simulate_from`] continue from a [`State`] under a constant set-point
 //!   (sweeps: each point starts from the previous point's end state);
 //! - [`friction_coefficient`] μ(Ω1) of a law (Fig. 4.15);
@@ -229,6 +231,19 @@ impl Default for SimOptions {
     }
 }
 
+/// The channels a run writes: all of them, or all but the brake's friction
+/// torque T1, left empty. T1 is an output only (the integration never reads
+/// a sample), so every other channel is the same to the bit either way; its
+/// samples cost a friction law at every sample time (under a normal-force
+/// modulation a `sin` each), which a caller that reads only the motion and
+/// the drive need not pay (the diagnosis' held-out free runs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Channels {
+    #[default]
+    All,
+    WithoutFriction,
+}
+
 /// Full state of the rig model at one instant (enough to continue a run).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct State {
@@ -264,6 +279,19 @@ pub fn simulate(
     simulate_with_stats(params, input, sample_times_s, opts).map(|(traj, _)| traj)
 }
 
+/// [`simulate`] writing only `channels` ([`Channels`]).
+pub fn simulate_channels(
+    params: &RigParams,
+    input: &RunInput,
+    sample_times_s: &[f64],
+    opts: &SimOptions,
+    channels: Channels,
+) -> Result<Trajectory, ModelError> {
+    let mut traj = Trajectory::default();
+    simulate_into_channels(params, input, sample_times_s, (opts, channels), &mut traj)?;
+    Ok(traj)
+}
+
 /// [`simulate`] that also returns the integrator's counters (benches, tests).
 pub fn simulate_with_stats(
     params: &RigParams,
@@ -289,6 +317,17 @@ pub fn simulate_into(
     opts: &SimOptions,
     out: &mut Trajectory,
 ) -> Result<SimStats, ModelError> {
+    simulate_into_channels(params, input, sample_times_s, (opts, Channels::All), out)
+}
+
+/// [`simulate_into`] writing only `channels`.
+fn simulate_into_channels(
+    params: &RigParams,
+    input: &RunInput,
+    sample_times_s: &[f64],
+    (opts, channels): (&SimOptions, Channels),
+    out: &mut Trajectory,
+) -> Result<SimStats, ModelError> {
     validate(params, opts)?;
     check_samples(sample_times_s, 0.0)?;
     let (drive, n0, breakpoints) = match *input {
@@ -307,7 +346,7 @@ pub fn simulate_into(
     let sys = System::new(params, drive, n0);
     let y0 = [0.0; dopri::DIM];
     let mode0 = sys.mode_at_rest(0.0, &y0);
-    let (_, stats) = sim::run(&sys, (0.0, y0, mode0), sample_times_s, &breakpoints, opts, out)?;
+    let (_, stats) = sim::run(&sys, (0.0, y0, mode0), sample_times_s, &breakpoints, (opts, channels), out)?;
     Ok(stats)
 }
 
@@ -354,7 +393,7 @@ pub fn simulate_from(
     let sys = System::new(params, drive, normal_force_n);
     let mode0 = sys.mode_of(state.time_s, &y0, state.stuck);
     let mut traj = Trajectory::default();
-    let (end, _) = sim::run(&sys, (state.time_s, y0, mode0), sample_times_s, &[], opts, &mut traj)?;
+    let (end, _) = sim::run(&sys, (state.time_s, y0, mode0), sample_times_s, &[], (opts, Channels::All), &mut traj)?;
     Ok((traj, end))
 }
 

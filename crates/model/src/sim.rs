@@ -5,7 +5,7 @@
 use crate::dopri::{DIM, Dopri, StepFailure, Vector, locate_root};
 use crate::exact::{Compute, Exact, ROWS, apply, apply_along, same_step};
 use crate::system::{CUR, INT, Mode, PHI1, PHI2, Region, System, TEMP, VoltageIn, W1, W2};
-use crate::{ModelError, SimOptions, State};
+use crate::{Channels, ModelError, SimOptions, State};
 use rig_types::{FrictionLaw, ModelKind, Trajectory};
 
 /// Step budget of one call: accepted plus rejected steps may not exceed
@@ -109,8 +109,9 @@ fn stuck_flag(sys: &System, mode: Mode, y: &Vector) -> bool {
     }
 }
 
+/// Appends the sample at `t`; the friction torque only if `friction` ([`Channels`]).
 #[inline]
-fn push_sample(out: &mut Trajectory, sys: &System, mode: Mode, t: f64, y: &Vector) {
+fn push_sample(out: &mut Trajectory, sys: &System, mode: Mode, t: f64, y: &Vector, friction: bool) {
     out.time_s.push(t);
     out.rotor_angle_rad.push(y[PHI1]);
     out.rotor_speed_rad_s.push(y[W1]);
@@ -118,7 +119,9 @@ fn push_sample(out: &mut Trajectory, sys: &System, mode: Mode, t: f64, y: &Vecto
     out.motor_speed_rad_s.push(y[W2]);
     out.current_a.push(y[CUR]);
     out.voltage_v.push(sys.voltage(t, y).0);
-    out.friction_torque_nm.push(sys.friction_torque_nm(mode, t, y));
+    if friction {
+        out.friction_torque_nm.push(sys.friction_torque_nm(mode, t, y));
+    }
     out.stuck.push(stuck_flag(sys, mode, y));
 }
 
@@ -126,14 +129,15 @@ fn push_sample(out: &mut Trajectory, sys: &System, mode: Mode, t: f64, y: &Vecto
 /// in `states[..][..times.len()]`, all in `mode` and `region`: one append per
 /// channel. The voltage and the friction torque take the shortcuts
 /// [`System::voltage_in`] and [`System::friction_torque_constant_in`] allow
-/// (the same values as [`push_sample`] writes).
+/// (the same values as [`push_sample`] writes); the friction torque only if
+/// `friction`.
 fn push_pending<const P: usize>(
     out: &mut Trajectory,
     sys: &System,
-    mode: Mode,
-    region: &Region,
+    (mode, region): (Mode, &Region),
     times: &[f64],
     states: &[[f64; P]; ROWS],
+    friction: bool,
 ) {
     let n = times.len();
     if n == 0 {
@@ -161,10 +165,10 @@ fn push_pending<const P: usize>(
                 .map(|(&t, (&w, &i))| sys.pi_unclamped_of_v(sys.reference_rad_s(t), w, i)),
         ),
     }
-    if sys.friction_torque_constant_in(region) {
+    if friction && sys.friction_torque_constant_in(region) {
         let f = sys.friction_torque_nm(mode, times[0], &y(0));
         out.friction_torque_nm.extend(times.iter().map(|_| f));
-    } else {
+    } else if friction {
         out.friction_torque_nm.extend(times.iter().enumerate().map(|(j, &t)| sys.friction_torque_nm(mode, t, &y(j))));
     }
     if sys.kind == ModelKind::Rig {
@@ -209,10 +213,13 @@ fn block_len(samples: &[f64], idx: usize, t: f64, h: f64, t_stop: f64, max_step_
     k
 }
 
-/// Empties every channel of `out`, keeping its allocations, and makes room for `n` samples.
-fn clear(out: &mut Trajectory, n: usize) {
+/// Empties every channel of `out`, keeping its allocations, and makes room
+/// for `n` samples in each it will write (not the friction torque's unless `friction`).
+fn clear(out: &mut Trajectory, n: usize, friction: bool) {
     for c in out.numeric_channels_mut() {
         c.clear();
+    }
+    for c in out.numeric_channels_mut().into_iter().take(if friction { 8 } else { 7 }) {
         c.reserve(n);
     }
     out.stuck.clear();
@@ -221,19 +228,20 @@ fn clear(out: &mut Trajectory, n: usize) {
 
 /// Integrates from `from` = (t0, y0, mode0) to the last sample time, stopping
 /// exactly at each `breakpoints` time (kinks of the input, e.g. the end of the
-/// ramp), into `out` (emptied first; its allocations are reused). Samples
-/// must be sorted and >= t0 (checked by the caller).
+/// ramp), into `out`'s `channels` (emptied first; its allocations are
+/// reused). Samples must be sorted and >= t0 (checked by the caller).
 pub(crate) fn run(
     sys: &System,
     from: (f64, Vector, Mode),
     samples: &[f64],
     breakpoints: &[f64],
-    opts: &SimOptions,
+    (opts, channels): (&SimOptions, Channels),
     out: &mut Trajectory,
 ) -> Result<(State, SimStats), ModelError> {
     let (t0, y0, mode0) = from;
     let n = samples.len();
-    clear(out, n);
+    let friction = channels == Channels::All;
+    clear(out, n, friction);
     let t_end = samples.last().copied().unwrap_or(t0).max(t0);
     let (mut t, mut y, mut mode) = (t0, y0, mode0);
     if mode == Mode::Stick {
@@ -241,7 +249,7 @@ pub(crate) fn run(
     }
     let mut idx = 0;
     while idx < n && samples[idx] <= t0 {
-        push_sample(out, sys, mode, samples[idx], &y);
+        push_sample(out, sys, mode, samples[idx], &y, friction);
         idx += 1;
     }
     let mut dp = Dopri::new(opts.rtol, opts.atol, opts.max_step_s).with_norm_dim(if sys.has_thermal_state() {
@@ -309,7 +317,7 @@ pub(crate) fn run(
                     let mut ok = false;
                     if k > 1 {
                         if held + k > PENDING {
-                            push_pending(out, sys, mode, &region, &samples[idx - held..idx], &pending);
+                            push_pending(out, sys, (mode, &region), &samples[idx - held..idx], &pending, friction);
                             held = 0;
                         }
                         let mut yk = apply_along(phi, &y, t, &samples[idx..idx + k], &mut pending, held);
@@ -330,11 +338,11 @@ pub(crate) fn run(
                         }
                         if let Some(end) = exact_end(sys, mode, &region, g0, t1, &y1) {
                             if held > 0 {
-                                push_pending(out, sys, mode, &region, &samples[idx - held..idx], &pending);
+                                push_pending(out, sys, (mode, &region), &samples[idx - held..idx], &pending, friction);
                                 held = 0;
                             }
                             while idx < n && samples[idx] <= t1 {
-                                push_sample(out, sys, mode, samples[idx], &y1);
+                                push_sample(out, sys, mode, samples[idx], &y1, friction);
                                 idx += 1;
                             }
                             (carried, steps, t, y, ok) = (end, steps + 1, t1, y1, true);
@@ -356,7 +364,7 @@ pub(crate) fn run(
                     }
                     (t1, h, g0) = (t1_next, h_next, g);
                 };
-                push_pending(out, sys, mode, &region, &samples[idx - held..idx], &pending);
+                push_pending(out, sys, (mode, &region), &samples[idx - held..idx], &pending, friction);
                 exact.steps += steps;
                 if taken {
                     kink_hugs = 0;
@@ -428,7 +436,7 @@ pub(crate) fn run(
             (None, false) => kink_hugs,
         };
         while idx < n && samples[idx] <= t_next {
-            push_sample(out, sys, mode, samples[idx], &step.dense(samples[idx]));
+            push_sample(out, sys, mode, samples[idx], &step.dense(samples[idx]), friction);
             idx += 1;
         }
         let advanced = t_next - t;
@@ -464,7 +472,7 @@ pub(crate) fn run(
     }
     // Samples at exactly t_end when the loop ended on an event or never ran.
     while idx < n {
-        push_sample(out, sys, mode, samples[idx], &y);
+        push_sample(out, sys, mode, samples[idx], &y, friction);
         idx += 1;
     }
     stats.accepted_steps = dp.n_accept;

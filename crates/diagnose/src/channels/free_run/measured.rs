@@ -228,8 +228,11 @@ pub(super) fn simulate_pair(
     };
     let rad = tick_rad(c.rig.encoder_ticks_per_rev);
     // The whole record is simulated (the regime is read at its end); the
-    // window's features from its first `to` samples.
-    let sim = rig_model::simulate(p, &m.input, t, &s.integrator).ok().map(|tr| {
+    // window's features from its first `to` samples. A rotor-only pair reads
+    // no force, so its run writes no friction torque (the other channels are
+    // the same to the bit).
+    let channels = if rotor_only { rig_model::Channels::WithoutFriction } else { rig_model::Channels::All };
+    let sim = rig_model::simulate_channels(p, &m.input, t, &s.integrator, channels).ok().map(|tr| {
         let (w1, w2) =
             (centred_speed(tt, &tr.rotor_angle_rad[..to], h1), centred_speed(tt, &tr.motor_angle_rad[..to], h2));
         let has_force = m.has_force && !rotor_only;
