@@ -244,6 +244,7 @@ fn rss_lower_bound(runs: &[Recording], l: f64, cap: f64) -> f64 {
 /// `None` when the supply itself binds; else (that limit, the RSS there).
 fn non_binding_from(runs: &[Recording], supply_v: f64, p0: &Pi) -> Option<(f64, f64)> {
     let v_meas = runs.iter().flat_map(|s| s.voltage_v.iter()).fold(0.0f64, |m, v| m.max(v.abs()));
+    let v_floor = v_meas / 0.999;
     let mut v_pred = 0.0f64;
     let mut binds = false;
     let mut visited = Vec::new();
@@ -251,8 +252,15 @@ fn non_binding_from(runs: &[Recording], supply_v: f64, p0: &Pi) -> Option<(f64, 
     for pi in &visited {
         for r in runs {
             // An unclamped run's largest |V̂| at its hull's vertices (within
-            // 10⁻¹⁵ of the samples', which the margin below covers).
+            // 10⁻¹⁵ of the samples', which the margin below covers). Where
+            // its bound without the hull ([`Prepared::max_abs_bound`], never
+            // below it) is at most max(v_pred, v_floor) so far, the run's
+            // maximum cannot raise `l_free` (a max of maxima), and the hull
+            // is not built.
             if r.p.idle(pi) {
+                if r.p.max_abs_bound(pi) <= v_pred.max(v_floor) {
+                    continue;
+                }
                 v_pred = v_pred.max(r.p.max_abs_unclamped(pi).0);
                 continue;
             }
@@ -262,7 +270,7 @@ fn non_binding_from(runs: &[Recording], supply_v: f64, p0: &Pi) -> Option<(f64, 
             });
         }
     }
-    let l_free = v_pred.max(v_meas / 0.999) * (1.0 + 1e-12);
+    let l_free = v_pred.max(v_floor) * (1.0 + 1e-12);
     if binds || v_meas >= 0.999 * supply_v || l_free > supply_v {
         return None;
     }

@@ -53,7 +53,9 @@ pub struct Pi {
 /// (`hull`, a few dozen of 20 000 points), so one look at the vertices
 /// decides it, with a margin of 10⁻⁹ of the terms' scale for rounding (a run
 /// within it of the limit is treated as clamping: the recursion, exact, runs
-/// then). For an unclamped run a pass's normal equations are sums of e², e·I₀,
+/// then). The hull is built only when a cheaper bound cannot decide
+/// ([`Prepared::idle`]): its sort of 20 000 keys was a third of this
+/// preparation's CPU, and most questions are asked far below the limit. For an unclamped run a pass's normal equations are sums of e², e·I₀,
 /// I₀², e·V, I₀·V over the samples the fit keeps (|V| < 0.999·Vmax), which
 /// are the first samples in the order of |V|: prefix sums in that order
 /// (`cum`) give them for any limit, and its RSS is the quadratic form of the
@@ -64,8 +66,10 @@ pub struct Pi {
 pub struct Prepared {
     e_rad_s: Vec<f64>,
     dt_s: Vec<f64>,
-    /// The convex hull's vertices of the points (e_k, I₀(k)).
-    hull: Vec<[f64; 2]>,
+    /// The convex hull's vertices of the points (e_k, I₀(k)), built on the
+    /// first question the bound |kp|·e_max + |ki|·i_max cannot answer
+    /// ([`Prepared::hull`]).
+    hull: std::sync::OnceLock<Vec<[f64; 2]>>,
     /// max |e|, max |I₀|: the scale of the rounding margin.
     e_max: f64,
     i_max: f64,
@@ -81,7 +85,7 @@ impl Prepared {
         Prepared {
             e_rad_s: s.time_s.iter().zip(&s.motor_speed_rad_s).map(|(&t, &w)| s.reference_rad_s(t) - w).collect(),
             dt_s: s.time_s.windows(2).map(|w| w[1] - w[0]).collect(),
-            hull: Vec::new(),
+            hull: std::sync::OnceLock::new(),
             e_max: 0.0,
             i_max: 0.0,
             v_abs_sorted: Vec::new(),
@@ -93,17 +97,7 @@ impl Prepared {
         let Prepared { e_rad_s, dt_s, .. } = Prepared::bare(s);
         let n = e_rad_s.len();
         assert_eq!(s.voltage_v.len(), n, "run {}: a voltage sample per time sample", s.id);
-        // The recursion's additions with the clamp idle ([`visit`]): rate = e.
-        let mut i0_rad = Vec::with_capacity(n);
-        let mut i_acc = 0.0;
-        for k in 0..n {
-            i0_rad.push(i_acc);
-            if k + 1 < n {
-                i_acc += e_rad_s[k] * dt_s[k];
-            }
-        }
-        let mut pts: Vec<[f64; 2]> = e_rad_s.iter().zip(&i0_rad).map(|(&e, &i)| [e, i]).collect();
-        let hull = convex_hull(&mut pts);
+        let i0_rad = running_integral(&e_rad_s, &dt_s);
         let e_max = e_rad_s.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let i_max = i0_rad.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         // Ascending |V| (total_cmp), ties by index: the keys are distinct, so
@@ -123,18 +117,57 @@ impl Prepared {
             }
             cum.push(acc);
         }
-        Prepared { e_rad_s, dt_s, hull, e_max, i_max, v_abs_sorted, cum }
+        Prepared { e_rad_s, dt_s, hull: std::sync::OnceLock::new(), e_max, i_max, v_abs_sorted, cum }
+    }
+
+    /// The convex hull's vertices of the points (e_k, I₀(k)), built on first
+    /// use (I₀ by the same additions as [`Prepared::of`]'s, so the same points).
+    fn hull(&self) -> &[[f64; 2]] {
+        self.hull.get_or_init(|| {
+            let i0_rad = running_integral(&self.e_rad_s, &self.dt_s);
+            let mut pts: Vec<[f64; 2]> = self.e_rad_s.iter().zip(&i0_rad).map(|(&e, &i)| [e, i]).collect();
+            convex_hull(&mut pts)
+        })
     }
 
     /// The largest |kp·e + ki·I₀| over the run (at the hull's vertices) and
     /// the rounding margin of its terms.
     fn max_abs_unclamped(&self, pi: &Pi) -> (f64, f64) {
-        let m = self.hull.iter().fold(0.0f64, |m, p| m.max((pi.kp_v_s_rad * p[0] + pi.ki_v_rad * p[1]).abs()));
+        let m = self.hull().iter().fold(0.0f64, |m, p| m.max((pi.kp_v_s_rad * p[0] + pi.ki_v_rad * p[1]).abs()));
         (m, 1e-9 * (pi.kp_v_s_rad.abs() * self.e_max + pi.ki_v_rad.abs() * self.i_max))
     }
 
+    /// An upper bound of [`Prepared::max_abs_unclamped`]'s maximum without
+    /// the hull, in floating point and not only in exact arithmetic:
+    /// B = fl(fl(|kp|·e_max) + fl(|ki|·i_max)). Every hull vertex (x, y) is a
+    /// sample, so |x| ≤ e_max and |y| ≤ i_max; rounding to nearest is
+    /// monotone and odd, so |fl(kp·x)| = fl(|kp|·|x|) ≤ fl(|kp|·e_max), the
+    /// same for ki·y, and |fl(a + b)| ≤ fl(|a| + |b|) ≤ B (the triangle
+    /// inequality under a monotone rounding). NaN when a term is (0·∞).
+    fn max_abs_bound(&self, pi: &Pi) -> f64 {
+        pi.kp_v_s_rad.abs() * self.e_max + pi.ki_v_rad.abs() * self.i_max
+    }
+
     /// Whether no sample of the run clamps under `pi` (false when in doubt).
+    ///
+    /// The hull's maximum m ≤ B ([`Prepared::max_abs_bound`]) and the margin
+    /// is the same, so B + tol < limit implies m + tol < limit (a rounded
+    /// sum is monotone in each term): where the bound decides, the answer
+    /// is the hull's, and the hull is built only where it does not.
     fn idle(&self, pi: &Pi) -> bool {
+        if !(pi.kp_v_s_rad.is_finite() && pi.ki_v_rad.is_finite()) {
+            return false;
+        }
+        // The margin is the one `max_abs_unclamped` returns: the same expression.
+        let bound = self.max_abs_bound(pi);
+        if bound + 1e-9 * bound < pi.limit_v {
+            return true;
+        }
+        self.idle_by_hull(pi)
+    }
+
+    /// [`Prepared::idle`] by the hull alone.
+    fn idle_by_hull(&self, pi: &Pi) -> bool {
         if !(pi.kp_v_s_rad.is_finite() && pi.ki_v_rad.is_finite()) {
             return false;
         }
@@ -146,6 +179,21 @@ impl Prepared {
     fn kept_sums(&self, limit_v: f64) -> &[f64; 6] {
         &self.cum[self.v_abs_sorted.partition_point(|&v| v < 0.999 * limit_v)]
     }
+}
+
+/// I₀(k) = Σ_{j<k} e_j·dt_j: the recursion's additions with the clamp idle
+/// ([`visit`]: rate = e).
+fn running_integral(e_rad_s: &[f64], dt_s: &[f64]) -> Vec<f64> {
+    let n = e_rad_s.len();
+    let mut i0_rad = Vec::with_capacity(n);
+    let mut i_acc = 0.0;
+    for k in 0..n {
+        i0_rad.push(i_acc);
+        if k + 1 < n {
+            i_acc += e_rad_s[k] * dt_s[k];
+        }
+    }
+    i0_rad
 }
 
 /// Andrew's monotone chain: the convex hull's vertices of `pts` (sorted in
@@ -464,6 +512,47 @@ pub(crate) mod tests {
             }
         }
         assert!(idle_seen >= 6 && clamped_seen >= 3, "{idle_seen} idle, {clamped_seen} clamped");
+    }
+
+    /// The bound without the hull decides `idle` as the hull does: over
+    /// gains of both signs and scales on clamping and unclamped synthetic
+    /// runs, the bound is never below the hull's maximum (to the bit, not
+    /// within a margin), and at limits around both the bound and the hull's
+    /// maximum (a few ulps to 10⁻⁶ either side) `idle` and the hull alone
+    /// answer alike; a run whose every question the bound answers builds no hull.
+    #[test]
+    fn the_bound_without_the_hull_decides_idle_as_the_hull_does() {
+        let mut rs = runs(Pi { kp_v_s_rad: 2.0, ki_v_rad: 10.0, limit_v: 5.0 }, &[1.0, 3.0]);
+        rs.extend(runs(Pi { kp_v_s_rad: 1.5, ki_v_rad: 6.0, limit_v: 24.0 }, &[2.0]));
+        let (mut by_bound, mut by_hull_only, mut seed) = (0, 0, 11u64);
+        for s in &rs {
+            let fresh = Prepared::of(s);
+            assert!(fresh.idle(&Pi { kp_v_s_rad: 1e-3, ki_v_rad: 1e-3, limit_v: 1e6 }));
+            assert!(fresh.hull.get().is_none(), "{}: hull built where the bound decides", s.id);
+            let p = Recording::of(s).p;
+            for _ in 0..400 {
+                seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                let u = |sh: u32| ((seed >> sh) & 0xffff) as f64 / 65535.0;
+                let kp = (u(8) - 0.5) * 10f64.powf(4.0 * u(24) - 2.0);
+                let ki = (u(40) - 0.3) * 10f64.powf(4.0 * u(48) - 2.0);
+                let pi = Pi { kp_v_s_rad: kp, ki_v_rad: ki, limit_v: 1.0 };
+                let (m, tol) = p.max_abs_unclamped(&pi);
+                let bound = p.max_abs_bound(&pi);
+                assert!(m <= bound, "{pi:?}: hull max {m} above the bound {bound}");
+                for base in [m + tol, bound + tol] {
+                    for rel in [-1e-6, -1e-12, -1e-15, 0.0, 1e-15, 1e-12, 1e-6, 0.5] {
+                        for limit_v in [base * (1.0 + rel), f64::from_bits(base.to_bits() + 1), base] {
+                            let pi = Pi { limit_v, ..pi };
+                            let fast = p.idle(&pi);
+                            assert_eq!(fast, p.idle_by_hull(&pi), "{pi:?}");
+                            by_bound += usize::from(bound + 1e-9 * bound < limit_v);
+                            by_hull_only += usize::from(fast && bound + 1e-9 * bound >= limit_v);
+                        }
+                    }
+                }
+            }
+        }
+        assert!(by_bound > 1000 && by_hull_only > 1000, "{by_bound} by the bound, {by_hull_only} by the hull alone");
     }
 
     /// The hull's key sort ([`rig_types::order`]'s keys of (x, y)) is the
