@@ -24,7 +24,7 @@
 mod conclude;
 mod features;
 
-pub use features::{measured_features, steady_features};
+pub use features::{measured_features, steady_features, steady_fundamental_hz};
 
 use crate::composite::{self, Composite, CompositeFit, FrictionSet, Phases};
 use crate::drive::{self, Pi};

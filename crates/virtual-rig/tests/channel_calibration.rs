@@ -310,8 +310,8 @@ fn shipped_campaign_with_baseline_and_extended_model() {
 #[test]
 fn free_runs_on_records_measured_once_are_the_same_to_the_bit() {
     use rig_diagnose::channels::{
-        FreeRunPair, FreeRunSettings, MeasuredRuns, free_run_checks_of, free_run_misfit, free_run_misfit_measured,
-        free_run_pairs_by, free_run_pairs_measured, speed_floor_rad_s,
+        FreeRunPair, FreeRunSettings, MeasuredRuns, free_run_checks_of, free_run_misfit_measured, free_run_pairs_by,
+        free_run_pairs_measured,
     };
     let th = thesis();
     let dopts = opts();
@@ -337,14 +337,7 @@ fn free_runs_on_records_measured_once_are_the_same_to_the_bit() {
         assert_eq!(bits(&by), bits(&once));
         let (kb, ko) = (free_run_checks_of(&c, &by, &s, &o), free_run_checks_of(&c, &once, &s, &o));
         assert_eq!(format!("{kb:?}"), format!("{ko:?}"));
-        // The structure's held-out free runs: one run's misfit without the
-        // features it does not read, the pair's misfit to the bit.
-        let floor = speed_floor_rad_s(&c, &s);
-        let misfits: Vec<Option<u64>> =
-            once.iter().map(|q| free_run_misfit_measured(&c, &s, &m, &q.id, p, floor).map(f64::to_bits)).collect();
-        let of_pairs: Vec<Option<u64>> = once.iter().map(|q| free_run_misfit(q, floor).map(f64::to_bits)).collect();
-        assert!(of_pairs.iter().all(Option::is_some), "every pair has a misfit");
-        assert_eq!(misfits, of_pairs);
+        assert_eq!(misfits_alone(&c, &s, &m, p, &once), 0, "no run sticks and slips in both");
     }
     assert_eq!(free_run_misfit_measured(&c, &s, &m, "no such run", &base, 1.0), None);
     // Every other run held out: the runs without a model are skipped alike.
@@ -353,4 +346,44 @@ fn free_runs_on_records_measured_once_are_the_same_to_the_bit() {
     let once = free_run_pairs_measured(&c, &s, &m, |id| held(id).then(|| base.clone()));
     assert!(!by.is_empty() && by.len() < c.runs_of("operating_point").count(), "some runs skipped, some kept");
     assert_eq!(bits(&by), bits(&once));
+    // A campaign that sticks and slips, the model its truth: the fundamental
+    // is read where both regimes stick and slip. The rig of
+    // `free_run_calibration.rs`'s stick-slip nulls (shaft damping × 0.3,
+    // seed 9100; low set-points, high forces).
+    let mut truth = draw_truth("none", 130.0, 9100);
+    truth.params.shaft_damping_nm_s_rad *= 0.3;
+    let op = vec![(10.0, 10.0), (10.0, 25.0), (15.0, 25.0), (20.0, 13.0), (32.0, 25.0), (45.0, 10.0), (130.0, 25.0)];
+    let c = generate("null-ss", &truth, &Protocol { op_points: op, ..Protocol::small() }, 9100).expect("generate");
+    let s = FreeRunSettings::of(&dopts, &o);
+    let m = MeasuredRuns::of(&c, &s);
+    let pairs = free_run_pairs_measured(&c, &s, &m, |_| Some(truth.params.clone()));
+    let read = misfits_alone(&c, &s, &m, &truth.params, &pairs);
+    assert!(read >= 1 && read < pairs.len(), "the fundamental read in {read} of {} runs", pairs.len());
+}
+
+/// The structure's held-out free runs: each run's misfit without the
+/// features it does not read (`free_run_misfit_measured`), the pair's misfit
+/// (`pairs` of `p` against `m`) to the bit. Returns the number of runs whose
+/// misfit reads the fundamental (both regimes stick-slip, a measured
+/// fundamental): the line analysis the run alone makes only there.
+fn misfits_alone(
+    c: &Campaign,
+    s: &rig_diagnose::channels::FreeRunSettings,
+    m: &rig_diagnose::channels::MeasuredRuns,
+    p: &RigParams,
+    pairs: &[rig_diagnose::channels::FreeRunPair],
+) -> usize {
+    use rig_diagnose::channels::{free_run_misfit, free_run_misfit_measured, speed_floor_rad_s};
+    let floor = speed_floor_rad_s(c, s);
+    let misfits: Vec<Option<u64>> =
+        pairs.iter().map(|q| free_run_misfit_measured(c, s, m, &q.id, p, floor).map(f64::to_bits)).collect();
+    let of_pairs: Vec<Option<u64>> = pairs.iter().map(|q| free_run_misfit(q, floor).map(f64::to_bits)).collect();
+    assert!(!pairs.is_empty() && of_pairs.iter().all(Option::is_some), "every pair has a misfit");
+    assert_eq!(misfits, of_pairs);
+    pairs
+        .iter()
+        .filter(|q| {
+            q.measured.stick_slip() && q.measured.fundamental_hz > 0.0 && q.simulated.is_some_and(|f| f.stick_slip())
+        })
+        .count()
 }

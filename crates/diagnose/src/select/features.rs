@@ -46,21 +46,35 @@ pub fn steady_features(
     let min = w1.iter().copied().fold(f64::INFINITY, f64::min);
     let max = w1.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let dip = w2.iter().map(|w| setpoint_rad_s - w).fold(0.0_f64, f64::max);
-    // Fundamental: f0 of the line analysis of Ω1 when Ω1 swings more than the slip speed.
-    let n = w1.len() as f64;
-    let mean = w1.iter().sum::<f64>() / n;
-    let var = w1.iter().map(|w| (w - mean).powi(2)).sum::<f64>() / n;
-    let fundamental_hz = if var.sqrt() > slip_speed_rad_s {
-        line_analysis(w1, fs_hz, &STEADY_LINES).ok().and_then(|sl| sl.lines.f0_hz).unwrap_or(0.0)
-    } else {
-        0.0
-    };
     Features {
         stuck_fraction: stuck,
         stick_slip,
         rotor_min_rad_s: min,
         rotor_max_rad_s: max,
-        fundamental_hz,
+        fundamental_hz: fundamental_of(w1, fs_hz, slip_speed_rad_s),
         motor_dip_rad_s: dip,
+    }
+}
+
+/// [`steady_features`]' fundamental alone, Hz, the same value to the bit:
+/// for a reader that needs no other feature (the structure candidates'
+/// rotor-only free runs, `channels::free_run`).
+pub fn steady_fundamental_hz(t: &[f64], w1: &[f64], slip_speed_rad_s: f64) -> f64 {
+    if t.len() < 16 {
+        return Features::default().fundamental_hz;
+    }
+    fundamental_of(w1, (t.len() - 1) as f64 / (t[t.len() - 1] - t[0]), slip_speed_rad_s)
+}
+
+/// Fundamental: f0 of the line analysis of Ω1 (sampled at `fs_hz`) when Ω1
+/// swings more than the slip speed (its standard deviation), else 0.
+fn fundamental_of(w1: &[f64], fs_hz: f64, slip_speed_rad_s: f64) -> f64 {
+    let n = w1.len() as f64;
+    let mean = w1.iter().sum::<f64>() / n;
+    let var = w1.iter().map(|w| (w - mean).powi(2)).sum::<f64>() / n;
+    if var.sqrt() > slip_speed_rad_s {
+        line_analysis(w1, fs_hz, &STEADY_LINES).ok().and_then(|sl| sl.lines.f0_hz).unwrap_or(0.0)
+    } else {
+        0.0
     }
 }

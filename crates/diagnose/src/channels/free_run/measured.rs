@@ -208,8 +208,10 @@ pub(super) fn dwell_of(
 }
 
 /// The model's side of [`pair`]: run `p` on the record `m` was measured from.
-/// `rotor_only`: the features [`free_run_misfit`] reads and no others (the
-/// force's, its break-away peaks and the dwell row are left out: NaN, empty,
+/// `rotor_only`: the features [`free_run_misfit`] reads and no others
+/// ([`rotor_side`]: Ω1's extremes, the attractor's regime, the fundamental
+/// where read; the motor's, voltage's and force's features, the break-away
+/// peaks, the window's regime and the dwell row are left out: NaN, empty,
 /// `None`), for [`free_run_misfit_measured`] alone.
 pub(super) fn simulate_pair(
     c: &Campaign,
@@ -233,9 +235,12 @@ pub(super) fn simulate_pair(
     // the same to the bit).
     let channels = if rotor_only { rig_model::Channels::WithoutFriction } else { rig_model::Channels::All };
     let sim = rig_model::simulate_channels(p, &m.input, t, &s.integrator, channels).ok().map(|tr| {
+        if rotor_only {
+            return rotor_side(t, &tr.rotor_angle_rad, m, s);
+        }
         let (w1, w2) =
             (centred_speed(tt, &tr.rotor_angle_rad[..to], h1), centred_speed(tt, &tr.motor_angle_rad[..to], h2));
-        let has_force = m.has_force && !rotor_only;
+        let has_force = m.has_force;
         let force: Vec<f64> = if has_force {
             tr.friction_torque_nm[..to].iter().map(|x| x / p.brake_disc_radius_m).collect()
         } else {
@@ -252,7 +257,7 @@ pub(super) fn simulate_pair(
         } else {
             Vec::new()
         };
-        let dwell = m.dwell.as_ref().filter(|_| !rotor_only).and_then(|_| {
+        let dwell = m.dwell.as_ref().and_then(|_| {
             let ticks = rig_types::sensor::encoder_ticks(&tr.rotor_angle_rad, c.rig.encoder_ticks_per_rev);
             let enc = ticks_to_rad(&ticks, c.rig.encoder_ticks_per_rev);
             let all: Vec<f64> = tr.friction_torque_nm.iter().map(|x| x / p.brake_disc_radius_m).collect();
@@ -271,10 +276,16 @@ pub(super) fn simulate_pair(
             ..window
         };
         let trace = w1[from..].iter().step_by(stride).copied().collect::<Vec<f64>>();
-        (f, trace, ChannelFeatures { values: channel_values(&win, s.slip_speed_rad_s, 0.0) }, window.stick_slip, dwell)
+        (
+            f,
+            trace,
+            ChannelFeatures { values: channel_values(&win, s.slip_speed_rad_s, 0.0) },
+            Some(window.stick_slip),
+            dwell,
+        )
     });
     let (simulated, simulated_rad_s, channels_simulated, sim_window_ss, sim_dwell) =
-        sim.map_or((None, None, None, None, None), |(f, w, ch, ss, d)| (Some(f), Some(w), Some(ch), Some(ss), d));
+        sim.map_or((None, None, None, None, None), |(f, w, ch, ss, d)| (Some(f), Some(w), Some(ch), ss, d));
     let trace = Trace {
         time_s: tt[from..].iter().step_by(stride).copied().collect(),
         measured_rad_s: m.measured_trace.clone(),
@@ -294,6 +305,45 @@ pub(super) fn simulate_pair(
         window_stick_slip: (m.window_measured.stick_slip, sim_window_ss),
         dwell: (m.dwell.clone(), sim_dwell),
     }
+}
+
+/// A simulation's side of a pair: its features, speed trace, channel
+/// features, window regime (`None`: not read) and dwell row.
+type SimSide = (Features, Vec<f64>, ChannelFeatures, Option<bool>, Option<DwellRow>);
+
+/// What a simulation of [`simulate_pair`] gives for [`free_run_misfit`] alone
+/// (`rotor_only`), to the bit the full pair's values that misfit reads: the
+/// attractor's regime, the Ω1 extremes of the window (channel features 0, 1),
+/// and the fundamental only where it is read (both regimes stick-slip and
+/// the record's fundamental > 0; else 0). Not computed, so not read: Ω2 and
+/// its features (NaN), the window's regime (the checks': `None`), the stuck
+/// fraction and motor dip (NaN).
+fn rotor_side(t: &[f64], rotor_angle_rad: &[f64], m: &MeasuredRun, s: &FreeRunSettings) -> SimSide {
+    let MeasuredRun { from, to, h1, stride, regime_from, .. } = *m;
+    let tt = &t[..to];
+    let w1 = centred_speed(tt, &rotor_angle_rad[..to], h1);
+    let win = &w1[from..];
+    let stick_slip = attractor_stick_slip(t, rotor_angle_rad, regime_from, h1, &s.classify);
+    let fundamental_hz = if stick_slip && m.measured.stick_slip() && m.measured.fundamental_hz > 0.0 {
+        steady_fundamental_hz(&tt[from..], win, s.slip_speed_rad_s)
+    } else {
+        0.0
+    };
+    let min = win.iter().copied().fold(f64::INFINITY, f64::min);
+    let max = win.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let f = Features {
+        stuck_fraction: f64::NAN,
+        stick_slip,
+        rotor_min_rad_s: min,
+        rotor_max_rad_s: max,
+        fundamental_hz,
+        motor_dip_rad_s: f64::NAN,
+    };
+    let mut ch = ChannelFeatures::nan();
+    ch.values[ChannelFeatures::ROTOR_MAX] = max;
+    ch.values[ChannelFeatures::ROTOR_MIN] = min;
+    let trace = win.iter().step_by(stride).copied().collect();
+    (f, trace, ch, None, None)
 }
 
 /// Stick-slip of the attractor a run settles to: the regime classifier

@@ -99,7 +99,7 @@ use crate::DiagnoseOptions;
 use crate::extension::dwell::{DwellRow, dwell_row};
 use crate::prepare::{SensorLaw, centred_speed, diff_noise};
 use crate::result::{ChannelFeatures, Features};
-use crate::select::steady_features;
+use crate::select::{steady_features, steady_fundamental_hz};
 use rig_model::SimOptions;
 use rig_types::sensor::centred_moving_average;
 use rig_types::sensor::{half_window_samples, nominal_window_samples, tick_rad, ticks_to_rad};
