@@ -63,12 +63,7 @@ pub(super) fn refine_speed_time(
     // sin/cos of 2π f t by the schedule's rotations (friction::SinCosSchedule),
     // visited in sample order in the same pass.
     let schedule = friction::SinCosSchedule::of(d);
-    // The pass stops once the running sum exceeds `bound`, returning that
-    // partial sum: a line-search candidate above the current RSS is rejected
-    // whatever its exact RSS (as in `friction::fit_sine`'s: the same
-    // decisions, so the same fit to the bit; `g` and `sc` then partly
-    // filled, and only an accepted candidate's are read).
-    let eval = |th: &[f64], g: &mut Vec<f64>, sc: &mut Vec<(f64, f64)>, bound: f64| -> f64 {
+    let eval = |th: &[f64], g: &mut Vec<f64>, sc: &mut Vec<(f64, f64)>| -> f64 {
         if stribeck && th[2] <= 0.0 {
             return f64::INFINITY;
         }
@@ -76,7 +71,7 @@ pub(super) fn refine_speed_time(
         g.resize(d.len(), 0.0);
         sc.resize(d.len(), (0.0, 0.0));
         let mut rss = 0.0;
-        schedule.visit_while(&d.t, th[i_f], |i, (sx, cx)| {
+        schedule.visit(&d.t, th[i_f], |i, (sx, cx)| {
             let gi = if stribeck { rig_model::friction::stribeck_decay(d.omega[i], th[2]) } else { 0.0 };
             let (st, ct) = trig[d.run[i]];
             let v = (sx * ct + cx * st, cx * ct - sx * st);
@@ -84,13 +79,12 @@ pub(super) fn refine_speed_time(
             rss += d.w(i) * e * e;
             g[i] = gi;
             sc[i] = v;
-            rss <= bound || rss.is_nan()
         });
         rss
     };
     let (mut g, mut sc) = (Vec::with_capacity(d.len()), Vec::with_capacity(d.len()));
     let (mut g_cand, mut sc_cand) = (Vec::with_capacity(d.len()), Vec::with_capacity(d.len()));
-    let mut rss = eval(&theta, &mut g, &mut sc, f64::INFINITY);
+    let mut rss = eval(&theta, &mut g, &mut sc);
     let mut converged = false;
     let mut ne_last = None;
     let mut start = friction::LineStart::default();
@@ -137,7 +131,7 @@ pub(super) fn refine_speed_time(
         let mut lambda = start.lambda;
         for _ in 0..12 {
             let cand: Vec<f64> = theta.iter().zip(&step).map(|(t, s)| t + lambda * s).collect();
-            let r2 = eval(&cand, &mut g_cand, &mut sc_cand, rss);
+            let r2 = eval(&cand, &mut g_cand, &mut sc_cand);
             if r2 <= rss {
                 let rel = (rss - r2) / rss.max(f64::MIN_POSITIVE);
                 gains.push(rss - r2);

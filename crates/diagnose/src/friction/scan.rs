@@ -470,30 +470,16 @@ impl SinCosSchedule {
     /// Calls `f(i, (sin, cos) of 2π f t_i)` for every sample in order.
     #[inline]
     pub(crate) fn visit(&self, t: &[f64], f_hz: f64, mut f: impl FnMut(usize, (f64, f64))) {
-        self.visit_while(t, f_hz, |i, v| {
-            f(i, v);
-            true
-        });
-    }
-
-    /// [`Self::visit`] until `f` returns false (the samples after it are not
-    /// visited; those before get the same values as in a whole visit).
-    #[inline]
-    pub(crate) fn visit_while(&self, t: &[f64], f_hz: f64, mut f: impl FnMut(usize, (f64, f64)) -> bool) {
         let w = 2.0 * PI * f_hz;
         let rot: Vec<(f64, f64)> = self.steps_s.iter().map(|dt| (w * dt).sin_cos()).collect();
         for &(start, len, step) in &self.segments {
             let mut v = (w * t[start]).sin_cos();
-            if !f(start, v) {
-                return;
-            }
+            f(start, v);
             if len > 1 {
                 let (sr, cr) = rot[step];
                 for i in start + 1..start + len {
                     v = (v.0 * cr + v.1 * sr, v.1 * cr - v.0 * sr);
-                    if !f(i, v) {
-                        return;
-                    }
+                    f(i, v);
                 }
             }
         }
@@ -696,17 +682,6 @@ mod tests {
             });
             let bits = |v: &[(f64, f64)]| v.iter().map(|x| (x.0.to_bits(), x.1.to_bits())).collect::<Vec<_>>();
             assert_eq!(bits(&got), bits(&reference(f_hz)), "f = {f_hz} Hz");
-            // Stopped at sample k (mid-segment, a segment's first, the
-            // last): the samples up to k visited, with the same values, and
-            // none after.
-            for k in [100, RESYNC_EVERY, 1199, d.len() - 1] {
-                let mut part = Vec::new();
-                schedule.visit_while(&d.t, f_hz, |i, v| {
-                    part.push(v);
-                    i < k
-                });
-                assert_eq!(bits(&part), bits(&got[..=k]), "f = {f_hz} Hz, stopped at {k}");
-            }
         }
     }
 }

@@ -125,14 +125,7 @@ pub(crate) fn fit_sine_with(
     // iteration's normal equations, so each iteration evaluates them once.
     // Time kind: sin/cos of 2πf·t by the schedule's rotations, visited in
     // sample order in the same pass (the angle kind reads sc0).
-    //
-    // The pass stops once the running sum exceeds `bound`, returning that
-    // partial sum: its terms are ≥ 0 and rounding is monotone, so the whole
-    // sum would exceed `bound` too, and a line-search candidate above the
-    // current RSS is rejected whatever its exact RSS (the decision, and so
-    // the fit, the same to the bit; `sc` is then partly filled, and only an
-    // accepted candidate's is read).
-    let rss_of = |th: &[f64], sc: &mut Vec<(f64, f64)>, bound: f64| -> f64 {
+    let rss_of = |th: &[f64], sc: &mut Vec<(f64, f64)>| -> f64 {
         let trig = run_trig(th);
         sc.resize(d.len(), (0.0, 0.0));
         let mut rss = 0.0;
@@ -142,23 +135,15 @@ pub(crate) fn fit_sine_with(
             sc[i] = v;
             let e = d.mu[i] - th[0] * (1.0 + th[1] * v.0);
             rss += w[i] * e * e;
-            // A NaN sum runs to the end, as it did before the bound.
-            rss <= bound || rss.is_nan()
         };
         match &schedule {
-            Some(sch) => sch.visit_while(&d.t, th[2], at),
-            None => {
-                for (i, &v) in sc0.iter().enumerate() {
-                    if !at(i, v) {
-                        break;
-                    }
-                }
-            }
+            Some(sch) => sch.visit(&d.t, th[2], at),
+            None => sc0.iter().enumerate().for_each(|(i, &v)| at(i, v)),
         }
         rss
     };
     let (mut sc, mut sc_cand) = (Vec::with_capacity(d.len()), Vec::with_capacity(d.len()));
-    let mut rss = rss_of(&theta, &mut sc, f64::INFINITY);
+    let mut rss = rss_of(&theta, &mut sc);
     let mut converged = false;
     let mut ne_last = None;
     // Where each step's line search starts ([`LineStart`]): Newton's, Gauss–Newton's.
@@ -246,7 +231,7 @@ pub(crate) fn fit_sine_with(
             let mut lambda = starts[kind].lambda;
             for _ in 0..12 {
                 let cand: Vec<f64> = theta.iter().zip(step).map(|(t, s)| t + lambda * s).collect();
-                let r2 = rss_of(&cand, &mut sc_cand, rss);
+                let r2 = rss_of(&cand, &mut sc_cand);
                 if r2 <= rss {
                     let rel = (rss - r2) / rss.max(f64::MIN_POSITIVE);
                     theta = cand;
