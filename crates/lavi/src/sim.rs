@@ -127,6 +127,21 @@ impl Model {
     pub fn static_level_nm(&self) -> f64 {
         self.friction.static_nm + self.static_excess_nm
     }
+
+    /// This model (a derivation's shaft, law and structure) carrying
+    /// `current`'s effects that no derivation fits: the friction's lag, the
+    /// middle degree of freedom, the drive, the WOB level and the static
+    /// excess.
+    pub(crate) fn with_effects_of(self, current: &Model) -> Model {
+        Model {
+            friction_lag_s: current.friction_lag_s,
+            mid: current.mid,
+            drive: current.drive,
+            wob_level: current.wob_level,
+            static_excess_nm: current.static_excess_nm,
+            ..self
+        }
+    }
 }
 
 /// What a free run is driven by (rad/s and N, one value per sample).

@@ -79,14 +79,7 @@ fn point(ev: &Evaluator, current: &Model, top_delay_s: f64) -> Result<(ScanPoint
     let cal = ev.calibration();
     let st = structure_at(ev, current, top_delay_s);
     let (m, der) = derive(ev.data, &ev.windows[cal], ev.slip_speed_rpm, st)?;
-    let m = Model {
-        friction_lag_s: current.friction_lag_s,
-        mid: current.mid,
-        drive: current.drive,
-        wob_level: current.wob_level,
-        static_excess_nm: current.static_excess_nm,
-        ..m
-    };
+    let m = m.with_effects_of(current);
     let vmax = ev.measured[cal].bit_speed_max_rpm * crate::data::RPM_TO_RAD_S;
     let p = ScanPoint {
         top_delay_s,

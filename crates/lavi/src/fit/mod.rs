@@ -570,14 +570,7 @@ fn restructure(current: &Model, ev: &Evaluator, st: Structure) -> Result<Model, 
 /// keeping `current`'s law and its other effects.
 fn restructure_with_law(current: &Model, ev: &Evaluator, st: Structure) -> Result<Model, LaviError> {
     let (m, _) = derive_with(ev.data, &ev.windows[ev.calibration()], ev.slip_speed_rpm, st, Some(current.friction))?;
-    Ok(Model {
-        friction_lag_s: current.friction_lag_s,
-        mid: current.mid,
-        drive: current.drive,
-        wob_level: current.wob_level,
-        static_excess_nm: current.static_excess_nm,
-        ..m
-    })
+    Ok(m.with_effects_of(current))
 }
 
 /// True when `current`'s law is still the least-squares one of [`derive`] (no simulation fit chose it).
