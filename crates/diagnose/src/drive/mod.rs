@@ -100,12 +100,11 @@ impl Prepared {
         let i0_rad = running_integral(&e_rad_s, &dt_s);
         let e_max = e_rad_s.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let i_max = i0_rad.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        // Ascending |V| (total_cmp), ties by index: the keys are distinct, so
-        // one order whichever sort; integer keys sort faster than the comparator.
-        let mut keys: Vec<u128> =
-            (0..n).map(|k| (u128::from(total_key_u64(s.voltage_v[k].abs())) << 64) | k as u128).collect();
-        keys.sort_unstable();
-        let order: Vec<usize> = keys.iter().map(|&k| k as u64 as usize).collect();
+        // Ascending |V| (total_cmp), ties by index: one order whichever stable
+        // sort (the prefix sums' bits depend on it); a radix sort of the
+        // integer keys is linear in n.
+        let keys: Vec<u64> = s.voltage_v.iter().map(|v| total_key_u64(v.abs())).collect();
+        let order = rig_types::order::argsort_u64(&keys);
         let v_abs_sorted = order.iter().map(|&k| s.voltage_v[k].abs()).collect();
         let mut cum = Vec::with_capacity(n + 1);
         let mut acc = [0.0; 6];
