@@ -38,10 +38,14 @@ pub fn stick_slip_runs(truth: &Truth, protocol: &Protocol) -> Result<Vec<StickSl
         .op_points
         .par_iter()
         .enumerate()
-        .map(|(j, &(rpm, n0))| {
+        // One trajectory per worker, reused from run to run (`simulate_into`,
+        // what `simulate` calls: the same samples): a fresh one per run was a
+        // fresh mapping of its pages, and the battery's construction draws
+        // these rigs hundreds of times (≈ 1 s of page faults per process).
+        .map_init(rig_types::Trajectory::default, |tr, (j, &(rpm, n0))| {
             let input =
                 RunInput::OperatingPoint { motor_rpm_setpoint: rpm, normal_force_n: n0, ramp_s: protocol.ramp_s };
-            let tr = rig_model::simulate(&truth.params, &input, &t, &opts)
+            rig_model::simulate_into(&truth.params, &input, &t, &opts, tr)
                 .map_err(|source| VirtualRigError::Model { run: format!("op-{:02}", j + 1), source })?;
             let half = tr.stuck.len() / 2;
             let w = &tr.stuck[half..];
