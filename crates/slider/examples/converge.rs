@@ -1,10 +1,12 @@
 //! The slider study at a fit tolerance (issue 26: the verdict must not turn
 //! on the search): every step's trials (gain, paired t, kept), the verdict,
 //! every fit's evaluations and whether it converged, and the process's CPU.
-//! `cargo run -p rig-slider --example converge -- [TOLERANCE] [STARTS] [DIR] [EVALS]`
+//! `cargo run -p rig-slider --example converge -- [TOLERANCE] [STARTS] [DIR] [EVALS] [KEEP RACE_EVALS]`
 //! from the workspace root (default: pipeline.toml's `fit_tolerance`,
-//! `fit_starts` and `fit_evals`; a tolerance above 0 with a safeguard of 2000
-//! evaluations per start, ../shared/data/ens-lyon-slider-2019). The
+//! `fit_starts` and `fit_evals`, no race; a tolerance above 0 with a safeguard of 2000
+//! evaluations per start, ../shared/data/ens-lyon-slider-2019; with KEEP,
+//! tolerance 0: the STARTS best-scored starts raced, EVALS each, the KEEP
+//! best on to RACE_EVALS: `fit_race_keep`, `fit_race_evals`). The
 //! calibration fits come first (`cal` lines: every fit's misfit on the runs
 //! it was fitted on, what a budget is chosen on), the held-out selection after.
 
@@ -28,9 +30,16 @@ fn main() {
     if let Some(e) = args.get(4) {
         p.fit_evals = e.parse().expect("EVALS: a count");
     }
+    if let (Some(k), Some(e)) = (args.get(5), args.get(6)) {
+        p.fit_race_keep = k.parse().expect("KEEP: a count");
+        p.fit_race_evals = e.parse().expect("RACE_EVALS: a count");
+    }
     let dir = args.get(3).cloned().unwrap_or_else(|| "../shared/data/ens-lyon-slider-2019".into());
     let s = run_study(std::path::Path::new(&dir), &p).unwrap_or_else(|e| panic!("{e}"));
-    println!("fit_tolerance {} fit_starts {} fit_evals {}", p.fit_tolerance, p.fit_starts, p.fit_evals);
+    println!(
+        "fit_tolerance {} fit_starts {} fit_evals {} fit_race_keep {} fit_race_evals {}",
+        p.fit_tolerance, p.fit_starts, p.fit_evals, p.fit_race_keep, p.fit_race_evals
+    );
     // Calibration only: each fit as (step, the model it extends, model, training stiffnesses).
     let from_of = |i: usize| {
         s.steps

@@ -1,7 +1,8 @@
 //! Candidate friction laws as parameter vectors with bounds, the misfit of a
 //! law against measured features (defined once here), and the fit:
 //! Nelder–Mead (a fixed count, or to convergence:
-//! `rig_types::minimize::nelder_mead_converged`, [`FitTolerance`]) on the bounded search axes from the best-scored
+//! `rig_types::minimize::nelder_mead_converged`, [`FitTolerance`], or raced
+//! over the starts: [`fit_race`]) on the bounded search axes from the best-scored
 //! physical starts, on the calibration runs only.
 //!
 //! Misfit of one run (dimensionless, in units of the targets, RMS
@@ -33,7 +34,7 @@
 
 use crate::features::{Features, Regime};
 use crate::sim::{Law, Structure};
-use rig_types::minimize::{SimplexTolerance, nelder_mead, nelder_mead_converged};
+use rig_types::minimize::{SimplexTolerance, nelder_mead, nelder_mead_converged, nelder_mead_race};
 use serde::Serialize;
 
 /// A candidate law family.
@@ -470,29 +471,8 @@ pub struct FitResult {
 /// every restart) a tenth of it, inward; a point outside the bounds is
 /// clamped onto them before the law sees it.
 pub fn fit(specs: &[ParamSpec], start: &[f64], tol: &FitTolerance, cost: impl Fn(&[f64]) -> f64) -> FitResult {
-    let axis = |s: &ParamSpec, v: f64| if s.log { (v.ln(), s.lo.ln(), s.hi.ln()) } else { (v, s.lo, s.hi) };
-    // u in [0, 1] per axis: (axis value − lo)/(hi − lo).
-    let to_u = |x: &[f64]| -> Vec<f64> {
-        specs
-            .iter()
-            .zip(x)
-            .map(|(s, &v)| {
-                let (a, lo, hi) = axis(s, v.clamp(s.lo, s.hi));
-                (a - lo) / (hi - lo)
-            })
-            .collect()
-    };
-    let from_u = |u: &[f64]| -> Vec<f64> {
-        specs
-            .iter()
-            .zip(u)
-            .map(|(s, &u)| {
-                let (_, lo, hi) = axis(s, s.lo);
-                let a = lo + u.clamp(0.0, 1.0) * (hi - lo);
-                if s.log { a.exp() } else { a }
-            })
-            .collect()
-    };
+    let to_u = |x: &[f64]| to_unit(specs, x);
+    let from_u = |u: &[f64]| from_unit(specs, u);
     let u0 = to_u(start);
     let step = |u: &[f64]| -> Vec<f64> { u.iter().map(|&u| if u > 0.9 { -0.1 } else { 0.1 }).collect() };
     if tol.tolerance <= 0.0 {
@@ -502,4 +482,56 @@ pub fn fit(specs: &[ParamSpec], start: &[f64], tol: &FitTolerance, cost: impl Fn
     let stop = SimplexTolerance { f_tol: tol.tolerance, x_tol: tol.tolerance, max_evals: tol.max_evals };
     let r = nelder_mead_converged(|u| cost(&from_u(u)), &u0, step, &stop);
     FitResult { x: from_u(&r.x), cost: r.f, evals: r.evals, converged: r.converged }
+}
+
+/// A parameter's search axis: (value, lo, hi) on the log of a `log`
+/// parameter, else on the parameter.
+fn axis(s: &ParamSpec, v: f64) -> (f64, f64, f64) {
+    if s.log { (v.ln(), s.lo.ln(), s.hi.ln()) } else { (v, s.lo, s.hi) }
+}
+
+/// `x` on the unit cube of the search axes: (axis value − lo)/(hi − lo),
+/// clamped onto the bounds first.
+pub fn to_unit(specs: &[ParamSpec], x: &[f64]) -> Vec<f64> {
+    specs
+        .iter()
+        .zip(x)
+        .map(|(s, &v)| {
+            let (a, lo, hi) = axis(s, v.clamp(s.lo, s.hi));
+            (a - lo) / (hi - lo)
+        })
+        .collect()
+}
+
+/// The parameter vector at `u` of the unit cube of the search axes ([`to_unit`]'s inverse; clamped into it).
+pub fn from_unit(specs: &[ParamSpec], u: &[f64]) -> Vec<f64> {
+    specs
+        .iter()
+        .zip(u)
+        .map(|(s, &u)| {
+            let (_, lo, hi) = axis(s, s.lo);
+            let a = lo + u.clamp(0.0, 1.0) * (hi - lo);
+            if s.log { a.exp() } else { a }
+        })
+        .collect()
+}
+
+/// [`fit`]'s simplex (the same axes, edges and clamping) from every start
+/// of `starts`, raced (`rig_types::minimize::nelder_mead_race`): each start
+/// `first_evals` evaluations, then the `keep` best on to `max_evals`; the
+/// best result kept. Reported as not converged (fixed counts).
+pub fn fit_race(
+    specs: &[ParamSpec],
+    starts: &[Vec<f64>],
+    first_evals: usize,
+    keep: usize,
+    max_evals: usize,
+    cost: impl Fn(&[f64]) -> f64,
+) -> FitResult {
+    let us: Vec<Vec<f64>> = starts.iter().map(|x| to_unit(specs, x)).collect();
+    let steps: Vec<Vec<f64>> =
+        us.iter().map(|u| u.iter().map(|&u| if u > 0.9 { -0.1 } else { 0.1 }).collect()).collect();
+    let pairs: Vec<(&[f64], &[f64])> = us.iter().zip(&steps).map(|(u, s)| (u.as_slice(), s.as_slice())).collect();
+    let r = nelder_mead_race(|u| cost(&from_unit(specs, u)), &pairs, first_evals, keep, max_evals);
+    FitResult { x: from_unit(specs, &r.x), cost: r.f, evals: r.evals, converged: false }
 }

@@ -63,6 +63,11 @@ pub struct StudyParams {
     /// lowered the best misfit by more than `fit_tolerance`.
     pub fit_tolerance: f64,
     pub fit_evals: usize,
+    /// Above 0 (and `fit_tolerance` 0): the `fit_starts` best-scored starts
+    /// are raced ([`crate::fit::fit_race`]): each runs `fit_evals`
+    /// evaluations, then the `fit_race_keep` best run on to `fit_race_evals`.
+    pub fit_race_keep: usize,
+    pub fit_race_evals: usize,
     /// An extension must pass the workspace's step rule (pipeline.toml's
     /// `[shared.selection]`, `rig_types::select::compare`: the campaign
     /// diagnosis' and the LAVI study's rule too)...
@@ -528,7 +533,17 @@ fn fit_on(model: Model, runs: &[Measured], train: &[usize], nested: Option<&Fitt
     let tol = FitTolerance { tolerance: p.fit_tolerance, max_evals: p.fit_evals };
     let (mut evals, mut converged) = (scored.len(), true);
     let mut best: Option<FitResult> = None;
-    for (k, (_, x)) in scored.iter().enumerate() {
+    // Raced (`fit_race_keep` > 0): the `fit_starts` best-scored starts side
+    // by side for `fit_evals` evaluations, the `fit_race_keep` best on.
+    let race = p.fit_race_keep > 0 && p.fit_tolerance <= 0.0;
+    if race {
+        let first: Vec<Vec<f64>> = scored.iter().take(p.fit_starts.max(1)).map(|(_, x)| x.clone()).collect();
+        let r = crate::fit::fit_race(&specs, &first, p.fit_evals, p.fit_race_keep, p.fit_race_evals, cost);
+        evals += r.evals;
+        converged = false;
+        best = Some(r);
+    }
+    for (k, (_, x)) in scored.iter().enumerate().take(if race { 0 } else { scored.len() }) {
         let r = fit(&specs, x, &tol, cost);
         evals += r.evals;
         converged &= r.converged;

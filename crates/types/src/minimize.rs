@@ -2,7 +2,8 @@
 //! bracketed one-dimensional search ([`brent_min`]: the diagnosis' Stribeck
 //! speed and drive limit, the stick-slip weakening law's speed) and the
 //! Nelder–Mead simplex ([`nelder_mead`]: the LAVI study's candidate fits, the
-//! slider's friction laws).
+//! slider's friction laws; to a convergence criterion,
+//! [`nelder_mead_converged`]; raced over several starts, [`nelder_mead_race`]).
 
 /// Minimum of `f` on [lo, hi] by Brent's method (Brent 1973, "Algorithms for
 /// minimization without derivatives", ch. 5): parabolic interpolation through
@@ -88,6 +89,72 @@ pub fn brent_min(lo: f64, hi: f64, tol: f64, max_evals: usize, mut f: impl FnMut
 /// evaluations).
 pub fn nelder_mead(f: impl Fn(&[f64]) -> f64, x0: &[f64], step: &[f64], max_evals: usize) -> (Vec<f64>, f64, usize) {
     simplex(f, x0, step, max_evals, |pts| (pts[pts.len() - 1].1 - pts[0].1).abs() < 1e-6 * (1.0 + pts[0].1.abs()))
+}
+
+/// A race's result ([`nelder_mead_race`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RaceResult {
+    /// The best point of every search and its value (the first of equals in start order).
+    pub x: Vec<f64>,
+    pub f: f64,
+    /// Evaluations of `f`, every search's.
+    pub evals: usize,
+    /// Per start, its search's best value after the first round, in start order.
+    pub first_round: Vec<f64>,
+    /// The starts that ran on (indices into `starts`, best first).
+    pub kept: Vec<usize>,
+}
+
+/// Nelder–Mead from several starts, raced: every start's simplex
+/// ([`nelder_mead`]) runs `first_evals` evaluations, then only the `keep`
+/// best of them (by their best value; the first of equals in start order)
+/// run on to `max_evals` — a round of successive halving (Jamieson &
+/// Talwalkar 2016, AISTATS; the multi-start's budget spent on the basins
+/// that look best once each simplex has moved, not on the starts' own
+/// values). A search that runs on takes exactly the points and decisions
+/// [`nelder_mead`] from its start with `max_evals` takes (it resumes where
+/// the first round stopped it). Deterministic; a non-finite value counts as 1e9.
+pub fn nelder_mead_race(
+    f: impl Fn(&[f64]) -> f64,
+    starts: &[(&[f64], &[f64])],
+    first_evals: usize,
+    keep: usize,
+    max_evals: usize,
+) -> RaceResult {
+    assert!(!starts.is_empty(), "a race needs a start");
+    let done = |pts: &[(Vec<f64>, f64)]| (pts[pts.len() - 1].1 - pts[0].1).abs() < 1e-6 * (1.0 + pts[0].1.abs());
+    let run = |s: &mut Search, cap: usize| {
+        while !s.asked.is_empty() {
+            let values: Vec<f64> = s.asked.iter().map(|x| f(x)).map(|v| if v.is_finite() { v } else { 1e9 }).collect();
+            s.tell(&values, cap, &done);
+        }
+    };
+    let best_of = |s: &Search| s.pts.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+    let mut searches: Vec<Search> = starts.iter().map(|(x0, step)| Search::new(x0, step)).collect();
+    for s in searches.iter_mut() {
+        run(s, first_evals);
+    }
+    let first_round: Vec<f64> = searches.iter().map(best_of).collect();
+    let mut order: Vec<usize> = (0..searches.len()).collect();
+    order.sort_by(|&a, &b| first_round[a].total_cmp(&first_round[b]));
+    order.truncate(keep.max(1));
+    for &i in &order {
+        let s = &mut searches[i];
+        if s.evals < max_evals {
+            s.resume(&done);
+            run(s, max_evals);
+        }
+    }
+    let evals = searches.iter().map(|s| s.evals).sum();
+    let mut best: Option<(Vec<f64>, f64)> = None;
+    for s in searches.iter_mut() {
+        s.pts.sort_by(|a, b| a.1.total_cmp(&b.1));
+        if best.as_ref().is_none_or(|b| s.pts[0].1 < b.1) {
+            best = Some(s.pts[0].clone());
+        }
+    }
+    let (x, f) = best.expect("a race has a start");
+    RaceResult { x, f, evals, first_round, kept: order }
 }
 
 /// When [`nelder_mead_converged`] stops: a simplex has converged when the
@@ -269,6 +336,22 @@ impl Search {
         (0..n).map(|k| self.centroid[k] + t * (self.pts[n].0[k] - self.centroid[k])).collect()
     }
 
+    /// After a stop by the evaluation cap: asks the next step, as [`Search::tell`] would have
+    /// with a larger cap (nothing when the simplex has converged or is mid-step).
+    fn resume(&mut self, done: &impl Fn(&[(Vec<f64>, f64)]) -> bool) {
+        if !self.asked.is_empty() || !matches!(self.wait, Wait::Finished) || self.pts.is_empty() {
+            return;
+        }
+        self.pts.sort_by(|a, b| a.1.total_cmp(&b.1));
+        if done(&self.pts) {
+            return;
+        }
+        let n = self.pts.len() - 1;
+        self.centroid = (0..n).map(|k| self.pts[..n].iter().map(|p| p.0[k]).sum::<f64>() / n as f64).collect();
+        self.asked = vec![self.along(-1.0)];
+        self.wait = Wait::Reflect;
+    }
+
     /// Takes the values of the points asked (in order, non-finite already 1e9) and asks the next.
     fn tell(&mut self, values: &[f64], max_evals: usize, done: &impl Fn(&[(Vec<f64>, f64)]) -> bool) {
         let asked = std::mem::take(&mut self.asked);
@@ -387,6 +470,38 @@ mod tests {
                 assert!(rounds[1..].iter().any(|&k| k > 1), "a shrink was asked for side by side");
             }
         }
+    }
+
+    /// The race: a search that runs on ends to the bit where [`nelder_mead`]
+    /// from its start with the full budget ends; the others stop at the first
+    /// round's count; and on two basins whose starts' own values point to the
+    /// shallow one, the first round's simplexes pick the deep one.
+    #[test]
+    fn a_race_keeps_the_searches_that_have_moved_best_and_resumes_them_exactly() {
+        // Two basins: a shallow one at x = −2 (value 0.5) and a deep one at x = 3 (value 0),
+        // with a slope that makes a start near 3 look worse than one near −2.
+        let f = |x: &[f64]| {
+            let shallow = 0.5 + (x[0] + 2.0).powi(2) + (x[1] - 1.0).powi(2);
+            let deep = 0.3 * ((x[0] - 3.0).powi(2) + (x[1] + 1.0).powi(2));
+            shallow.min(deep)
+        };
+        let starts: [(&[f64], &[f64]); 3] =
+            [(&[-1.5, 1.5], &[0.3, 0.3]), (&[0.4, 2.0], &[0.3, 0.3]), (&[-2.6, 0.2], &[0.3, 0.3])];
+        // The starts' values: the deep basin's start (index 1) is the worst of the three.
+        let at: Vec<f64> = starts.iter().map(|s| f(s.0)).collect();
+        assert!(at[1] > at[0] && at[1] > at[2], "{at:?}");
+        let r = nelder_mead_race(f, &starts, 20, 1, 300);
+        assert_eq!(r.kept, vec![1], "first round {:?}", r.first_round);
+        let alone = nelder_mead(f, starts[1].0, starts[1].1, 300);
+        assert_eq!((r.x.clone(), r.f.to_bits()), (alone.0.clone(), alone.1.to_bits()));
+        assert!(r.f < 1e-6 && (r.x[0] - 3.0).abs() < 1e-3, "{r:?}");
+        let short: Vec<usize> = [0, 2].iter().map(|&i| nelder_mead(f, starts[i].0, starts[i].1, 20).2).collect();
+        assert_eq!(r.evals, alone.2 + short[0] + short[1]);
+        // Keeping every start: each search is its full run alone, the best of them returned.
+        let all = nelder_mead_race(f, &starts, 20, 3, 300);
+        let full: Vec<(Vec<f64>, f64, usize)> = starts.iter().map(|s| nelder_mead(f, s.0, s.1, 300)).collect();
+        assert_eq!(all.evals, full.iter().map(|r| r.2).sum::<usize>());
+        assert_eq!(all.f.to_bits(), full.iter().map(|r| r.1).fold(f64::INFINITY, f64::min).to_bits());
     }
 
     #[test]

@@ -298,6 +298,18 @@ pub(super) fn search_note(s: &Study) -> String {
     let p = &s.params;
     let fits: Vec<&crate::study::Fitted> = s.candidates.iter().flat_map(CandidateResult::fits).collect();
     let evals = fits.iter().map(|f| f.evals).sum::<usize>();
+    if p.fit_tolerance <= 0.0 && p.fit_race_keep > 0 {
+        return format!(
+            "Every fit races Nelder–Mead (`rig_types::minimize::nelder_mead_race`) from the {} best-scored of its \
+             starts: each start {} evaluations, then the {} best of them on to {} ({} fits, {evals} misfit \
+             evaluations): fixed counts, not a convergence criterion (docs/findings.md, eighteenth session).",
+            p.fit_starts,
+            p.fit_evals,
+            p.fit_race_keep,
+            p.fit_race_evals,
+            fits.len()
+        );
+    }
     if p.fit_tolerance <= 0.0 {
         return format!(
             "Every fit runs Nelder–Mead (`rig_types::minimize::nelder_mead`) for {} evaluations from each of the {} \
