@@ -8,23 +8,85 @@
 use super::{FrictionFit, FrictionModel, SEARCH_EVERY, SlipData, linear_fit};
 use rig_estimate::linear::Normal;
 use rig_types::minimize::brent_min;
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// The distinct |Ω| of a set of slip samples (by bit pattern, in order of
+/// first appearance) and each sample's index among them. The rotor speed is
+/// a centred difference of encoder angles, so it takes few values: on the
+/// 37-case strided battery sample 2.4 % of the samples the Stribeck searches
+/// evaluate carry a bit pattern not seen before in their data (issue 23,
+/// docs/performance.md, eighteenth session). The decay g = exp(−(Ω/vs)²) of
+/// a trial vs is computed once per distinct Ω and gathered per sample: the
+/// same `stribeck_decay` of the same bits gives the same g, so every sum
+/// over the samples, made in sample order as before, has the same bits.
+struct Levels {
+    values: Vec<f64>,
+    index: Vec<u32>,
+}
+
+impl Levels {
+    fn of(omega: &[f64]) -> Self {
+        let mut seen: HashMap<u64, u32, BuildHasherDefault<BitsHasher>> =
+            HashMap::with_capacity_and_hasher(omega.len().min(4096), Default::default());
+        let mut values = Vec::new();
+        let index = omega
+            .iter()
+            .map(|&w| {
+                *seen.entry(w.to_bits()).or_insert_with(|| {
+                    values.push(w);
+                    (values.len() - 1) as u32
+                })
+            })
+            .collect();
+        Levels { values, index }
+    }
+
+    /// g = `stribeck_decay(Ω, vs)` of every distinct Ω, into `g`.
+    fn decay_into(&self, vs: f64, g: &mut [f64]) {
+        for (g, &w) in g.iter_mut().zip(&self.values) {
+            *g = rig_model::friction::stribeck_decay(w, vs);
+        }
+    }
+}
+
+/// A hash of an f64's bits for [`Levels`] (a multiply–xorshift: the std
+/// hasher's SipHash costs more per sample than the `exp` it saves).
+#[derive(Default)]
+struct BitsHasher(u64);
+
+impl Hasher for BitsHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+    fn write_u64(&mut self, x: u64) {
+        let h = (self.0 ^ x).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        self.0 = h ^ (h >> 32);
+    }
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
 
 /// The weighted RSS of the Stribeck regression μ = μk + Δ g(Ω; vs) [+ c Ω]
 /// at a given vs, as [`linear_solve`] computes it (the same products summed
 /// in the same order, so the same bits), without its per-call row storage
 /// and general sparse accumulation: the sums that do not involve g (Σw,
-/// ΣwΩ, ΣwΩ², Σwμ, ΣwΩμ) are made once, and each vs costs one exp and a
-/// few products per sample. The Stribeck speed search evaluates it ~70
-/// times per fit.
+/// ΣwΩ, ΣwΩ², Σwμ, ΣwΩμ) are made once, and each vs costs one exp per
+/// distinct Ω ([`Levels`]) and a few products per sample. The Stribeck
+/// speed search evaluates it ~70 times per fit.
 struct StribeckRss<'a> {
     d: &'a SlipData,
     viscous: bool,
+    levels: Levels,
     /// √w and μ√w per sample.
     sw: Vec<f64>,
     y: Vec<f64>,
     /// Σ sw², Σ sw·(Ω sw), Σ (Ω sw)², Σ sw·y, Σ (Ω sw)·y.
     fixed: [f64; 5],
-    /// g of every sample at the last vs (the residual pass reuses it).
+    /// g of every distinct Ω at the last vs (the residual pass reuses it).
     g: Vec<f64>,
 }
 
@@ -41,16 +103,19 @@ impl<'a> StribeckRss<'a> {
             fixed[3] += v0 * y[i];
             fixed[4] += v2 * y[i];
         }
-        StribeckRss { d, viscous, sw, y, fixed, g: vec![0.0; d.len()] }
+        let levels = Levels::of(&d.omega);
+        let g = vec![0.0; levels.values.len()];
+        StribeckRss { d, viscous, levels, sw, y, fixed, g }
     }
 
     /// The RSS at `vs` (∞ when the normal equations are singular).
     fn at(&mut self, vs: f64) -> f64 {
         let d = self.d;
+        self.levels.decay_into(vs, &mut self.g);
+        let (g, index) = (&self.g, &self.levels.index);
         let (mut a01, mut a11, mut a12, mut b1) = (0.0, 0.0, 0.0, 0.0);
         for i in 0..d.len() {
-            let g = rig_model::friction::stribeck_decay(d.omega[i], vs);
-            self.g[i] = g;
+            let g = g[index[i] as usize];
             let (v0, v1, v2) = (1.0 * self.sw[i], g * self.sw[i], d.omega[i] * self.sw[i]);
             a01 += v0 * v1;
             a11 += v1 * v1;
@@ -66,11 +131,8 @@ impl<'a> StribeckRss<'a> {
         let Some(p) = ne.solve() else { return f64::INFINITY };
         let mut rss = 0.0;
         for i in 0..d.len() {
-            let fit = if self.viscous {
-                1.0 * p[0] + self.g[i] * p[1] + d.omega[i] * p[2]
-            } else {
-                1.0 * p[0] + self.g[i] * p[1]
-            };
+            let g = g[index[i] as usize];
+            let fit = if self.viscous { 1.0 * p[0] + g * p[1] + d.omega[i] * p[2] } else { 1.0 * p[0] + g * p[1] };
             let e = d.mu[i] - fit;
             rss += d.w(i) * e * e;
         }
@@ -125,7 +187,7 @@ fn stribeck_in(d: &SlipData, with_viscous: bool, lo: f64, hi: f64) -> Option<Fri
     // of the ≈ 20 a search makes; issue 23). Should the returned point not
     // be the one kept, g is computed at it.
     let mut kept: Option<(f64, f64)> = None;
-    let mut g = vec![0.0; d.len()];
+    let mut g = vec![0.0; fine.g.len()];
     // ln vs to 10⁻⁶ (golden section's 25 steps on this bracket reached 2·10⁻⁶).
     let lv = brent_min(lo, hi, 1e-6, 27, |lv| {
         let rss = fine.at(lv.exp());
@@ -137,11 +199,12 @@ fn stribeck_in(d: &SlipData, with_viscous: bool, lo: f64, hi: f64) -> Option<Fri
     });
     let vs = lv.exp();
     if kept.is_none_or(|k| k.0.to_bits() != lv.to_bits()) {
-        g = d.omega.iter().map(|&w| rig_model::friction::stribeck_decay(w, vs)).collect();
+        fine.levels.decay_into(vs, &mut g);
     }
+    let index = &fine.levels.index;
     let (p, _, rss) = linear_fit(d, ncol, |i, r| {
         r[0] = 1.0;
-        r[1] = g[i];
+        r[1] = g[index[i] as usize];
         if with_viscous {
             r[2] = d.omega[i];
         }
@@ -152,7 +215,7 @@ fn stribeck_in(d: &SlipData, with_viscous: bool, lo: f64, hi: f64) -> Option<Fri
     let np = ncol + 1;
     let mut ne = Normal::new(np);
     for i in 0..d.len() {
-        let g = g[i];
+        let g = g[index[i] as usize];
         let dg_dvs = g * 2.0 * d.omega[i].powi(2) / vs.powi(3);
         let sw = d.w(i).sqrt();
         if with_viscous {
@@ -188,8 +251,8 @@ fn stribeck_in(d: &SlipData, with_viscous: bool, lo: f64, hi: f64) -> Option<Fri
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::friction::fit_coulomb;
     use crate::friction::tests::synth;
+    use crate::friction::{fit_coulomb, linear_solve};
 
     #[test]
     fn stribeck_law_is_recovered() {
@@ -199,6 +262,42 @@ mod tests {
         assert!((mu_k - 0.4).abs() < 1e-3 && (mu_s - 0.6).abs() < 5e-3 && (vs - 2.0).abs() < 0.05, "{:?}", f.model);
         // The Coulomb baseline is much worse on the same data.
         assert!(fit_coulomb(&d).rss_w > 10.0 * f.rss_w);
+    }
+
+    /// The RSS of a trial vs from the decay of each distinct |Ω| gathered per
+    /// sample is `linear_solve`'s, which evaluates the decay of every sample:
+    /// the same bits, with and without the viscous column, on speeds taken
+    /// as the prepared data takes them (a centred difference of encoder
+    /// angles, so many samples share a bit pattern) and at trial speeds
+    /// where the decay underflows for some samples and not for others.
+    #[test]
+    fn the_rss_from_distinct_speeds_is_the_rss_of_every_sample() {
+        let mut d = synth(3, |_, _, _, w| 0.4 + 0.2 * rig_model::friction::stribeck_decay(w, 1.3f64) + 0.002 * w);
+        let ticks: Vec<i64> =
+            d.phi.iter().map(|&p| (p * 2048.0 / (2.0 * std::f64::consts::PI)).round() as i64).collect();
+        let phi = rig_types::sensor::ticks_to_rad(&ticks, 2048);
+        let mut omega = rig_types::sensor::central_difference_rad_s(&d.t, &phi, 10);
+        omega.iter_mut().for_each(|w| *w = w.abs());
+        d.omega = std::sync::Arc::new(omega);
+        let levels = Levels::of(&d.omega);
+        assert!(levels.values.len() < d.len() / 4, "{} distinct speeds of {}", levels.values.len(), d.len());
+        assert!(
+            levels.index.iter().zip(d.omega.iter()).all(|(&l, w)| levels.values[l as usize].to_bits() == w.to_bits())
+        );
+        for viscous in [false, true] {
+            let mut rss = StribeckRss::new(&d, viscous);
+            for vs in [0.02, 0.05, 0.3, 0.9, 1.3, 2.7, 11.0, 48.0] {
+                let each = linear_solve(&d, 2 + usize::from(viscous), |i, r| {
+                    r[0] = 1.0;
+                    r[1] = rig_model::friction::stribeck_decay(d.omega[i], vs);
+                    if viscous {
+                        r[2] = d.omega[i];
+                    }
+                })
+                .map_or(f64::INFINITY, |s| s.1);
+                assert_eq!(rss.at(vs).to_bits(), each.to_bits(), "vs {vs}, viscous {viscous}");
+            }
+        }
     }
 
     /// The linear fit and the covariance at the speed Brent returns read the
