@@ -57,16 +57,60 @@ pub fn free_run_pairs_measured(
     m: &MeasuredRuns,
     params_of: impl Fn(&str) -> Option<RigParams> + Sync,
 ) -> Vec<Pair> {
+    pairs_where(c, s, m, |r, mr| params_of(&r.id).map(|p| simulate_pair(c, r, mr, &p, s, false)))
+}
+
+/// [`free_run_pairs_measured`] beside pairs already simulated: a run whose
+/// model is `known_model` to the bit ([`same_model`]) takes its pair from
+/// `known` (`known_model`'s pairs from [`free_run_pairs_measured`] with the
+/// same `c`, `s`, `m`: the same simulation of the same record, so the same
+/// pair to the bit); only the others are simulated. The diagnosis' extended
+/// model is the baseline on every run that no finding moves (a null, a
+/// structural fault, an `outside` case, a missed rung): its free runs are
+/// the baseline's.
+pub fn free_run_pairs_reusing(
+    c: &Campaign,
+    s: &FreeRunSettings,
+    m: &MeasuredRuns,
+    params_of: impl Fn(&str) -> Option<RigParams> + Sync,
+    known_model: &RigParams,
+    known: &[Pair],
+) -> Vec<Pair> {
+    pairs_where(c, s, m, |r, mr| {
+        let p = params_of(&r.id)?;
+        match known.iter().find(|q| q.id == r.id) {
+            Some(q) if same_model(&p, known_model) => Some(q.clone()),
+            _ => Some(simulate_pair(c, r, mr, &p, s, false)),
+        }
+    })
+}
+
+/// Whether two models are the same to the bit: equal, and spelt alike (so
+/// +0 and −0 differ; a NaN is equal to nothing). Every field of a
+/// [`RigParams`] is a number, an enum or a list of them.
+pub(super) fn same_model(a: &RigParams, b: &RigParams) -> bool {
+    a == b && format!("{a:?}") == format!("{b:?}")
+}
+
+/// Each operating point's pair by `pair_of(run, its record)` (in parallel;
+/// campaign order kept; runs it gives `None` for, or with no measured
+/// record, skipped).
+fn pairs_where(
+    c: &Campaign,
+    s: &FreeRunSettings,
+    m: &MeasuredRuns,
+    pair_of: impl Fn(&rig_types::Run, &MeasuredRun) -> Option<Pair> + Sync,
+) -> Vec<Pair> {
     use rayon::prelude::*;
-    assert!(m.settings == *s, "free_run_pairs_measured: records measured under other settings");
+    assert!(m.settings == *s, "free-run pairs: records measured under other settings");
     let runs: Vec<&rig_types::Run> = c.runs_of("operating_point").collect();
-    assert_eq!(runs.len(), m.runs.len(), "free_run_pairs_measured: records of another campaign");
+    assert_eq!(runs.len(), m.runs.len(), "free-run pairs: records of another campaign");
     runs.par_iter()
         .zip(&m.runs)
         .map(|(r, mr)| {
             let mr = mr.as_ref()?;
             debug_assert_eq!(mr.id, r.id);
-            params_of(&r.id).map(|p| simulate_pair(c, r, mr, &p, s, false))
+            pair_of(r, mr)
         })
         .collect::<Vec<_>>()
         .into_iter()
