@@ -359,6 +359,20 @@ fn free_runs_on_records_measured_once_are_the_same_to_the_bit() {
     let pairs = free_run_pairs_measured(&c, &s, &m, |_| Some(truth.params.clone()));
     let read = misfits_alone(&c, &s, &m, &truth.params, &pairs);
     assert!(read >= 1 && read < pairs.len(), "the fundamental read in {read} of {} runs", pairs.len());
+    // The same with the force channel read (the break-away and slip-friction
+    // features, the break-away and stick fraction read where both stick and slip).
+    let (cal, _) = calibrate(&c, &th);
+    let s = s.with_force(rig_diagnose::prepare::SensorLaw::Line(rig_types::sensor::ForceCal {
+        factor_mv_per_n: cal.force_factor_mv_per_n,
+        offset_mv: cal.force_offset_mv,
+    }));
+    let m = MeasuredRuns::of(&c, &s);
+    let pairs = free_run_pairs_measured(&c, &s, &m, |_| Some(truth.params.clone()));
+    assert!(
+        pairs.iter().any(|q| q.channels_simulated.is_some_and(|v| v.values[7].is_finite()) && q.measured.stick_slip()),
+        "a break-away read on both sides"
+    );
+    assert_eq!(misfits_alone(&c, &s, &m, &truth.params, &pairs), read);
 }
 
 /// The extended model's free runs beside the baseline's
@@ -425,13 +439,24 @@ fn misfits_alone(
     p: &RigParams,
     pairs: &[rig_diagnose::channels::FreeRunPair],
 ) -> usize {
-    use rig_diagnose::channels::{free_run_misfit, free_run_misfit_measured, speed_floor_rad_s};
+    use rig_diagnose::channels::{
+        free_run_channel_misfits_measured, free_run_misfit, free_run_misfit_channels, free_run_misfit_measured,
+        speed_floor_rad_s,
+    };
     let floor = speed_floor_rad_s(c, s);
     let misfits: Vec<Option<u64>> =
         pairs.iter().map(|q| free_run_misfit_measured(c, s, m, &q.id, p, floor).map(f64::to_bits)).collect();
     let of_pairs: Vec<Option<u64>> = pairs.iter().map(|q| free_run_misfit(q, floor).map(f64::to_bits)).collect();
     assert!(!pairs.is_empty() && of_pairs.iter().all(Option::is_some), "every pair has a misfit");
     assert_eq!(misfits, of_pairs);
+    // Every channel's misfit (the extension's ageing fit) alone, the pair's.
+    let channels: Vec<Option<u64>> = free_run_channel_misfits_measured(c, s, m, |_| Some(p.clone()), floor)
+        .into_iter()
+        .map(|x| x.map(f64::to_bits))
+        .collect();
+    let of_pairs: Vec<Option<u64>> =
+        pairs.iter().map(|q| free_run_misfit_channels(q, floor).map(f64::to_bits)).collect();
+    assert_eq!(channels, of_pairs);
     pairs
         .iter()
         .filter(|q| {
