@@ -319,8 +319,11 @@ pub(super) fn simulate_pair(
         if reads == Reads::RotorMisfit {
             return rotor_side(t, &tr.rotor_angle_rad, m, s);
         }
-        let (w1, w2) =
-            (centred_speed(tt, &tr.rotor_angle_rad[..to], h1), centred_speed(tt, &tr.motor_angle_rad[..to], h2));
+        // Ω1 and Ω2 over the window alone: every reader below starts at `from`.
+        let (w1, w2) = (
+            centred_speed_from(tt, &tr.rotor_angle_rad[..to], h1, from),
+            centred_speed_from(tt, &tr.motor_angle_rad[..to], h2, from),
+        );
         let has_force = m.has_force;
         let force: Vec<f64> = if has_force {
             tr.friction_torque_nm[..to].iter().map(|x| x / p.brake_disc_radius_m).collect()
@@ -345,8 +348,8 @@ pub(super) fn simulate_pair(
             dwell_of(&m.id, t, &centred_speed(t, &enc, h1), &all, h1, s.slip_speed_rad_s)
         });
         let win = Window {
-            w1: &w1[from..],
-            w2: &w2[from..],
+            w1: &w1,
+            w2: &w2,
             voltage_v: m.has_voltage.then(|| &tr.voltage_v[from..to]),
             force_n: force_smooth.as_deref(),
             peaks: &peaks,
@@ -354,14 +357,14 @@ pub(super) fn simulate_pair(
         let ch = ChannelFeatures { values: channel_values(&win, s.slip_speed_rad_s, 0.0) };
         let stick_slip = attractor_stick_slip(t, &tr.rotor_angle_rad, regime_from, h1, &s.classify);
         if reads == Reads::ChannelMisfit {
-            let (w, ts) = (&w1[from..], &tt[from..]);
+            let (w, ts) = (&w1, &tt[from..]);
             let (min, max) = (ch.values[ChannelFeatures::ROTOR_MIN], ch.values[ChannelFeatures::ROTOR_MAX]);
             let f = misfit_features(stick_slip, read_fundamental_hz(stick_slip, m, ts, w, s), min, max);
             return (f, Vec::new(), ch, None, None);
         }
-        let window = steady_features(&tt[from..], &w1[from..], &w2[from..], w_set, s.slip_speed_rad_s, &s.classify);
+        let window = steady_features(&tt[from..], &w1, &w2, w_set, s.slip_speed_rad_s, &s.classify);
         let f = Features { stick_slip, ..window };
-        let trace = w1[from..].iter().step_by(stride).copied().collect::<Vec<f64>>();
+        let trace = w1.iter().step_by(stride).copied().collect::<Vec<f64>>();
         (f, trace, ch, Some(window.stick_slip), dwell)
     });
     let (simulated, simulated_rad_s, channels_simulated, sim_window_ss, sim_dwell) =
@@ -405,8 +408,8 @@ type SimSide = (Features, Vec<f64>, ChannelFeatures, Option<bool>, Option<DwellR
 fn rotor_side(t: &[f64], rotor_angle_rad: &[f64], m: &MeasuredRun, s: &FreeRunSettings) -> SimSide {
     let MeasuredRun { from, to, h1, stride, regime_from, .. } = *m;
     let tt = &t[..to];
-    let w1 = centred_speed(tt, &rotor_angle_rad[..to], h1);
-    let win = &w1[from..];
+    let w1 = centred_speed_from(tt, &rotor_angle_rad[..to], h1, from);
+    let win = &w1[..];
     let stick_slip = attractor_stick_slip(t, rotor_angle_rad, regime_from, h1, &s.classify);
     let fundamental_hz = read_fundamental_hz(stick_slip, m, &tt[from..], win, s);
     let min = win.iter().copied().fold(f64::INFINITY, f64::min);
@@ -482,9 +485,24 @@ pub(super) fn attractor_stick_slip(
     if n < from + 16 {
         return false;
     }
-    let w1 = centred_speed(&t[..n], &rotor_angle_rad[..n], h);
+    let w1 = centred_speed_from(&t[..n], &rotor_angle_rad[..n], h, from);
     let fs_hz = (n - from - 1) as f64 / (t[n - 1] - t[from]);
-    rig_sweep::classify(&w1[from..], fs_hz, classify).regime.stick_slip()
+    rig_sweep::classify(&w1, fs_hz, classify).regime.stick_slip()
+}
+
+/// `centred_speed(t, angle_rad, h)[from..]`, to the bit, made from the
+/// samples that reach it alone (`from − h..`): the centred difference at
+/// sample i reads samples i − h and i + h (clamped to the ends), and its
+/// values from `from` on read nothing before `from − h`. A free run's
+/// readers start at its window (or the attractor's last `steady_s`), the
+/// record's first 8-24 s of 40 s not read.
+pub(super) fn centred_speed_from(t: &[f64], angle_rad: &[f64], h: usize, from: usize) -> Vec<f64> {
+    let n = t.len().min(angle_rad.len());
+    let from = from.min(n);
+    let lo = from.saturating_sub(h.max(1));
+    let mut w = centred_speed(&t[lo..n], &angle_rad[lo..n], h);
+    w.drain(..from - lo);
+    w
 }
 
 /// Each operating point's measured rotor speed with the baseline's and the
