@@ -45,9 +45,10 @@ pub use balance::{
 pub use drive_balance::drive_balance_check;
 pub use force_linearity::{force_linearity_check, force_parabola};
 pub use free_run::{
-    FreeRunSettings, FreeRunThresholds, MeasuredRuns, Pair as FreeRunPair, free_run_check_names, free_run_checks,
-    free_run_checks_of, free_run_misfit, free_run_misfit_channels, free_run_misfit_measured, free_run_pairs,
-    free_run_pairs_by, free_run_pairs_measured, speed_floor_rad_s, speed_traces, stuck_stretches,
+    FreeRunSettings, FreeRunThresholds, MeasuredRuns, Pair as FreeRunPair, free_run_channel_misfits_measured,
+    free_run_check_names, free_run_checks, free_run_checks_of, free_run_misfit, free_run_misfit_channels,
+    free_run_misfit_measured, free_run_pairs, free_run_pairs_by, free_run_pairs_measured, free_run_pairs_reusing,
+    speed_floor_rad_s, speed_traces, stuck_stretches,
 };
 pub use step::voltage_step_checks;
 pub use twist::static_twist_checks;

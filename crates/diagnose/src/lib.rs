@@ -459,7 +459,10 @@ pub fn diagnose(
                 channels::with_run_phases(m, phases.get(id).copied().unwrap_or_default())
             };
             let measured = measured.as_ref().expect("measured with the baseline's pairs");
-            let ext_pairs = channels::free_run_pairs_measured(c, &s, measured, |id| Some(phased(&ext, id)));
+            // Where no finding moves the model (the extended model is the
+            // baseline to the bit on a run), its free run is the baseline's.
+            let ext_pairs =
+                channels::free_run_pairs_reusing(c, &s, measured, |id| Some(phased(&ext, id)), p, base_pairs);
             let sdata = sdata.get_or_init(|| {
                 structure::StructureData::of(c, recorded.as_ref().expect("with the balance"), o, data.clone())
             });

@@ -359,6 +359,72 @@ fn free_runs_on_records_measured_once_are_the_same_to_the_bit() {
     let pairs = free_run_pairs_measured(&c, &s, &m, |_| Some(truth.params.clone()));
     let read = misfits_alone(&c, &s, &m, &truth.params, &pairs);
     assert!(read >= 1 && read < pairs.len(), "the fundamental read in {read} of {} runs", pairs.len());
+    // The same with the force channel read (the break-away and slip-friction
+    // features, the break-away and stick fraction read where both stick and slip).
+    let (cal, _) = calibrate(&c, &th);
+    let s = s.with_force(rig_diagnose::prepare::SensorLaw::Line(rig_types::sensor::ForceCal {
+        factor_mv_per_n: cal.force_factor_mv_per_n,
+        offset_mv: cal.force_offset_mv,
+    }));
+    let m = MeasuredRuns::of(&c, &s);
+    let pairs = free_run_pairs_measured(&c, &s, &m, |_| Some(truth.params.clone()));
+    assert!(
+        pairs.iter().any(|q| q.channels_simulated.is_some_and(|v| v.values[7].is_finite()) && q.measured.stick_slip()),
+        "a break-away read on both sides"
+    );
+    assert_eq!(misfits_alone(&c, &s, &m, &truth.params, &pairs), read);
+}
+
+/// The extended model's free runs beside the baseline's
+/// (`free_run_pairs_reusing`, the diagnosis' extended model where no
+/// finding moves it): a run whose model is the known one to the bit takes
+/// the known pair — the pair a simulation gives, to the bit — and a run
+/// whose model differs by one ulp of one parameter, or by the sign of a
+/// zero, is simulated; runs without a model are skipped; campaign order kept.
+#[test]
+fn free_runs_of_a_known_model_are_taken_not_simulated_again() {
+    use rig_diagnose::channels::{
+        FreeRunPair, FreeRunSettings, MeasuredRuns, free_run_pairs_measured, free_run_pairs_reusing,
+    };
+    let th = thesis();
+    let dopts = opts();
+    let truth = draw_truth(ids::DRIVE_VOLTAGE_LIMIT, 130.0, 16);
+    let c = generate("dvl", &truth, &Protocol::small(), 16).expect("generate");
+    let (_, base) = calibrate(&c, &th);
+    let s = FreeRunSettings::of(&dopts, &dopts.channels);
+    let m = MeasuredRuns::of(&c, &s);
+    let bits = |v: &[FreeRunPair]| format!("{v:?}");
+    let known = free_run_pairs_measured(&c, &s, &m, |_| Some(base.clone()));
+    let again = free_run_pairs_reusing(&c, &s, &m, |_| Some(base.clone()), &base, &known);
+    assert_eq!(bits(&again), bits(&known));
+    // Taken, not simulated: known pairs marked (a window no run has) come back marked.
+    let marked: Vec<FreeRunPair> = known.iter().cloned().map(|q| FreeRunPair { window_s: -1.0, ..q }).collect();
+    let mut ulp = base.clone();
+    ulp.drive.limit_v = f64::from_bits(ulp.drive.limit_v.to_bits() + 1);
+    assert_eq!(base.rotor_damping_nm_s_rad.to_bits(), 0, "the estimate puts no damping on the rotor: +0");
+    let mut negative_zero = base.clone();
+    negative_zero.rotor_damping_nm_s_rad = -0.0;
+    let model_of = |id: &str| match id.chars().last() {
+        Some('0' | '4' | '8') => None,
+        Some('1' | '5' | '9') => Some(ulp.clone()),
+        Some('3' | '7') => Some(negative_zero.clone()),
+        _ => Some(base.clone()),
+    };
+    let mixed = free_run_pairs_reusing(&c, &s, &m, model_of, &base, &marked);
+    let fresh = free_run_pairs_measured(&c, &s, &m, model_of);
+    assert!(fresh.len() < known.len(), "some runs skipped");
+    assert_eq!(mixed.iter().map(|q| &q.id).collect::<Vec<_>>(), fresh.iter().map(|q| &q.id).collect::<Vec<_>>());
+    let mut taken = 0;
+    for (a, b) in mixed.iter().zip(&fresh) {
+        if model_of(&a.id).is_some_and(|p| p == base && p.rotor_damping_nm_s_rad.is_sign_positive()) {
+            assert_eq!(a.window_s, -1.0, "{}: the known pair", a.id);
+            assert_eq!(bits(&[FreeRunPair { window_s: b.window_s, ..a.clone() }]), bits(std::slice::from_ref(b)));
+            taken += 1;
+        } else {
+            assert_eq!(bits(std::slice::from_ref(a)), bits(std::slice::from_ref(b)), "{}: simulated", a.id);
+        }
+    }
+    assert!(taken > 0 && taken < mixed.len(), "{taken} of {} taken", mixed.len());
 }
 
 /// The structure's held-out free runs: each run's misfit without the
@@ -373,13 +439,24 @@ fn misfits_alone(
     p: &RigParams,
     pairs: &[rig_diagnose::channels::FreeRunPair],
 ) -> usize {
-    use rig_diagnose::channels::{free_run_misfit, free_run_misfit_measured, speed_floor_rad_s};
+    use rig_diagnose::channels::{
+        free_run_channel_misfits_measured, free_run_misfit, free_run_misfit_channels, free_run_misfit_measured,
+        speed_floor_rad_s,
+    };
     let floor = speed_floor_rad_s(c, s);
     let misfits: Vec<Option<u64>> =
         pairs.iter().map(|q| free_run_misfit_measured(c, s, m, &q.id, p, floor).map(f64::to_bits)).collect();
     let of_pairs: Vec<Option<u64>> = pairs.iter().map(|q| free_run_misfit(q, floor).map(f64::to_bits)).collect();
     assert!(!pairs.is_empty() && of_pairs.iter().all(Option::is_some), "every pair has a misfit");
     assert_eq!(misfits, of_pairs);
+    // Every channel's misfit (the extension's ageing fit) alone, the pair's.
+    let channels: Vec<Option<u64>> = free_run_channel_misfits_measured(c, s, m, |_| Some(p.clone()), floor)
+        .into_iter()
+        .map(|x| x.map(f64::to_bits))
+        .collect();
+    let of_pairs: Vec<Option<u64>> =
+        pairs.iter().map(|q| free_run_misfit_channels(q, floor).map(f64::to_bits)).collect();
+    assert_eq!(channels, of_pairs);
     pairs
         .iter()
         .filter(|q| {

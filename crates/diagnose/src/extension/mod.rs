@@ -95,8 +95,8 @@ pub mod drift;
 pub mod dwell;
 
 use crate::channels::{
-    ChannelCheck, FreeRunPair, FreeRunSettings, MeasuredRuns, free_run_checks_of, free_run_misfit_channels,
-    free_run_pairs_measured, speed_floor_rad_s, with_run_phases,
+    ChannelCheck, FreeRunPair, FreeRunSettings, MeasuredRuns, free_run_channel_misfits_measured, free_run_checks_of,
+    free_run_misfit_channels, free_run_pairs_measured, speed_floor_rad_s, with_run_phases,
 };
 use crate::prepare::RunSignals;
 use crate::result::{Extension, ExtensionTerm, SpeedTraces, StepRow, round_sig};
@@ -439,13 +439,15 @@ impl SignalFits for Library<'_> {
         let misfit = |cd: f64| {
             let mut k = coef;
             (k[LEVEL], k[DWELL]) = (level_at(cd), cd);
-            let pairs = free_run_pairs_measured(c, s, measured, |id| {
-                training.contains_key(id).then(|| self.x.with_extension(k, id))
-            });
-            let m2: Vec<f64> = pairs
-                .iter()
-                .map(|q| free_run_misfit_channels(q, self.floor).map_or(FAILED_RUN_MISFIT, |m| m * m))
-                .collect();
+            // Only the misfit is read: the features it does not read are not made.
+            let misfits = free_run_channel_misfits_measured(
+                c,
+                s,
+                measured,
+                |id| training.contains_key(id).then(|| self.x.with_extension(k, id)),
+                self.floor,
+            );
+            let m2: Vec<f64> = misfits.iter().map(|m| m.map_or(FAILED_RUN_MISFIT, |m| m * m)).collect();
             m2.iter().sum::<f64>() / m2.len().max(1) as f64
         };
         let cd = brent_min(0.0, DWELL_SLOPE_MAX, DWELL_SLOPE_TOL, DWELL_FIT_EVALS, misfit);

@@ -57,16 +57,60 @@ pub fn free_run_pairs_measured(
     m: &MeasuredRuns,
     params_of: impl Fn(&str) -> Option<RigParams> + Sync,
 ) -> Vec<Pair> {
+    pairs_where(c, s, m, |r, mr| params_of(&r.id).map(|p| simulate_pair(c, r, mr, &p, s, Reads::All)))
+}
+
+/// [`free_run_pairs_measured`] beside pairs already simulated: a run whose
+/// model is `known_model` to the bit ([`same_model`]) takes its pair from
+/// `known` (`known_model`'s pairs from [`free_run_pairs_measured`] with the
+/// same `c`, `s`, `m`: the same simulation of the same record, so the same
+/// pair to the bit); only the others are simulated. The diagnosis' extended
+/// model is the baseline on every run that no finding moves (a null, a
+/// structural fault, an `outside` case, a missed rung): its free runs are
+/// the baseline's.
+pub fn free_run_pairs_reusing(
+    c: &Campaign,
+    s: &FreeRunSettings,
+    m: &MeasuredRuns,
+    params_of: impl Fn(&str) -> Option<RigParams> + Sync,
+    known_model: &RigParams,
+    known: &[Pair],
+) -> Vec<Pair> {
+    pairs_where(c, s, m, |r, mr| {
+        let p = params_of(&r.id)?;
+        match known.iter().find(|q| q.id == r.id) {
+            Some(q) if same_model(&p, known_model) => Some(q.clone()),
+            _ => Some(simulate_pair(c, r, mr, &p, s, Reads::All)),
+        }
+    })
+}
+
+/// Whether two models are the same to the bit: equal, and spelt alike (so
+/// +0 and −0 differ; a NaN is equal to nothing). Every field of a
+/// [`RigParams`] is a number, an enum or a list of them.
+pub(super) fn same_model(a: &RigParams, b: &RigParams) -> bool {
+    a == b && format!("{a:?}") == format!("{b:?}")
+}
+
+/// Each operating point's pair by `pair_of(run, its record)` (in parallel;
+/// campaign order kept; runs it gives `None` for, or with no measured
+/// record, skipped).
+fn pairs_where(
+    c: &Campaign,
+    s: &FreeRunSettings,
+    m: &MeasuredRuns,
+    pair_of: impl Fn(&rig_types::Run, &MeasuredRun) -> Option<Pair> + Sync,
+) -> Vec<Pair> {
     use rayon::prelude::*;
-    assert!(m.settings == *s, "free_run_pairs_measured: records measured under other settings");
+    assert!(m.settings == *s, "free-run pairs: records measured under other settings");
     let runs: Vec<&rig_types::Run> = c.runs_of("operating_point").collect();
-    assert_eq!(runs.len(), m.runs.len(), "free_run_pairs_measured: records of another campaign");
+    assert_eq!(runs.len(), m.runs.len(), "free-run pairs: records of another campaign");
     runs.par_iter()
         .zip(&m.runs)
         .map(|(r, mr)| {
             let mr = mr.as_ref()?;
             debug_assert_eq!(mr.id, r.id);
-            params_of(&r.id).map(|p| simulate_pair(c, r, mr, &p, s, false))
+            pair_of(r, mr)
         })
         .collect::<Vec<_>>()
         .into_iter()
@@ -91,7 +135,26 @@ pub fn free_run_misfit_measured(
     assert!(m.settings == *s, "free_run_misfit_measured: records measured under other settings");
     let (r, mr) = c.runs_of("operating_point").zip(&m.runs).find(|(r, _)| r.id == id)?;
     let mr = mr.as_ref()?;
-    free_run_misfit(&simulate_pair(c, r, mr, p, s, true), floor_rad_s)
+    free_run_misfit(&simulate_pair(c, r, mr, p, s, Reads::RotorMisfit), floor_rad_s)
+}
+
+/// [`free_run_misfit_channels`] of every operating point simulated with
+/// `params_of(run id)` against its record measured under `s` (`m` from
+/// [`MeasuredRuns::of`] with `s`; campaign order, the runs
+/// [`free_run_pairs_measured`] skips left out): each value to the bit the
+/// misfit of that function's pair, without the features this misfit does
+/// not read ([`Reads::ChannelMisfit`]). `None` where the pair has no misfit.
+pub fn free_run_channel_misfits_measured(
+    c: &Campaign,
+    s: &FreeRunSettings,
+    m: &MeasuredRuns,
+    params_of: impl Fn(&str) -> Option<RigParams> + Sync,
+    floor_rad_s: f64,
+) -> Vec<Option<f64>> {
+    pairs_where(c, s, m, |r, mr| params_of(&r.id).map(|p| simulate_pair(c, r, mr, &p, s, Reads::ChannelMisfit)))
+        .iter()
+        .map(|q| free_run_misfit_channels(q, floor_rad_s))
+        .collect()
 }
 
 /// Features of one run: measured from the encoders, the voltage and force
@@ -100,7 +163,7 @@ pub fn free_run_misfit_measured(
 /// same on both sides; the force smoothed over the rotor-speed window).
 pub(super) fn pair(c: &Campaign, run: &rig_types::Run, p: &RigParams, s: &FreeRunSettings) -> Option<Pair> {
     let m = measure(c, run, s)?;
-    Some(simulate_pair(c, run, &m, p, s, false))
+    Some(simulate_pair(c, run, &m, p, s, Reads::All))
 }
 
 /// The record's side of [`pair`]: features, floors and trace of one run.
@@ -207,19 +270,36 @@ pub(super) fn dwell_of(
     dwell_row(id, t, w1, &smooth, mean(&slip), slip_speed_rad_s)
 }
 
-/// The model's side of [`pair`]: run `p` on the record `m` was measured from.
-/// `rotor_only`: the features [`free_run_misfit`] reads and no others
-/// ([`rotor_side`]: Ω1's extremes, the attractor's regime, the fundamental
-/// where read; the motor's, voltage's and force's features, the break-away
-/// peaks, the window's regime and the dwell row are left out: NaN, empty,
-/// `None`), for [`free_run_misfit_measured`] alone.
+/// What a simulated side of a pair is made for: which features
+/// [`simulate_pair`] computes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Reads {
+    /// Every feature, the trace and the dwell row: the checks and the report.
+    All,
+    /// What [`free_run_misfit`] reads and nothing else ([`rotor_side`]: Ω1's
+    /// extremes, the attractor's regime, the fundamental where read; the
+    /// motor's, voltage's and force's features, the break-away peaks, the
+    /// window's regime and the dwell row are left out: NaN, empty, `None`),
+    /// for [`free_run_misfit_measured`] alone.
+    RotorMisfit,
+    /// What [`free_run_misfit_channels`] reads and nothing else: every
+    /// channel feature, the attractor's regime and the fundamental where read
+    /// ([`Reads::RotorMisfit`]'s rule); the window's regime, the stuck
+    /// fraction and motor dip of [`Features`], the trace and the dwell row
+    /// are left out (`None`, NaN, empty), for
+    /// [`free_run_channel_misfits_measured`] alone.
+    ChannelMisfit,
+}
+
+/// The model's side of [`pair`]: run `p` on the record `m` was measured from,
+/// with the features `reads` asks for.
 pub(super) fn simulate_pair(
     c: &Campaign,
     run: &rig_types::Run,
     m: &MeasuredRun,
     p: &RigParams,
     s: &FreeRunSettings,
-    rotor_only: bool,
+    reads: Reads,
 ) -> Pair {
     let t = &run.data.time_s;
     let MeasuredRun { from, to, h1, h2, dt, stride, regime_from, normal_force_n, .. } = *m;
@@ -233,13 +313,17 @@ pub(super) fn simulate_pair(
     // window's features from its first `to` samples. A rotor-only pair reads
     // no force, so its run writes no friction torque (the other channels are
     // the same to the bit).
-    let channels = if rotor_only { rig_model::Channels::WithoutFriction } else { rig_model::Channels::All };
+    let channels =
+        if reads == Reads::RotorMisfit { rig_model::Channels::WithoutFriction } else { rig_model::Channels::All };
     let sim = rig_model::simulate_channels(p, &m.input, t, &s.integrator, channels).ok().map(|tr| {
-        if rotor_only {
+        if reads == Reads::RotorMisfit {
             return rotor_side(t, &tr.rotor_angle_rad, m, s);
         }
-        let (w1, w2) =
-            (centred_speed(tt, &tr.rotor_angle_rad[..to], h1), centred_speed(tt, &tr.motor_angle_rad[..to], h2));
+        // Ω1 and Ω2 over the window alone: every reader below starts at `from`.
+        let (w1, w2) = (
+            centred_speed_from(tt, &tr.rotor_angle_rad[..to], h1, from),
+            centred_speed_from(tt, &tr.motor_angle_rad[..to], h2, from),
+        );
         let has_force = m.has_force;
         let force: Vec<f64> = if has_force {
             tr.friction_torque_nm[..to].iter().map(|x| x / p.brake_disc_radius_m).collect()
@@ -257,39 +341,42 @@ pub(super) fn simulate_pair(
         } else {
             Vec::new()
         };
-        let dwell = m.dwell.as_ref().and_then(|_| {
+        let dwell = m.dwell.as_ref().filter(|_| reads == Reads::All).and_then(|_| {
             let ticks = rig_types::sensor::encoder_ticks(&tr.rotor_angle_rad, c.rig.encoder_ticks_per_rev);
             let enc = ticks_to_rad(&ticks, c.rig.encoder_ticks_per_rev);
             let all: Vec<f64> = tr.friction_torque_nm.iter().map(|x| x / p.brake_disc_radius_m).collect();
             dwell_of(&m.id, t, &centred_speed(t, &enc, h1), &all, h1, s.slip_speed_rad_s)
         });
         let win = Window {
-            w1: &w1[from..],
-            w2: &w2[from..],
+            w1: &w1,
+            w2: &w2,
             voltage_v: m.has_voltage.then(|| &tr.voltage_v[from..to]),
             force_n: force_smooth.as_deref(),
             peaks: &peaks,
         };
-        let window = steady_features(&tt[from..], &w1[from..], &w2[from..], w_set, s.slip_speed_rad_s, &s.classify);
-        let f = Features {
-            stick_slip: attractor_stick_slip(t, &tr.rotor_angle_rad, regime_from, h1, &s.classify),
-            ..window
-        };
-        let trace = w1[from..].iter().step_by(stride).copied().collect::<Vec<f64>>();
-        (
-            f,
-            trace,
-            ChannelFeatures { values: channel_values(&win, s.slip_speed_rad_s, 0.0) },
-            Some(window.stick_slip),
-            dwell,
-        )
+        let ch = ChannelFeatures { values: channel_values(&win, s.slip_speed_rad_s, 0.0) };
+        let stick_slip = attractor_stick_slip(t, &tr.rotor_angle_rad, regime_from, h1, &s.classify);
+        if reads == Reads::ChannelMisfit {
+            let (w, ts) = (&w1, &tt[from..]);
+            let (min, max) = (ch.values[ChannelFeatures::ROTOR_MIN], ch.values[ChannelFeatures::ROTOR_MAX]);
+            let f = misfit_features(stick_slip, read_fundamental_hz(stick_slip, m, ts, w, s), min, max);
+            return (f, Vec::new(), ch, None, None);
+        }
+        let window = steady_features(&tt[from..], &w1, &w2, w_set, s.slip_speed_rad_s, &s.classify);
+        let f = Features { stick_slip, ..window };
+        let trace = w1.iter().step_by(stride).copied().collect::<Vec<f64>>();
+        (f, trace, ch, Some(window.stick_slip), dwell)
     });
     let (simulated, simulated_rad_s, channels_simulated, sim_window_ss, sim_dwell) =
         sim.map_or((None, None, None, None, None), |(f, w, ch, ss, d)| (Some(f), Some(w), Some(ch), ss, d));
-    let trace = Trace {
-        time_s: tt[from..].iter().step_by(stride).copied().collect(),
-        measured_rad_s: m.measured_trace.clone(),
-        simulated_rad_s,
+    // Neither misfit reads the trace.
+    let trace = match reads {
+        Reads::All => Trace {
+            time_s: tt[from..].iter().step_by(stride).copied().collect(),
+            measured_rad_s: m.measured_trace.clone(),
+            simulated_rad_s,
+        },
+        _ => Trace { simulated_rad_s, ..Trace::default() },
     };
     let motor_tick_rad_s = rad / (2.0 * h2 as f64 * dt);
     Pair {
@@ -321,29 +408,43 @@ type SimSide = (Features, Vec<f64>, ChannelFeatures, Option<bool>, Option<DwellR
 fn rotor_side(t: &[f64], rotor_angle_rad: &[f64], m: &MeasuredRun, s: &FreeRunSettings) -> SimSide {
     let MeasuredRun { from, to, h1, stride, regime_from, .. } = *m;
     let tt = &t[..to];
-    let w1 = centred_speed(tt, &rotor_angle_rad[..to], h1);
-    let win = &w1[from..];
+    let w1 = centred_speed_from(tt, &rotor_angle_rad[..to], h1, from);
+    let win = &w1[..];
     let stick_slip = attractor_stick_slip(t, rotor_angle_rad, regime_from, h1, &s.classify);
-    let fundamental_hz = if stick_slip && m.measured.stick_slip() && m.measured.fundamental_hz > 0.0 {
-        steady_fundamental_hz(&tt[from..], win, s.slip_speed_rad_s)
-    } else {
-        0.0
-    };
+    let fundamental_hz = read_fundamental_hz(stick_slip, m, &tt[from..], win, s);
     let min = win.iter().copied().fold(f64::INFINITY, f64::min);
     let max = win.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let f = Features {
+    let f = misfit_features(stick_slip, fundamental_hz, min, max);
+    let mut ch = ChannelFeatures::nan();
+    ch.values[ChannelFeatures::ROTOR_MAX] = max;
+    ch.values[ChannelFeatures::ROTOR_MIN] = min;
+    let trace = win.iter().step_by(stride).copied().collect();
+    (f, trace, ch, None, None)
+}
+
+/// The simulated fundamental where a misfit reads it (both regimes
+/// stick-slip and the record's fundamental > 0; else 0): [`steady_features`]'
+/// value to the bit ([`steady_fundamental_hz`]) over the window `t`, `w1`.
+fn read_fundamental_hz(stick_slip: bool, m: &MeasuredRun, t: &[f64], w1: &[f64], s: &FreeRunSettings) -> f64 {
+    if stick_slip && m.measured.stick_slip() && m.measured.fundamental_hz > 0.0 {
+        steady_fundamental_hz(t, w1, s.slip_speed_rad_s)
+    } else {
+        0.0
+    }
+}
+
+/// A misfit's simulated [`Features`]: the attractor's regime, the
+/// fundamental where read and Ω1's extremes; the stuck fraction and motor
+/// dip, which no misfit reads, NaN.
+fn misfit_features(stick_slip: bool, fundamental_hz: f64, min: f64, max: f64) -> Features {
+    Features {
         stuck_fraction: f64::NAN,
         stick_slip,
         rotor_min_rad_s: min,
         rotor_max_rad_s: max,
         fundamental_hz,
         motor_dip_rad_s: f64::NAN,
-    };
-    let mut ch = ChannelFeatures::nan();
-    ch.values[ChannelFeatures::ROTOR_MAX] = max;
-    ch.values[ChannelFeatures::ROTOR_MIN] = min;
-    let trace = win.iter().step_by(stride).copied().collect();
-    (f, trace, ch, None, None)
+    }
 }
 
 /// Stick-slip of the attractor a run settles to: the regime classifier
@@ -384,9 +485,24 @@ pub(super) fn attractor_stick_slip(
     if n < from + 16 {
         return false;
     }
-    let w1 = centred_speed(&t[..n], &rotor_angle_rad[..n], h);
+    let w1 = centred_speed_from(&t[..n], &rotor_angle_rad[..n], h, from);
     let fs_hz = (n - from - 1) as f64 / (t[n - 1] - t[from]);
-    rig_sweep::classify(&w1[from..], fs_hz, classify).regime.stick_slip()
+    rig_sweep::classify(&w1, fs_hz, classify).regime.stick_slip()
+}
+
+/// `centred_speed(t, angle_rad, h)[from..]`, to the bit, made from the
+/// samples that reach it alone (`from − h..`): the centred difference at
+/// sample i reads samples i − h and i + h (clamped to the ends), and its
+/// values from `from` on read nothing before `from − h`. A free run's
+/// readers start at its window (or the attractor's last `steady_s`), the
+/// record's first 8-24 s of 40 s not read.
+pub(super) fn centred_speed_from(t: &[f64], angle_rad: &[f64], h: usize, from: usize) -> Vec<f64> {
+    let n = t.len().min(angle_rad.len());
+    let from = from.min(n);
+    let lo = from.saturating_sub(h.max(1));
+    let mut w = centred_speed(&t[lo..n], &angle_rad[lo..n], h);
+    w.drain(..from - lo);
+    w
 }
 
 /// Each operating point's measured rotor speed with the baseline's and the

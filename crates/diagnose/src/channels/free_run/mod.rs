@@ -362,6 +362,30 @@ mod tests {
         assert!(breakaway_peaks(&t, &phi, &force, 0, 0.1, &o).is_empty(), "N0 below min_normal_force_n");
     }
 
+    /// Ω from sample `from` on, made from the samples that reach it alone:
+    /// the whole run's centred difference from `from` on, to the bit, on
+    /// jittered sample times and a rough angle, at every start (before,
+    /// at and after the half window, the last sample, past the end) and
+    /// half window (0 and 1 both mean 1).
+    #[test]
+    fn the_speed_from_a_sample_on_is_the_whole_runs() {
+        let t: Vec<f64> = (0..400).map(|k| k as f64 * 0.002 + 1e-5 * ((k * 7919) % 13) as f64).collect();
+        let phi: Vec<f64> = t.iter().map(|x| (3.0 * x).sin() + 0.01 * (97.0 * x).cos() + x * x).collect();
+        for h in [0, 1, 5, 8, 30] {
+            let whole = centred_speed(&t, &phi, h);
+            for from in [0, 1, 4, 5, 6, 8, 9, 29, 30, 31, 200, 399, 400, 450] {
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();
+                let tail = &whole[from.min(whole.len())..];
+                assert_eq!(bits(&measured::centred_speed_from(&t, &phi, h, from)), bits(tail), "h {h}, from {from}");
+            }
+        }
+        // A shorter angle than time: the run's length is the shorter.
+        assert_eq!(
+            measured::centred_speed_from(&t, &phi[..300], 8, 100),
+            centred_speed(&t[..300], &phi[..300], 8)[100..]
+        );
+    }
+
     /// Stick-slip at 0.45 Hz (rotor speed 4(1 − cos) clipped at 0, stuck
     /// part of each cycle) that stops at `until_s` and rings down to steady
     /// slip at 2 rad/s; 40 s at 500 Hz. Read at the end of the run: a
