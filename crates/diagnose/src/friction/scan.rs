@@ -237,16 +237,18 @@ fn time_scan_fft(d: &SlipData, freqs_hz: &[f64]) -> Option<Vec<(f64, f64)>> {
                 .iter()
                 .map(|&f| {
                     let m = bin(f);
-                    // Σ a e^{−jx} = e^{−j2πf t_ref}·X[m]: real part Σ a cos x, imaginary −Σ a sin x.
-                    let at = |x: realfft::num_complex::Complex<f64>, f: f64| {
-                        let (s, c) = (2.0 * PI * f * t_ref).sin_cos();
+                    // Σ a e^{−jx} = e^{−j2πf t_ref}·X[m]: real part Σ a cos x, imaginary −Σ a sin x,
+                    // (s, c) = sin and cos of 2πf·t_ref (the indicator's and μ's sums at f share them).
+                    let at = |x: realfft::num_complex::Complex<f64>, (s, c): (f64, f64)| {
                         let re = x.re * c + x.im * s;
                         let im = x.im * c - x.re * s;
                         (-im, re)
                     };
-                    let (s1, c1) = at(ind_f[m], f);
-                    let (s2, c2) = at(ind_f[2 * m], 2.0 * f);
-                    let (ys, yc) = at(val_f[m], f);
+                    let ref_at = |f: f64| (2.0 * PI * f * t_ref).sin_cos();
+                    let at_f = ref_at(f);
+                    let (s1, c1) = at(ind_f[m], at_f);
+                    let (s2, c2) = at(ind_f[2 * m], ref_at(2.0 * f));
+                    let (ys, yc) = at(val_f[m], at_f);
                     [s1, c1, 0.5 * (count - c2), 0.5 * (count + c2), 0.5 * s2, ys, yc]
                 })
                 .collect()
