@@ -88,10 +88,10 @@ struct Cv<'a> {
     /// computes alike ([`composite::DataMemo`]: the cold Stribeck fits, the
     /// angle modulation's sin and cos by order).
     cold: Vec<composite::DataMemo>,
-    /// Per fold and held-out run (in `fold_data`'s order), the sin and cos
-    /// of its angle modulation by order, shared by every friction set that
-    /// predicts it ([`crate::friction::AngleTrig`]).
-    held_angles: Vec<Vec<crate::friction::AngleTrig>>,
+    /// Per fold, its held-out runs' (in `fold_data`'s order) sin and cos of
+    /// the modulations, shared by every friction set that predicts them
+    /// ([`composite::HeldRuns`]).
+    held_memos: Vec<composite::HeldRuns>,
 }
 
 /// One fold's friction fit: the model fitted on its training runs and, per
@@ -220,14 +220,14 @@ impl Cv<'_> {
         let (d, held_data) = &self.fold_data[f];
         let model =
             composite::fit_composite_model_from_cached(d, set, &self.freqs, self.max_order, start, &self.cold[f]);
-        let mut held = Vec::new();
-        for ((i, dr), angles) in held_data.iter().zip(&self.held_angles[f]) {
-            let (e, ph) = match &model {
-                Some(m) => composite::heldout_fit_with(m, dr, Some(angles)),
-                None => (None, (0.0, 0.0)),
-            };
-            held.push((*i, e, ph));
-        }
+        let held = match &model {
+            Some(m) => {
+                let runs: Vec<&SlipData> = held_data.iter().map(|(_, d)| d).collect();
+                let fits = composite::heldout_fits(m, &runs, &self.held_memos[f]);
+                held_data.iter().zip(fits).map(|((i, _), (e, ph))| (*i, e, ph)).collect()
+            }
+            None => held_data.iter().map(|(i, _)| (*i, None, (0.0, 0.0))).collect(),
+        };
         (model, held)
     }
 
@@ -409,8 +409,8 @@ pub(crate) fn select_over<'a>(
     };
     let fold_data = Cv::fold_data(runs, folds, opts.fold_fit_spacing_s);
     let cold = (0..folds).map(|_| composite::DataMemo::default()).collect();
-    let held_angles = fold_data.iter().map(|f| f.1.iter().map(|_| Default::default()).collect()).collect();
-    let cv = Cv { runs, folds, supply_v, freqs, max_order: opts.max_order, fold_data, cold, held_angles };
+    let held_memos = fold_data.iter().map(|f| composite::HeldRuns::new(f.1.len())).collect();
+    let cv = Cv { runs, folds, supply_v, freqs, max_order: opts.max_order, fold_data, cold, held_memos };
 
     // Forward selection on the one engine: the runs are the units, fold f
     // holds out the runs of fold f and trains on the others; the baseline

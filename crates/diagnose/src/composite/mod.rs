@@ -34,7 +34,7 @@
 mod heldout;
 mod joint;
 
-pub(crate) use heldout::heldout_fit_with;
+pub(crate) use heldout::{HeldRuns, heldout_fits};
 pub use heldout::{heldout_fit, heldout_phases, relative_mu_error};
 use joint::{joint_params, refine_speed_time};
 

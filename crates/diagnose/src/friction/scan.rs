@@ -237,16 +237,18 @@ fn time_scan_fft(d: &SlipData, freqs_hz: &[f64]) -> Option<Vec<(f64, f64)>> {
                 .iter()
                 .map(|&f| {
                     let m = bin(f);
-                    // Σ a e^{−jx} = e^{−j2πf t_ref}·X[m]: real part Σ a cos x, imaginary −Σ a sin x.
-                    let at = |x: realfft::num_complex::Complex<f64>, f: f64| {
-                        let (s, c) = (2.0 * PI * f * t_ref).sin_cos();
+                    // Σ a e^{−jx} = e^{−j2πf t_ref}·X[m]: real part Σ a cos x, imaginary −Σ a sin x,
+                    // (s, c) = sin and cos of 2πf·t_ref (the indicator's and μ's sums at f share them).
+                    let at = |x: realfft::num_complex::Complex<f64>, (s, c): (f64, f64)| {
                         let re = x.re * c + x.im * s;
                         let im = x.im * c - x.re * s;
                         (-im, re)
                     };
-                    let (s1, c1) = at(ind_f[m], f);
-                    let (s2, c2) = at(ind_f[2 * m], 2.0 * f);
-                    let (ys, yc) = at(val_f[m], f);
+                    let ref_at = |f: f64| (2.0 * PI * f * t_ref).sin_cos();
+                    let at_f = ref_at(f);
+                    let (s1, c1) = at(ind_f[m], at_f);
+                    let (s2, c2) = at(ind_f[2 * m], ref_at(2.0 * f));
+                    let (ys, yc) = at(val_f[m], at_f);
                     [s1, c1, 0.5 * (count - c2), 0.5 * (count + c2), 0.5 * s2, ys, yc]
                 })
                 .collect()
@@ -344,15 +346,21 @@ fn time_scan_at(d: &SlipData, freqs_hz: &[f64]) -> Vec<(f64, f64)> {
 /// RSS of the angle-sine regression at every order 1..=`max_order`, in
 /// parallel over orders; sin/cos of n·φ by the multiple-angle recurrence from
 /// sin/cos φ (rounding grows by about one unit per order, far below the RSS
-/// differences the scan ranks).
-pub(super) fn order_scan(d: &SlipData, orders: &RangeInclusive<u32>) -> Vec<(f64, f64)> {
+/// differences the scan ranks). sin/cos φ are order 1's of `angles`, the
+/// memo of `d`'s, when given (1·φ is φ to the bit): every friction set with
+/// a cold angle block scans the same fold's φ1 (a `sin_cos` of every sample
+/// per scan, 0.44 % of the full battery's CPU in `perf`, issue 23).
+pub(super) fn order_scan(d: &SlipData, orders: &RangeInclusive<u32>, angles: Option<&AngleTrig>) -> Vec<(f64, f64)> {
     let sums = ScanSums::of(d);
-    let base: Vec<(f64, f64)> = d.phi.iter().map(|p| p.sin_cos()).collect();
-    let mut sc = base.clone();
+    let base: SinCos = match angles {
+        Some(memo) => memo.get(d, 1),
+        None => std::sync::Arc::new(d.phi.iter().map(|p| p.sin_cos()).collect()),
+    };
+    let mut sc = base.to_vec();
     let mut out = Vec::with_capacity(orders.clone().count());
     for n in 1..=*orders.end() {
         if n > 1 {
-            for (v, b) in sc.iter_mut().zip(&base) {
+            for (v, b) in sc.iter_mut().zip(base.iter()) {
                 *v = (v.0 * b.1 + v.1 * b.0, v.1 * b.1 - v.0 * b.0);
             }
         }
@@ -537,6 +545,25 @@ mod tests {
         assert!(thin.t.iter().all(|t| ((t / 0.016) - (t / 0.016).round()).abs() < 1e-9));
         let freqs: Vec<f64> = (0..=995).map(|j| 0.05 + 0.01 * j as f64).collect();
         assert!(time_scan_fft(&thin, &freqs).is_some(), "the thinned samples left the FFT's grid");
+    }
+
+    /// The order scan from the data's memo (its order 1, 1·φ1) is the scan
+    /// by its own `sin_cos` of every φ1, to the bit, whether the memo is
+    /// filled by the scan or before it.
+    #[test]
+    fn the_order_scan_from_the_memo_is_the_scan_alone() {
+        let d = synth(3, |r, _, phi, _| 0.45 * (1.0 + 0.1 * (3.0 * phi + 0.5 * r as f64).sin()));
+        let bits = |v: Vec<(f64, f64)>| v.iter().map(|x| (x.0.to_bits(), x.1.to_bits())).collect::<Vec<_>>();
+        let alone = bits(order_scan(&d, &(1..=8), None));
+        let memo = AngleTrig::default();
+        assert_eq!(bits(order_scan(&d, &(1..=8), Some(&memo))), alone);
+        assert_eq!(bits(order_scan(&d, &(2..=8), Some(&memo))), bits(order_scan(&d, &(2..=8), None)));
+        assert_eq!(bits(order_scan(&d, &(1..=8), Some(&memo))), alone);
+        let own: Vec<(f64, f64)> = d.phi.iter().map(|p| p.sin_cos()).collect();
+        assert_eq!(bits(memo.get(&d, 1).to_vec()), bits(own));
+        // The scan finds the order.
+        let scan = order_scan(&d, &(1..=8), None);
+        assert_eq!(scan.iter().min_by(|a, b| a.1.total_cmp(&b.1)).unwrap().0, 3.0, "{scan:?}");
     }
 
     #[test]

@@ -65,7 +65,7 @@ pub(crate) fn fit_sine_with(
     let mut scored: Vec<(f64, f64)> = match single {
         Some(_) => Vec::new(),
         None if time_kind => time_scan(d, freqs_hz),
-        None => order_scan(d, &orders),
+        None => order_scan(d, &orders, angles),
     };
     let psi0 = match single {
         Some(psi) => psi,
