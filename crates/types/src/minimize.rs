@@ -336,12 +336,9 @@ impl Search {
         (0..n).map(|k| self.centroid[k] + t * (self.pts[n].0[k] - self.centroid[k])).collect()
     }
 
-    /// After a stop by the evaluation cap: asks the next step, as [`Search::tell`] would have
-    /// with a larger cap (nothing when the simplex has converged or is mid-step).
-    fn resume(&mut self, done: &impl Fn(&[(Vec<f64>, f64)]) -> bool) {
-        if !self.asked.is_empty() || !matches!(self.wait, Wait::Finished) || self.pts.is_empty() {
-            return;
-        }
+    /// The loop's test of the single simplex (sorted), then its reflection
+    /// asked: the next step of a search that goes on.
+    fn reflect_unless(&mut self, done: &impl Fn(&[(Vec<f64>, f64)]) -> bool) {
         self.pts.sort_by(|a, b| a.1.total_cmp(&b.1));
         if done(&self.pts) {
             return;
@@ -350,6 +347,15 @@ impl Search {
         self.centroid = (0..n).map(|k| self.pts[..n].iter().map(|p| p.0[k]).sum::<f64>() / n as f64).collect();
         self.asked = vec![self.along(-1.0)];
         self.wait = Wait::Reflect;
+    }
+
+    /// After a stop by the evaluation cap: asks the next step, as [`Search::tell`] would have
+    /// with a larger cap (nothing when the simplex has converged or is mid-step).
+    fn resume(&mut self, done: &impl Fn(&[(Vec<f64>, f64)]) -> bool) {
+        if !self.asked.is_empty() || !matches!(self.wait, Wait::Finished) || self.pts.is_empty() {
+            return;
+        }
+        self.reflect_unless(done);
     }
 
     /// Takes the values of the points asked (in order, non-finite already 1e9) and asks the next.
@@ -411,14 +417,7 @@ impl Search {
         if self.evals >= max_evals {
             return;
         }
-        self.pts.sort_by(|a, b| a.1.total_cmp(&b.1));
-        if done(&self.pts) {
-            return;
-        }
-        let n = self.pts.len() - 1;
-        self.centroid = (0..n).map(|k| self.pts[..n].iter().map(|p| p.0[k]).sum::<f64>() / n as f64).collect();
-        self.asked = vec![self.along(-1.0)];
-        self.wait = Wait::Reflect;
+        self.reflect_unless(done);
     }
 }
 
