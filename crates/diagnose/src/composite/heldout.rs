@@ -265,6 +265,17 @@ mod tests {
     /// fits on `Composite::time_factor` / `angle_factor` and the error on
     /// `Composite::mu` — up to rounding, on a run with both modulations and
     /// the Stribeck term (the three rounds of the alternation all run).
+    /// A Stribeck law with both modulations, near the synthetic law the tests draw from.
+    fn modulated_model() -> Composite {
+        Composite {
+            mu_k: 0.41,
+            stribeck: Some((0.59, 2.1)),
+            viscous: None,
+            time_mod: Some((0.11, 1.3004)),
+            angle_mod: Some((0.07, 3)),
+        }
+    }
+
     #[test]
     fn the_heldout_fit_from_values_computed_once_is_the_per_sample_one() {
         let law = |_: usize, t: f64, phi: f64, w: f64| {
@@ -273,13 +284,7 @@ mod tests {
                 * (1.0 + 0.08 * (3.0 * phi + 1.1).sin())
         };
         let held = synth(1, law);
-        let m = Composite {
-            mu_k: 0.41,
-            stribeck: Some((0.59, 2.1)),
-            viscous: None,
-            time_mod: Some((0.11, 1.3004)),
-            angle_mod: Some((0.07, 3)),
-        };
+        let m = modulated_model();
         // The reference: the same alternation, every factor by `sin` of its whole argument.
         let mut reference = (0.0, 0.0);
         let mut target = held.clone();
@@ -358,13 +363,7 @@ mod tests {
         let occupied = grid.slots.iter().filter(|&&b| b != u64::MAX).count();
         let samples: usize = held.iter().map(SlipData::len).sum();
         assert!(occupied < samples / 2, "the runs share slots: {occupied} of {samples}");
-        let m = Composite {
-            mu_k: 0.41,
-            stribeck: Some((0.59, 2.1)),
-            viscous: None,
-            time_mod: Some((0.11, 1.3004)),
-            angle_mod: Some((0.07, 3)),
-        };
+        let m = modulated_model();
         let bits = |(e, ph): (Option<f64>, Phases)| (e.map(f64::to_bits), ph.0.to_bits(), ph.1.to_bits());
         let memo = HeldRuns::new(held.len());
         for model in
