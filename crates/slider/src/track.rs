@@ -126,16 +126,19 @@ impl Track {
 /// function of the travel alone, so reading it back where the travel has
 /// the same bits is the same number (a stuck slider's steps, most of a
 /// stick-slip run's: each drew it again, a division, a floor and the node
-/// cache, ≈ 15 % of the slider study's CPU at the shipped budget).
+/// cache, ≈ 15 % of the slider study's CPU at the shipped budget); and
+/// the run's last node pair, as the thread's [`LAST_NODES`] (values: the
+/// same numbers without the thread-local's access per sliding step).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Memo {
     travel_bits: u64,
     threshold: f64,
+    nodes: Option<(i64, f64, f64)>,
 }
 
 impl Default for Memo {
     fn default() -> Memo {
-        Memo { travel_bits: f64::NAN.to_bits(), threshold: f64::NAN }
+        Memo { travel_bits: f64::NAN.to_bits(), threshold: f64::NAN, nodes: None }
     }
 }
 
@@ -143,7 +146,8 @@ impl Memo {
     /// `law`'s threshold at `travel_m`, from the memo when the travel is the last one.
     pub fn threshold(&mut self, law: &Track, travel_m: f64) -> f64 {
         if travel_m.to_bits() != self.travel_bits {
-            (self.travel_bits, self.threshold) = (travel_m.to_bits(), law.threshold(travel_m));
+            let z = profile_with(travel_m / law.length_m, &mut self.nodes);
+            (self.travel_bits, self.threshold) = (travel_m.to_bits(), law.mu_static0 + law.sd * z);
         }
         self.threshold
     }
@@ -167,11 +171,29 @@ fn floor(u: f64) -> f64 {
 /// Unit value noise at `u` (in correlation lengths): standard normal values
 /// at the integers, joined by smoothstep.
 fn profile(u: f64) -> f64 {
+    LAST_NODES.with(|c| {
+        let mut last = c.get();
+        let z = profile_with(u, &mut last);
+        c.set(last);
+        z
+    })
+}
+
+/// [`profile`] with the last node pair drawn, `last` ((i, node(i),
+/// node(i + 1))), kept by the caller: a slider crosses a node in many steps.
+fn profile_with(u: f64, last: &mut Option<(i64, f64, f64)>) -> f64 {
     let n = floor(u);
     let s = u - n;
     let s = s * s * (3.0 - 2.0 * s);
     let i = n as i64;
-    let (a, b) = nodes(i);
+    let (a, b) = match *last {
+        Some((j, a, b)) if j == i => (a, b),
+        _ => {
+            let (a, b) = (node(i), node(i.wrapping_add(1)));
+            *last = Some((i, a, b));
+            (a, b)
+        }
+    };
     a * (1.0 - s) + b * s
 }
 
@@ -181,18 +203,6 @@ thread_local! {
     /// track law's simulations spent about 40 % of the `slider` stage's CPU
     /// drawing the same two nodes again). Values, not a state: bit-identical.
     static LAST_NODES: std::cell::Cell<Option<(i64, f64, f64)>> = const { std::cell::Cell::new(None) };
-}
-
-/// (node(i), node(i + 1)), from the thread's last pair when it is the same.
-fn nodes(i: i64) -> (f64, f64) {
-    LAST_NODES.with(|c| match c.get() {
-        Some((j, a, b)) if j == i => (a, b),
-        _ => {
-            let (a, b) = (node(i), node(i.wrapping_add(1)));
-            c.set(Some((i, a, b)));
-            (a, b)
-        }
-    })
 }
 
 /// A standard normal value for node `i` (Box–Muller on two splitmix64 draws).
