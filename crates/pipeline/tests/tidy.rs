@@ -493,7 +493,7 @@ const SELECTIONS: [(&str, &str); 5] = [
     ("crates/diagnose/src/structure/selection.rs", "the thesis rig's structural candidates (three views)"),
     ("crates/diagnose/src/extension/mod.rs", "the `unexplained` answer's extension (library signals, free run)"),
     ("crates/lavi/src/select.rs", "the LAVI study's candidates"),
-    ("crates/slider/src/study.rs", "the slider's friction laws"),
+    ("crates/slider/src/study/mod.rs", "the slider's friction laws"),
 ];
 
 /// The files of [`SELECTIONS`] with no call to the engine on a code line,

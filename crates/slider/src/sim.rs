@@ -178,7 +178,7 @@ pub fn simulate_more(law: &Law, s: &Setup, state: &mut OneDofState, out: &mut Ve
         absolute_damping_nm_s_rad: 0.0,
         mid: None,
     };
-    let contact = Contact { law: *law, weight_n };
+    let contact = Contact { law: *law, weight_n, track: Default::default() };
     if out.is_empty() {
         *state = OneDofState {
             twist_rad: s.initial_force_over_weight * weight_n / chain_n_m,
@@ -217,6 +217,8 @@ impl ImplicitSink for ForceOverWeight<'_> {
 struct Contact {
     law: Law,
     weight_n: f64,
+    /// A track law's last threshold ([`crate::track::Memo`]; values, not a state).
+    track: std::cell::Cell<crate::track::Memo>,
 }
 
 impl Contact {
@@ -276,7 +278,12 @@ impl ImplicitFriction for Contact {
             Law::Heslot(law) => {
                 crate::heslot::Contact { law, weight_n: w }.implicit_step(state, stuck, p, h_over_mass, h_s)
             }
-            Law::Track(law) => law.step(&mut state[0], stuck, p, h_over_mass, h_s, w),
+            Law::Track(law) => {
+                let mut memo = self.track.get();
+                let r = law.step(&mut state[0], stuck, p, h_over_mass, h_s, w, &mut memo);
+                self.track.set(memo);
+                r
+            }
         }
     }
 }

@@ -80,7 +80,10 @@ impl Track {
     /// (N; speeds in m/s, forces in N), for `sim`'s `one_dof::ImplicitFriction`:
     /// Coulomb's step at the levels of the slider's travel `travel_m` (its
     /// state, from 0 at the start), which it advances by v h. Returns the
-    /// new speed and the signed contact force.
+    /// new speed and the signed contact force. `memo` is the run's last
+    /// (travel's bits, threshold) ([`Memo`]): a stuck slider does not move,
+    /// so its threshold is read from there instead of drawn again.
+    #[allow(clippy::too_many_arguments)]
     pub fn step(
         &self,
         travel_m: &mut f64,
@@ -89,8 +92,9 @@ impl Track {
         h_over_mass: f64,
         h_s: f64,
         weight_n: f64,
+        memo: &mut Memo,
     ) -> (f64, f64) {
-        let mu_s = self.threshold(*travel_m);
+        let mu_s = memo.threshold(self, *travel_m);
         let kinetic = weight_n * (mu_s - self.mu_drop);
         let r = implicit_coulomb_step(p, h_over_mass, weight_n * mu_s, |_| kinetic, stuck);
         *travel_m += r.0 * h_s;
@@ -117,14 +121,79 @@ impl Track {
     }
 }
 
+/// A run's last threshold: (the travel's bits, [`Track::threshold`] there),
+/// the travel's bits NaN's before the first step. The threshold is a
+/// function of the travel alone, so reading it back where the travel has
+/// the same bits is the same number (a stuck slider's steps, most of a
+/// stick-slip run's: each drew it again, a division, a floor and the node
+/// cache, ≈ 15 % of the slider study's CPU at the shipped budget); and
+/// the run's last node pair, as the thread's [`LAST_NODES`] (values: the
+/// same numbers without the thread-local's access per sliding step).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Memo {
+    travel_bits: u64,
+    threshold: f64,
+    nodes: Option<(i64, f64, f64)>,
+}
+
+impl Default for Memo {
+    fn default() -> Memo {
+        Memo { travel_bits: f64::NAN.to_bits(), threshold: f64::NAN, nodes: None }
+    }
+}
+
+impl Memo {
+    /// `law`'s threshold at `travel_m`, from the memo when the travel is the last one.
+    pub fn threshold(&mut self, law: &Track, travel_m: f64) -> f64 {
+        if travel_m.to_bits() != self.travel_bits {
+            let z = profile_with(travel_m / law.length_m, &mut self.nodes);
+            (self.travel_bits, self.threshold) = (travel_m.to_bits(), law.mu_static0 + law.sd * z);
+        }
+        self.threshold
+    }
+}
+
+/// `u.floor()` without libm's call (the dev profile's target has no SSE4.1
+/// `roundsd`, so `f64::floor` is a function call: 2.5 % of the slider
+/// study's CPU): the truncation toward zero, one less where it rounded a
+/// negative number up. Exact wherever |u| < 2⁵² (there every float is an
+/// integer and is returned as it is); NaN and the rest go to `f64::floor`.
+fn floor(u: f64) -> f64 {
+    if u.abs() < 4_503_599_627_370_496.0 {
+        let t = (u as i64) as f64;
+        // copysign: −0.0 stays −0.0, as libm gives it.
+        if t > u { t - 1.0 } else { t.copysign(u) }
+    } else {
+        u.floor()
+    }
+}
+
 /// Unit value noise at `u` (in correlation lengths): standard normal values
 /// at the integers, joined by smoothstep.
 fn profile(u: f64) -> f64 {
-    let n = u.floor();
+    LAST_NODES.with(|c| {
+        let mut last = c.get();
+        let z = profile_with(u, &mut last);
+        c.set(last);
+        z
+    })
+}
+
+/// [`profile`] with the last node pair drawn, `last` ((i, node(i),
+/// node(i + 1))), kept by the caller: a slider crosses a node in many steps.
+fn profile_with(u: f64, last: &mut Option<(i64, f64, f64)>) -> f64 {
+    let n = floor(u);
     let s = u - n;
     let s = s * s * (3.0 - 2.0 * s);
     let i = n as i64;
-    let (a, b) = nodes(i);
+    let (a, b) = match *last {
+        Some((j, a, b)) if j == i => (a, b),
+        _ => {
+            let (a, b) = (node(i), node(i.wrapping_add(1)));
+            *last = Some((i, a, b));
+            (a, b)
+        }
+    };
     a * (1.0 - s) + b * s
 }
 
@@ -134,18 +203,6 @@ thread_local! {
     /// track law's simulations spent about 40 % of the `slider` stage's CPU
     /// drawing the same two nodes again). Values, not a state: bit-identical.
     static LAST_NODES: std::cell::Cell<Option<(i64, f64, f64)>> = const { std::cell::Cell::new(None) };
-}
-
-/// (node(i), node(i + 1)), from the thread's last pair when it is the same.
-fn nodes(i: i64) -> (f64, f64) {
-    LAST_NODES.with(|c| match c.get() {
-        Some((j, a, b)) if j == i => (a, b),
-        _ => {
-            let (a, b) = (node(i), node(i.wrapping_add(1)));
-            c.set(Some((i, a, b)));
-            (a, b)
-        }
-    })
 }
 
 /// A standard normal value for node `i` (Box–Muller on two splitmix64 draws).
@@ -180,14 +237,40 @@ mod tests {
     }
 
     #[test]
+    fn the_floor_is_libms_and_the_memo_the_threshold() {
+        let cases = [0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 2.0 - f64::EPSILON, -1e-300, 4.5e15, -4.5e15, 1e300, -1e300];
+        for &x in cases.iter().chain(&[f64::INFINITY, f64::NEG_INFINITY, f64::MAX, f64::MIN_POSITIVE]) {
+            assert_eq!(floor(x).to_bits(), x.floor().to_bits(), "{x}");
+        }
+        assert!(floor(f64::NAN).is_nan());
+        // Every binade from 2^-30 to 2^54, both signs, at integers and their neighbours.
+        for e in -30..55 {
+            for m in [1.0, 1.37, 1.5, 1.999] {
+                let u = m * 2f64.powi(e);
+                for x in
+                    [u, -u, u.round(), -u.round(), u.round().next_up(), u.round().next_down(), -u.round().next_up()]
+                {
+                    assert_eq!(floor(x).to_bits(), x.floor().to_bits(), "{x}");
+                }
+            }
+        }
+        let law = Track::of(&[0.35, 0.02, 0.02, 5e-6]);
+        let mut memo = Memo::default();
+        for x in [0.0, 0.0, 1.3e-6, 1.3e-6, 7.7e-5, 0.0, -2e-6, -2e-6] {
+            assert_eq!(memo.threshold(&law, x).to_bits(), law.threshold(x).to_bits());
+        }
+    }
+
+    #[test]
     fn the_step_holds_at_the_local_threshold_and_advances_the_travel() {
         let law = Track::of(&[0.35, 0.02, 0.02, 5e-6]);
         let (hm, h, w) = (1e-4 / 0.0307, 1e-4, 0.301);
         let (mut x, mut stuck) = (0.0, true);
         let here = law.threshold(0.0);
-        let (v, _) = law.step(&mut x, &mut stuck, 0.99 * hm * w * here, hm, h, w);
+        let mut memo = Memo::default();
+        let (v, _) = law.step(&mut x, &mut stuck, 0.99 * hm * w * here, hm, h, w, &mut memo);
         assert!(stuck && v == 0.0 && x == 0.0);
-        let (v, f) = law.step(&mut x, &mut stuck, 1.2 * hm * w * here, hm, h, w);
+        let (v, f) = law.step(&mut x, &mut stuck, 1.2 * hm * w * here, hm, h, w, &mut memo);
         assert!(!stuck && v > 0.0 && (x - v * h).abs() < 1e-18);
         assert!((f - w * (here - law.mu_drop)).abs() < 1e-12);
     }

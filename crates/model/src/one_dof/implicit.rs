@@ -176,7 +176,7 @@ pub fn rate_state_implicit_speed(p: f64, hn: f64, a: f64, ln_s: f64, u_guess: f6
     if hi.is_nan() {
         return (f64::NAN, f64::NAN);
     }
-    if ln_s.exp() == f64::INFINITY {
+    if ln_s > LN_S_OVERFLOW {
         // s sinh u = s u to the last digit (u < e^{ln p − ln s} < e^{−300}).
         let v = p / (1.0 + c * (-ln_s).exp());
         return (sign * v, (v.ln() - ln_s).exp());
@@ -218,6 +218,14 @@ pub fn rate_state_implicit_speed(p: f64, hn: f64, a: f64, ln_s: f64, u_guess: f6
         None => (f64::NAN, f64::NAN),
     }
 }
+
+/// The largest x whose `exp` is finite, 709.782712893384 (the float below
+/// ln f64::MAX, 0x40862E42FEFA39EF): `x.exp() == ∞` exactly where
+/// `x > LN_S_OVERFLOW` (its exp is ≈ 107 ulps below f64::MAX, the next
+/// float's ≈ 400 above: no rounding of `exp` moves either across; a NaN is
+/// neither). [`rate_state_implicit_speed`] tests this where it took an
+/// `exp` per step to the same effect (test `the_overflow_bound_is_exps`).
+pub const LN_S_OVERFLOW: f64 = 709.782_712_893_384;
 
 /// The ageing law dθ/dt = 1 − v θ/Dc advanced exactly over `h_s` at constant
 /// speed `v` (≥ 0): θ → Dc/v + (θ − Dc/v) e^{−v h/Dc} (θ + h (1 − vθ/Dc) below

@@ -252,3 +252,18 @@ fn a_sink_that_keeps_the_twist_alone_gets_the_runs_twist() {
     let (lo, hi) = whole.twist_rad.iter().fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(*v), h.max(*v)));
     assert!(hi - lo > 0.01, "the twist moves: {lo}..{hi}");
 }
+
+#[test]
+fn the_overflow_bound_is_exps() {
+    use super::implicit::LN_S_OVERFLOW;
+    assert_eq!(LN_S_OVERFLOW.to_bits(), 0x4086_2E42_FEFA_39EF);
+    assert!(LN_S_OVERFLOW.exp().is_finite() && LN_S_OVERFLOW.next_up().exp() == f64::INFINITY);
+    let mut x = LN_S_OVERFLOW;
+    for _ in 0..1000 {
+        x = x.next_down();
+        assert!(x.exp().is_finite());
+    }
+    for x in [-1e300, -745.2, 0.0, 700.0, 709.0, 709.78, 710.0, 1e4, f64::INFINITY, f64::NEG_INFINITY, f64::NAN] {
+        assert_eq!(x.exp() == f64::INFINITY, x > LN_S_OVERFLOW, "{x}");
+    }
+}
