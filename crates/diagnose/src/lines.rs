@@ -54,10 +54,30 @@ fn floor_powers(phi: &[f64], x: &[f64], qs: &[f64], step: &[(f64, f64)]) -> Vec<
     while j0 < qs.len() {
         let k = size.min(qs.len() - j0);
         let mut acc = [(0.0f64, 0.0f64); BLOCK];
-        for ((v, r), xv) in sc.iter_mut().zip(step).zip(x) {
+        // Two samples a step: their rotations are independent chains that
+        // overlap, each point's sums still taken in sample order (the
+        // first sample's term, then the second's).
+        let rot = |v: (f64, f64), r: &(f64, f64)| (v.0 * r.1 + v.1 * r.0, v.1 * r.1 - v.0 * r.0);
+        let mut pairs = sc.chunks_exact_mut(2).zip(step.chunks_exact(2)).zip(x.chunks_exact(2));
+        for ((v, r), xv) in &mut pairs {
+            let (mut u0, mut u1) = (v[0], v[1]);
             for (j, a) in acc[..k].iter_mut().enumerate() {
                 if j0 + j > 0 {
-                    *v = (v.0 * r.1 + v.1 * r.0, v.1 * r.1 - v.0 * r.0);
+                    u0 = rot(u0, &r[0]);
+                    u1 = rot(u1, &r[1]);
+                }
+                a.0 += xv[0] * u0.1;
+                a.0 += xv[1] * u1.1;
+                a.1 += xv[0] * u0.0;
+                a.1 += xv[1] * u1.0;
+            }
+            (v[0], v[1]) = (u0, u1);
+        }
+        let tail = sc.len().min(step.len()).min(x.len()) / 2 * 2;
+        for ((v, r), xv) in sc[tail..].iter_mut().zip(&step[tail..]).zip(&x[tail..]) {
+            for (j, a) in acc[..k].iter_mut().enumerate() {
+                if j0 + j > 0 {
+                    *v = rot(*v, r);
                 }
                 a.0 += xv * v.1;
                 a.1 += xv * v.0;

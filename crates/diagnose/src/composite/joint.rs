@@ -71,7 +71,8 @@ pub(super) fn refine_speed_time(
         g.resize(d.len(), 0.0);
         sc.resize(d.len(), (0.0, 0.0));
         let mut rss = 0.0;
-        schedule.visit(&d.t, th[i_f], |i, (sx, cx)| {
+        // A loop over the schedule's iterator, not a closure per sample: the sum stays in a register.
+        for (i, (sx, cx)) in schedule.iter(&d.t, th[i_f]).enumerate() {
             let gi = if stribeck { rig_model::friction::stribeck_decay(d.omega[i], th[2]) } else { 0.0 };
             let (st, ct) = trig[d.run[i]];
             let v = (sx * ct + cx * st, cx * ct - sx * st);
@@ -79,7 +80,7 @@ pub(super) fn refine_speed_time(
             rss += d.w(i) * e * e;
             g[i] = gi;
             sc[i] = v;
-        });
+        }
         rss
     };
     let (mut g, mut sc) = (Vec::with_capacity(d.len()), Vec::with_capacity(d.len()));

@@ -478,19 +478,52 @@ impl SinCosSchedule {
     /// Calls `f(i, (sin, cos) of 2π f t_i)` for every sample in order.
     #[inline]
     pub(crate) fn visit(&self, t: &[f64], f_hz: f64, mut f: impl FnMut(usize, (f64, f64))) {
-        let w = 2.0 * PI * f_hz;
-        let rot: Vec<(f64, f64)> = self.steps_s.iter().map(|dt| (w * dt).sin_cos()).collect();
-        for &(start, len, step) in &self.segments {
-            let mut v = (w * t[start]).sin_cos();
-            f(start, v);
-            if len > 1 {
-                let (sr, cr) = rot[step];
-                for i in start + 1..start + len {
-                    v = (v.0 * cr + v.1 * sr, v.1 * cr - v.0 * sr);
-                    f(i, v);
-                }
-            }
+        for (i, v) in self.iter(t, f_hz).enumerate() {
+            f(i, v);
         }
+    }
+
+    /// (sin, cos) of 2π f t_i for every sample in order, as an iterator: the
+    /// numbers [`SinCosSchedule::visit`] passes, for a loop that keeps its
+    /// sums in registers (a closure `visit` does not inline sums through a
+    /// captured `&mut` in memory, one store and reload per sample).
+    pub(crate) fn iter<'a>(&'a self, t: &'a [f64], f_hz: f64) -> ScheduleIter<'a> {
+        let w = 2.0 * PI * f_hz;
+        let rot = self.steps_s.iter().map(|dt| (w * dt).sin_cos()).collect();
+        ScheduleIter { segments: self.segments.iter(), t, w, rot, v: (0.0, 1.0), r: (0.0, 1.0), left: 0 }
+    }
+}
+
+/// [`SinCosSchedule::iter`]: an exact `sin_cos` at each segment's first
+/// sample, then `left` rotations by `r`, the segment's step.
+pub(crate) struct ScheduleIter<'a> {
+    segments: std::slice::Iter<'a, (usize, usize, usize)>,
+    t: &'a [f64],
+    w: f64,
+    rot: Vec<(f64, f64)>,
+    v: (f64, f64),
+    r: (f64, f64),
+    left: usize,
+}
+
+impl Iterator for ScheduleIter<'_> {
+    type Item = (f64, f64);
+
+    #[inline]
+    fn next(&mut self) -> Option<(f64, f64)> {
+        if self.left > 0 {
+            self.left -= 1;
+            let ((s, c), (sr, cr)) = (self.v, self.r);
+            self.v = (s * cr + c * sr, c * cr - s * sr);
+            return Some(self.v);
+        }
+        let &(start, len, step) = self.segments.next()?;
+        self.v = (self.w * self.t[start]).sin_cos();
+        self.left = len - 1;
+        if len > 1 {
+            self.r = self.rot[step];
+        }
+        Some(self.v)
     }
 }
 

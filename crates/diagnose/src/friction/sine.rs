@@ -128,19 +128,10 @@ pub(crate) fn fit_sine_with(
     let rss_of = |th: &[f64], sc: &mut Vec<(f64, f64)>| -> f64 {
         let trig = run_trig(th);
         sc.resize(d.len(), (0.0, 0.0));
-        let mut rss = 0.0;
-        let mut at = |i: usize, (sx, cx): (f64, f64)| {
-            let (st, ct) = trig[d.run[i]];
-            let v = (sx * ct + cx * st, cx * ct - sx * st);
-            sc[i] = v;
-            let e = d.mu[i] - th[0] * (1.0 + th[1] * v.0);
-            rss += w[i] * e * e;
-        };
         match &schedule {
-            Some(sch) => sch.visit(&d.t, th[2], at),
-            None => sc0.iter().enumerate().for_each(|(i, &v)| at(i, v)),
+            Some(sch) => phase_rss(sch.iter(&d.t, th[2]), d, &w, &trig, th, sc),
+            None => phase_rss(sc0.iter().copied(), d, &w, &trig, th, sc),
         }
-        rss
     };
     let (mut sc, mut sc_cand) = (Vec::with_capacity(d.len()), Vec::with_capacity(d.len()));
     let mut rss = rss_of(&theta, &mut sc);
@@ -288,6 +279,32 @@ pub(crate) fn fit_sine_with(
         converged,
         scan: scored,
     })
+}
+
+/// The weighted RSS of μk(1 + a sin(x + θ_r)) at `th` = [μk, a, …], given
+/// (sin x, cos x) per sample in sample order (`base`) and (sin θ_r, cos θ_r)
+/// per run (`trig`), leaving sin and cos of x + θ_r in `sc` (angle
+/// addition). One loop with the sum in a register: the same operations in
+/// the same order as a closure per sample, which did not inline and kept the
+/// sum in memory (issue 23).
+fn phase_rss(
+    base: impl Iterator<Item = (f64, f64)>,
+    d: &SlipData,
+    w: &[f64],
+    trig: &[(f64, f64)],
+    th: &[f64],
+    sc: &mut [(f64, f64)],
+) -> f64 {
+    let (mk, a) = (th[0], th[1]);
+    let mut rss = 0.0;
+    for ((((sx, cx), out), (&r, &mu)), &w) in base.zip(sc.iter_mut()).zip(d.run.iter().zip(&d.mu)).zip(w) {
+        let (st, ct) = trig[r];
+        let v = (sx * ct + cx * st, cx * ct - sx * st);
+        *out = v;
+        let e = mu - mk * (1.0 + a * v.0);
+        rss += w * e * e;
+    }
+    rss
 }
 
 #[cfg(test)]
