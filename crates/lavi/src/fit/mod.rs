@@ -445,7 +445,7 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
             let id = crate::drive::identify(ev, current)?;
             at_bounds.extend(id.at_bounds.iter().cloned());
             let kept = Model { drive: Some(id.used), ..*current };
-            let (ls, _) = derive(ev.data, &ev.windows[cal], ev.slip_speed_rpm, current.structure)?;
+            let (ls, _) = ev.derivation(current.structure)?;
             let falling = Model { friction: ls.friction, ..kept };
             let from_torque = falling.friction != kept.friction && misfit(&falling) < misfit(&kept);
             let m = if from_torque { falling } else { kept };
@@ -486,7 +486,7 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
     let calibration_misfit = misfit(&model);
     // A structural re-derivation reports the dampings its least squares pinned.
     if model.structure != current.structure {
-        let (_, info) = derive(ev.data, &ev.windows[cal], ev.slip_speed_rpm, model.structure)?;
+        let (_, info) = ev.derivation(model.structure)?;
         at_bounds.extend(info.at_bounds);
     }
     Ok(Fitted { model, at_bounds, params, calibration_misfit, evaluations: evals, top_scan })
@@ -629,7 +629,7 @@ pub const MAX_DELAY_S: f64 = 0.05;
 /// then); the other effects carried over.
 fn restructure(current: &Model, ev: &Evaluator, st: Structure) -> Result<Model, LaviError> {
     let keep_law = !law_is_derived(current, ev)?;
-    let (mut m, _) = derive(ev.data, &ev.windows[ev.calibration()], ev.slip_speed_rpm, st)?;
+    let (mut m, _) = ev.derivation(st)?;
     m.friction_lag_s = current.friction_lag_s;
     m.mid = current.mid;
     m.drive = current.drive;
@@ -643,7 +643,7 @@ fn restructure(current: &Model, ev: &Evaluator, st: Structure) -> Result<Model, 
 
 /// True when `current`'s law is still the least-squares one of [`derive`] (no simulation fit chose it).
 fn law_is_derived(current: &Model, ev: &Evaluator) -> Result<bool, LaviError> {
-    let (m, _) = derive(ev.data, &ev.windows[ev.calibration()], ev.slip_speed_rpm, current.structure)?;
+    let (m, _) = ev.derivation(current.structure)?;
     Ok(m.friction == current.friction)
 }
 
