@@ -82,11 +82,27 @@ pub fn fit_equation_of_motion(
         r
     };
     let p = 3 + with_c as usize + with_ca as usize;
-    let (ic, ica, ij) = (1, 1 + with_c as usize, p - 2);
-    let fit = least_squares(bit_accel_rad_s2, p, row).ok_or(LaviError::Input {
+    let fit = least_squares(bit_accel_rad_s2, p, row).ok_or_else(collinear)?;
+    let mean = bit_accel_rad_s2.iter().sum::<f64>() / n as f64;
+    let sst: f64 = bit_accel_rad_s2.iter().map(|a| (a - mean).powi(2)).sum();
+    eom_fit(&fit, damping, sst)
+}
+
+/// The error of a singular design.
+fn collinear() -> LaviError {
+    LaviError::Input {
         what: "equation-of-motion fit",
         rule: "twist, damping terms and torque are collinear (is the window long enough?)".into(),
-    })?;
+    }
+}
+
+/// J, k, c, c_a and their standard errors from the least squares of the
+/// module's regression under `damping` (columns Δφ, [Ω_top − Ω], [−Ω], −T, 1),
+/// `sst` the acceleration's sum of squares about its mean.
+fn eom_fit(fit: &crate::lsq::LeastSquares, damping: Damping, sst: f64) -> Result<EomFit, LaviError> {
+    let (with_c, with_ca) = columns(damping);
+    let p = 3 + with_c as usize + with_ca as usize;
+    let (ic, ica, ij) = (1, 1 + with_c as usize, p - 2);
     let b = &fit.coef;
     if b[ij] <= 0.0 {
         return Err(LaviError::Input {
@@ -100,8 +116,6 @@ pub fn fit_equation_of_motion(
     let (c, c_se) = if with_c { ratio(ic) } else { (0.0, 0.0) };
     let (ca, ca_se) = if with_ca { ratio(ica) } else { (0.0, 0.0) };
     let (k, k_se) = ratio(0);
-    let mean = bit_accel_rad_s2.iter().sum::<f64>() / n as f64;
-    let sst: f64 = bit_accel_rad_s2.iter().map(|a| (a - mean).powi(2)).sum();
     Ok(EomFit {
         inertia_kgm2: j,
         stiffness_nm_rad: k,
@@ -113,22 +127,25 @@ pub fn fit_equation_of_motion(
         absolute_damping_stderr: ca_se,
         initial_twist_rad: b[p - 1] / b[0],
         r_squared: 1.0 - fit.sse / sst,
-        points: n,
+        points: fit.points,
     })
 }
 
 /// The equation of motion's least squares of one window for many torque
-/// columns (the torque channel read at each delay of a scan): everything but
-/// the torque's column is the same for every delay, so the twist, the
+/// columns (the torque channel read at each delay of a scan, or less a
+/// sensor inertia's J_s Ω̇ at each J_s of a fit): everything but the
+/// torque's column is the same for every such column, so the twist, the
 /// design's fixed columns and their sums in the normal equations are made
-/// once, and a delay costs its torque column's sums, a 5 × 5 solve and the
-/// residual pass. The sums are the products [`fit_equation_of_motion`]'s rows
-/// add, in the same row order: the same normal equations to the last bit, so
-/// the same R² ([`TorqueScan::r_squared`]).
-pub struct TorqueScan<'a> {
-    acc: &'a [f64],
+/// once, and a torque column costs its sums, a 5 × 5 solve and the residual
+/// pass. The sums are the products [`fit_equation_of_motion`]'s rows add, in
+/// the same row order: the same normal equations to the last bit, so the same
+/// fit ([`TorqueScan::fit`]) and R² ([`TorqueScan::r_squared`]).
+#[derive(Debug)]
+pub struct TorqueScan {
+    acc: Vec<f64>,
     /// The fixed columns per row, in [`fit_equation_of_motion`]'s order with the torque's slot 0.
     rows: Vec<[f64; 5]>,
+    damping: Damping,
     p: usize,
     ij: usize,
     /// AᵀA (row-major, p × p) and Aᵀy of the fixed columns; the torque's row and column 0.
@@ -137,13 +154,13 @@ pub struct TorqueScan<'a> {
     sst: f64,
 }
 
-impl<'a> TorqueScan<'a> {
+impl TorqueScan {
     /// The fixed part of [`fit_equation_of_motion`]'s design on these samples.
     pub fn new(
         time_s: &[f64],
         top_rad_s: &[f64],
         bit_rad_s: &[f64],
-        bit_accel_rad_s2: &'a [f64],
+        bit_accel_rad_s2: &[f64],
         damping: Damping,
     ) -> Self {
         let n = time_s.len();
@@ -179,18 +196,17 @@ impl<'a> TorqueScan<'a> {
         }
         let mean = bit_accel_rad_s2.iter().sum::<f64>() / n as f64;
         let sst: f64 = bit_accel_rad_s2.iter().map(|a| (a - mean).powi(2)).sum();
-        TorqueScan { acc: bit_accel_rad_s2, rows, p, ij, ata, atb, sst }
+        TorqueScan { acc: bit_accel_rad_s2.to_vec(), rows, damping, p, ij, ata, atb, sst }
     }
 
-    /// R² of [`fit_equation_of_motion`] with `torque_nm` (bit for bit); None where it
-    /// errs (a singular design, or an inverse inertia not above 0).
-    pub fn r_squared(&self, torque_nm: &[f64]) -> Option<f64> {
+    /// The normal equations with `torque_nm` as the torque's column.
+    fn normal(&self, torque_nm: &[f64]) -> Normal {
         let (p, ij) = (self.p, self.ij);
         let (mut ata, mut atb) = (self.ata.clone(), self.atb.clone());
         // The torque's entries: −T times each column (itself included), summed in row order.
         let mut col = [0.0; 5];
         let mut ty = 0.0;
-        for ((r, t), y) in self.rows.iter().zip(torque_nm).zip(self.acc) {
+        for ((r, t), y) in self.rows.iter().zip(torque_nm).zip(&self.acc) {
             let v = -t;
             ty += v * y;
             for b in 0..p {
@@ -202,16 +218,44 @@ impl<'a> TorqueScan<'a> {
             ata[ij * p + b] = col[b];
             ata[b * p + ij] = col[b];
         }
-        let normal = Normal::from_row_major(p, &ata, atb);
-        let coef = normal.solve()?;
-        if coef[ij] <= 0.0 {
+        Normal::from_row_major(p, &ata, atb)
+    }
+
+    /// Σ (Ω̇ − X β)² with `torque_nm` as the torque's column, in row order.
+    fn sse(&self, torque_nm: &[f64], coef: &[f64]) -> f64 {
+        sse(&self.acc, coef, |i, x| {
+            x.copy_from_slice(&self.rows[i][..self.p]);
+            x[self.ij] = -torque_nm[i];
+        })
+    }
+
+    /// R² of [`fit_equation_of_motion`] with `torque_nm` (bit for bit); None where it
+    /// errs (a singular design, or an inverse inertia not above 0).
+    pub fn r_squared(&self, torque_nm: &[f64]) -> Option<f64> {
+        let coef = self.normal(torque_nm).solve()?;
+        if coef[self.ij] <= 0.0 {
             return None;
         }
-        let sse = sse(self.acc, &coef, |i, x| {
-            x.copy_from_slice(&self.rows[i][..p]);
-            x[ij] = -torque_nm[i];
-        });
-        Some(1.0 - sse / self.sst)
+        Some(1.0 - self.sse(torque_nm, &coef) / self.sst)
+    }
+
+    /// [`fit_equation_of_motion`] with `torque_nm` as the torque (the time,
+    /// speeds, acceleration and damping of [`TorqueScan::new`]), bit for bit,
+    /// its errors included.
+    pub fn fit(&self, torque_nm: &[f64]) -> Result<EomFit, LaviError> {
+        let n = self.acc.len();
+        if torque_nm.len() != n || n < 8 {
+            return Err(LaviError::Input {
+                what: "equation-of-motion fit",
+                rule: format!("time, speeds, acceleration and torque need equal lengths of at least 8 samples ({n})"),
+            });
+        }
+        let normal = self.normal(torque_nm);
+        let (coef, flat) = normal.solve().zip(normal.inverse()).ok_or_else(collinear)?;
+        let inverse = flat.chunks(self.p).map(<[f64]>::to_vec).collect();
+        let sse = self.sse(torque_nm, &coef);
+        let fit = crate::lsq::LeastSquares { coef, inverse, sse, points: n };
+        eom_fit(&fit, self.damping, self.sst)
     }
 }
 
@@ -291,6 +335,27 @@ mod tests {
                 scan.r_squared(&neg).is_some(),
                 fit_equation_of_motion(&t, &u, &om, &acc, &neg, damping).is_ok()
             );
+            assert_eq!(
+                scan.fit(&neg).map_err(|e| e.to_string()),
+                fit_equation_of_motion(&t, &u, &om, &acc, &neg, damping).map_err(|e| e.to_string())
+            );
+        }
+    }
+
+    #[test]
+    fn the_scan_fits_each_torque_column_bit_for_bit() {
+        let (t, u, om, acc, tq) = record(0.02, 0.01);
+        for damping in [Damping::TwistRate, Damping::Absolute, Damping::Both, Damping::Fixed0] {
+            let scan = TorqueScan::new(&t, &u, &om, &acc, damping);
+            // The torque less a sensor inertia's J_s Ω̇ (the `sensor_inertia` fit's column), and read late.
+            for (js, k) in [(0.0, 0usize), (0.004, 0), (0.05, 3), (0.5, 30)] {
+                let tf: Vec<f64> = (0..tq.len()).map(|i| tq[(i + k).min(tq.len() - 1)] - js * acc[i]).collect();
+                let one = fit_equation_of_motion(&t, &u, &om, &acc, &tf, damping).unwrap();
+                // Debug prints every float's shortest round trip: equal strings, equal bits.
+                assert_eq!(format!("{:?}", scan.fit(&tf).unwrap()), format!("{one:?}"), "{damping:?} {js} {k}");
+            }
+            // A column too short is refused as the fit refuses it.
+            assert!(scan.fit(&tq[..5]).is_err());
         }
     }
 }

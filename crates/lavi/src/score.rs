@@ -132,6 +132,8 @@ pub struct Evaluator<'a> {
     /// The weight on bit's slow level over the whole record at each span of `wob_level`'s fit.
     wob_levels: Vec<(f64, Vec<f64>)>,
     outcomes: Mutex<HashMap<(String, usize), Outcome>>,
+    /// The least-squares derivations on the calibration window per structure ([`Evaluator::derivation`]).
+    derivations: Mutex<HashMap<String, (Model, crate::fit::Derivation)>>,
     /// Free runs made and outcomes reused ([`Evaluator::run_counts`]).
     made: AtomicUsize,
     reused: AtomicUsize,
@@ -186,6 +188,7 @@ impl<'a> Evaluator<'a> {
             bit_acc_rad_s2: derivative(&bit, data.fs_hz),
             wob_levels: crate::wob_level::levels(&data.wob_n, data.fs_hz),
             outcomes: Mutex::new(HashMap::new()),
+            derivations: Mutex::new(HashMap::new()),
             made: AtomicUsize::new(0),
             reused: AtomicUsize::new(0),
         })
@@ -212,6 +215,22 @@ impl<'a> Evaluator<'a> {
     /// Indices of the held-out windows.
     pub fn heldout(&self) -> Vec<usize> {
         (1..self.windows.len()).collect()
+    }
+
+    /// `fit::derive` of structure `st` on the calibration window, made once per
+    /// structure (keyed by its `Debug`, every float's shortest round trip): the
+    /// candidates of a step re-derive the current structure and the one they
+    /// extend it to more than once (`restructure`, its law's check, the
+    /// dampings pinned, `motor_drive`'s falling law). A pure function of the
+    /// structure, so the same numbers on any thread count; an error is not kept.
+    pub fn derivation(&self, st: crate::fit::Structure) -> Result<(Model, crate::fit::Derivation), LaviError> {
+        let key = format!("{st:?}");
+        if let Some(d) = self.derivations.lock().expect("no thread panicked holding the cache").get(&key) {
+            return Ok(d.clone());
+        }
+        let d = crate::fit::derive(self.data, &self.windows[self.calibration()], self.slip_speed_rpm, st)?;
+        self.derivations.lock().expect("no thread panicked holding the cache").insert(key, d.clone());
+        Ok(d)
     }
 
     /// Free run of `m` over window `wi`'s span (warm-up included), from the measured state at its start.

@@ -36,9 +36,7 @@
 
 use crate::Candidate;
 use crate::LaviError;
-use crate::fit::{
-    AtBound, MAX_DELAY_S, Structure, best_delay_s, derive, family_of, insert_law_params, law_by_simulation,
-};
+use crate::fit::{AtBound, MAX_DELAY_S, Structure, best_delay_s, family_of, insert_law_params, law_by_simulation};
 use crate::score::Evaluator;
 use crate::select::Selection;
 use crate::sim::Model;
@@ -78,7 +76,7 @@ fn structure_at(ev: &Evaluator, current: &Model, top_delay_s: f64) -> Structure 
 fn point(ev: &Evaluator, current: &Model, top_delay_s: f64) -> Result<(ScanPoint, Model), LaviError> {
     let cal = ev.calibration();
     let st = structure_at(ev, current, top_delay_s);
-    let (m, der) = derive(ev.data, &ev.windows[cal], ev.slip_speed_rpm, st)?;
+    let (m, der) = ev.derivation(st)?;
     let m = m.with_effects_of(current);
     let vmax = ev.measured[cal].bit_speed_max_rpm * crate::data::RPM_TO_RAD_S;
     let p = ScanPoint {

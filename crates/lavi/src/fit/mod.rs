@@ -4,7 +4,7 @@
 //! feature misfit, starting from the current model.
 
 use crate::data::{Prepared, RPM_TO_RAD_S, WindowSpec, derivative};
-use crate::eom::{Damping, EomFit, fit_equation_of_motion};
+use crate::eom::{Damping, EomFit};
 use crate::score::{ERROR_CAP, Evaluator};
 use crate::sim::{Drive, FrictionLaw, MidDof, Model};
 use crate::{Candidate, LaviError};
@@ -100,102 +100,173 @@ fn derive_with(
     st: Structure,
     law: Option<FrictionLaw>,
 ) -> Result<(Model, Derivation), LaviError> {
-    let r = (cal.span.start + cal.window.start)..(cal.span.start + cal.window.end);
-    let t = &d.time_s[r.clone()];
-    let rad = |x: &[f64]| x.iter().map(|v| v * RPM_TO_RAD_S).collect::<Vec<f64>>();
-    let (top, bit) = (top_rad_s(d, r.clone(), st.top_delay_s), rad(&d.bit_rpm[r.clone()]));
-    let acc = derivative(&bit, d.fs_hz);
-    let shift = (st.torque_delay_s * d.fs_hz).round() as isize;
-    let torque_at = |i: usize| d.torque_nm[(i as isize + shift).clamp(0, d.len() as isize - 1) as usize];
-    let tf: Vec<f64> = r.clone().zip(&acc).map(|(i, a)| torque_at(i) - st.sensor_inertia_kgm2 * a).collect();
-    let w = &d.wob_n[r.clone()];
-    let w_ref = w.iter().sum::<f64>() / w.len() as f64;
-    let fit = |damping| fit_equation_of_motion(t, &top, &bit, &acc, &tf, damping);
-    let free = fit(st.damping)?;
-    let mut at_bounds = Vec::new();
-    let neg_c = matches!(st.damping, Damping::TwistRate | Damping::Both) && free.damping_nm_s_rad < 0.0;
-    let neg_ca = matches!(st.damping, Damping::Absolute | Damping::Both) && free.absolute_damping_nm_s_rad < 0.0;
-    if neg_c {
-        at_bounds.push(AtBound {
-            parameter: "shaft_damping_nm_s_rad",
-            bound: 0.0,
-            unconstrained: free.damping_nm_s_rad,
-            stderr: free.damping_stderr,
-            meaning:
-                "a negative damping on the twist rate feeds energy in: the equation of motion with this structure \
+    EomWindow::new(d, cal, st).derive(d, slip_speed_rpm, st, law)
+}
+
+/// The calibration window as [`derive_with`] reads it under a structure's
+/// clocks (the top channel's delay τ_top, the torque channel's τ): the
+/// speeds, the acceleration, the torque read τ later, and per damping the
+/// equation of motion's columns but the torque's (`eom::TorqueScan`, made
+/// when first asked). What a derivation varies beyond the clocks, the
+/// sensor inertia's J_s Ω̇ taken off the torque and the damping, costs the
+/// torque column's sums: `sensor_inertia` re-derives J, k, c at every point
+/// of its simplex on one window (the same fits to the bit as made afresh:
+/// `TorqueScan::fit`).
+struct EomWindow {
+    /// Samples of the calibration window in the record.
+    r: std::ops::Range<usize>,
+    top_delay_s: f64,
+    /// The torque channel's delay in samples.
+    shift: isize,
+    top: Vec<f64>,
+    bit: Vec<f64>,
+    acc: Vec<f64>,
+    /// The torque channel's sample τ later, per sample of the window, N m.
+    torque_nm: Vec<f64>,
+    /// The window's mean weight on bit, N (the WOB structure's reference).
+    w_ref: f64,
+    /// Per damping (`Damping` order: twist rate, absolute, both, none).
+    scans: [std::sync::OnceLock<crate::eom::TorqueScan>; 4],
+}
+
+impl EomWindow {
+    fn new(d: &Prepared, cal: &WindowSpec, st: Structure) -> Self {
+        let r = (cal.span.start + cal.window.start)..(cal.span.start + cal.window.end);
+        let rad = |x: &[f64]| x.iter().map(|v| v * RPM_TO_RAD_S).collect::<Vec<f64>>();
+        let (top, bit) = (top_rad_s(d, r.clone(), st.top_delay_s), rad(&d.bit_rpm[r.clone()]));
+        let acc = derivative(&bit, d.fs_hz);
+        let shift = (st.torque_delay_s * d.fs_hz).round() as isize;
+        let torque_nm =
+            r.clone().map(|i| d.torque_nm[(i as isize + shift).clamp(0, d.len() as isize - 1) as usize]).collect();
+        let w = &d.wob_n[r.clone()];
+        let w_ref = w.iter().sum::<f64>() / w.len() as f64;
+        EomWindow { r, top_delay_s: st.top_delay_s, shift, top, bit, acc, torque_nm, w_ref, scans: Default::default() }
+    }
+
+    /// True when `st` reads the channels on this window's clocks.
+    fn clocks_of(&self, d: &Prepared, st: Structure) -> bool {
+        st.top_delay_s == self.top_delay_s && (st.torque_delay_s * d.fs_hz).round() as isize == self.shift
+    }
+
+    /// The least squares of the equation of motion under `damping` with the torque `tf`.
+    fn fit(&self, d: &Prepared, damping: Damping, tf: &[f64]) -> Result<EomFit, LaviError> {
+        let k = match damping {
+            Damping::TwistRate => 0,
+            Damping::Absolute => 1,
+            Damping::Both => 2,
+            Damping::Fixed0 => 3,
+        };
+        let scan = self.scans[k].get_or_init(|| {
+            crate::eom::TorqueScan::new(&d.time_s[self.r.clone()], &self.top, &self.bit, &self.acc, damping)
+        });
+        scan.fit(tf)
+    }
+
+    /// [`derive_with`] under `st`, which reads the channels on this window's clocks.
+    fn derive(
+        &self,
+        d: &Prepared,
+        slip_speed_rpm: f64,
+        st: Structure,
+        law: Option<FrictionLaw>,
+    ) -> Result<(Model, Derivation), LaviError> {
+        debug_assert!(self.clocks_of(d, st), "a derivation on another structure's clocks");
+        let (r, acc, shift, w_ref) = (self.r.clone(), &self.acc, self.shift, self.w_ref);
+        let t = &d.time_s[r.clone()];
+        let tf: Vec<f64> = self.torque_nm.iter().zip(acc).map(|(x, a)| x - st.sensor_inertia_kgm2 * a).collect();
+        let w = &d.wob_n[r.clone()];
+        let fit = |damping| self.fit(d, damping, &tf);
+        let free = fit(st.damping)?;
+        let mut at_bounds = Vec::new();
+        let neg_c = matches!(st.damping, Damping::TwistRate | Damping::Both) && free.damping_nm_s_rad < 0.0;
+        let neg_ca = matches!(st.damping, Damping::Absolute | Damping::Both) && free.absolute_damping_nm_s_rad < 0.0;
+        if neg_c {
+            at_bounds.push(AtBound {
+                parameter: "shaft_damping_nm_s_rad",
+                bound: 0.0,
+                unconstrained: free.damping_nm_s_rad,
+                stderr: free.damping_stderr,
+                meaning:
+                    "a negative damping on the twist rate feeds energy in: the equation of motion with this structure \
                       explains the measured acceleration only with an energy source, a structural error the damping \
                       placement, a channel delay or a sensor inertia may be"
-                    .into(),
-        });
-    }
-    if neg_ca {
-        at_bounds.push(AtBound {
-            parameter: "absolute_damping_nm_s_rad",
-            bound: 0.0,
-            unconstrained: free.absolute_damping_nm_s_rad,
-            stderr: free.absolute_damping_stderr,
-            meaning: "a negative drag on the absolute bit speed feeds energy in: not a dissipation the data support"
-                .into(),
-        });
-    }
-    let pinned = match (st.damping, neg_c, neg_ca) {
-        (_, false, false) => st.damping,
-        (Damping::Both, true, false) => Damping::Absolute,
-        (Damping::Both, false, true) => Damping::TwistRate,
-        _ => Damping::Fixed0,
-    };
-    let mut dof = if pinned == st.damping { free } else { fit(pinned)? };
-    // A refit after pinning can push the other damping below 0 too: pin it as well (reported).
-    if pinned != Damping::Fixed0 && (dof.damping_nm_s_rad < 0.0 || dof.absolute_damping_nm_s_rad < 0.0) {
-        at_bounds.push(AtBound {
-            parameter: if dof.damping_nm_s_rad < 0.0 { "shaft_damping_nm_s_rad" } else { "absolute_damping_nm_s_rad" },
-            bound: 0.0,
-            unconstrained: dof.damping_nm_s_rad.min(dof.absolute_damping_nm_s_rad),
-            stderr: if dof.damping_nm_s_rad < 0.0 { dof.damping_stderr } else { dof.absolute_damping_stderr },
-            meaning: "negative after the other damping was pinned at 0: no damping of this structure is positive"
-                .into(),
-        });
-        dof = fit(Damping::Fixed0)?;
-    }
-    let bit_rpm = &d.bit_rpm[r];
-    let (friction, law_rmse_nm, law_constant_rmse_nm) = match law {
-        Some(law) => (law, f64::NAN, f64::NAN),
-        None => {
-            let (vs, ys): (Vec<f64>, Vec<f64>) = (0..t.len())
-                .filter(|&i| bit_rpm[i] > slip_speed_rpm)
-                .map(|i| (bit_rpm[i], if st.wob { tf[i] * w_ref / w[i] } else { tf[i] }))
-                .unzip();
-            let e = fit_weakening(&vs, &ys, 1.0, 0.5, 2000.0)?;
-            let g = fit_weakening(&vs, &ys, 2.0, 0.5, 2000.0)?;
-            let f = if g.rmse <= e.rmse { g } else { e };
-            let law = FrictionLaw {
-                static_nm: f.a + f.b.max(0.0),
-                kinetic_nm: f.a,
-                stribeck_speed_rad_s: f.vs * RPM_TO_RAD_S,
-                shape_exponent: f.shape_exponent,
-                viscous_nm_s_rad: 0.0,
-            };
-            (law, f.rmse, f.rmse_constant)
+                        .into(),
+            });
         }
-    };
-    let model = Model {
-        inertia_kgm2: dof.inertia_kgm2,
-        stiffness_nm_rad: dof.stiffness_nm_rad,
-        damping_nm_s_rad: dof.damping_nm_s_rad,
-        absolute_damping_nm_s_rad: dof.absolute_damping_nm_s_rad,
-        torque_delay_s: shift as f64 / d.fs_hz,
-        friction,
-        wob_ref_n: st.wob.then_some(w_ref),
-        sensor_inertia_kgm2: st.sensor_inertia_kgm2,
-        friction_lag_s: 0.0,
-        mid: None,
-        drive: None,
-        wob_level: None,
-        static_excess_nm: 0.0,
-        structure: st,
-    };
-    let info = Derivation { structure: st, free, used: dof, at_bounds, law_rmse_nm, law_constant_rmse_nm };
-    Ok((model, info))
+        if neg_ca {
+            at_bounds.push(AtBound {
+                parameter: "absolute_damping_nm_s_rad",
+                bound: 0.0,
+                unconstrained: free.absolute_damping_nm_s_rad,
+                stderr: free.absolute_damping_stderr,
+                meaning:
+                    "a negative drag on the absolute bit speed feeds energy in: not a dissipation the data support"
+                        .into(),
+            });
+        }
+        let pinned = match (st.damping, neg_c, neg_ca) {
+            (_, false, false) => st.damping,
+            (Damping::Both, true, false) => Damping::Absolute,
+            (Damping::Both, false, true) => Damping::TwistRate,
+            _ => Damping::Fixed0,
+        };
+        let mut dof = if pinned == st.damping { free } else { fit(pinned)? };
+        // A refit after pinning can push the other damping below 0 too: pin it as well (reported).
+        if pinned != Damping::Fixed0 && (dof.damping_nm_s_rad < 0.0 || dof.absolute_damping_nm_s_rad < 0.0) {
+            at_bounds.push(AtBound {
+                parameter: if dof.damping_nm_s_rad < 0.0 {
+                    "shaft_damping_nm_s_rad"
+                } else {
+                    "absolute_damping_nm_s_rad"
+                },
+                bound: 0.0,
+                unconstrained: dof.damping_nm_s_rad.min(dof.absolute_damping_nm_s_rad),
+                stderr: if dof.damping_nm_s_rad < 0.0 { dof.damping_stderr } else { dof.absolute_damping_stderr },
+                meaning: "negative after the other damping was pinned at 0: no damping of this structure is positive"
+                    .into(),
+            });
+            dof = fit(Damping::Fixed0)?;
+        }
+        let bit_rpm = &d.bit_rpm[r];
+        let (friction, law_rmse_nm, law_constant_rmse_nm) = match law {
+            Some(law) => (law, f64::NAN, f64::NAN),
+            None => {
+                let (vs, ys): (Vec<f64>, Vec<f64>) = (0..t.len())
+                    .filter(|&i| bit_rpm[i] > slip_speed_rpm)
+                    .map(|i| (bit_rpm[i], if st.wob { tf[i] * w_ref / w[i] } else { tf[i] }))
+                    .unzip();
+                let e = fit_weakening(&vs, &ys, 1.0, 0.5, 2000.0)?;
+                let g = fit_weakening(&vs, &ys, 2.0, 0.5, 2000.0)?;
+                let f = if g.rmse <= e.rmse { g } else { e };
+                let law = FrictionLaw {
+                    static_nm: f.a + f.b.max(0.0),
+                    kinetic_nm: f.a,
+                    stribeck_speed_rad_s: f.vs * RPM_TO_RAD_S,
+                    shape_exponent: f.shape_exponent,
+                    viscous_nm_s_rad: 0.0,
+                };
+                (law, f.rmse, f.rmse_constant)
+            }
+        };
+        let model = Model {
+            inertia_kgm2: dof.inertia_kgm2,
+            stiffness_nm_rad: dof.stiffness_nm_rad,
+            damping_nm_s_rad: dof.damping_nm_s_rad,
+            absolute_damping_nm_s_rad: dof.absolute_damping_nm_s_rad,
+            torque_delay_s: shift as f64 / d.fs_hz,
+            friction,
+            wob_ref_n: st.wob.then_some(w_ref),
+            sensor_inertia_kgm2: st.sensor_inertia_kgm2,
+            friction_lag_s: 0.0,
+            mid: None,
+            drive: None,
+            wob_level: None,
+            static_excess_nm: 0.0,
+            structure: st,
+        };
+        let info = Derivation { structure: st, free, used: dof, at_bounds, law_rmse_nm, law_constant_rmse_nm };
+        Ok((model, info))
+    }
 }
 
 /// A candidate fitted on the calibration window.
@@ -250,10 +321,14 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
             // T_m − J_s Ω̇ for each J_s), from J_s = J: the sensor above an inertia like the bit's.
             // J_s is kept within J/10..10 J: below, no inertia worth the name (the law's refit alone,
             // `friction_law`'s); at a bound it is reported.
+            // Every point re-derives J, k, c on the calibration window under the current
+            // structure's clocks: its columns made once (`EomWindow`).
             let (lo, hi) = (0.1f64.ln(), 10.0f64.ln());
+            let window = EomWindow::new(ev.data, &ev.windows[cal], current.structure);
             let with_js = |m: &Model, y: &[f64]| -> Option<Model> {
                 let st = Structure { sensor_inertia_kgm2: j * y[0].clamp(lo, hi).exp(), ..m.structure };
-                restructure_with_law(m, ev, st).ok()
+                let (derived, _) = window.derive(ev.data, ev.slip_speed_rpm, st, Some(m.friction)).ok()?;
+                Some(derived.with_effects_of(m))
             };
             let (m, n, family, y) =
                 law_by_simulation_with(current, ev, max_evals, &[(0.0, 1.0)], &with_js).ok_or(LaviError::Input {
@@ -370,7 +445,7 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
             let id = crate::drive::identify(ev, current)?;
             at_bounds.extend(id.at_bounds.iter().cloned());
             let kept = Model { drive: Some(id.used), ..*current };
-            let (ls, _) = derive(ev.data, &ev.windows[cal], ev.slip_speed_rpm, current.structure)?;
+            let (ls, _) = ev.derivation(current.structure)?;
             let falling = Model { friction: ls.friction, ..kept };
             let from_torque = falling.friction != kept.friction && misfit(&falling) < misfit(&kept);
             let m = if from_torque { falling } else { kept };
@@ -411,7 +486,7 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
     let calibration_misfit = misfit(&model);
     // A structural re-derivation reports the dampings its least squares pinned.
     if model.structure != current.structure {
-        let (_, info) = derive(ev.data, &ev.windows[cal], ev.slip_speed_rpm, model.structure)?;
+        let (_, info) = ev.derivation(model.structure)?;
         at_bounds.extend(info.at_bounds);
     }
     Ok(Fitted { model, at_bounds, params, calibration_misfit, evaluations: evals, top_scan })
@@ -554,7 +629,7 @@ pub const MAX_DELAY_S: f64 = 0.05;
 /// then); the other effects carried over.
 fn restructure(current: &Model, ev: &Evaluator, st: Structure) -> Result<Model, LaviError> {
     let keep_law = !law_is_derived(current, ev)?;
-    let (mut m, _) = derive(ev.data, &ev.windows[ev.calibration()], ev.slip_speed_rpm, st)?;
+    let (mut m, _) = ev.derivation(st)?;
     m.friction_lag_s = current.friction_lag_s;
     m.mid = current.mid;
     m.drive = current.drive;
@@ -566,16 +641,9 @@ fn restructure(current: &Model, ev: &Evaluator, st: Structure) -> Result<Model, 
     Ok(m)
 }
 
-/// `current` re-derived by least squares under structure `st` (J, k, c, c_a),
-/// keeping `current`'s law and its other effects.
-fn restructure_with_law(current: &Model, ev: &Evaluator, st: Structure) -> Result<Model, LaviError> {
-    let (m, _) = derive_with(ev.data, &ev.windows[ev.calibration()], ev.slip_speed_rpm, st, Some(current.friction))?;
-    Ok(m.with_effects_of(current))
-}
-
 /// True when `current`'s law is still the least-squares one of [`derive`] (no simulation fit chose it).
 fn law_is_derived(current: &Model, ev: &Evaluator) -> Result<bool, LaviError> {
-    let (m, _) = derive(ev.data, &ev.windows[ev.calibration()], ev.slip_speed_rpm, current.structure)?;
+    let (m, _) = ev.derivation(current.structure)?;
     Ok(m.friction == current.friction)
 }
 
