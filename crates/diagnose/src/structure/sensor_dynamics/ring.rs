@@ -110,8 +110,9 @@ fn ring_average(run: &RecordedRun, rate_hz: f64) -> Option<Vec<f64>> {
 ///
 /// The basis 1 does not depend on τ or the width and t (time from the drop)
 /// not on the width, so each is put through `q` once (and its products with
-/// the records summed once), the ramp s once per sample for its three
-/// columns, and X'X's lower triangle is its upper one's mirror: the same
+/// the records summed once), the drop's three columns once per width, every
+/// τ reading them shifted (below), and X'X's lower triangle is its upper
+/// one's mirror: the same
 /// operations on the same values as every point building its own five
 /// columns and 25 sums, so the same misfits to the bit (test
 /// `ring_misfits_are_each_points_own_fit_to_the_bit`).
@@ -129,43 +130,78 @@ fn ring_misfits(y: &[&[f64]], q: Option<Biquad>, rate_hz: f64) -> Vec<f64> {
     let one = through(vec![1.0; lead + len]);
     let one_y: Vec<f64> = y.iter().map(|yr| dot(&one, yr)).collect();
     let yty: Vec<f64> = y.iter().map(|yr| yr.iter().map(|v| v * v).sum()).collect();
-    let taus = -(nominal_window_samples(RING_STEP_LEAD_S, rate_hz) as i64)
-        ..=nominal_window_samples(RING_STEP_LAG_S, rate_hz) as i64;
-    for tau in taus {
-        let at = pre as i64 + lead as i64 + tau;
-        let times: Vec<f64> = (0..(lead + len) as i64).map(|k| (k - at) as f64 * dt).collect();
-        let t_col = through(times.clone());
-        let t_y: Vec<f64> = y.iter().map(|yr| dot(&t_col, yr)).collect();
-        for width_s in RING_RAMPS_S {
+    let (tau_lo, tau_hi) = (
+        -(nominal_window_samples(RING_STEP_LEAD_S, rate_hz) as i64),
+        nominal_window_samples(RING_STEP_LAG_S, rate_hz) as i64,
+    );
+    let span = (tau_hi - tau_lo) as usize;
+    // The drop's columns s, s·t', s·t'² are 0 before it and functions of the
+    // samples since it after it (t' = k − at), and the filter starts from
+    // rest at sample 0, so it stays at rest until the drop: the columns of
+    // a drop `o` samples earlier than the last τ's are the last τ's columns
+    // read `o` samples on — the same operations on the same values. So each
+    // width's three columns are put through `q` once, with the drop at the
+    // last τ and `span` samples longer, and every τ reads its slice.
+    let at_hi = pre as i64 + lead as i64 + tau_hi;
+    let drop_cols: Vec<[Vec<f64>; 3]> = RING_RAMPS_S
+        .iter()
+        .map(|&width_s| {
             let m = (width_s * rate_hz).round() as i64;
-            // After the drop (ramp s from `at` over m samples): s, s·t', s·t'².
-            let mut cols = [(); 3].map(|_| Vec::with_capacity(lead + len));
-            for (k, &t) in (0..(lead + len) as i64).zip(&times) {
-                let s = if k < at {
+            // After the drop (ramp s from `at_hi` over m samples): s, s·t', s·t'².
+            let mut cols = [(); 3].map(|_| Vec::with_capacity(lead + len + span));
+            for k in 0..(lead + len + span) as i64 {
+                let t = (k - at_hi) as f64 * dt;
+                let s = if k < at_hi {
                     0.0
-                } else if k >= at + m {
+                } else if k >= at_hi + m {
                     1.0
                 } else {
-                    0.5 - 0.5 * (std::f64::consts::PI * (k - at) as f64 / m as f64).cos()
+                    0.5 - 0.5 * (std::f64::consts::PI * (k - at_hi) as f64 / m as f64).cos()
                 };
                 cols[0].push(s);
                 cols[1].push(s * t);
                 cols[2].push(s * t * t);
             }
-            let [s_col, st_col, stt_col] = cols.map(through);
-            let basis: [&[f64]; 5] = [&one, &t_col, &s_col, &st_col, &stt_col];
+            cols.map(|u| q.map_or(u.clone(), |q| filtered(&u, q)))
+        })
+        .collect();
+    for tau in tau_lo..=tau_hi {
+        let at = pre as i64 + lead as i64 + tau;
+        let times: Vec<f64> = (0..(lead + len) as i64).map(|k| (k - at) as f64 * dt).collect();
+        let t_col = through(times);
+        let t_y: Vec<f64> = y.iter().map(|yr| dot(&t_col, yr)).collect();
+        // The window's first sample in the columns of the drop at `at_hi`.
+        let from = lead + (at_hi - at) as usize;
+        for cols in &drop_cols {
+            let [s_col, st_col, stt_col] = [0, 1, 2].map(|c| &cols[c][from..from + len]);
+            let basis: [&[f64]; 5] = [&one, &t_col, s_col, st_col, stt_col];
+            const UPPER: [(usize, usize); 15] = [
+                (0, 0),
+                (0, 1),
+                (0, 2),
+                (0, 3),
+                (0, 4),
+                (1, 1),
+                (1, 2),
+                (1, 3),
+                (1, 4),
+                (2, 2),
+                (2, 3),
+                (2, 4),
+                (3, 3),
+                (3, 4),
+                (4, 4),
+            ];
             let mut xtx = [0.0; 25];
-            for i in 0..5 {
-                for j in i..5 {
-                    let v = dot(basis[i], basis[j]);
-                    (xtx[5 * i + j], xtx[5 * j + i]) = (v, v);
-                }
+            for ((i, j), v) in UPPER.into_iter().zip(dots(UPPER.map(|(i, j)| (basis[i], basis[j])))) {
+                (xtx[5 * i + j], xtx[5 * j + i]) = (v, v);
             }
             let Some(inv) = rig_estimate::linear::Normal::from_row_major(5, &xtx, vec![0.0; 5]).inverse() else {
                 continue;
             };
             for (r, yr) in y.iter().enumerate() {
-                let xty = [one_y[r], t_y[r], dot(&s_col, yr), dot(&st_col, yr), dot(&stt_col, yr)];
+                let [sy, sty, stty] = dots([(s_col, yr), (st_col, yr), (stt_col, yr)]);
+                let xty = [one_y[r], t_y[r], sy, sty, stty];
                 let fitted: f64 = (0..5).map(|i| xty[i] * (0..5).map(|j| inv[5 * i + j] * xty[j]).sum::<f64>()).sum();
                 let rms = ((yty[r] - fitted).max(0.0) / len as f64).sqrt();
                 if rms < best[r] {
@@ -175,6 +211,24 @@ fn ring_misfits(y: &[&[f64]], q: Option<Biquad>, rate_hz: f64) -> Vec<f64> {
         }
     }
     best
+}
+
+/// Σ_k a[k]·b[k] of each of the `M` pairs (k up to the shortest slice's
+/// length: the ring's columns and averages all have the window's), each summed in k's order from −0.0 as `Iterator::sum` folds it, so each
+/// is `a.iter().zip(b).map(|(a, b)| a * b).sum()` to the bit; the `M` sums
+/// in one pass: each addition waits for its sum's last, the sums are
+/// independent, so the processor overlaps them (the latency-bound
+/// recursions' lanes, [`super::corrected_pairs`]).
+fn dots<const M: usize>(pairs: [(&[f64], &[f64]); M]) -> [f64; M] {
+    let n = pairs.iter().map(|(a, b)| a.len().min(b.len())).min().unwrap_or(0);
+    let pairs = pairs.map(|(a, b)| (&a[..n], &b[..n]));
+    let mut acc = [-0.0f64; M];
+    for k in 0..n {
+        for (s, (a, b)) in acc.iter_mut().zip(&pairs) {
+            *s += a[k] * b[k];
+        }
+    }
+    acc
 }
 
 #[cfg(test)]
