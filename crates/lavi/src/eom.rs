@@ -60,10 +60,7 @@ pub fn fit_equation_of_motion(
 ) -> Result<EomFit, LaviError> {
     let n = time_s.len();
     if [top_rad_s.len(), bit_rad_s.len(), bit_accel_rad_s2.len(), torque_nm.len()].iter().any(|l| *l != n) || n < 8 {
-        return Err(LaviError::Input {
-            what: "equation-of-motion fit",
-            rule: format!("time, speeds, acceleration and torque need equal lengths of at least 8 samples ({n})"),
-        });
+        return Err(unequal_or_short(n));
     }
     let dphi = integrated_twist_rad(time_s, top_rad_s, bit_rad_s);
     let (with_c, with_ca) = columns(damping);
@@ -86,6 +83,14 @@ pub fn fit_equation_of_motion(
     let mean = bit_accel_rad_s2.iter().sum::<f64>() / n as f64;
     let sst: f64 = bit_accel_rad_s2.iter().map(|a| (a - mean).powi(2)).sum();
     eom_fit(&fit, damping, sst)
+}
+
+/// The error of series of unequal lengths or shorter than 8 samples (`n`: the time's).
+fn unequal_or_short(n: usize) -> LaviError {
+    LaviError::Input {
+        what: "equation-of-motion fit",
+        rule: format!("time, speeds, acceleration and torque need equal lengths of at least 8 samples ({n})"),
+    }
 }
 
 /// The error of a singular design.
@@ -245,10 +250,7 @@ impl TorqueScan {
     pub fn fit(&self, torque_nm: &[f64]) -> Result<EomFit, LaviError> {
         let n = self.acc.len();
         if torque_nm.len() != n || n < 8 {
-            return Err(LaviError::Input {
-                what: "equation-of-motion fit",
-                rule: format!("time, speeds, acceleration and torque need equal lengths of at least 8 samples ({n})"),
-            });
+            return Err(unequal_or_short(n));
         }
         let normal = self.normal(torque_nm);
         let (coef, flat) = normal.solve().zip(normal.inverse()).ok_or_else(collinear)?;
