@@ -8,7 +8,8 @@
 //! tolerance 0: the STARTS best-scored starts raced, EVALS each, the KEEP
 //! best on to RACE_EVALS: `fit_race_keep`, `fit_race_evals`). The
 //! calibration fits come first (`cal` lines: every fit's misfit on the runs
-//! it was fitted on, what a budget is chosen on), the held-out selection after.
+//! it was fitted on, what a budget is chosen on, and its parameters, which
+//! the `landscape` example reads), the held-out selection after.
 
 use rig_slider::{StudyParams, run_study};
 
@@ -53,10 +54,11 @@ fn main() {
             let mut ks: Vec<f64> = f.train.iter().map(|&r| s.runs[r].stiffness_n_m).collect();
             ks.dedup();
             println!(
-                "cal step {step} from {from} model {} train {ks:?} misfit {:.4} evals {}",
+                "cal step {step} from {from} model {} train {ks:?} misfit {:.4} evals {} params {}",
                 c.model.id(),
                 f.calibration_misfit,
-                f.evals
+                f.evals,
+                f.params.iter().map(|v| format!("{v:e}")).collect::<Vec<_>>().join(",")
             );
         }
     }
