@@ -75,6 +75,8 @@ pub struct Study {
     pub wob_level: Option<crate::wob_level::WobLevelReport>,
     /// A static level above the law (`static_friction`): its last trial per window before → after, side by side.
     pub static_friction: Option<crate::static_friction::StaticFrictionReport>,
+    /// Per window (calibration first): where the stick phases sit on the bit's angle, measured and in the final model's free run.
+    pub angle_locks: Vec<crate::wob_angle::AngleLock>,
     /// Free runs made and outcomes reused over the study ([`Evaluator::run_counts`]; not an output).
     #[serde(skip)]
     pub free_runs: [usize; 2],
@@ -158,6 +160,7 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
     let top_delay = crate::top_delay::report(&selection, &candidate_features);
     let wob_level = crate::wob_level::report(&ev, &selection, &baseline, p)?;
     let static_friction = crate::static_friction::report(&ev, &selection, &baseline);
+    let angle_locks = crate::wob_angle::angle_locks(&ev, &selection.final_model)?;
     let study = Study {
         params: p.clone(),
         windows: wins,
@@ -183,6 +186,7 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
         top_delay,
         wob_level,
         static_friction,
+        angle_locks,
         free_runs: ev.run_counts(),
     };
     Ok((study, d, rec))

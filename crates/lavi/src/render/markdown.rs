@@ -326,6 +326,7 @@ pub(super) fn markdown(
     md.push_str(&crate::top_delay::section(s));
     md.push_str(&crate::wob_level::section(s));
     md.push_str(&crate::static_friction::section(s));
+    md.push_str(&crate::wob_angle::section(s));
     md.push_str(&crate::drive::section(s));
     let h = &s.wob;
     let _ = writeln!(md, "## The chapter's hypothesis: a varying normal force\n");
