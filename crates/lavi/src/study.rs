@@ -40,6 +40,9 @@ pub struct Study {
     pub baseline_features: Vec<Features>,
     pub selection: Selection,
     pub final_features: Vec<Features>,
+    /// Per window (calibration first): the measured features of its first and of its second half
+    /// (what the record resolves: a feature that moves this much within one window).
+    pub halves: Vec<[Features; 2]>,
     pub wob: WobHypothesis,
     pub adequate: bool,
     pub signature: Vec<SignatureTerm>,
@@ -109,6 +112,7 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
     let baseline_features = sim_features(&baseline);
     let selection = forward_select(&ev, &baseline, &Candidate::ALL, p.fit_evaluations, &p.selection)?;
     let final_features = sim_features(&selection.final_model);
+    let halves = halves_of(&d, &wins, &ev.fopts)?;
     let wob = wob_hypothesis(&ev, &selection)?;
     let adequate = overall(&selection.final_heldout) <= p.adequacy_threshold;
     let signature = if adequate { Vec::new() } else { residual_signature(&ev, &selection.final_model)? };
@@ -170,6 +174,7 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
         baseline_features,
         selection,
         final_features,
+        halves,
         wob,
         adequate,
         signature,
@@ -190,6 +195,21 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
         free_runs: ev.run_counts(),
     };
     Ok((study, d, rec))
+}
+
+/// The measured features of each window's first and second half (the same one function and
+/// low-pass of the whole span as the window's own features, [`crate::features::window_features`]).
+fn halves_of(d: &Prepared, wins: &[WindowSpec], o: &FeatureOptions) -> Result<Vec<[Features; 2]>, LaviError> {
+    wins.iter()
+        .map(|w| {
+            let (b, t) = (&d.bit_raw_rpm[w.span.clone()], &d.torque_raw_nm[w.span.clone()]);
+            let mid = w.window.start + w.window.len() / 2;
+            Ok([
+                crate::features::window_features(b, t, w.window.start..mid, o)?,
+                crate::features::window_features(b, t, mid..w.window.end, o)?,
+            ])
+        })
+        .collect()
 }
 
 /// Runs the study and renders its outputs (tables, figures, lavi.md, lavi-diagnosis.json).
