@@ -15,6 +15,11 @@
 //! `cargo run --profile dev --example profile_study -- top`: `top_delay`'s scan
 //! on the baseline (rig_lavi::top_delay::scan), point by point, and its CPU time.
 //!
+//! `cargo run --profile dev --example profile_study -- dump DIR`: per window,
+//! `DIR/<window>.csv` with the span's time, the recorded bit speed and the
+//! final model's free-run bit speed (rpm): the series behind the features,
+//! for an independent look at what a window's misses are made of.
+//!
 //! `cargo run --profile dev --example profile_study -- static`:
 //! `static_friction`'s grid on the final model, every point's calibration
 //! misfit and, looked at after the choice, its held-out misfit and targets.
@@ -47,6 +52,8 @@ fn main() {
         torque_level(&path, &p);
     } else if std::env::args().nth(1).as_deref() == Some("top") {
         top_scan(&path, &p);
+    } else if std::env::args().nth(1).as_deref() == Some("dump") {
+        dump(&path, &p, Path::new(&std::env::args().nth(2).expect("dump DIR")));
     } else if std::env::args().nth(1).as_deref() == Some("static") {
         static_grid(&path, &p);
     } else {
@@ -81,6 +88,32 @@ fn profile(path: &Path, p: &StudyParams) {
     let (c, w) = (cpu_s(), std::time::Instant::now());
     let _ = rig_lavi::run_study(path, p).expect("the study runs");
     println!("run_study (analyse and render): CPU {:.2} s, wall {:.2} s", cpu_s() - c, w.elapsed().as_secs_f64());
+}
+
+fn dump(path: &Path, p: &StudyParams, dir: &Path) {
+    let (s, d, _) = rig_lavi::study::analyse(path, p).expect("the study runs");
+    let fopts = FeatureOptions {
+        fs_hz: d.fs_hz,
+        cutoff_hz: p.cutoff_hz,
+        transition_hz: p.transition_hz,
+        stick_speed_rpm: p.stick_speed_rpm,
+    };
+    let ev = Evaluator::new(&d, s.windows.clone(), fopts, p.substeps, p.slip_speed_rpm, p.drive_ref_window_s)
+        .expect("evaluator");
+    std::fs::create_dir_all(dir).expect("dump dir");
+    for (wi, w) in s.windows.iter().enumerate() {
+        let run = ev.simulate(&s.selection.final_model, wi).expect("the final model runs");
+        let mut csv = String::from("time_s,bit_rpm,sim_bit_rpm\n");
+        for (k, i) in w.span.clone().enumerate() {
+            csv.push_str(&format!(
+                "{},{},{}\n",
+                d.time_s[i],
+                d.bit_raw_rpm[i],
+                run.bit_rad_s[k] / rig_lavi::data::RPM_TO_RAD_S
+            ));
+        }
+        std::fs::write(dir.join(format!("{}.csv", w.label)), csv).expect("write");
+    }
 }
 
 fn torque_level(path: &Path, p: &StudyParams) {

@@ -80,7 +80,9 @@ pub fn describe(
     let top_r = rad(&top[span.clone()]);
     let acc0 = derivative(&rad(&bit[span.clone()]), fs_hz)[0];
     let inputs = Inputs { fs_hz, top_rad_s: &top_r, wob_n: &d.wob_n[span.clone()], top_ref_rad_s: &top_r };
-    let start = Start { bit_rad_s: bit[i0] * RPM_TO_RAD_S, bit_acc_rad_s2: acc0, torque_nm: torque[i0] };
+    // The baseline's contact does not follow the bit's angle: no angle needed.
+    let start =
+        Start { bit_rad_s: bit[i0] * RPM_TO_RAD_S, bit_acc_rad_s2: acc0, torque_nm: torque[i0], bit_angle_rad: 0.0 };
     let sim = simulate(base, &inputs, start, p.substeps)?;
     let sim_rpm: Vec<f64> = sim.bit_rad_s.iter().map(|v| v / RPM_TO_RAD_S).collect();
     let nrmse = rms(&sim_rpm.iter().zip(&bit_w).map(|(a, b)| a - b).collect::<Vec<_>>()) / rms(&bit_w);

@@ -29,6 +29,7 @@
 //! | `top_delay` | the top-speed channel is late (or early) on the bit speed: Ω_top(t) = Ω_top,m(t + τ_top), jointly with the torque channel's delay ([`top_delay`]) | τ_top over ±50 ms on the calibration window's free run of each structure's least-squares J, k, c and law (the torque delay by least squares for each τ_top), then the law refitted by simulation on that structure (like `channel_delay`'s); the better of the two on the calibration window | `top_delay_s`, `torque_delay_s`, `law_from_torque` (1: the least-squares law kept), and `friction_law`'s keys |
 //! | `wob_level` | the contact's normal force is the weight on bit's slow level: torque = μ(Ω)·W̄(t), W̄ the measured WOB's centred moving mean over a span of at least a stick-slip cycle ([`wob_level`]) | the law kept, scaled by W̄(t)/W_ref, W_ref W̄'s mean over the calibration window; the span chosen on the calibration window among 0.5, 1, 2, 4 s | `wob_level_window_s`, `reference_wob_n` |
 //! | `static_friction` | the stuck contact holds more than the kinetic law's zero-speed torque: a static level T(0) + ΔT_s above the Stribeck curve's start ([`static_friction`]) | ΔT_s on a grid of 1 % of T(0) up to 30 % by the calibration misfit, the law, J, k, c kept | `static_excess_nm`, `breakaway_nm` |
+//! | `wob_angle` | the contact's normal force follows the bit's angle: N(θ)/N̄ = 1 + Σ_{h=1..3} (a_h cos hθ + b_h sin hθ), a face out of flat or square pushing the counter-face back per revolution ([`wob_angle`]) | a_h, b_h by linear least squares of the relative WOB on the measured bit angle's harmonics (calibration window); refused when they explain less than half its variance there; the law, J, k, c kept; in the free run θ is the simulated bit's | `wob_angle_amplitude_1..3`, `wob_angle_r2` |
 //! | `unexplained` | a significant mismatch is left (adequacy below) | — | — |
 //!
 //! The structural candidates that change the motion (`channel_delay`,
@@ -66,6 +67,7 @@ pub mod sim;
 pub mod static_friction;
 pub mod study;
 pub mod top_delay;
+pub mod wob_angle;
 pub mod wob_level;
 
 pub use features::{FEATURES, FeatureOptions, Features, StickTorque, stick_torque, window_features};
@@ -111,10 +113,11 @@ pub enum Candidate {
     TopDelay,
     WobLevel,
     StaticFriction,
+    WobAngle,
 }
 
 impl Candidate {
-    pub const ALL: [Candidate; 12] = [
+    pub const ALL: [Candidate; 13] = [
         Candidate::FrictionLaw,
         Candidate::WobNormalForce,
         Candidate::SensorInertia,
@@ -127,6 +130,7 @@ impl Candidate {
         Candidate::TopDelay,
         Candidate::WobLevel,
         Candidate::StaticFriction,
+        Candidate::WobAngle,
     ];
 
     pub fn id(self) -> &'static str {
@@ -143,6 +147,7 @@ impl Candidate {
             Candidate::TopDelay => "top_delay",
             Candidate::WobLevel => "wob_level",
             Candidate::StaticFriction => "static_friction",
+            Candidate::WobAngle => "wob_angle",
         }
     }
 }

@@ -129,6 +129,8 @@ pub struct Evaluator<'a> {
     top_rad_s: Vec<f64>,
     top_ref_rad_s: Vec<f64>,
     bit_acc_rad_s2: Vec<f64>,
+    /// The bit's angle, rad: the record's bit speed integrated from its first sample (`wob_angle`).
+    bit_angle_rad: Vec<f64>,
     /// The weight on bit's slow level over the whole record at each span of `wob_level`'s fit.
     wob_levels: Vec<(f64, Vec<f64>)>,
     outcomes: Mutex<HashMap<(String, usize), Outcome>>,
@@ -186,6 +188,13 @@ impl<'a> Evaluator<'a> {
             top_rad_s,
             top_ref_rad_s,
             bit_acc_rad_s2: derivative(&bit, data.fs_hz),
+            // The bit's angle ∫ Ω dt: the workspace's one trapezoid integral of a speed difference
+            // (rig_model::one_dof::integrated_twist_rad), the bit against a resting reference.
+            bit_angle_rad: rig_model::one_dof::integrated_twist_rad(
+                &data.time_s,
+                &data.bit_raw_rpm.iter().map(|v| v * RPM_TO_RAD_S).collect::<Vec<f64>>(),
+                &vec![0.0; data.bit_raw_rpm.len()],
+            ),
             wob_levels: crate::wob_level::levels(&data.wob_n, data.fs_hz),
             outcomes: Mutex::new(HashMap::new()),
             derivations: Mutex::new(HashMap::new()),
@@ -205,6 +214,11 @@ impl<'a> Evaluator<'a> {
             Some((_, w)) => std::borrow::Cow::Borrowed(w),
             None => std::borrow::Cow::Owned(l.level_n(&self.data.wob_n, self.data.fs_hz)),
         }
+    }
+
+    /// The bit's angle over the whole record, rad (the record's bit speed integrated from its first sample).
+    pub fn bit_angle_rad(&self) -> &[f64] {
+        &self.bit_angle_rad
     }
 
     /// Index of the calibration window.
@@ -276,6 +290,7 @@ impl<'a> Evaluator<'a> {
             bit_rad_s: self.data.bit_rpm[s.start] * RPM_TO_RAD_S,
             bit_acc_rad_s2: self.bit_acc_rad_s2[s.start],
             torque_nm: self.data.torque_nm[at],
+            bit_angle_rad: self.bit_angle_rad[s.start],
         };
         WindowRun { model, top, top_ref, level, span: s, start }
     }

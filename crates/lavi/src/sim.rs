@@ -117,6 +117,10 @@ pub struct Model {
     /// [`crate::static_friction`]; 0: the break-away is the law's T(0); not serialised at 0).
     #[serde(skip_serializing_if = "crate::fit::is_zero")]
     pub static_excess_nm: f64,
+    /// Some: the normal force follows the bit's angle (`wob_angle`,
+    /// [`crate::wob_angle`]); not serialised when None.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wob_angle: Option<crate::wob_angle::WobAngle>,
     /// How J, k, c (and the least-squares law) were derived (rig_lavi::fit).
     pub structure: Structure,
 }
@@ -139,6 +143,7 @@ impl Model {
             drive: current.drive,
             wob_level: current.wob_level,
             static_excess_nm: current.static_excess_nm,
+            wob_angle: current.wob_angle,
             ..self
         }
     }
@@ -162,6 +167,9 @@ pub struct Start {
     pub bit_rad_s: f64,
     pub bit_acc_rad_s2: f64,
     pub torque_nm: f64,
+    /// The bit's angle, rad (the record's bit speed integrated from its first
+    /// sample): where a normal force that follows the angle starts (`wob_angle`).
+    pub bit_angle_rad: f64,
 }
 
 /// A free run at the input's sample times.
@@ -177,6 +185,7 @@ const STICK_RAD_S: f64 = 1e-3;
 
 /// The contact of [`Model`] as a law of the one simulator core: the
 /// reference law scaled by W/W_ref, with the first-order memory as its state.
+#[derive(Clone, Copy)]
 struct Contact {
     law: FrictionLaw,
     lag_s: f64,
@@ -197,6 +206,29 @@ impl Friction for Contact {
             let target = held.unwrap_or_else(|| scale * self.law.slip_nm(speed));
             state[0] += if held.is_some() { 1.0 } else { (h / self.lag_s).min(1.0) } * (target - state[0]);
         }
+    }
+}
+
+/// [`Contact`] whose normal force also follows the bit's angle (`wob_angle`): its
+/// normal-force factor times N(θ)/N̄, θ the bit's angle in `state[1]` (rad),
+/// advanced by |Ω| h (`speed` is 0 while stuck). A type of its own, run in a
+/// batch of its own ([`simulate_batch`]): every other model's contact keeps
+/// its loop free of the angle.
+struct AngleContact {
+    contact: Contact,
+    angle: crate::wob_angle::WobAngle,
+}
+
+impl Friction for AngleContact {
+    fn static_nm(&self, scale: f64, state: &[f64; MAX_FRICTION_STATES]) -> Option<f64> {
+        self.contact.static_nm(scale * self.angle.factor(state[1]), state)
+    }
+    fn slip_nm(&self, speed_rad_s: f64, scale: f64, state: &[f64; MAX_FRICTION_STATES]) -> f64 {
+        self.contact.slip_nm(speed_rad_s, scale * self.angle.factor(state[1]), state)
+    }
+    fn step_state(&self, state: &mut [f64; MAX_FRICTION_STATES], speed: f64, scale: f64, held: Option<f64>, h: f64) {
+        self.contact.step_state(state, speed, scale * self.angle.factor(state[1]), held, h);
+        state[1] += speed * h;
     }
 }
 
@@ -232,6 +264,8 @@ pub type Job<'m, 'u> = (&'m Model, Inputs<'u>, Start);
 struct Setup {
     shaft: Shaft,
     contact: Contact,
+    /// The contact when the normal force follows the bit's angle (`wob_angle`).
+    angle: Option<AngleContact>,
     state: OneDofState,
     /// W(t)/W_ref per sample (`wob_ref_n` Some).
     scale: Option<Vec<f64>>,
@@ -274,8 +308,9 @@ fn setup(m: &Model, u: &Inputs, start: Start) -> Result<Setup, LaviError> {
             Some(d) if d.ki_nm_rad > 0.0 => (tau0 - d.load_nm) / d.ki_nm_rad,
             _ => 0.0,
         },
-        friction_state: [tf0.abs(), 0.0],
-        stuck: om.abs() < STICK_RAD_S && tau0.abs() <= scale0 * m.static_level_nm(),
+        friction_state: [tf0.abs(), if m.wob_angle.is_some() { start.bit_angle_rad } else { 0.0 }],
+        stuck: om.abs() < STICK_RAD_S
+            && tau0.abs() <= scale0 * m.wob_angle.map_or(1.0, |a| a.factor(start.bit_angle_rad)) * m.static_level_nm(),
     };
     // T_0 as a shift of the reference: K_p (Ω_ref + T_0/K_p − Ω_top) = K_p (Ω_ref − Ω_top) + T_0.
     let shifted: Option<Vec<f64>> = m
@@ -283,7 +318,8 @@ fn setup(m: &Model, u: &Inputs, start: Start) -> Result<Setup, LaviError> {
         .filter(|d| d.load_nm != 0.0)
         .map(|d| u.top_ref_rad_s.iter().map(|r| r + d.load_nm / d.kp_nm_s_rad).collect());
     let contact = Contact { law: m.friction, lag_s: m.friction_lag_s, static_nm: m.static_level_nm() };
-    Ok(Setup { shaft, contact, state, scale, shifted })
+    let angle = m.wob_angle.map(|angle| AngleContact { contact, angle });
+    Ok(Setup { shaft, contact, angle, state, scale, shifted })
 }
 
 /// Integrates every job as [`simulate`] would, results in job order: one
@@ -291,8 +327,9 @@ fn setup(m: &Model, u: &Inputs, start: Start) -> Result<Setup, LaviError> {
 /// substep in one loop, each run's bits its own).
 pub fn simulate_batch(jobs: &[Job<'_, '_>], substeps: usize) -> Vec<Result<Run, LaviError>> {
     let setups: Vec<Result<Setup, LaviError>> = jobs.iter().map(|(m, u, start)| setup(m, u, *start)).collect();
-    // The jobs that set up, as the core's.
-    let (mut core, mut of) = (Vec::with_capacity(jobs.len()), Vec::with_capacity(jobs.len()));
+    // The jobs that set up, as the core's: a batch per contact type (one loop each).
+    let (mut plain, mut of_plain) = (Vec::with_capacity(jobs.len()), Vec::new());
+    let (mut angled, mut of_angled) = (Vec::new(), Vec::new());
     for (j, s) in setups.iter().enumerate() {
         let Ok(s) = s else { continue };
         let (m, u, _) = &jobs[j];
@@ -305,29 +342,22 @@ pub fn simulate_batch(jobs: &[Job<'_, '_>], substeps: usize) -> Vec<Result<Run, 
             },
             None => one_dof::Drive::Speed(u.top_rad_s),
         };
-        core.push(one_dof::OneDofJob {
-            shaft: s.shaft,
-            law: &s.contact,
-            drive,
-            normal_scale: s.scale.as_deref(),
-            start: s.state,
-            samples: u.top_rad_s.len(),
-        });
-        of.push(j);
+        let (shaft, normal_scale, start, samples) = (s.shaft, s.scale.as_deref(), s.state, u.top_rad_s.len());
+        match &s.angle {
+            Some(law) => {
+                angled.push(one_dof::OneDofJob { shaft, law, drive, normal_scale, start, samples });
+                of_angled.push(j);
+            }
+            None => {
+                plain.push(one_dof::OneDofJob { shaft, law: &s.contact, drive, normal_scale, start, samples });
+                of_plain.push(j);
+            }
+        }
     }
-    // Every job's core run is made together: same sample rate across the batch.
-    let fs_hz = jobs.first().map_or(1.0, |j| j.1.fs_hz);
     let mut runs: Vec<Option<Result<one_dof::OneDofRun, rig_model::ModelError>>> =
         (0..jobs.len()).map(|_| None).collect();
-    if jobs.iter().all(|j| j.1.fs_hz == fs_hz) {
-        for (j, r) in of.into_iter().zip(one_dof::simulate_batch(&core, fs_hz, substeps)) {
-            runs[j] = Some(r);
-        }
-    } else {
-        for (j, job) in of.into_iter().zip(&core) {
-            runs[j] = one_dof::simulate_batch(std::slice::from_ref(job), jobs[j].1.fs_hz, substeps).pop();
-        }
-    }
+    run_core(&plain, &of_plain, jobs, substeps, &mut runs);
+    run_core(&angled, &of_angled, jobs, substeps, &mut runs);
     setups
         .into_iter()
         .zip(runs)
@@ -343,6 +373,28 @@ pub fn simulate_batch(jobs: &[Job<'_, '_>], substeps: usize) -> Vec<Result<Run, 
             Ok(sensor_run(m, r, *start, u.fs_hz))
         })
         .collect()
+}
+
+/// The core runs of `core` (jobs `of` of `jobs`) into `runs`: one batch
+/// (`one_dof::simulate_batch`: the runs advance substep by substep in one
+/// loop, each run's bits its own) when the jobs share a sample rate, else one by one.
+fn run_core<F: Friction>(
+    core: &[one_dof::OneDofJob<'_, F>],
+    of: &[usize],
+    jobs: &[Job<'_, '_>],
+    substeps: usize,
+    runs: &mut [Option<Result<one_dof::OneDofRun, rig_model::ModelError>>],
+) {
+    let fs_hz = jobs.first().map_or(1.0, |j| j.1.fs_hz);
+    if jobs.iter().all(|j| j.1.fs_hz == fs_hz) {
+        for (j, r) in of.iter().zip(one_dof::simulate_batch(core, fs_hz, substeps)) {
+            runs[*j] = Some(r);
+        }
+    } else {
+        for (j, job) in of.iter().zip(core) {
+            runs[*j] = one_dof::simulate_batch(std::slice::from_ref(job), jobs[*j].1.fs_hz, substeps).pop();
+        }
+    }
 }
 
 /// The core's run as the rig's channels read it: the sensor's inertia and
@@ -385,6 +437,7 @@ pub(crate) mod tests {
             drive: None,
             wob_level: None,
             static_excess_nm: 0.0,
+            wob_angle: None,
             structure: Structure::BASELINE,
         }
     }
@@ -393,7 +446,7 @@ pub(crate) mod tests {
         let n = (secs * 1000.0) as usize;
         let (u, w) = (vec![top; n], vec![500.0; n]);
         let inp = Inputs { fs_hz: 1000.0, top_rad_s: &u, wob_n: &w, top_ref_rad_s: &u };
-        simulate(m, &inp, Start { bit_rad_s: top, bit_acc_rad_s2: 0.0, torque_nm: 1.0 }, 5).unwrap()
+        simulate(m, &inp, Start { bit_rad_s: top, bit_acc_rad_s2: 0.0, torque_nm: 1.0, bit_angle_rad: 0.0 }, 5).unwrap()
     }
 
     #[test]
@@ -402,6 +455,31 @@ pub(crate) mod tests {
         let r = run(&base(), 20.0, 60.0);
         let n = r.bit_rad_s.len() - 1;
         assert!((r.bit_rad_s[n] - 20.0).abs() < 1e-3 && (r.torque_nm[n] - 1.0).abs() < 1e-3, "{:?}", r.bit_rad_s[n]);
+    }
+
+    /// A contact whose normal force follows the bit's angle (`wob_angle`): in steady slip at
+    /// 20 rad/s past the Stribeck speed the torque is T_k (1 + 0.2 cos 2θ), θ the simulated bit's
+    /// angle from its start: it swings at twice the revolution rate, in that phase.
+    #[test]
+    fn a_contact_that_follows_the_angle_varies_with_the_simulated_angle() {
+        let a = crate::wob_angle::WobAngle { cos: [0.0, 0.2, 0.0], sin: [0.0; 3] };
+        let m = Model { wob_angle: Some(a), ..base() };
+        let r = run(&m, 20.0, 60.0);
+        // Past the transient (decay 2J/c = 5 s): the bit's angle is ∫ Ω dt from 0.
+        let mut theta = 0.0;
+        let mut worst = 0.0f64;
+        for i in 1..r.bit_rad_s.len() {
+            theta += 0.5 * (r.bit_rad_s[i - 1] + r.bit_rad_s[i]) / 1000.0;
+            if i > 50_000 {
+                let want = 1.0 * (1.0 + 0.2 * (2.0 * theta).cos());
+                worst = worst.max((r.torque_nm[i] - want).abs());
+            }
+        }
+        // The torque follows the angle (to the bit speed's small ripple the swing itself drives).
+        assert!(worst < 0.02, "largest departure {worst}");
+        let (lo, hi) =
+            r.torque_nm[50_000..].iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), t| (l.min(*t), h.max(*t)));
+        assert!(lo < 0.81 && hi > 1.19, "{lo}..{hi}");
     }
 
     #[test]
@@ -474,7 +552,7 @@ pub(crate) mod tests {
         let top: Vec<f64> = (0..n).map(|i| 1.0 + 0.5 * (i as f64 * 0.002).sin()).collect();
         let w: Vec<f64> = (0..n).map(|i| 500.0 + 40.0 * (i as f64 * 0.001).cos()).collect();
         let inp = Inputs { fs_hz: 1000.0, top_rad_s: &top, wob_n: &w, top_ref_rad_s: &top };
-        let start = Start { bit_rad_s: 0.0, bit_acc_rad_s2: 0.0, torque_nm: 1.0 };
+        let start = Start { bit_rad_s: 0.0, bit_acc_rad_s2: 0.0, torque_nm: 1.0, bit_angle_rad: 0.0 };
         let jobs: Vec<Job> = models.iter().map(|m| (m, inp, start)).collect();
         let batch = simulate_batch(&jobs, 5);
         let bits = |r: &Result<Run, LaviError>| match r {

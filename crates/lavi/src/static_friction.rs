@@ -194,7 +194,7 @@ mod tests {
         let n = 20_000;
         let (u, w) = (vec![1.0; n], vec![500.0; n]);
         let inp = Inputs { fs_hz: 1000.0, top_rad_s: &u, wob_n: &w, top_ref_rad_s: &u };
-        let start = Start { bit_rad_s: 1.0, bit_acc_rad_s2: 0.0, torque_nm: 1.0 };
+        let start = Start { bit_rad_s: 1.0, bit_acc_rad_s2: 0.0, torque_nm: 1.0, bit_angle_rad: 0.0 };
         let held = |m: &Model| {
             let r = simulate(m, &inp, start, 5).unwrap();
             let stuck: Vec<usize> = (0..n).filter(|&i| r.bit_rad_s[i] == 0.0).collect();

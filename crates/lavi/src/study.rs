@@ -40,6 +40,9 @@ pub struct Study {
     pub baseline_features: Vec<Features>,
     pub selection: Selection,
     pub final_features: Vec<Features>,
+    /// Per window (calibration first): the measured features of its first and of its second half
+    /// (what the record resolves: a feature that moves this much within one window).
+    pub halves: Vec<[Features; 2]>,
     pub wob: WobHypothesis,
     pub adequate: bool,
     pub signature: Vec<SignatureTerm>,
@@ -75,6 +78,8 @@ pub struct Study {
     pub wob_level: Option<crate::wob_level::WobLevelReport>,
     /// A static level above the law (`static_friction`): its last trial per window before → after, side by side.
     pub static_friction: Option<crate::static_friction::StaticFrictionReport>,
+    /// Per window (calibration first): where the stick phases sit on the bit's angle, measured and in the final model's free run.
+    pub angle_locks: Vec<crate::wob_angle::AngleLock>,
     /// Free runs made and outcomes reused over the study ([`Evaluator::run_counts`]; not an output).
     #[serde(skip)]
     pub free_runs: [usize; 2],
@@ -107,6 +112,7 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
     let baseline_features = sim_features(&baseline);
     let selection = forward_select(&ev, &baseline, &Candidate::ALL, p.fit_evaluations, &p.selection)?;
     let final_features = sim_features(&selection.final_model);
+    let halves = halves_of(&d, &wins, &ev.fopts)?;
     let wob = wob_hypothesis(&ev, &selection)?;
     let adequate = overall(&selection.final_heldout) <= p.adequacy_threshold;
     let signature = if adequate { Vec::new() } else { residual_signature(&ev, &selection.final_model)? };
@@ -158,6 +164,7 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
     let top_delay = crate::top_delay::report(&selection, &candidate_features);
     let wob_level = crate::wob_level::report(&ev, &selection, &baseline, p)?;
     let static_friction = crate::static_friction::report(&ev, &selection, &baseline);
+    let angle_locks = crate::wob_angle::angle_locks(&ev, &selection.final_model)?;
     let study = Study {
         params: p.clone(),
         windows: wins,
@@ -167,6 +174,7 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
         baseline_features,
         selection,
         final_features,
+        halves,
         wob,
         adequate,
         signature,
@@ -183,9 +191,25 @@ pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRec
         top_delay,
         wob_level,
         static_friction,
+        angle_locks,
         free_runs: ev.run_counts(),
     };
     Ok((study, d, rec))
+}
+
+/// The measured features of each window's first and second half (the same one function and
+/// low-pass of the whole span as the window's own features, [`crate::features::window_features`]).
+fn halves_of(d: &Prepared, wins: &[WindowSpec], o: &FeatureOptions) -> Result<Vec<[Features; 2]>, LaviError> {
+    wins.iter()
+        .map(|w| {
+            let (b, t) = (&d.bit_raw_rpm[w.span.clone()], &d.torque_raw_nm[w.span.clone()]);
+            let mid = w.window.start + w.window.len() / 2;
+            Ok([
+                crate::features::window_features(b, t, w.window.start..mid, o)?,
+                crate::features::window_features(b, t, mid..w.window.end, o)?,
+            ])
+        })
+        .collect()
 }
 
 /// Runs the study and renders its outputs (tables, figures, lavi.md, lavi-diagnosis.json).

@@ -262,6 +262,7 @@ impl EomWindow {
             drive: None,
             wob_level: None,
             static_excess_nm: 0.0,
+            wob_angle: None,
             structure: st,
         };
         let info = Derivation { structure: st, free, used: dof, at_bounds, law_rmse_nm, law_constant_rmse_nm };
@@ -385,6 +386,7 @@ pub fn fit_candidate(c: Candidate, current: &Model, ev: &Evaluator, max_evals: u
         }
         Candidate::WobLevel => crate::wob_level::fit(current, ev, &mut params)?,
         Candidate::StaticFriction => crate::static_friction::fit(current, ev, &mut params, &mut at_bounds)?,
+        Candidate::WobAngle => crate::wob_angle::fit(current, ev, &mut params)?,
         Candidate::FrictionLaw => {
             let (m, total, family) = law_by_simulation(current, ev, max_evals);
             insert_law_params(&mut params, &m, family);

@@ -272,6 +272,9 @@ pub(super) fn markdown(
             missed.join("; ")
         );
     }
+    if met_ext.iter().any(|m| *m < nh) {
+        let _ = writeln!(md, "{}", resolution_of_misses(s));
+    }
     if met_ext[5] < nh || met_ext[6] < nh {
         let _ = writeln!(md, "{}", torque_level_hypothesis(s));
         let _ = writeln!(md, "{}", stick_torque_finding(s));
@@ -326,6 +329,7 @@ pub(super) fn markdown(
     md.push_str(&crate::top_delay::section(s));
     md.push_str(&crate::wob_level::section(s));
     md.push_str(&crate::static_friction::section(s));
+    md.push_str(&crate::wob_angle::section(s));
     md.push_str(&crate::drive::section(s));
     let h = &s.wob;
     let _ = writeln!(md, "## The chapter's hypothesis: a varying normal force\n");
@@ -426,4 +430,41 @@ pub(super) fn side_by_side(s: &Study) -> String {
         );
     }
     t
+}
+
+/// What the record resolves of each miss of the extended model: the miss against how far the
+/// window's own two halves lie apart, both in units of the whole window's tolerance.
+fn resolution_of_misses(s: &Study) -> String {
+    let mut rows = Vec::new();
+    let (mut misses, mut unresolved) = (0, 0);
+    for wi in 1..s.windows.len() {
+        let (m, x) = (&s.measured[wi], &s.final_features[wi]);
+        let e = feature_errors(m, x);
+        let (h1, h2) = (feature_errors(m, &s.halves[wi][0]), feature_errors(m, &s.halves[wi][1]));
+        for (fi, ei) in e.iter().enumerate() {
+            if ei.abs() <= 1.0 {
+                continue;
+            }
+            misses += 1;
+            let apart = (h2[fi] - h1[fi]).abs();
+            let resolved = ei.abs() > apart;
+            if !resolved {
+                unresolved += 1;
+            }
+            rows.push(format!(
+                "{} `{}` {:+.2} (halves {:.2} apart{})",
+                s.windows[wi].label,
+                FEATURES[fi],
+                ei,
+                apart,
+                if resolved { "" } else { ": not resolved" }
+            ));
+        }
+    }
+    format!(
+        "- What the record resolves of each miss: the error over tolerance against how far the window's two halves (2 s each, the \
+         same features of the record) lie apart in the same units: {}. {unresolved} of the {misses} misses are no larger than their \
+         window's own halves differ by: the record does not resolve them.",
+        rows.join("; ")
+    )
 }

@@ -42,7 +42,7 @@ const TARGETS: [&str; N_FEATURES] = [
     "within 10 %",
 ];
 /// The effect ids of this rig, as the crate docs list them.
-const EFFECT_IDS: [(&str, &str); 14] = [
+const EFFECT_IDS: [(&str, &str); 15] = [
     ("none", "the baseline explains the held-out windows within the adequacy threshold."),
     (
         "friction_law",
@@ -88,6 +88,10 @@ const EFFECT_IDS: [(&str, &str); 14] = [
     (
         "static_friction",
         "the stuck contact holds more than the kinetic law's zero-speed torque: a static level T(0) + ΔT_s, ΔT_s ≥ 0 on a grid of 1 % of T(0) up to 30 % chosen by the calibration misfit, the law, J, k and c kept; the bit leaves stick with the torque dropping to T(0) (`static_excess_nm`, `breakaway_nm`).",
+    ),
+    (
+        "wob_angle",
+        "the contact's normal force follows the bit's angle, not the time: N(θ)/N̄ = 1 + Σ_{h=1..3} (a_h cos hθ + b_h sin hθ) (a face out of flat or square pushing the counter-face back per revolution, as a wobbling brake disc does), a_h, b_h by linear least squares of the relative WOB on the measured bit angle's harmonics over the calibration window, refused when they explain less than half its variance there; the law, J, k, c kept; in the free run θ is the simulated bit's angle (`wob_angle_amplitude_1..3`, `wob_angle_r2`).",
     ),
     (
         "unexplained",
