@@ -65,6 +65,15 @@ pub fn grid(t_end_s: f64, rate_hz: f64) -> Vec<f64> {
     (0..=n).map(|k| k as f64 / rate_hz).collect()
 }
 
-pub fn opts(tol: f64) -> SimOptions {
-    SimOptions { rtol: tol, atol: tol * 1e-2, max_step_s: 0.01 }
+/// The shipped integrator setting: pipeline.toml's `[shared.integrator]`.
+pub fn shipped() -> SimOptions {
+    SimOptions::from_pipeline_toml(include_str!("../../../../pipeline.toml"))
+        .expect("pipeline.toml [shared.integrator]")
+}
+
+/// A tolerance chosen by a test, not the shipped one (a convergence study, a
+/// reference tighter than the shipped setting, a proof that needs more digits):
+/// rtol `rtol`, atol `rtol`/100, the shipped largest step.
+pub fn at_rtol(rtol: f64) -> SimOptions {
+    SimOptions { rtol, atol: rtol * 1e-2, ..shipped() }
 }
