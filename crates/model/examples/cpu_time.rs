@@ -19,10 +19,12 @@ fn minor_faults() -> f64 {
     s.rsplit(')').next().unwrap().split_whitespace().nth(7).unwrap().parse().unwrap()
 }
 fn main() {
+    // Read once, first (on a thread of its own: `common::shipped`).
+    let o = common::shipped();
     let input = RunInput::OperatingPoint { motor_rpm_setpoint: 40.0, normal_force_n: 15.0, ramp_s: 2.0 };
     let t = common::grid(40.0, 500.0);
     if std::env::args().any(|a| a == "--peer-case") {
-        return peer_case(&input, &t);
+        return peer_case(&input, &t, &o);
     }
     for (name, p, samples) in [
         ("rig 500 Hz", common::rig_params(), t.clone()),
@@ -30,7 +32,6 @@ fn main() {
         ("thesis 500 Hz", common::thesis_params(), t.clone()),
     ] {
         let n = 500;
-        let o = common::shipped();
         let (c0, f0) = (cpu_s(), minor_faults());
         let w0 = std::time::Instant::now();
         let mut st = None;
@@ -55,15 +56,14 @@ fn main() {
     }
 }
 
-fn peer_case(input: &RunInput, t: &[f64]) {
+fn peer_case(input: &RunInput, t: &[f64], o: &rig_model::SimOptions) {
     let p = common::rig_params();
     let RunInput::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s } = *input else { unreachable!() };
     let FrictionLaw::Coulomb { mu_static, mu_kinetic } = p.friction else { unreachable!("the bench brake is Coulomb") };
-    let o = common::shipped();
     let (n, c0, w0) = (500, cpu_s(), std::time::Instant::now());
     let mut tr = None;
     for _ in 0..n {
-        tr = Some(simulate_with_stats(&p, input, t, &o).unwrap().0);
+        tr = Some(simulate_with_stats(&p, input, t, o).unwrap().0);
     }
     let (cpu_ms, wall_ms) = ((cpu_s() - c0) / n as f64 * 1e3, w0.elapsed().as_secs_f64() / n as f64 * 1e3);
     let tr = tr.unwrap();
@@ -71,7 +71,7 @@ fn peer_case(input: &RunInput, t: &[f64]) {
     let mut out = rig_types::Trajectory::default();
     let (c0, w0) = (cpu_s(), std::time::Instant::now());
     for _ in 0..n {
-        simulate_into(&p, input, t, &o, &mut out).unwrap();
+        simulate_into(&p, input, t, o, &mut out).unwrap();
     }
     let (cpu_reused_ms, wall_reused_ms) =
         ((cpu_s() - c0) / n as f64 * 1e3, w0.elapsed().as_secs_f64() / n as f64 * 1e3);

@@ -52,11 +52,12 @@ fn main() {
         return best(which, runs);
     }
     let mut h = std::collections::hash_map::DefaultHasher::new();
+    let o = common::shipped();
     for (rpm, n) in [(40.0, 15.0), (10.0, 15.0), (5.0, 25.0), (60.0, 5.0), (20.0, 20.0)] {
         let input = RunInput::OperatingPoint { motor_rpm_setpoint: rpm, normal_force_n: n, ramp_s: 2.0 };
         for p in [common::rig_params(), common::thesis_params()] {
             for rate in [500.0, 100.0, 1000.0] {
-                let (tr, st) = simulate_with_stats(&p, &input, &common::grid(40.0, rate), &common::shipped()).unwrap();
+                let (tr, st) = simulate_with_stats(&p, &input, &common::grid(40.0, rate), &o).unwrap();
                 for c in tr.numeric_channels() {
                     c.iter().for_each(|v| v.to_bits().hash(&mut h));
                 }
