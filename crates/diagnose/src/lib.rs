@@ -138,6 +138,7 @@ pub use result::{
     Adequacy, CandidateScore, ChannelFeatures, Diagnosis, Extension, ExtensionTerm, Finding, ParamAtBound, RunRow,
     SignatureEntry, StepRow, Structure, StructureScore, round_sig,
 };
+use rig_types::pipeline_toml::stage_params;
 pub use select::diagnose_signals;
 
 /// Knobs of the diagnosis: the `[stage.params]` of the `diagnosis` stage in
@@ -274,35 +275,6 @@ impl BlindChain {
 /// values to start from), as [`BlindChain::calibrate_and_estimate`] gives them.
 pub type Baseline =
     (rig_calibrate::CampaignCalibration, Option<Result<rig_types::RigParams, rig_estimate::EstimateError>>);
-
-/// The `[stage.params]` of stage `name` in a pipeline.toml text, with the
-/// `[shared.<name>]` tables it lists, as the runner hands them over
-/// (`rig_pipeline`'s config; a test there checks the two agree).
-fn stage_params<T: serde::de::DeserializeOwned>(text: &str, name: &str) -> Result<T, String> {
-    #[derive(serde::Deserialize)]
-    struct Stage {
-        name: String,
-        params: Option<toml::Value>,
-        #[serde(default)]
-        shared: Vec<String>,
-    }
-    #[derive(serde::Deserialize)]
-    struct File {
-        stage: Vec<Stage>,
-        #[serde(default)]
-        shared: toml::Table,
-    }
-    let f: File = toml::from_str(text).map_err(|e| format!("pipeline.toml: {e}"))?;
-    let st = f.stage.into_iter().find(|s| s.name == name).ok_or_else(|| format!("pipeline.toml: no stage `{name}`"))?;
-    let mut params = st.params.ok_or_else(|| format!("pipeline.toml: stage {name} has no [stage.params]"))?;
-    for shared in &st.shared {
-        let table = f.shared.get(shared).ok_or_else(|| format!("pipeline.toml: no [shared.{shared}]"))?;
-        if let toml::Value::Table(t) = &mut params {
-            t.insert(shared.clone(), table.clone());
-        }
-    }
-    params.try_into().map_err(|e| format!("pipeline.toml: stage {name}: [stage.params]: {e}"))
-}
 
 /// Why a diagnosis could not be made.
 #[derive(Debug, thiserror::Error)]

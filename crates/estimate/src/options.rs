@@ -139,8 +139,8 @@ pub struct EstimateOptions {
     /// correlation and standard error it would have if freed).
     pub free_inductance: bool,
     /// Integrator tolerances of the fits: pipeline.toml's `[shared.integrator]`
-    /// (the estimation stage lists it), the same as every simulating stage;
-    /// the default is rig-model's, which that table states.
+    /// (the estimation stage lists it), the same as every simulating stage.
+    /// No default in code: [`EstimateOptions::new`] is given it.
     pub integrator: SimOptions,
     /// Lags of the residual whiteness test (in speed windows).
     pub whiteness_max_lag: usize,
@@ -157,8 +157,10 @@ fn is_twist_rate(d: &DampingStructure) -> bool {
 }
 
 impl EstimateOptions {
-    /// Defaults around the given Table 4.4 values.
-    pub fn new(initial: InitialValues) -> Self {
+    /// Defaults around the given Table 4.4 values, integrating with
+    /// `integrator` (pipeline.toml's `[shared.integrator]`:
+    /// `SimOptions::from_pipeline_toml`, or a stage's params).
+    pub fn new(initial: InitialValues, integrator: SimOptions) -> Self {
         EstimateOptions {
             initial,
             gear_ratio: 8.0,
@@ -169,7 +171,7 @@ impl EstimateOptions {
             speed_window_s: 0.05,
             step_residual: StepResidual::Speed,
             free_inductance: false,
-            integrator: SimOptions::default(),
+            integrator,
             whiteness_max_lag: 25,
             pi: PiOptions::default(),
             friction: FrictionOptions::default(),
@@ -178,7 +180,10 @@ impl EstimateOptions {
     }
 
     /// [`EstimateOptions::new`] from Table 4.4 symbols (see [`InitialValues::from_table_4_4`]).
-    pub fn from_thesis_table_4_4(value_of: impl Fn(&str) -> Option<f64>) -> Result<Self, EstimateError> {
-        Ok(Self::new(InitialValues::from_table_4_4(value_of)?))
+    pub fn from_thesis_table_4_4(
+        value_of: impl Fn(&str) -> Option<f64>,
+        integrator: SimOptions,
+    ) -> Result<Self, EstimateError> {
+        Ok(Self::new(InitialValues::from_table_4_4(value_of)?, integrator))
     }
 }

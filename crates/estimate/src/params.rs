@@ -110,7 +110,7 @@ impl EstimateParams {
     /// The estimator's options from these params, started from `initial`
     /// (Table 4.4, `InitialValues::from_thesis_data` in the DAG and the blind chain).
     pub fn options(&self, initial: InitialValues) -> EstimateOptions {
-        let mut o = EstimateOptions::new(initial);
+        let mut o = EstimateOptions::new(initial, self.integrator.clone());
         let v = &self.voltage_steps;
         o.solver_kind = v.solver_kind();
         o.solver = v.solver_options();
@@ -128,7 +128,6 @@ impl EstimateParams {
         o.pi.window_s = self.pi_window_s;
         o.pi.saturation_margin_v = self.saturation_margin_v;
         o.friction = self.stick_episodes.clone();
-        o.integrator = self.integrator.clone();
         o
     }
 }

@@ -76,7 +76,10 @@ fn emulated_rig_2026_timing() {
         shaft_stiffness_nm_rad: 0.268,
     };
     for free_l in [false] {
-        let mut o = EstimateOptions::new(init.clone());
+        let mut o = EstimateOptions::new(
+            init.clone(),
+            rig_model::SimOptions::from_pipeline_toml(include_str!("../../../pipeline.toml")).expect("pipeline.toml"),
+        );
         o.free_inductance = free_l;
         let t0 = Instant::now();
         let e = estimate_rig(&c, &cal, &o).unwrap();

@@ -31,7 +31,7 @@ fn synthetic(truth: &RigParams, seed: u64) -> Campaign {
 fn run(truth: &RigParams, seed: u64) -> RigEstimate {
     let c = synthetic(truth, seed);
     let cal = rig_calibrate::calibrate_campaign(&c).expect("calibration of the synthetic campaign");
-    estimate_rig(&c, &cal, &EstimateOptions::new(table_4_4())).expect("estimation")
+    estimate_rig(&c, &cal, &EstimateOptions::new(table_4_4(), common::sim())).expect("estimation")
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -126,7 +126,7 @@ fn estimation_is_deterministic() {
     let truth = common::truth();
     let c = synthetic(&truth, 3);
     let cal = rig_calibrate::calibrate_campaign(&c).unwrap();
-    let o = EstimateOptions::new(table_4_4());
+    let o = EstimateOptions::new(table_4_4(), common::sim());
     let a = estimate_rig(&c, &cal, &o).unwrap();
     let b = estimate_rig(&c, &cal, &o).unwrap();
     assert_eq!(a, b);
@@ -213,7 +213,7 @@ fn rotor_absolute_structure_recovers_its_drag_and_motor() {
     let cal = rig_calibrate::calibrate_campaign(&c).expect("calibration");
     let o = EstimateOptions {
         damping: DampingStructure::RotorAbsolute { rotor_damping: RotorDamping::Fitted },
-        ..EstimateOptions::new(table_4_4())
+        ..EstimateOptions::new(table_4_4(), common::sim())
     };
     let est = estimate_rig(&c, &cal, &o).expect("estimation under rotor_absolute");
     let p = &est.params;
@@ -230,7 +230,8 @@ fn rotor_absolute_structure_recovers_its_drag_and_motor() {
     assert!(matches!(row("C").identifiable, Identifiability::Fixed { .. }));
     assert!(row("C_r").stderr.is_some(), "C_r is estimated, with a standard error");
 
-    let twist = estimate_rig(&c, &cal, &EstimateOptions::new(table_4_4())).expect("estimation under twist_rate");
+    let twist =
+        estimate_rig(&c, &cal, &EstimateOptions::new(table_4_4(), common::sim())).expect("estimation under twist_rate");
     let cw = combos(&twist.params);
     eprintln!("twist_rate on the same data: viscous combo rel. error {:.2e}", rel(cw[1], ct[1]));
     assert!(rel(cw[1], ct[1]) > 0.01, "the default structure absorbs the drag: {} vs {}", cw[1], ct[1]);
@@ -243,7 +244,7 @@ fn rotor_absolute_structure_recovers_its_drag_and_motor() {
 #[test]
 fn damping_structure_default_is_invisible_and_held_values_are_checked() {
     use rig_estimate::{DampingStructure, RotorDamping};
-    let o = EstimateOptions::new(table_4_4());
+    let o = EstimateOptions::new(table_4_4(), common::sim());
     let text = toml::to_string(&o).unwrap();
     assert!(!text.contains("damping"), "{text}");
     let back: EstimateOptions = toml::from_str(&text).unwrap();
@@ -273,7 +274,7 @@ fn motor_side_refit_under_a_held_drag_recovers_the_motor() {
     let truth = RigParams { shaft_damping_nm_s_rad: 0.0, rotor_damping_nm_s_rad: 0.006, ..common::truth() };
     let c = synthetic(&truth, 7);
     let cal = rig_calibrate::calibrate_campaign(&c).expect("calibration");
-    let o = EstimateOptions::new(table_4_4());
+    let o = EstimateOptions::new(table_4_4(), common::sim());
     let twist = estimate_rig(&c, &cal, &o).expect("estimation under twist_rate").params;
     let start = RigParams { shaft_damping_nm_s_rad: 0.0, rotor_damping_nm_s_rad: 0.006, ..twist };
     let r =

@@ -29,6 +29,7 @@ use rig_ingest::lavi::{LaviRecording, read_lavi};
 use rig_model::one_dof::integrated_twist_rad;
 use rig_spectra::lowpass_fft;
 use rig_spectra::stickslip::{GlitchOptions, GlitchReport, repair_glitches};
+use rig_types::sensor::{half_window_samples, window_samples};
 use serde::Serialize;
 use std::ops::Range;
 use std::path::Path;
@@ -139,13 +140,7 @@ pub fn prepare(path: &Path, p: &StudyParams) -> Result<(LaviRecording, Prepared)
         });
     }
     let fs_hz = (n - 1) as f64 / (rec.time_s[n - 1] - rec.time_s[0]);
-    let glitch = GlitchOptions {
-        median_window: p.glitch_median_window,
-        threshold: p.glitch_threshold_rpm,
-        floor: p.glitch_floor_rpm,
-        dilate: p.glitch_dilate,
-    };
-    let (bridged, glitches) = repair_glitches(&rec.top_speed_rpm, &glitch)?;
+    let (bridged, glitches) = repair_glitches(&rec.top_speed_rpm, &glitch_options(&rec.time_s, p))?;
     let lp = |x: &[f64]| lowpass_fft(x, fs_hz, p.cutoff_hz, p.transition_hz);
     let top_lp = lp(&rec.top_speed_rpm)?;
     let rad = |x: &[f64]| x.iter().map(|v| v * RPM_TO_RAD_S).collect::<Vec<f64>>();
@@ -205,6 +200,19 @@ pub fn prepare(path: &Path, p: &StudyParams) -> Result<(LaviRecording, Prepared)
         repairs: vec![lowpass, bridge],
     };
     Ok((rec, prepared))
+}
+
+/// The top-speed dip detector of `p` on a record sampled at `time_s`: its
+/// windows, declared in seconds, counted in samples from the time column
+/// (`rig_types::sensor`: the median window a window, the dilation each side
+/// a half window; on run 175, 1 kHz, 101 and 10 samples).
+pub fn glitch_options(time_s: &[f64], p: &StudyParams) -> GlitchOptions {
+    GlitchOptions {
+        median_window: window_samples(time_s, p.glitch_median_window_s),
+        threshold: p.glitch_threshold_rpm,
+        floor: p.glitch_floor_rpm,
+        dilate: half_window_samples(time_s, p.glitch_dilate_s),
+    }
 }
 
 /// Centred moving mean over ±`half` samples (shortened at the ends).

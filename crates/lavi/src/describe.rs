@@ -390,6 +390,7 @@ pub fn describe(
 /// The record as measured: the dips, the twist they carry, and the audit of every repair (tables/lavi-repairs.csv).
 fn repairs_paragraph(d: &Prepared, p: &StudyParams) -> String {
     let g = d.glitches;
+    let counted = crate::data::glitch_options(&d.time_s, p);
     let mut s = format!(
         "**The record as measured.** The top speed has {} dips (samples more than {} rpm from the {}-sample running median \
          or below {} rpm, widened by {} samples each side: {} samples, longest {}). They carry angle: the twist \
@@ -399,9 +400,9 @@ fn repairs_paragraph(d: &Prepared, p: &StudyParams) -> String {
          random walk): ",
         g.runs,
         p.glitch_threshold_rpm,
-        p.glitch_median_window,
+        counted.median_window,
         p.glitch_floor_rpm,
-        p.glitch_dilate,
+        counted.dilate,
         g.samples,
         g.longest_run,
         d.twist_excursion_rad.0,

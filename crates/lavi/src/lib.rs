@@ -166,10 +166,13 @@ pub struct StudyParams {
     pub warmup_s: f64,
     pub cutoff_hz: f64,
     pub transition_hz: f64,
-    pub glitch_median_window: usize,
+    /// The top-speed dip detector's running-median window, s (counted in
+    /// samples of the record by [`data::glitch_options`]).
+    pub glitch_median_window_s: f64,
     pub glitch_threshold_rpm: f64,
     pub glitch_floor_rpm: f64,
-    pub glitch_dilate: usize,
+    /// Added each side of a flagged run of dips, s (counted as a half window).
+    pub glitch_dilate_s: f64,
     /// Bit speed above which the friction law is fitted, rpm.
     pub slip_speed_rpm: f64,
     /// Bins of the friction-vs-speed description.

@@ -2,7 +2,7 @@
 //! on synthetic recordings, and on run 175 when ../shared holds it.
 
 use rig_lavi::StudyParams;
-use rig_lavi::data::{Split, prepare, windows};
+use rig_lavi::data::{Split, glitch_options, prepare, windows};
 use std::path::PathBuf;
 
 fn params() -> StudyParams {
@@ -14,10 +14,10 @@ fn params() -> StudyParams {
         warmup_s: 1.0,
         cutoff_hz: 10.0,
         transition_hz: 2.0,
-        glitch_median_window: 101,
+        glitch_median_window_s: 0.101,
         glitch_threshold_rpm: 30.0,
         glitch_floor_rpm: 0.0,
-        glitch_dilate: 10,
+        glitch_dilate_s: 0.010,
         slip_speed_rpm: 5.0,
         bins: 20,
         stick_speed_rpm: 5.0,
@@ -173,4 +173,19 @@ fn run_175_reads_and_cuts_its_windows() {
     assert!(rec.top_speed_rpm.iter().any(|v| *v < -200.0));
     assert!(d.glitches.runs > 0, "{:?}", d.glitches);
     assert_eq!(windows(&d, &p).unwrap().len(), 3);
+    // The detector's windows, in seconds in pipeline.toml, are the 101 and 10
+    // samples of the record's 1 kHz (read from its time column).
+    let g = glitch_options(&rec.time_s, &p);
+    assert_eq!((g.median_window, g.dilate), (101, 10));
+}
+
+/// The detector's windows keep their length in seconds: twice the samples at
+/// twice the rate, read from the time column (not a nominal rate).
+#[test]
+fn the_glitch_windows_are_counted_from_the_time_column() {
+    let at = |rate_hz: f64| (0..4000).map(|i| i as f64 / rate_hz).collect::<Vec<f64>>();
+    let g = glitch_options(&at(1000.0), &params());
+    assert_eq!((g.median_window, g.dilate), (101, 10));
+    let g = glitch_options(&at(2000.0), &params());
+    assert_eq!((g.median_window, g.dilate), (202, 20));
 }

@@ -7,7 +7,7 @@
 //! and wall time and results on it: scripts/peer_scipy.py times scipy on it.
 #[path = "../tests/common/mod.rs"]
 mod common;
-use rig_model::{ANTI_WINDUP_TRACKING_S, MOTOR_FRICTION_SPEED_RAD_S, SimOptions, simulate_into, simulate_with_stats};
+use rig_model::{ANTI_WINDUP_TRACKING_S, MOTOR_FRICTION_SPEED_RAD_S, simulate_into, simulate_with_stats};
 use rig_types::{FrictionLaw, RunInput};
 /// CPU time (user + system) of this process so far, s (`rig_types::cpu`).
 fn cpu_s() -> f64 {
@@ -19,10 +19,12 @@ fn minor_faults() -> f64 {
     s.rsplit(')').next().unwrap().split_whitespace().nth(7).unwrap().parse().unwrap()
 }
 fn main() {
+    // Read once, first (on a thread of its own: `common::shipped`).
+    let o = common::shipped();
     let input = RunInput::OperatingPoint { motor_rpm_setpoint: 40.0, normal_force_n: 15.0, ramp_s: 2.0 };
     let t = common::grid(40.0, 500.0);
     if std::env::args().any(|a| a == "--peer-case") {
-        return peer_case(&input, &t);
+        return peer_case(&input, &t, &o);
     }
     for (name, p, samples) in [
         ("rig 500 Hz", common::rig_params(), t.clone()),
@@ -34,14 +36,14 @@ fn main() {
         let w0 = std::time::Instant::now();
         let mut st = None;
         for _ in 0..n {
-            st = Some(simulate_with_stats(&p, &input, &samples, &SimOptions::default()).unwrap().1);
+            st = Some(simulate_with_stats(&p, &input, &samples, &o).unwrap().1);
         }
         let (cpu_fresh, wall_fresh) = ((cpu_s() - c0) / n as f64 * 1e3, w0.elapsed().as_secs_f64() / n as f64 * 1e3);
         let faults_fresh = (minor_faults() - f0) / n as f64;
         let mut out = rig_types::Trajectory::default();
         let (c0, w0, f0) = (cpu_s(), std::time::Instant::now(), minor_faults());
         for _ in 0..n {
-            simulate_into(&p, &input, &samples, &SimOptions::default(), &mut out).unwrap();
+            simulate_into(&p, &input, &samples, &o, &mut out).unwrap();
         }
         println!(
             "{name}: cpu {cpu_fresh:.3} ms, wall {wall_fresh:.3} ms, {faults_fresh:.0} page faults per run; into a \
@@ -54,14 +56,14 @@ fn main() {
     }
 }
 
-fn peer_case(input: &RunInput, t: &[f64]) {
+fn peer_case(input: &RunInput, t: &[f64], o: &rig_model::SimOptions) {
     let p = common::rig_params();
     let RunInput::OperatingPoint { motor_rpm_setpoint, normal_force_n, ramp_s } = *input else { unreachable!() };
     let FrictionLaw::Coulomb { mu_static, mu_kinetic } = p.friction else { unreachable!("the bench brake is Coulomb") };
     let (n, c0, w0) = (500, cpu_s(), std::time::Instant::now());
     let mut tr = None;
     for _ in 0..n {
-        tr = Some(simulate_with_stats(&p, input, t, &SimOptions::default()).unwrap().0);
+        tr = Some(simulate_with_stats(&p, input, t, o).unwrap().0);
     }
     let (cpu_ms, wall_ms) = ((cpu_s() - c0) / n as f64 * 1e3, w0.elapsed().as_secs_f64() / n as f64 * 1e3);
     let tr = tr.unwrap();
@@ -69,7 +71,7 @@ fn peer_case(input: &RunInput, t: &[f64]) {
     let mut out = rig_types::Trajectory::default();
     let (c0, w0) = (cpu_s(), std::time::Instant::now());
     for _ in 0..n {
-        simulate_into(&p, input, t, &SimOptions::default(), &mut out).unwrap();
+        simulate_into(&p, input, t, o, &mut out).unwrap();
     }
     let (cpu_reused_ms, wall_reused_ms) =
         ((cpu_s() - c0) / n as f64 * 1e3, w0.elapsed().as_secs_f64() / n as f64 * 1e3);
@@ -89,7 +91,10 @@ fn peer_case(input: &RunInput, t: &[f64]) {
         "anti_windup_tracking_s": ANTI_WINDUP_TRACKING_S,
         "motor_friction_speed_rad_s": MOTOR_FRICTION_SPEED_RAD_S,
         "rust": {
-            "options": "SimOptions::default() (rtol 1e-8, atol 1e-10, max_step 0.01 s)",
+            "options": format!(
+                "pipeline.toml [shared.integrator] (rtol {:e}, atol {:e}, max_step {} s)",
+                o.rtol, o.atol, o.max_step_s
+            ),
             "cpu_ms_per_run": cpu_ms,
             "wall_ms_per_run": wall_ms,
             "cpu_ms_per_run_reused": cpu_reused_ms,

@@ -16,7 +16,7 @@
 //! comparison of two builds can trust (criterion's mean moves with the load).
 #[path = "../tests/common/mod.rs"]
 mod common;
-use rig_model::{SimOptions, simulate_into, simulate_with_stats};
+use rig_model::{simulate_into, simulate_with_stats};
 use rig_types::RunInput;
 use std::hash::{Hash, Hasher};
 
@@ -27,11 +27,9 @@ fn main() {
         let num = |i: usize| args[i].parse::<f64>().expect("a number");
         let input = RunInput::OperatingPoint { motor_rpm_setpoint: num(1), normal_force_n: num(2), ramp_s: 2.0 };
         let p = if args[3] == "thesis" { common::thesis_params() } else { common::rig_params() };
-        // RTOL=<x> in the environment: that rtol (atol 10⁻² of it) instead of the default.
-        let o = std::env::var("RTOL").map_or(SimOptions::default(), |r| {
-            let rtol: f64 = r.parse().expect("RTOL: a number");
-            SimOptions { rtol, atol: rtol * 1e-2, ..SimOptions::default() }
-        });
+        // RTOL=<x> in the environment: that rtol (atol 10⁻² of it) instead of the shipped one.
+        let o =
+            std::env::var("RTOL").map_or(common::shipped(), |r| common::at_rtol(r.parse().expect("RTOL: a number")));
         let (tr, _) = simulate_with_stats(&p, &input, &common::grid(40.0, 500.0), &o).unwrap();
         for k in 0..tr.len() {
             println!(
@@ -54,12 +52,12 @@ fn main() {
         return best(which, runs);
     }
     let mut h = std::collections::hash_map::DefaultHasher::new();
+    let o = common::shipped();
     for (rpm, n) in [(40.0, 15.0), (10.0, 15.0), (5.0, 25.0), (60.0, 5.0), (20.0, 20.0)] {
         let input = RunInput::OperatingPoint { motor_rpm_setpoint: rpm, normal_force_n: n, ramp_s: 2.0 };
         for p in [common::rig_params(), common::thesis_params()] {
             for rate in [500.0, 100.0, 1000.0] {
-                let (tr, st) =
-                    simulate_with_stats(&p, &input, &common::grid(40.0, rate), &SimOptions::default()).unwrap();
+                let (tr, st) = simulate_with_stats(&p, &input, &common::grid(40.0, rate), &o).unwrap();
                 for c in tr.numeric_channels() {
                     c.iter().for_each(|v| v.to_bits().hash(&mut h));
                 }
@@ -81,7 +79,7 @@ fn best(which: &str, runs: usize) {
         _ => common::grid(40.0, 500.0),
     };
     let p = if which == "thesis" { common::thesis_params() } else { common::rig_params() };
-    let (mut out, o) = (rig_types::Trajectory::default(), SimOptions::default());
+    let (mut out, o) = (rig_types::Trajectory::default(), common::shipped());
     let mut best_ms = f64::INFINITY;
     for _ in 0..runs.div_ceil(100) {
         let w = std::time::Instant::now();

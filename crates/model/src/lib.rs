@@ -214,8 +214,11 @@ use rig_types::{
 };
 use system::{Drive, System};
 
-/// Integrator settings. Tolerances are explicit arguments, never globals.
-/// pipeline.toml declares them once, in its `[shared.integrator]` table.
+/// Integrator settings. Tolerances are explicit arguments, never globals,
+/// and have no default in code: pipeline.toml declares them once, in its
+/// `[shared.integrator]` table (the stages are handed it; tests, benches and
+/// examples read it with [`SimOptions::from_pipeline_toml`]). Tidy
+/// `integrator_tolerances_have_one_home` (crates/pipeline/tests/tidy.rs).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SimOptions {
@@ -225,9 +228,12 @@ pub struct SimOptions {
     pub max_step_s: f64,
 }
 
-impl Default for SimOptions {
-    fn default() -> Self {
-        SimOptions { rtol: 1e-8, atol: 1e-10, max_step_s: 0.01 }
+impl SimOptions {
+    /// The shipped setting: the `[shared.integrator]` table of a
+    /// pipeline.toml text (the workspace's: `include_str!` of its root's
+    /// pipeline.toml).
+    pub fn from_pipeline_toml(text: &str) -> Result<SimOptions, String> {
+        rig_types::pipeline_toml::shared_table(text, "integrator")
     }
 }
 

@@ -21,10 +21,10 @@ fn with(effects: Vec<Effect>) -> RigParams {
 
 /// Each channel of `without` against `all`'s, bit for bit; T1 empty.
 fn check(name: &str, p: &RigParams, input: &RunInput, times: &[f64]) -> SimStats {
-    let (all, stats) = simulate_with_stats(p, input, times, &opts(1e-8)).unwrap();
-    let full = simulate_channels(p, input, times, &opts(1e-8), Channels::All).unwrap();
+    let (all, stats) = simulate_with_stats(p, input, times, &shipped()).unwrap();
+    let full = simulate_channels(p, input, times, &shipped(), Channels::All).unwrap();
     assert_eq!(bits(&full), bits(&all), "{name}: Channels::All is simulate");
-    let without = simulate_channels(p, input, times, &opts(1e-8), Channels::WithoutFriction).unwrap();
+    let without = simulate_channels(p, input, times, &shipped(), Channels::WithoutFriction).unwrap();
     assert!(without.friction_torque_nm.is_empty(), "{name}");
     assert_eq!(all.len(), times.len(), "{name}");
     let t1_only = Trajectory { friction_torque_nm: Vec::new(), ..all.clone() };

@@ -10,13 +10,13 @@ use rig_types::{RigParams, RunInput};
 
 /// The step cap is lifted so that the tolerance, not `max_step_s`, sets the step.
 fn max_rotor_speed_error(p: &RigParams, input: &RunInput, t: &[f64], tol: f64, reference: &[f64]) -> f64 {
-    let tr = simulate(p, input, t, &SimOptions { max_step_s: 1.0, ..opts(tol) }).unwrap();
+    let tr = simulate(p, input, t, &SimOptions { max_step_s: 1.0, ..at_rtol(tol) }).unwrap();
     tr.rotor_speed_rad_s.iter().zip(reference).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max)
 }
 
 fn check_convergence(p: &RigParams, input: &RunInput, t_end: f64) -> Vec<f64> {
     let t = grid(t_end, 200.0);
-    let reference = simulate(p, input, &t, &SimOptions { rtol: 1e-13, atol: 1e-15, max_step_s: 0.01 }).unwrap();
+    let reference = simulate(p, input, &t, &at_rtol(1e-13)).unwrap();
     let errors: Vec<f64> = [1e-5, 1e-7, 1e-9, 1e-11]
         .iter()
         .map(|&tol| max_rotor_speed_error(p, input, &t, tol, &reference.rotor_speed_rad_s))
@@ -32,7 +32,7 @@ fn check_convergence(p: &RigParams, input: &RunInput, t_end: f64) -> Vec<f64> {
 fn rig_model_converges_through_stick_slip() {
     let p = rig_params();
     let input = RunInput::OperatingPoint { motor_rpm_setpoint: 5.0, normal_force_n: 30.0, ramp_s: 2.0 };
-    let (_, stats) = simulate_with_stats(&p, &input, &grid(20.0, 200.0), &opts(1e-9)).unwrap();
+    let (_, stats) = simulate_with_stats(&p, &input, &grid(20.0, 200.0), &at_rtol(1e-9)).unwrap();
     assert!(stats.events >= 6, "the run must contain stick/slip events: {stats:?}");
     let errors = check_convergence(&p, &input, 20.0);
     // Rotor speed peaks at ~3 rad/s: at tol 1e-9 the error is well below 1e-5 rad/s.
@@ -56,7 +56,7 @@ fn no_nan_over_the_operating_range() {
         for rpm in [5.0, 20.0, 55.0, 100.0, 150.0] {
             for n in [0.0, 1.0, 7.5, 15.0, 30.0] {
                 let input = RunInput::OperatingPoint { motor_rpm_setpoint: rpm, normal_force_n: n, ramp_s: 2.0 };
-                let tr = simulate(&p, &input, &t, &SimOptions::default())
+                let tr = simulate(&p, &input, &t, &shipped())
                     .unwrap_or_else(|e| panic!("{:?} {rpm} rpm {n} N: {e}", p.kind));
                 assert_eq!(tr.len(), t.len());
                 let channels = tr.numeric_channels();
@@ -73,8 +73,7 @@ fn absurdly_stiff_parameters_fail_with_a_budget_error() {
     let mut p = rig_params();
     p.motor.inductance_h = 1e-9 * p.motor.resistance_ohm;
     let start = std::time::Instant::now();
-    let err =
-        simulate(&p, &RunInput::VoltageStep { voltage_v: 6.0 }, &grid(20.0, 10.0), &SimOptions::default()).unwrap_err();
+    let err = simulate(&p, &RunInput::VoltageStep { voltage_v: 6.0 }, &grid(20.0, 10.0), &shipped()).unwrap_err();
     let rig_model::ModelError::IntegratorFailed { reason, .. } = err else { panic!("{err:?}") };
     assert!(reason.contains("L/R = 1.00e-9 s"), "{reason}");
     assert!(start.elapsed().as_secs() < 60);
@@ -94,9 +93,8 @@ fn a_reused_trajectory_holds_exactly_what_a_fresh_run_returns() {
     ] {
         let input = RunInput::OperatingPoint { motor_rpm_setpoint: rpm, normal_force_n: 15.0, ramp_s: 2.0 };
         let t = common::grid(t_end, rate);
-        let stats = rig_model::simulate_into(&p, &input, &t, &SimOptions::default(), &mut out).expect("reused");
-        let (fresh, fresh_stats) =
-            rig_model::simulate_with_stats(&p, &input, &t, &SimOptions::default()).expect("fresh");
+        let stats = rig_model::simulate_into(&p, &input, &t, &shipped(), &mut out).expect("reused");
+        let (fresh, fresh_stats) = rig_model::simulate_with_stats(&p, &input, &t, &shipped()).expect("fresh");
         assert_eq!(out.len(), t.len());
         assert_eq!(out, fresh, "{rate} Hz, {t_end} s");
         assert_eq!(stats, fresh_stats);
@@ -113,7 +111,7 @@ fn a_reused_trajectory_holds_exactly_what_a_fresh_run_returns() {
 fn a_grid_at_the_maximum_step_takes_no_extra_dormand_prince_steps() {
     let p = rig_params();
     let input = RunInput::OperatingPoint { motor_rpm_setpoint: 40.0, normal_force_n: 15.0, ramp_s: 2.0 };
-    let o = SimOptions::default();
+    let o = shipped();
     let (_, once) = simulate_with_stats(&p, &input, &[40.0], &o).expect("sampled once");
     for rate in [100.0, 50.0] {
         let (_, grid) = simulate_with_stats(&p, &input, &grid(40.0, rate), &o).expect("on the grid");

@@ -15,7 +15,7 @@ use rig_types::{Effect, FrictionLaw, RunInput};
 fn break_aways(p: &rig_types::RigParams, n0: f64, rate_hz: f64) -> (Vec<(f64, f64)>, f64) {
     let t = grid(30.0, rate_hz);
     let input = RunInput::OperatingPoint { motor_rpm_setpoint: 15.0, normal_force_n: n0, ramp_s: 1.0 };
-    let tr = simulate(p, &input, &t, &opts(1e-9)).unwrap();
+    let tr = simulate(p, &input, &t, &at_rtol(1e-9)).unwrap();
     let FrictionLaw::Coulomb { mu_kinetic, .. } = p.friction else { panic!() };
     let slip_nm = mu_kinetic * n0 * p.brake_disc_radius_m;
     let mut out = Vec::new();
@@ -73,6 +73,6 @@ fn aging_and_fade_cannot_share_the_pad_state() {
         Effect::BrakeFade { heat_capacity_j_k: 5.0, cooling_time_s: 30.0, fade_temperature_k: 50.0 },
     ];
     let input = RunInput::OperatingPoint { motor_rpm_setpoint: 15.0, normal_force_n: 10.0, ramp_s: 1.0 };
-    let e = simulate(&p, &input, &grid(1.0, 100.0), &opts(1e-8)).unwrap_err().to_string();
+    let e = simulate(&p, &input, &grid(1.0, 100.0), &shipped()).unwrap_err().to_string();
     assert!(e.contains("static_friction_aging"), "{e}");
 }

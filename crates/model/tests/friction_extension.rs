@@ -31,7 +31,7 @@ fn break_away_and_slip_friction_follow_the_extension() {
     p.effects = vec![extension(av, ab, c0, cd)];
     let t = grid(30.0, 4000.0);
     let input = RunInput::OperatingPoint { motor_rpm_setpoint: 15.0, normal_force_n: n0, ramp_s: 1.0 };
-    let tr = simulate(&p, &input, &t, &opts(1e-9)).unwrap();
+    let tr = simulate(&p, &input, &t, &at_rtol(1e-9)).unwrap();
     let (mut stick_start, mut slip_start) = (None, Some(0.0));
     let (mut breaks, mut slip_checked) = (0, 0);
     for k in 1..tr.len() {
@@ -74,14 +74,14 @@ fn zero_coefficients_move_nothing_and_the_pad_state_is_not_shared() {
     p.shaft_damping_nm_s_rad *= 0.3;
     let t = grid(20.0, 500.0);
     let input = RunInput::OperatingPoint { motor_rpm_setpoint: 15.0, normal_force_n: 20.0, ramp_s: 1.0 };
-    let plain = simulate(&p, &input, &t, &opts(1e-10)).unwrap();
+    let plain = simulate(&p, &input, &t, &at_rtol(1e-10)).unwrap();
     p.effects = vec![extension(0.0, 0.0, 0.0, 0.0)];
-    let zero = simulate(&p, &input, &t, &opts(1e-10)).unwrap();
+    let zero = simulate(&p, &input, &t, &at_rtol(1e-10)).unwrap();
     let worst =
         plain.rotor_speed_rad_s.iter().zip(&zero.rotor_speed_rad_s).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
     assert!(worst < 1e-5, "rotor speed moved by {worst} rad/s");
     p.effects.push(Effect::StaticFrictionAging { aging_mu_per_efold: 0.05, aging_time_s: 0.05 });
-    let e = simulate(&p, &input, &t, &opts(1e-8)).unwrap_err().to_string();
+    let e = simulate(&p, &input, &t, &shipped()).unwrap_err().to_string();
     assert!(e.contains("friction_extension"), "{e}");
 }
 
@@ -118,11 +118,11 @@ fn break_away_terms_alone_take_exact_steps_and_age_the_contact() {
     // a steady operating point; 40 N: ten stick-slip cycles in 30 s.
     let input = RunInput::OperatingPoint { motor_rpm_setpoint: 30.0, normal_force_n: n0, ramp_s: 1.0 };
     p.effects = vec![extension(0.0, 0.0, c0, cd)];
-    let (exact, stats) = rig_model::simulate_with_stats(&p, &input, &t, &opts(1e-8)).unwrap();
+    let (exact, stats) = rig_model::simulate_with_stats(&p, &input, &t, &shipped()).unwrap();
     // The same law through Dormand–Prince alone: a break-away transient of
     // 1e-300 moves no slip factor off 1 (below an ulp) but is not "alone".
     p.effects = vec![extension(0.0, 1e-300, c0, cd)];
-    let (dopri, dopri_stats) = rig_model::simulate_with_stats(&p, &input, &t, &opts(1e-8)).unwrap();
+    let (dopri, dopri_stats) = rig_model::simulate_with_stats(&p, &input, &t, &shipped()).unwrap();
     assert!(dopri_stats.exact_steps == 0 && stats.exact_steps > 10 * stats.accepted_steps, "{stats:?} {dopri_stats:?}");
     let (a, b) = (break_aways(&exact), break_aways(&dopri));
     assert!(a.len() >= 5 && a.len() == b.len(), "{} vs {} break-aways", a.len(), b.len());

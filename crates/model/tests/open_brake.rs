@@ -47,7 +47,7 @@ fn channels(tr: &Trajectory) -> [&Vec<f64>; 7] {
 
 /// A voltage step of `voltage_v` over 6 s at 1 kHz (the brake open, N = 0).
 fn step(p: &RigParams, voltage_v: f64) -> (Trajectory, rig_model::SimStats) {
-    simulate_with_stats(p, &RunInput::VoltageStep { voltage_v }, &grid(6.0, 1000.0), &opts(1e-8)).unwrap()
+    simulate_with_stats(p, &RunInput::VoltageStep { voltage_v }, &grid(6.0, 1000.0), &shipped()).unwrap()
 }
 
 #[test]

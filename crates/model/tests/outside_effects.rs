@@ -23,10 +23,10 @@ fn backlash_is_a_dead_zone_of_the_twist() {
     p.effects = vec![Effect::CouplingBacklash { gap_rad: 0.4 }];
     let t = grid(10.0, 200.0);
     let inside = State { rotor_angle_rad: 0.15, ..State::default() };
-    let (tr, _) = simulate_from(&p, &inside, 0.0, 0.0, &t, &opts(1e-10)).unwrap();
+    let (tr, _) = simulate_from(&p, &inside, 0.0, 0.0, &t, &at_rtol(1e-10)).unwrap();
     assert!(tr.rotor_angle_rad.iter().all(|&a| a == 0.15));
     let beyond = State { rotor_angle_rad: 1.0, ..State::default() };
-    let (tr, _) = simulate_from(&p, &beyond, 0.0, 0.0, &grid(120.0, 50.0), &opts(1e-10)).unwrap();
+    let (tr, _) = simulate_from(&p, &beyond, 0.0, 0.0, &grid(120.0, 50.0), &at_rtol(1e-10)).unwrap();
     // Released at δ = −1 it swings through the gap; damping acts only in
     // contact, so the swing decays until it ends up inside the gap, |φ1| ≤ b.
     let late = tr.rotor_angle_rad[tr.len() - 1000..].iter().fold(0.0f64, |m, a| m.max(a.abs()));
@@ -57,7 +57,7 @@ fn cubic_shaft_hardens_and_static_twist_inverts_it() {
     p.effects = vec![Effect::ShaftCubicStiffness { cubic_per_rad2: 0.5 }];
     let period = |amp: f64| {
         let start = State { rotor_angle_rad: amp, ..State::default() };
-        let (tr, _) = simulate_from(&p, &start, 0.0, 0.0, &grid(20.0, 2000.0), &opts(1e-11)).unwrap();
+        let (tr, _) = simulate_from(&p, &start, 0.0, 0.0, &grid(20.0, 2000.0), &at_rtol(1e-11)).unwrap();
         let x = &tr.rotor_angle_rad;
         let c: Vec<f64> = (1..x.len()).filter(|&i| x[i - 1] > 0.0 && x[i] <= 0.0).map(|i| tr.time_s[i]).collect();
         (c[c.len() - 1] - c[0]) / (c.len() - 1) as f64
@@ -77,7 +77,7 @@ fn imbalance_rotor_settles_where_shaft_balances_gravity() {
     motor_held(&mut p);
     let (me, th) = (0.01, 0.5);
     p.effects = vec![Effect::RotorImbalance { imbalance_kg_m: me, phase_rad: th }];
-    let (tr, _) = simulate_from(&p, &State::default(), 0.0, 0.0, &grid(200.0, 10.0), &opts(1e-10)).unwrap();
+    let (tr, _) = simulate_from(&p, &State::default(), 0.0, 0.0, &grid(200.0, 10.0), &at_rtol(1e-10)).unwrap();
     let phi = *tr.rotor_angle_rad.last().unwrap();
     let residual = -p.shaft_stiffness_nm_rad * phi - me * 9.80665 * (phi + th).sin();
     assert!(residual.abs() < 1e-6, "φ1 = {phi}, residual {residual}");
@@ -93,14 +93,14 @@ fn brake_fade_lowers_friction_as_work_accumulates() {
     p.friction = FrictionLaw::Coulomb { mu_static: 0.5, mu_kinetic: 0.4 };
     let t = grid(30.0, 100.0);
     let input = RunInput::OperatingPoint { motor_rpm_setpoint: 130.0, normal_force_n: 20.0, ramp_s: 1.0 };
-    let cold = simulate(&p, &input, &t, &opts(1e-9)).unwrap();
+    let cold = simulate(&p, &input, &t, &at_rtol(1e-9)).unwrap();
     let late = |tr: &rig_types::Trajectory| {
         let n = tr.len();
         tr.friction_torque_nm[n - 500..].iter().sum::<f64>() / 500.0
     };
     let mut fade = |c: f64| {
         p.effects = vec![Effect::BrakeFade { heat_capacity_j_k: c, cooling_time_s: 20.0, fade_temperature_k: 30.0 }];
-        simulate(&p, &input, &t, &opts(1e-9)).unwrap()
+        simulate(&p, &input, &t, &at_rtol(1e-9)).unwrap()
     };
     let hot = fade(5.0);
     let hotter = fade(2.0);
@@ -121,11 +121,11 @@ fn current_limit_caps_the_step_current_not_the_steady_speed() {
     let mut p = rig_params();
     let t = grid(20.0, 500.0);
     let step = RunInput::VoltageStep { voltage_v: 12.0 };
-    let free = simulate(&p, &step, &t, &opts(1e-9)).unwrap();
+    let free = simulate(&p, &step, &t, &at_rtol(1e-9)).unwrap();
     let peak = |tr: &rig_types::Trajectory| tr.current_a.iter().cloned().fold(0.0, f64::max);
     assert!(peak(&free) > 5.0, "{}", peak(&free));
     p.effects = vec![Effect::DriveCurrentLimit { current_limit_a: 3.0 }];
-    let lim = simulate(&p, &step, &t, &opts(1e-9)).unwrap();
+    let lim = simulate(&p, &step, &t, &at_rtol(1e-9)).unwrap();
     assert!(peak(&lim) <= 3.0 + 1e-6, "{}", peak(&lim));
     assert!(lim.voltage_v[1] < 12.0, "the terminal voltage is clamped at start-up");
     let n = t.len();

@@ -28,7 +28,7 @@ fn free_oscillation_matches_analytic_frequency_and_log_decrement() {
     p.drive = DriveParams { kp_v_s_rad: 0.0, ki_v_rad: 0.0, limit_v: 24.0 };
     let start = State { rotor_angle_rad: 1.0, ..State::default() };
     let t = grid(20.0, 1000.0);
-    let (tr, _) = simulate_from(&p, &start, 0.0, 0.0, &t, &opts(1e-10)).unwrap();
+    let (tr, _) = simulate_from(&p, &start, 0.0, 0.0, &t, &at_rtol(1e-10)).unwrap();
     let (j, k, c) = (p.rotor_inertia_kgm2, p.shaft_stiffness_nm_rad, p.shaft_damping_nm_s_rad);
     let wn = (k / j).sqrt();
     let xi = c / (2.0 * (j * k).sqrt());
@@ -61,7 +61,7 @@ fn rig_voltage_step_reaches_analytic_steady_speed() {
     let n = m.gear_ratio;
     let v = 8.0;
     let t = grid(80.0, 10.0);
-    let tr = simulate(&p, &RunInput::VoltageStep { voltage_v: v }, &t, &opts(1e-10)).unwrap();
+    let tr = simulate(&p, &RunInput::VoltageStep { voltage_v: v }, &t, &at_rtol(1e-10)).unwrap();
     // Solve with the regularised friction (tanh = 1 − 1e-100 at these speeds).
     let omega = (v - m.resistance_ohm * m.friction_torque_nm / m.torque_constant_nm_a)
         / (n * (m.voltage_constant_v_s_rad + m.resistance_ohm * m.speed_regulation_nm_s_rad / m.torque_constant_nm_a));
@@ -90,7 +90,7 @@ fn rotor_drag_loads_the_shaft_with_its_analytic_twist() {
     let n = m.gear_ratio;
     let v = 8.0;
     let t = grid(120.0, 10.0);
-    let tr = simulate(&p, &RunInput::VoltageStep { voltage_v: v }, &t, &opts(1e-10)).unwrap();
+    let tr = simulate(&p, &RunInput::VoltageStep { voltage_v: v }, &t, &at_rtol(1e-10)).unwrap();
     let cr = p.rotor_damping_nm_s_rad;
     let omega = (v - m.resistance_ohm * m.friction_torque_nm / m.torque_constant_nm_a)
         / (n * m.voltage_constant_v_s_rad
@@ -103,7 +103,7 @@ fn rotor_drag_loads_the_shaft_with_its_analytic_twist() {
     assert!((twist - expected).abs() < 1e-6 * expected.max(1.0), "twist {twist} vs {expected}");
     // Without the drag the same run carries no shaft load.
     p.rotor_damping_nm_s_rad = 0.0;
-    let tr0 = simulate(&p, &RunInput::VoltageStep { voltage_v: v }, &t, &opts(1e-10)).unwrap();
+    let tr0 = simulate(&p, &RunInput::VoltageStep { voltage_v: v }, &t, &at_rtol(1e-10)).unwrap();
     assert!((tr0.motor_angle_rad[last] - tr0.rotor_angle_rad[last]).abs() < 1e-6);
 }
 
@@ -115,7 +115,7 @@ fn thesis_voltage_step_reaches_analytic_steady_speed() {
     let m = &p.motor;
     let (v, c, k) = (8.0, p.shaft_damping_nm_s_rad, p.shaft_stiffness_nm_rad);
     let t = grid(60.0, 10.0);
-    let tr = simulate(&p, &RunInput::VoltageStep { voltage_v: v }, &t, &opts(1e-10)).unwrap();
+    let tr = simulate(&p, &RunInput::VoltageStep { voltage_v: v }, &t, &at_rtol(1e-10)).unwrap();
     let (r, kt, ke) = (m.resistance_ohm, m.torque_constant_nm_a, m.voltage_constant_v_s_rad);
     let omega = (v - r * m.friction_torque_nm / kt) / (ke + r * (m.speed_regulation_nm_s_rad + c) / kt);
     let last = tr.len() - 1;
@@ -135,7 +135,7 @@ fn rotor_is_held_until_shaft_torque_reaches_static_limit() {
     let nf = 10.0;
     let limit = mu_static * nf * p.brake_disc_radius_m;
     let t = grid(20.0, 1000.0);
-    let tr = simulate(&p, &op(1.0, nf, 0.0), &t, &opts(1e-10)).unwrap();
+    let tr = simulate(&p, &op(1.0, nf, 0.0), &t, &at_rtol(1e-10)).unwrap();
     let k_break = tr.stuck.iter().position(|s| !s).expect("the rotor must break away within 20 s");
     // Expected break-away near φ2 = limit/K at ~1 rpm: 11 s.
     assert!(t[k_break] > 9.0 && t[k_break] < 13.0, "break-away at {}", t[k_break]);
@@ -161,7 +161,7 @@ fn energy_balance_over_stick_slip() {
     let p = rig_params();
     let rate = 20_000.0;
     let t: Vec<f64> = grid(20.0, rate).into_iter().filter(|&x| x >= 10.0).collect();
-    let tr = simulate(&p, &op(5.0, 30.0, 2.0), &t, &opts(1e-11)).unwrap();
+    let tr = simulate(&p, &op(5.0, 30.0, 2.0), &t, &at_rtol(1e-11)).unwrap();
     let slips = tr.stuck.windows(2).filter(|w| w[0] && !w[1]).count();
     assert!(slips >= 2, "the window must contain stick-slip cycles ({slips})");
     let m = &p.motor;
@@ -201,7 +201,7 @@ fn drive_saturates_at_limit() {
     let mut p = rig_params();
     p.drive.limit_v = 3.0;
     let t = grid(20.0, 200.0);
-    let tr = simulate(&p, &op(130.0, 10.0, 0.5), &t, &opts(1e-8)).unwrap();
+    let tr = simulate(&p, &op(130.0, 10.0, 0.5), &t, &shipped()).unwrap();
     assert!(tr.voltage_v.iter().all(|v| v.abs() <= 3.0));
     assert!(tr.voltage_v.contains(&3.0));
 }
@@ -216,11 +216,11 @@ fn drive_saturates_at_limit() {
 fn a_steady_state_at_the_voltage_limit_does_not_stall_the_integrator() {
     let p = rig_params();
     let t = grid(40.0, 500.0);
-    let free = simulate(&p, &op(85.0, 10.0, 2.0), &t, &opts(1e-8)).unwrap();
+    let free = simulate(&p, &op(85.0, 10.0, 2.0), &t, &shipped()).unwrap();
     let need_v = *free.voltage_v.last().unwrap();
     let mut at_limit = p.clone();
     at_limit.drive.limit_v = need_v;
-    let (tr, st) = rig_model::simulate_with_stats(&at_limit, &op(85.0, 10.0, 2.0), &t, &opts(1e-8)).unwrap();
+    let (tr, st) = rig_model::simulate_with_stats(&at_limit, &op(85.0, 10.0, 2.0), &t, &shipped()).unwrap();
     assert!(st.accepted_steps + st.rejected_steps < 20_000, "{st:?}");
     assert!(tr.voltage_v.iter().all(|v| v.abs() <= need_v), "the clamp holds");
     assert_eq!(tr.time_s.len(), t.len());
@@ -235,7 +235,7 @@ fn anti_windup_limits_overshoot_after_saturation() {
     // A heavy motor side so that the saturated acceleration lasts seconds.
     p.motor.inertia_kgm2 *= 100.0;
     let t = grid(40.0, 200.0);
-    let tr = simulate(&p, &op(100.0, 0.0, 0.0), &t, &opts(1e-8)).unwrap();
+    let tr = simulate(&p, &op(100.0, 0.0, 0.0), &t, &shipped()).unwrap();
     let target = rig_types::units::rpm_to_rad_s(100.0);
     let peak = tr.motor_speed_rad_s.iter().cloned().fold(f64::MIN, f64::max);
     let saturated_s = tr.voltage_v.iter().filter(|&&v| v == 6.0).count() as f64 / 200.0;
@@ -252,7 +252,7 @@ fn normal_force_modulation_scales_slip_friction() {
     p.effects = vec![Effect::NormalForceModulation { amplitude_ratio: a, frequency_hz: f, phase_rad: th }];
     let t = grid(10.0, 100.0);
     let nf = 2.0;
-    let tr = simulate(&p, &op(100.0, nf, 1.0), &t, &opts(1e-8)).unwrap();
+    let tr = simulate(&p, &op(100.0, nf, 1.0), &t, &shipped()).unwrap();
     let mut checked = 0;
     for (k, &tk) in t.iter().enumerate() {
         if !tr.stuck[k] && tr.rotor_speed_rad_s[k] > 0.0 {
@@ -270,7 +270,7 @@ fn angle_periodic_friction_follows_rotor_angle() {
     let mut p = rig_params();
     p.effects = vec![Effect::AnglePeriodicFriction { amplitude_ratio: 0.2, order: 2, phase_rad: 1.0 }];
     let t = grid(10.0, 100.0);
-    let tr = simulate(&p, &op(100.0, 2.0, 1.0), &t, &opts(1e-8)).unwrap();
+    let tr = simulate(&p, &op(100.0, 2.0, 1.0), &t, &shipped()).unwrap();
     for k in (0..tr.len()).filter(|&k| tr.rotor_speed_rad_s[k] > 0.0 && !tr.stuck[k]) {
         let expect = 0.35 * 2.0 * (1.0 + 0.2 * (2.0 * tr.rotor_angle_rad[k] + 1.0).sin()) * p.brake_disc_radius_m;
         assert!((tr.friction_torque_nm[k] - expect).abs() < 1e-12);
@@ -283,9 +283,9 @@ fn angle_periodic_friction_follows_rotor_angle() {
 fn motor_cogging_makes_speed_ripple() {
     let mut p = rig_params();
     let t = grid(80.0, 500.0);
-    let smooth = simulate(&p, &RunInput::VoltageStep { voltage_v: 6.0 }, &t, &opts(1e-9)).unwrap();
+    let smooth = simulate(&p, &RunInput::VoltageStep { voltage_v: 6.0 }, &t, &at_rtol(1e-9)).unwrap();
     p.effects = vec![Effect::MotorCogging { amplitude_nm: 0.2, order: 6, phase_rad: 0.0 }];
-    let cog = simulate(&p, &RunInput::VoltageStep { voltage_v: 6.0 }, &t, &opts(1e-9)).unwrap();
+    let cog = simulate(&p, &RunInput::VoltageStep { voltage_v: 6.0 }, &t, &at_rtol(1e-9)).unwrap();
     let ripple = |tr: &Trajectory| {
         let w = &tr.motor_speed_rad_s[3 * tr.len() / 4..];
         w.iter().cloned().fold(f64::MIN, f64::max) - w.iter().cloned().fold(f64::MAX, f64::min)
@@ -302,7 +302,7 @@ fn motor_cogging_makes_speed_ripple() {
 fn continuation_matches_one_piece_run() {
     let p = rig_params();
     let t = grid(30.0, 100.0);
-    let o = opts(1e-11);
+    let o = at_rtol(1e-11);
     let (whole, _) = simulate_from(&p, &State::default(), 5.0, 30.0, &t, &o).unwrap();
     let direct = simulate(&p, &op(5.0, 30.0, 0.0), &t, &o).unwrap();
     assert_eq!(whole, direct);
@@ -327,14 +327,14 @@ fn thesis_friction_follows_lookup_and_eq_4_11() {
     let t = grid(10.0, 100.0);
     let nf = 5.0;
     let nr = nf * p.brake_disc_radius_m;
-    let plain = simulate(&p, &op(60.0, nf, 2.0), &t, &opts(1e-9)).unwrap();
+    let plain = simulate(&p, &op(60.0, nf, 2.0), &t, &at_rtol(1e-9)).unwrap();
     for k in 0..plain.len() {
         let mu = rig_model::friction::thesis_lookup(&table, plain.rotor_speed_rad_s[k]);
         assert!((plain.friction_torque_nm[k] - mu * nr).abs() < 1e-12);
     }
     let omega_p = 2.209;
     p.harmonic = Some(rig_types::HarmonicFriction::MultiplyTorque { omega_p_rad_s: omega_p });
-    let harmonic = simulate(&p, &op(60.0, nf, 2.0), &t, &opts(1e-9)).unwrap();
+    let harmonic = simulate(&p, &op(60.0, nf, 2.0), &t, &at_rtol(1e-9)).unwrap();
     for (k, &tk) in t.iter().enumerate() {
         let mu = rig_model::friction::thesis_lookup(&table, harmonic.rotor_speed_rad_s[k]);
         assert!((harmonic.friction_torque_nm[k] - mu * nr * (omega_p * tk).sin()).abs() < 1e-12);
@@ -361,7 +361,7 @@ fn slip_friction_follows_each_law_and_the_harmonic_normal_force() {
             p.friction = law.clone();
             p.harmonic = harmonic.clone();
             let nf = 8.0;
-            let tr = simulate(&p, &op(30.0, nf, 2.0), &t, &opts(1e-9)).unwrap();
+            let tr = simulate(&p, &op(30.0, nf, 2.0), &t, &at_rtol(1e-9)).unwrap();
             let mut slipping = 0;
             for (k, &tk) in t.iter().enumerate() {
                 let w1 = tr.rotor_speed_rad_s[k];

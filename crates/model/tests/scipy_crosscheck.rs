@@ -6,7 +6,7 @@
 mod common;
 
 use common::*;
-use rig_model::{ANTI_WINDUP_TRACKING_S, MOTOR_FRICTION_SPEED_RAD_S, SimOptions, simulate};
+use rig_model::{ANTI_WINDUP_TRACKING_S, MOTOR_FRICTION_SPEED_RAD_S, simulate};
 use rig_types::{FrictionLaw, RigParams, RunInput};
 use std::io::Write;
 use std::process::{Command, Stdio};
@@ -82,7 +82,7 @@ fn rig_model_agrees_with_scipy_solve_ivp() {
     let rate = 2_000.0;
     let t_end = 30.0;
     let t = grid(t_end, rate);
-    let o = SimOptions { rtol: 1e-10, atol: 1e-12, max_step_s: 0.01 };
+    let o = at_rtol(1e-10);
     for (rpm, n) in [(10.0, 5.0), (20.0, 15.0), (40.0, 25.0)] {
         let reference = run_scipy(&p, rpm, n, 2.0, &t);
         let tr =
@@ -136,12 +136,12 @@ fn default_tolerance_is_within_a_tenth_of_a_percent_of_a_tight_reference() {
     let p = crosscheck_params();
     let (rate, t_end) = (2_000.0, 30.0);
     let t = grid(t_end, rate);
-    let tight = SimOptions { rtol: 1e-13, atol: 1e-15, max_step_s: 0.01 };
+    let tight = at_rtol(1e-13);
     for (rpm, n) in [(10.0, 5.0), (20.0, 15.0), (40.0, 25.0)] {
         let input = RunInput::OperatingPoint { motor_rpm_setpoint: rpm, normal_force_n: n, ramp_s: 2.0 };
         let accel = (0.6 - 0.3) * n * p.brake_disc_radius_m / p.rotor_inertia_kgm2;
         let (rel_ref, peaks_ref) = cycles(&simulate(&p, &input, &t, &tight).unwrap(), &t, accel);
-        let (rel, peaks) = cycles(&simulate(&p, &input, &t, &SimOptions::default()).unwrap(), &t, accel);
+        let (rel, peaks) = cycles(&simulate(&p, &input, &t, &shipped()).unwrap(), &t, accel);
         assert_eq!(rel.len(), rel_ref.len(), "{rpm} rpm {n} N: number of break-aways");
         assert!(rel.len() >= 6, "{rpm} rpm {n} N must stick-slip: {rel:?}");
         let period_ref = period(&rel_ref, t_end / 2.0);

@@ -27,7 +27,10 @@ fn main() -> Result<()> {
             damping: rig_estimate::DampingStructure::RotorAbsolute {
                 rotor_damping: rig_estimate::RotorDamping::Fitted,
             },
-            ..rig_estimate::EstimateOptions::new(rig_estimate::InitialValues::from_thesis_data(&th))
+            ..rig_estimate::EstimateOptions::new(
+                rig_estimate::InitialValues::from_thesis_data(&th),
+                opts.integrator.clone(),
+            )
         };
         let e = rig_estimate::estimate_rig(&c, &cal, &o)?.params;
         println!(

@@ -62,7 +62,7 @@ fn main() -> Result<()> {
     let found = findings(&root.join("reports/diagnosis.json"))?;
     println!("campaign {} · extended by {:?}", c.name, found);
 
-    let base_opts = EstimateOptions::new(InitialValues::from_thesis_data(&th));
+    let base_opts = EstimateOptions::new(InitialValues::from_thesis_data(&th), opts.integrator.clone());
     let est = |d: DampingStructure| -> Result<rig_estimate::RigEstimate> {
         let o = EstimateOptions { damping: d, ..base_opts.clone() };
         let t0 = std::time::Instant::now();

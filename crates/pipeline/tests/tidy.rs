@@ -651,14 +651,24 @@ fn a_setting_declared_twice_is_seen() {
     assert!(declared_twice(fine).is_empty(), "{:?}", declared_twice(fine));
 }
 
+/// Keys of a stage that reads a recording whose names read as a window but
+/// that count something else, with the reason.
+const COUNTS_NOT_WINDOWS: [(&str, &str, &str); 1] = [(
+    "slider",
+    "features.segments",
+    "the number of equal pieces a loading phase is cut into (their length follows the phase), not a length",
+)];
+
 /// What breaks "no window is counted in samples in pipeline.toml" in a
-/// pipeline.toml text: a key of a stage that reads `{campaign}` (its params,
-/// nested tables and the `[shared.<name>]` tables it lists) whose name says
-/// window, half-width, segment or samples but is not in seconds (`*_s`).
+/// pipeline.toml text: a key of a stage that reads a recording (`{campaign}`,
+/// or a data set under `{shared}/data`: the LAVI record, the slider's runs;
+/// its params, nested tables and the `[shared.<name>]` tables it lists) whose
+/// name says window, half-width, segment, dilation or samples but is not in
+/// seconds (`*_s`), unless [`COUNTS_NOT_WINDOWS`] names it.
 fn windows_in_samples(text: &str) -> Vec<String> {
     fn walk(t: &toml::Table, at: &str, out: &mut Vec<String>) {
         for (path, key, _) in leaves(t, at) {
-            let windowish = ["window", "half", "segment", "samples"].iter().any(|w| key.contains(w));
+            let windowish = ["window", "half", "segment", "samples", "dilate"].iter().any(|w| key.contains(w));
             if windowish && !key.ends_with("_s") {
                 out.push(format!("{path}{key}"));
             }
@@ -669,11 +679,10 @@ fn windows_in_samples(text: &str) -> Vec<String> {
     let mut problems = Vec::new();
     for st in doc.get("stage").and_then(|v| v.as_array()).into_iter().flatten() {
         let name = st.get("name").and_then(|v| v.as_str()).unwrap_or("?");
-        let reads_campaign = st
-            .get("inputs")
-            .and_then(|v| v.as_array())
-            .is_some_and(|i| i.iter().any(|x| x.as_str().is_some_and(|x| x.contains("{campaign}"))));
-        if !reads_campaign {
+        let reads_recording = st.get("inputs").and_then(|v| v.as_array()).is_some_and(|i| {
+            i.iter().any(|x| x.as_str().is_some_and(|x| x.contains("{campaign}") || x.starts_with("{shared}/data")))
+        });
+        if !reads_recording {
             continue;
         }
         let mut keys = Vec::new();
@@ -686,14 +695,16 @@ fn windows_in_samples(text: &str) -> Vec<String> {
                 walk(t, &format!("[shared.{table}] "), &mut keys);
             }
         }
+        keys.retain(|k| !COUNTS_NOT_WINDOWS.iter().any(|(s, key, _)| *s == name && k == key));
         problems
             .extend(keys.into_iter().map(|k| format!("stage {name}: `{k}` reads as a window not in seconds (*_s)")));
     }
     problems
 }
 
-/// No window of a stage that reads the campaign is counted in samples: a
-/// campaign at another sample rate keeps its windows' length (issue 26).
+/// No window of a stage that reads a recording is counted in samples: a
+/// campaign (or the LAVI record, the slider's runs) at another sample rate
+/// keeps its windows' length (issue 26).
 #[test]
 fn campaign_windows_are_in_seconds() {
     let problems = windows_in_samples(&std::fs::read_to_string(root().join("pipeline.toml")).unwrap());
@@ -701,13 +712,111 @@ fn campaign_windows_are_in_seconds() {
 }
 
 /// The rule sees a window in samples, also in a nested or a shared table, and
-/// leaves stages that do not read the campaign alone (it is not vacuous).
+/// in a stage that reads a data set under `{shared}/data` (the LAVI stage's
+/// glitch windows before they were in seconds); it leaves stages that read no
+/// recording alone, and the named counts (it is not vacuous).
 #[test]
 fn a_window_in_samples_is_seen() {
     let bad = "[shared.x]\nspeed_half_window = 10\n[[stage]]\nname = \"a\"\ninputs = [\"{campaign}\"]\n\
                shared = [\"x\"]\n[stage.params]\nwindow_samples = 25\nwindow_s = 0.05\n[stage.params.c]\nbalance_window = 50\n\
-               [[stage]]\nname = \"b\"\ninputs = [\"{shared}/data\"]\n[stage.params]\nglitch_median_window = 101\n";
-    assert_eq!(windows_in_samples(bad).len(), 3, "{:?}", windows_in_samples(bad));
+               [[stage]]\nname = \"lavi\"\ninputs = [\"{shared}/data/ufrj-lavi-2018\"]\n[stage.params]\n\
+               glitch_median_window = 101\nglitch_dilate = 10\nglitch_dilate_s = 0.01\n\
+               [[stage]]\nname = \"b\"\ninputs = [\"@a/data/x.json\"]\n[stage.params]\nwindow_samples = 25\n\
+               [[stage]]\nname = \"slider\"\ninputs = [\"{shared}/data/s\"]\n[stage.params.features]\nsegments = 5\n";
+    let seen = windows_in_samples(bad);
+    assert_eq!(seen.len(), 5, "{seen:?}");
+    assert!(
+        seen.contains(&"stage lavi: `glitch_dilate` reads as a window not in seconds (*_s)".to_string()),
+        "{seen:?}"
+    );
+    let segments_elsewhere = bad.replace("name = \"slider\"", "name = \"other\"");
+    assert_eq!(windows_in_samples(&segments_elsewhere).len(), 6, "{:?}", windows_in_samples(&segments_elsewhere));
+}
+
+/// Where code writes an integrator tolerance of its own, as "file:line: what":
+/// a `SimOptions` field `rtol` or `atol` given a number (a struct literal, on
+/// any of its lines), or a `Default` for `SimOptions` (an `impl`, or a derive
+/// on the struct). pipeline.toml's `[shared.integrator]` is the one home of
+/// the numbers: stages are handed it, tests, benches and examples read it
+/// (`SimOptions::from_pipeline_toml`), and a test that chooses another
+/// tolerance says so by name (rig-model's `common::at_rtol`). The virtual
+/// rig's `TRUTH_SIM_OPTIONS` is the generator's own (ARCHITECTURE.md: its
+/// physics and settings are written independently of the analysis).
+fn integrator_literals(lines: &[(PathBuf, usize, String)]) -> Vec<String> {
+    let homes = ["crates/virtual-rig/src/lib.rs", "crates/pipeline/tests/tidy.rs"];
+    let numeric = |code: &str, field: &str| {
+        code.match_indices(field).any(|(i, _)| {
+            let after = &code[i + field.len()..];
+            let before = code[..i].chars().last();
+            !before.is_some_and(|c| c.is_alphanumeric() || c == '_')
+                && after.starts_with(|c: char| c.is_ascii_digit() || c == '.' || c == '-')
+        })
+    };
+    let mut out = Vec::new();
+    for (k, (f, i, code)) in lines.iter().enumerate() {
+        if homes.iter().any(|h| f.ends_with(h)) {
+            continue;
+        }
+        let what = if numeric(code, "rtol:") || numeric(code, "atol:") {
+            "an integrator tolerance written as a number"
+        } else if code.contains("implDefaultfor") && code.contains("SimOptions") {
+            "a Default for SimOptions"
+        } else if code.contains("structSimOptions")
+            && lines[k.saturating_sub(3)..k]
+                .iter()
+                .any(|(g, _, c)| g == f && c.starts_with("#[derive(") && c.contains("Default"))
+        {
+            "a derived Default for SimOptions"
+        } else {
+            continue;
+        };
+        out.push(format!("{}:{i}: {what}; read pipeline.toml's [shared.integrator]", f.display()));
+    }
+    out
+}
+
+/// No second integrator setting (issue 26, 6d): the tolerances are written
+/// once, in pipeline.toml's `[shared.integrator]`.
+#[test]
+fn integrator_tolerances_have_one_home() {
+    let problems = integrator_literals(&code_lines());
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+/// The rule sees a tolerance literal (one line or spread over several), an
+/// `impl Default` and a derived one, and passes the shipped setting read from
+/// pipeline.toml, a tolerance chosen by name and the generator's own (it is
+/// not vacuous).
+#[test]
+fn an_integrator_literal_is_seen() {
+    let squeeze = |text: &str, file: &str| -> Vec<(PathBuf, usize, String)> {
+        text.lines()
+            .enumerate()
+            .map(|(i, l)| (PathBuf::from(file), i + 1, l.chars().filter(|c| !c.is_whitespace()).collect()))
+            .collect()
+    };
+    let planted = "let o = SimOptions { rtol: 1e-8, atol: 1e-10, max_step_s: 0.01 };
+        let tight = SimOptions {
+            rtol: 1e-13,
+            atol: 1e-15,
+            max_step_s: 0.01,
+        };
+        impl Default for SimOptions {
+        #[derive(Debug, Clone, Default)]
+        pub struct SimOptions {";
+    let seen = integrator_literals(&squeeze(planted, "crates/model/tests/convergence.rs"));
+    assert_eq!(seen.len(), 5, "{seen:?}");
+    assert!(seen[0].starts_with("crates/model/tests/convergence.rs:1: an integrator tolerance"), "{seen:?}");
+    assert!(seen[3].contains(":7: a Default for SimOptions") && seen[4].contains(":9: a derived Default"), "{seen:?}");
+    let fine = "let o = SimOptions::from_pipeline_toml(include_str!(\"../../../pipeline.toml\"))?;
+        SimOptions { rtol, atol: rtol * 1e-2, ..shipped() }
+        let r = at_rtol(1e-13);
+        let c = Crit { min_rtol: 0.5 };
+        #[derive(Debug, Clone, PartialEq)]
+        pub struct SimOptions {";
+    assert!(integrator_literals(&squeeze(fine, "crates/model/tests/convergence.rs")).is_empty());
+    let truth = "pub const TRUTH_SIM_OPTIONS: SimOptions = SimOptions { rtol: 1e-8, atol: 1e-10, max_step_s: 0.01 };";
+    assert!(integrator_literals(&squeeze(truth, "crates/virtual-rig/src/lib.rs")).is_empty());
 }
 
 /// One rendering convention: the module that turns a crate's results into

@@ -19,7 +19,8 @@ fn bench(c: &mut Criterion) {
     let chains: Vec<_> = map.chains().into_iter().filter(|c| c.direction == Direction::Up).collect();
     let s = SweepSettings {
         window: WindowSpec { first_transient_s: 20.0, transient_s: 20.0, window_s: 20.0, sample_rate_hz: 100.0 },
-        sim: SimOptions::default(),
+        // The shipped integrator: pipeline.toml's [shared.integrator].
+        sim: SimOptions::from_pipeline_toml(include_str!("../../../pipeline.toml")).expect("pipeline.toml"),
         classify: ClassifyOptions::default(),
     };
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("thread pool");

@@ -53,8 +53,11 @@ fn times(duration_s: f64, rate_hz: f64) -> Vec<f64> {
     (0..(duration_s * rate_hz).round() as usize).map(|i| i as f64 / rate_hz).collect()
 }
 
+/// The shipped integrator setting (pipeline.toml's `[shared.integrator]`):
+/// the synthetic campaigns are recorded with it and the estimation fits with it.
 pub fn sim() -> SimOptions {
-    SimOptions { rtol: 1e-8, atol: 1e-10, max_step_s: 0.01 }
+    SimOptions::from_pipeline_toml(include_str!("../../../../pipeline.toml"))
+        .expect("pipeline.toml [shared.integrator]")
 }
 
 /// Runs of one kind, with noise from `rng`.

@@ -1,14 +1,14 @@
 //! The cases of the `simulate` and `simulate_system_alloc` benches: one 40 s
 //! operating-point run (40 rpm, 15 N) of the rig model, sampled at the
 //! campaign's 500 Hz and at its end only, and the thesis model, at the
-//! default tolerances, into a fresh trajectory and into a reused one. The two
+//! shipped tolerances (pipeline.toml's `[shared.integrator]`), into a fresh trajectory and into a reused one. The two
 //! bench binaries differ only in their global allocator (docs/performance.md).
 
 #[path = "../../tests/common/mod.rs"]
 mod common;
 
 use criterion::Criterion;
-use rig_model::{SimOptions, simulate_into, simulate_with_stats};
+use rig_model::{simulate_into, simulate_with_stats};
 use rig_types::RunInput;
 use std::hint::black_box;
 
@@ -17,7 +17,7 @@ pub fn bench(c: &mut Criterion, allocator: &str) {
     let p = common::rig_params();
     let input = RunInput::OperatingPoint { motor_rpm_setpoint: 40.0, normal_force_n: 15.0, ramp_s: 2.0 };
     let t = common::grid(40.0, 500.0);
-    let o = SimOptions::default();
+    let o = common::shipped();
     let mut g = c.benchmark_group(allocator);
     g.bench_function("rig model 40 s, 40 rpm, 15 N, default tol", |b| {
         b.iter(|| simulate_with_stats(black_box(&p), black_box(&input), black_box(&t), &o).unwrap())

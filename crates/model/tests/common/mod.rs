@@ -65,6 +65,23 @@ pub fn grid(t_end_s: f64, rate_hz: f64) -> Vec<f64> {
     (0..=n).map(|k| k as f64 / rate_hz).collect()
 }
 
-pub fn opts(tol: f64) -> SimOptions {
-    SimOptions { rtol: tol, atol: tol * 1e-2, max_step_s: 0.01 }
+/// The shipped integrator setting: pipeline.toml's `[shared.integrator]`.
+/// Parsed on a thread of its own, so that its allocations go to that
+/// thread's malloc arena: a bench or `cpu_time` that reads it starts from
+/// the heap it started from when the setting was a code default (parsed on
+/// the main thread, the toml left glibc's main arena so that a fresh 500 Hz
+/// thesis-model trajectory in `cpu_time` faulted 241 pages a run instead of
+/// 0 and cost 0.86 ms of CPU instead of 0.36).
+pub fn shipped() -> SimOptions {
+    std::thread::spawn(|| SimOptions::from_pipeline_toml(include_str!("../../../../pipeline.toml")))
+        .join()
+        .expect("reading pipeline.toml")
+        .expect("pipeline.toml [shared.integrator]")
+}
+
+/// A tolerance chosen by a test, not the shipped one (a convergence study, a
+/// reference tighter than the shipped setting, a proof that needs more digits):
+/// rtol `rtol`, atol `rtol`/100, the shipped largest step.
+pub fn at_rtol(rtol: f64) -> SimOptions {
+    SimOptions { rtol, atol: rtol * 1e-2, ..shipped() }
 }

@@ -55,7 +55,8 @@ pub fn rig_params() -> RigParams {
 pub fn settings(first_transient_s: f64, transient_s: f64, window_s: f64) -> SweepSettings {
     SweepSettings {
         window: WindowSpec { first_transient_s, transient_s, window_s, sample_rate_hz: 100.0 },
-        sim: SimOptions::default(),
+        // The shipped integrator: pipeline.toml's [shared.integrator].
+        sim: SimOptions::from_pipeline_toml(include_str!("../../../../pipeline.toml")).expect("pipeline.toml"),
         classify: ClassifyOptions::default(),
     }
 }
