@@ -69,10 +69,24 @@ fn campaign_of(protocol: &Protocol, seed: u64) -> Campaign {
     c
 }
 
+/// A run's out dir, removed with its campaign when dropped.
+#[derive(Debug)]
+struct Out {
+    _dir: tempfile::TempDir,
+    path: PathBuf,
+}
+
+impl Out {
+    fn join(&self, rel: &str) -> PathBuf {
+        self.path.join(rel)
+    }
+}
+
 /// Writes `c` (then `edit` rewrites files on disk) and runs the campaign
 /// stages through the runner; the runner's error and summary on failure.
-fn run_campaign(label: &str, c: &Campaign, edit: impl Fn(&Path)) -> Result<PathBuf, String> {
-    let dir = tempfile::tempdir().expect("tempdir").keep();
+fn run_campaign(label: &str, c: &Campaign, edit: impl Fn(&Path)) -> Result<Out, String> {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let dir = tmp.path();
     let campaign = dir.join("campaign");
     write_campaign(&campaign, c).expect("write campaign");
     edit(&campaign);
@@ -99,10 +113,10 @@ fn run_campaign(label: &str, c: &Campaign, edit: impl Fn(&Path)) -> Result<PathB
             return Err(format!("{label}: {f} missing\n{summary}"));
         }
     }
-    Ok(out)
+    Ok(Out { _dir: tmp, path: out })
 }
 
-fn runs_end_to_end(label: &str, c: &Campaign, edit: impl Fn(&Path)) -> PathBuf {
+fn runs_end_to_end(label: &str, c: &Campaign, edit: impl Fn(&Path)) -> Out {
     run_campaign(label, c, edit).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -312,4 +326,46 @@ fn a_single_operating_point_is_refused_with_the_rule() {
     let p = Protocol { op_points: vec![(40.0, 5.0)], ..small_lab(500.0) };
     let err = run_campaign("one op", &campaign_of(&p, 2614), |_| {}).unwrap_err();
     assert!(err.contains("campaign.toml: 1 operating_point run: stage diagnosis needs at least 3"), "{err}");
+}
+
+/// A voltage step of negative voltage turns the motor the other way (the
+/// spec allows it; its counts run negative): the campaign runs end to end
+/// and the step's decay reads as its positive twin's (same rig, same seed):
+/// the log decrement to the 4th decimal.
+#[test]
+fn a_negative_voltage_step_runs_end_to_end() {
+    let decrement = |v: f64| {
+        let p = Protocol { step_voltages_v: vec![v, 7.0, 11.0], ..small_lab(500.0) };
+        let out = runs_end_to_end(&format!("step {v} V"), &campaign_of(&p, 2617), |_| {});
+        let t = std::fs::read_to_string(out.join("tables/campaign-log-decrement.csv")).unwrap();
+        let row = t.lines().nth(1).expect("the first step's row").to_string();
+        row.split(',').nth(3).expect("log_decrement").to_string()
+    };
+    assert_eq!(decrement(-9.0), decrement(9.0));
+}
+
+/// Operating points recorded with both encoders (and voltage and force)
+/// turned the other way: counts are positive in the drive direction and the
+/// set-point is positive, so the reader refuses the first row more than a
+/// revolution backwards, naming file, line and rule. Read as it was, the
+/// run went through every stage with the PI gains' sign wrong (kp −0.23
+/// against 1.51 V·s/rad) and a false `unexplained` diagnosis.
+#[test]
+fn an_operating_point_turning_the_other_way_is_refused_with_the_rule() {
+    let truth = draw_rig(2616);
+    let mut c = campaign_of(&small_lab(500.0), 2616);
+    for r in c.runs.iter_mut().filter(|r| r.kind.name() == "operating_point") {
+        let d = &mut r.data;
+        for v in [&mut d.motor_ticks, &mut d.rotor_ticks].into_iter().flatten() {
+            v.iter_mut().for_each(|x| *x = -*x);
+        }
+        d.motor_voltage_v.iter_mut().flatten().for_each(|x| *x = -*x);
+        d.brake_force_mv.iter_mut().flatten().for_each(|x| *x = 2.0 * truth.force_offset_mv - *x);
+    }
+    let err = run_campaign("turned the other way", &c, |_| {}).unwrap_err();
+    assert!(err.contains("runs/lab2-point-01.csv:"), "{err}");
+    assert!(
+        err.contains("is more than one revolution (1000 counts) against the drive direction: encoder counts are positive in the drive direction and motor_rpm_setpoint = 15 rpm drives it forward"),
+        "{err}"
+    );
 }
