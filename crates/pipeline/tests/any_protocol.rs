@@ -402,3 +402,39 @@ fn operating_points_at_one_set_point_run_end_to_end() {
     };
     runs_end_to_end("one set-point", &campaign_of(&p, 2619), |_| {});
 }
+
+/// A recorder that dropped half a second of samples in every operating point
+/// (5.0–5.5 s: the time column jumps; strictly increasing, so allowed).
+#[test]
+fn a_gap_in_the_time_column_runs_end_to_end() {
+    let mut c = campaign_of(&small_lab(500.0), 2620);
+    for r in c.runs.iter_mut().filter(|r| r.kind.name() == "operating_point") {
+        let d = &mut r.data;
+        let keep: Vec<usize> = (0..d.time_s.len()).filter(|&i| !(5.0..5.5).contains(&d.time_s[i])).collect();
+        let pick_f = |v: &mut Vec<f64>| *v = keep.iter().map(|&i| v[i]).collect();
+        let pick_i = |v: &mut Vec<i64>| *v = keep.iter().map(|&i| v[i]).collect();
+        pick_f(&mut d.time_s);
+        d.motor_voltage_v.as_mut().map(pick_f);
+        d.brake_force_mv.as_mut().map(pick_f);
+        d.motor_ticks.as_mut().map(pick_i);
+        d.rotor_ticks.as_mut().map(pick_i);
+    }
+    runs_end_to_end("a gap", &c, |_| {});
+}
+
+/// Operating points of one rig with different ramps (0 s and 5 s) in one
+/// campaign: each run's ramp is read from its own metadata.
+#[test]
+fn operating_points_with_different_ramps_run_end_to_end() {
+    let mut c = campaign_of(&Protocol { ramp_s: 0.0, ..small_lab(500.0) }, 2621);
+    let other = campaign_of(&Protocol { ramp_s: 5.0, ..small_lab(500.0) }, 2621);
+    c.runs.retain(|r| r.kind.name() != "operating_point" || r.id.ends_with(['1', '3', '5', '7']));
+    for mut r in
+        other.runs.into_iter().filter(|r| r.kind.name() == "operating_point" && r.id.ends_with(['2', '4', '6', '8']))
+    {
+        r.id.push_str("-ramp5");
+        r.file = PathBuf::from(format!("runs/{}.csv", r.id));
+        c.runs.push(r);
+    }
+    runs_end_to_end("mixed ramps", &c, |_| {});
+}
