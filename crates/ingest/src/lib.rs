@@ -26,6 +26,11 @@
 //! - `operating_point`: `motor_rpm_setpoint > 0`, `normal_force_n >= 0`
 //!   (zero: brake open), `ramp_s >= 0` (zero: a step reference).
 //!
+//! **Direction** ("positive in the drive direction"): an operating point
+//! drives forward (its set-point is positive) and a voltage step the way of
+//! its voltage's sign, so neither encoder may run more than one revolution
+//! the other way; the first such row is refused (a reversed encoder).
+//!
 //! **Unknown keys are refused** everywhere (top level, `[rig]`, each run):
 //! a typo such as `lod_n` must not silently drop a value.
 //!
@@ -74,7 +79,7 @@ pub use error::IngestError;
 pub use manifest::FORMAT;
 
 use columns::{ColValues, TimeStart, read_numeric_csv};
-use rig_types::{Campaign, Run, RunData};
+use rig_types::{Campaign, Run, RunData, RunKind};
 use std::path::Path;
 
 /// Reads and validates a whole campaign folder (`<dir>/campaign.toml` and the
@@ -100,6 +105,7 @@ pub fn read_campaign(dir: &Path) -> Result<Campaign, IngestError> {
             }
         }
         check_plausible(&entry.resolved, &data, manifest.rig.supply_voltage_v)?;
+        check_direction(&entry.resolved, &entry.kind, &data, manifest.rig.encoder_ticks_per_rev)?;
         runs.push(Run { id: entry.id, kind: entry.kind, file: entry.file, data });
     }
     Ok(Campaign { name: manifest.name, description: manifest.description, rig: manifest.rig, runs })
@@ -134,6 +140,42 @@ fn check_plausible(file: &Path, data: &RunData, supply_v: f64) -> Result<(), Ing
                     show(x),
                     show(limit),
                     show(supply_v)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The direction rule (crate docs): encoder counts are positive in the drive
+/// direction, so a run the drive turns one way cannot run a whole revolution
+/// the other. An operating point's set-point is positive (forward); a voltage
+/// step turns the way of its voltage's sign. The first row more than one
+/// revolution against that direction is refused (a reversed encoder, or a
+/// record of the other direction without its counts negated): read as it is,
+/// its PI gains come out with the wrong sign and the diagnosis is wrong.
+fn check_direction(file: &Path, kind: &RunKind, data: &RunData, ticks_per_rev: u32) -> Result<(), IngestError> {
+    let (sign, why) = match *kind {
+        RunKind::OperatingPoint { motor_rpm_setpoint, .. } => {
+            (1, format!("motor_rpm_setpoint = {} rpm drives it forward", show(motor_rpm_setpoint)))
+        }
+        RunKind::VoltageStep { voltage_v } if voltage_v < 0.0 => {
+            (-1, format!("voltage_v = {} V drives it backward", show(voltage_v)))
+        }
+        RunKind::VoltageStep { voltage_v } => (1, format!("voltage_v = {} V drives it forward", show(voltage_v))),
+        _ => return Ok(()),
+    };
+    let rev = i64::from(ticks_per_rev);
+    for (name, counts) in [("motor_ticks", &data.motor_ticks), ("rotor_ticks", &data.rotor_ticks)] {
+        let Some(counts) = counts else { continue };
+        if let Some(i) = counts.iter().position(|&c| sign * c < -rev) {
+            return Err(IngestError::rule(
+                file,
+                Some(i + 2),
+                format!(
+                    "{name} = {} is more than one revolution ({rev} counts) against the drive direction: encoder \
+                     counts are positive in the drive direction and {why} (a reversed encoder's counts must be negated)",
+                    counts[i]
                 ),
             ));
         }

@@ -5,14 +5,27 @@
 //! succeeding. Windows are in seconds and the protocol is read from the
 //! campaign, so nothing here is tuned to the shipped 500 Hz, 40 s, 2 s ramp.
 //!
+//! The other campaigns `rig-campaign/1` allows (twentieth session): a time
+//! column that is authoritative and not the nominal rate (a clock 2 % off,
+//! jittered sampling, runs of different lengths), columns in another order
+//! in every file, other rates and lengths, ramps of zero and longer than half
+//! the run, set-points outside the thesis' range, a gap in the time column,
+//! different ramps in one campaign, a negative voltage step, and campaigns
+//! with few runs of a kind. What a stage cannot work with is refused with
+//! the file and the rule (one operating point; no run with a steady window;
+//! encoders running against the drive). Two the format allows still fail,
+//! ignored tests naming the cause: an open brake (`normal_force_n = 0`) and
+//! every operating point at one set-point.
+//!
 //! The sweeps stage's maps and diagrams are simulations on a grid that does
 //! not depend on the campaign's protocol; their grids are coarsened here
 //! (4 × 3 map points, 4 diagram points) only to keep the test's time down.
 
 use rig_pipeline::Runner;
 use rig_pipeline::testing::workspace_root;
+use rig_types::Campaign;
 use rig_virtual_rig::{Protocol, draw_rig, generate, write_campaign};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The campaign stages (their upstream, thesis-tables, runs first).
 const STAGES: [&str; 7] =
@@ -50,17 +63,39 @@ fn rename(id: &str) -> String {
     format!("lab2-{kind}-{n}")
 }
 
-fn run_protocol(sample_rate_hz: f64, seed: u64) {
+/// The virtual rig's campaign under `protocol`, every run renamed.
+fn campaign_of(protocol: &Protocol, seed: u64) -> Campaign {
     let truth = draw_rig(seed);
-    let mut c = generate("other-lab", &truth, &other_lab(sample_rate_hz), seed).expect("generate");
+    let mut c = generate("other-lab", &truth, protocol, seed).expect("generate");
     for r in &mut c.runs {
         r.id = rename(&r.id);
         r.file = PathBuf::from(format!("runs/{}.csv", r.id));
     }
-    let dir = tempfile::tempdir().expect("tempdir");
-    let campaign = dir.path().join("campaign");
-    write_campaign(&campaign, &c).expect("write campaign");
-    let out = dir.path().join("out");
+    c
+}
+
+/// A run's out dir, removed with its campaign when dropped.
+#[derive(Debug)]
+struct Out {
+    _dir: tempfile::TempDir,
+    path: PathBuf,
+}
+
+impl Out {
+    fn join(&self, rel: &str) -> PathBuf {
+        self.path.join(rel)
+    }
+}
+
+/// Writes `c` (then `edit` rewrites files on disk) and runs the campaign
+/// stages through the runner; the runner's error and summary on failure.
+fn run_campaign(label: &str, c: &Campaign, edit: impl Fn(&Path)) -> Result<Out, String> {
+    let tmp = tempfile::tempdir().expect("tempdir");
+    let dir = tmp.path();
+    let campaign = dir.join("campaign");
+    write_campaign(&campaign, c).expect("write campaign");
+    edit(&campaign);
+    let out = dir.join("out");
     let mut runner = Runner::new(&workspace_root().join("pipeline.toml"))
         .expect("pipeline.toml")
         .campaign(&campaign)
@@ -70,14 +105,28 @@ fn run_protocol(sample_rate_hz: f64, seed: u64) {
     for (key, value) in [("map_rpm_points", "4"), ("map_force_points", "3"), ("diagram_points", "4")] {
         runner = runner.set_param("sweeps", key, value).expect("sweeps param");
     }
-    let report = runner.run().expect("the run starts");
+    let report = match runner.run() {
+        Ok(r) => r,
+        Err(e) => return Err(format!("{label}: refused: {}", rig_pipeline::describe(&e.into()))),
+    };
     let summary = report.summary(false);
     if let Err(e) = report.into_result() {
-        panic!("{sample_rate_hz} Hz campaign: {e:#}\n{summary}");
+        return Err(format!("{label}: {e:#}\n{summary}"));
     }
     for f in ["data/rig-params.json", "diagnosis.json", "estimation.md", "tables/campaign-simulation-misfit.csv"] {
-        assert!(out.join(f).is_file(), "{sample_rate_hz} Hz campaign: {f} missing\n{summary}");
+        if !out.join(f).is_file() {
+            return Err(format!("{label}: {f} missing\n{summary}"));
+        }
     }
+    Ok(Out { _dir: tmp, path: out })
+}
+
+fn runs_end_to_end(label: &str, c: &Campaign, edit: impl Fn(&Path)) -> Out {
+    run_campaign(label, c, edit).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn run_protocol(sample_rate_hz: f64, seed: u64) {
+    runs_end_to_end(&format!("{sample_rate_hz} Hz"), &campaign_of(&other_lab(sample_rate_hz), seed), |_| {});
 }
 
 #[test]
@@ -88,4 +137,309 @@ fn a_1khz_campaign_of_another_protocol_runs_end_to_end() {
 #[test]
 fn a_250hz_campaign_of_another_protocol_runs_end_to_end() {
     run_protocol(250.0, 2602);
+}
+
+/// A small protocol for the variants: 8 operating points.
+fn small_lab(sample_rate_hz: f64) -> Protocol {
+    let mut op_points = Vec::new();
+    for rpm in [15.0, 40.0, 75.0, 110.0] {
+        for n in [3.0, 8.0] {
+            op_points.push((rpm, n));
+        }
+    }
+    Protocol { op_points, op_duration_s: 20.0, ..other_lab(sample_rate_hz) }
+}
+
+/// The recorder's clock runs 2 % fast of the declared rate: the time column
+/// (authoritative) says 510 samples a second, campaign.toml 500.
+#[test]
+fn a_clock_two_percent_off_the_nominal_rate_runs_end_to_end() {
+    let mut c = campaign_of(&small_lab(510.0), 2603);
+    c.rig.sample_rate_hz = 500.0;
+    runs_end_to_end("clock 2 % off", &c, |_| {});
+}
+
+/// Non-uniform sampling: recorded at 2 kHz, kept at one sample in about four
+/// (steps of 1.5–2.5 ms), declared 500 Hz.
+#[test]
+fn jittered_sampling_runs_end_to_end() {
+    let mut c = campaign_of(&small_lab(2000.0), 2604);
+    c.rig.sample_rate_hz = 500.0;
+    for (j, r) in c.runs.iter_mut().enumerate() {
+        let n = r.data.time_s.len();
+        let keep: Vec<usize> = (0..n / 4)
+            .map(|k| if k == 0 { 0 } else { 4 * k + [0, 1, 3][(k * 7 + j) % 3] - 1 })
+            .filter(|&i| i < n)
+            .collect();
+        let d = &mut r.data;
+        let pick_f = |v: &mut Vec<f64>| *v = keep.iter().map(|&i| v[i]).collect();
+        let pick_i = |v: &mut Vec<i64>| *v = keep.iter().map(|&i| v[i]).collect();
+        pick_f(&mut d.time_s);
+        d.motor_voltage_v.as_mut().map(pick_f);
+        d.brake_force_mv.as_mut().map(pick_f);
+        d.motor_ticks.as_mut().map(pick_i);
+        d.rotor_ticks.as_mut().map(pick_i);
+    }
+    runs_end_to_end("jittered", &c, |_| {});
+}
+
+/// Every CSV's columns rotated (time last in some), runs of unequal length.
+#[test]
+fn columns_in_another_order_and_runs_of_unequal_length_run_end_to_end() {
+    let mut c = campaign_of(&small_lab(500.0), 2605);
+    for (j, r) in c.runs.iter_mut().filter(|r| r.kind.name() == "operating_point").enumerate() {
+        let keep = r.data.time_s.len() - 1000 * (j % 3);
+        let d = &mut r.data;
+        d.time_s.truncate(keep);
+        for v in [&mut d.motor_voltage_v, &mut d.brake_force_mv].into_iter().flatten() {
+            v.truncate(keep);
+        }
+        for v in [&mut d.motor_ticks, &mut d.rotor_ticks].into_iter().flatten() {
+            v.truncate(keep);
+        }
+    }
+    runs_end_to_end("columns rotated", &c, |camp| {
+        let mut files: Vec<PathBuf> =
+            std::fs::read_dir(camp.join("runs")).unwrap().map(|e| e.unwrap().path()).collect();
+        files.sort();
+        for (j, f) in files.iter().enumerate() {
+            let text = std::fs::read_to_string(f).unwrap();
+            let mut out = String::new();
+            for line in text.lines() {
+                let mut cells: Vec<&str> = line.split(',').collect();
+                let k = (1 + j) % cells.len();
+                cells.rotate_left(k);
+                out.push_str(&cells.join(","));
+                out.push('\n');
+            }
+            std::fs::write(f, out).unwrap();
+        }
+    });
+}
+
+#[test]
+fn a_2khz_campaign_runs_end_to_end() {
+    let p = Protocol { op_duration_s: 10.0, step_duration_s: 8.0, ramp_s: 1.0, ..small_lab(2000.0) };
+    runs_end_to_end("2 kHz", &campaign_of(&p, 2606), |_| {});
+}
+
+#[test]
+fn a_100hz_campaign_runs_end_to_end() {
+    runs_end_to_end("100 Hz", &campaign_of(&small_lab(100.0), 2607), |_| {});
+}
+
+/// 10 s operating points (a 1 s ramp), 5 s voltage steps.
+#[test]
+fn short_runs_run_end_to_end() {
+    let p = Protocol { op_duration_s: 10.0, step_duration_s: 5.0, ramp_s: 1.0, ..small_lab(500.0) };
+    runs_end_to_end("short runs", &campaign_of(&p, 2608), |_| {});
+}
+
+#[test]
+fn no_ramp_runs_end_to_end() {
+    let p = Protocol { ramp_s: 0.0, ..small_lab(500.0) };
+    runs_end_to_end("ramp 0", &campaign_of(&p, 2609), |_| {});
+}
+
+/// A 12 s ramp on 20 s runs: the spectra's steady window (after the ramp
+/// and 8 s of settling) is empty on every run but the two that last longer.
+#[test]
+fn a_ramp_longer_than_half_the_run_runs_end_to_end() {
+    let p = Protocol { ramp_s: 12.0, ..small_lab(500.0) };
+    let mut c = campaign_of(&p, 2610);
+    for r in c.runs.iter_mut().filter(|r| r.kind.name() == "operating_point").take(2) {
+        // Two runs recorded 30 s instead of 20 s: the clock read on.
+        let d = &mut r.data;
+        let n = d.time_s.len();
+        let dt = d.time_s[1] - d.time_s[0];
+        for k in n..(n * 3 / 2) {
+            d.time_s.push(k as f64 * dt);
+        }
+        let last = |v: &mut Vec<f64>| v.resize(n * 3 / 2, *v.last().unwrap());
+        d.motor_voltage_v.as_mut().map(last);
+        d.brake_force_mv.as_mut().map(last);
+        let cont = |v: &mut Vec<i64>| {
+            let step = v[n - 1] - v[n - 2];
+            for k in n..(n * 3 / 2) {
+                let next = v[k - 1] + step;
+                v.push(next);
+            }
+        };
+        d.motor_ticks.as_mut().map(cont);
+        d.rotor_ticks.as_mut().map(cont);
+    }
+    let out = runs_end_to_end("ramp 12 s of 20", &c, |_| {});
+    let short = std::fs::read_to_string(out.join("tables/lines-short-runs.csv")).expect("the runs left out are listed");
+    assert_eq!(short.lines().count(), 1 + 6, "{short}");
+    assert!(short.contains("lab2-point-03,"), "{short}");
+    assert!(!short.contains("lab2-point-01,"), "{short}");
+}
+
+/// Every operating point ends before its steady window: spectra (and what
+/// reads it) stops with the rule; the shipped campaign has no such table.
+#[test]
+fn runs_without_a_steady_window_are_refused_by_spectra_with_the_rule() {
+    let p = Protocol { op_duration_s: 10.0, ramp_s: 3.0, ..small_lab(500.0) };
+    let err = run_campaign("no steady window", &campaign_of(&p, 2615), |_| {}).unwrap_err();
+    assert!(
+        err.contains("stage spectra: campaign other-lab: needs at least 1 operating_point run with a steady window"),
+        "{err}"
+    );
+}
+
+#[test]
+fn set_points_outside_the_thesis_range_run_end_to_end() {
+    let p = Protocol {
+        op_points: vec![
+            (2.0, 3.0),
+            (5.0, 40.0),
+            (300.0, 3.0),
+            (400.0, 8.0),
+            (60.0, 0.5),
+            (150.0, 60.0),
+            (40.0, 8.0),
+            (90.0, 3.0),
+        ],
+        ..small_lab(500.0)
+    };
+    runs_end_to_end("set-points outside", &campaign_of(&p, 2611), |_| {});
+}
+
+/// Two operating points with the brake open (`normal_force_n = 0`, which
+/// the spec allows). Every stage up to the diagnosis runs; the diagnosis
+/// stops: "the baseline fit is singular: the joint fit of the retained
+/// friction effects" (`rig_diagnose::select`'s fit on every run; the runs
+/// give no slip samples, μ = F/N having no N). Left for the diagnosis'
+/// owner (twentieth session, docs/issue-26-audit.md row 2a).
+#[test]
+#[ignore = "known gap: the diagnosis' joint fit is singular with open-brake operating points"]
+fn an_open_brake_runs_end_to_end() {
+    let mut p = small_lab(500.0);
+    p.op_points.push((30.0, 0.0));
+    p.op_points.push((90.0, 0.0));
+    runs_end_to_end("open brake", &campaign_of(&p, 2612), |_| {});
+}
+
+#[test]
+fn few_runs_of_each_kind_run_end_to_end() {
+    let p = Protocol {
+        force_loads_n: vec![1.0, 3.0, 5.0],
+        twist_torques_nm: vec![0.15, 0.3],
+        step_voltages_v: vec![9.0],
+        ..small_lab(500.0)
+    };
+    runs_end_to_end("few runs", &campaign_of(&p, 2613), |_| {});
+}
+
+/// One operating point: the diagnosis (cross-validation over runs) refuses
+/// the campaign before anything is written, naming the file and the rule.
+#[test]
+fn a_single_operating_point_is_refused_with_the_rule() {
+    let p = Protocol { op_points: vec![(40.0, 5.0)], ..small_lab(500.0) };
+    let err = run_campaign("one op", &campaign_of(&p, 2614), |_| {}).unwrap_err();
+    assert!(err.contains("campaign.toml: 1 operating_point run: stage diagnosis needs at least 3"), "{err}");
+}
+
+/// A voltage step of negative voltage turns the motor the other way (the
+/// spec allows it; its counts run negative): the campaign runs end to end
+/// and the step's decay reads as its positive twin's (same rig, same seed):
+/// the log decrement to the 4th decimal.
+#[test]
+fn a_negative_voltage_step_runs_end_to_end() {
+    let decrement = |v: f64| {
+        let p = Protocol { step_voltages_v: vec![v, 7.0, 11.0], ..small_lab(500.0) };
+        let out = runs_end_to_end(&format!("step {v} V"), &campaign_of(&p, 2617), |_| {});
+        let t = std::fs::read_to_string(out.join("tables/campaign-log-decrement.csv")).unwrap();
+        let row = t.lines().nth(1).expect("the first step's row").to_string();
+        row.split(',').nth(3).expect("log_decrement").to_string()
+    };
+    assert_eq!(decrement(-9.0), decrement(9.0));
+}
+
+/// Operating points recorded with both encoders (and voltage and force)
+/// turned the other way: counts are positive in the drive direction and the
+/// set-point is positive, so the reader refuses the first row more than a
+/// revolution backwards, naming file, line and rule. Read as it was, the
+/// run went through every stage with the PI gains' sign wrong (kp −0.23
+/// against 1.51 V·s/rad) and a false `unexplained` diagnosis.
+#[test]
+fn an_operating_point_turning_the_other_way_is_refused_with_the_rule() {
+    let truth = draw_rig(2616);
+    let mut c = campaign_of(&small_lab(500.0), 2616);
+    for r in c.runs.iter_mut().filter(|r| r.kind.name() == "operating_point") {
+        let d = &mut r.data;
+        for v in [&mut d.motor_ticks, &mut d.rotor_ticks].into_iter().flatten() {
+            v.iter_mut().for_each(|x| *x = -*x);
+        }
+        d.motor_voltage_v.iter_mut().flatten().for_each(|x| *x = -*x);
+        d.brake_force_mv.iter_mut().flatten().for_each(|x| *x = 2.0 * truth.force_offset_mv - *x);
+    }
+    let err = run_campaign("turned the other way", &c, |_| {}).unwrap_err();
+    assert!(err.contains("runs/lab2-point-01.csv:"), "{err}");
+    assert!(
+        err.contains("is more than one revolution (1000 counts) against the drive direction: encoder counts are positive in the drive direction and motor_rpm_setpoint = 15 rpm drives it forward"),
+        "{err}"
+    );
+}
+
+/// The fewest operating points the diagnosis takes (3), at one normal force.
+#[test]
+fn three_operating_points_at_one_force_run_end_to_end() {
+    let p = Protocol { op_points: vec![(20.0, 5.0), (60.0, 5.0), (110.0, 5.0)], ..small_lab(500.0) };
+    runs_end_to_end("three points", &campaign_of(&p, 2618), |_| {});
+}
+
+/// Every operating point at one set-point (the folds cannot stratify by it).
+/// The estimation stops: "PI gains from operating_point runs: only 0 usable
+/// samples": `rig_estimate::pi::voltage_plateau_v`'s two-run rule reads the
+/// runs' shared steady voltage (one set-point, similar loads) as a drive
+/// limit's plateau, so every sample counts as saturated. Its premise, "a run
+/// holding a steady voltage has its own level, which other runs seldom
+/// share", fails when set-points repeat. A fix moves the blind chain's
+/// drive-limit evidence, so it needs the battery's answers checked: left
+/// (twentieth session, docs/issue-26-audit.md row 2a).
+#[test]
+#[ignore = "known gap: runs at one set-point share a steady voltage the PI estimation reads as a drive-limit plateau"]
+fn operating_points_at_one_set_point_run_end_to_end() {
+    let p = Protocol {
+        op_points: vec![(40.0, 2.0), (40.0, 4.0), (40.0, 6.0), (40.0, 9.0), (40.0, 12.0)],
+        ..small_lab(500.0)
+    };
+    runs_end_to_end("one set-point", &campaign_of(&p, 2619), |_| {});
+}
+
+/// A recorder that dropped half a second of samples in every operating point
+/// (5.0–5.5 s: the time column jumps; strictly increasing, so allowed).
+#[test]
+fn a_gap_in_the_time_column_runs_end_to_end() {
+    let mut c = campaign_of(&small_lab(500.0), 2620);
+    for r in c.runs.iter_mut().filter(|r| r.kind.name() == "operating_point") {
+        let d = &mut r.data;
+        let keep: Vec<usize> = (0..d.time_s.len()).filter(|&i| !(5.0..5.5).contains(&d.time_s[i])).collect();
+        let pick_f = |v: &mut Vec<f64>| *v = keep.iter().map(|&i| v[i]).collect();
+        let pick_i = |v: &mut Vec<i64>| *v = keep.iter().map(|&i| v[i]).collect();
+        pick_f(&mut d.time_s);
+        d.motor_voltage_v.as_mut().map(pick_f);
+        d.brake_force_mv.as_mut().map(pick_f);
+        d.motor_ticks.as_mut().map(pick_i);
+        d.rotor_ticks.as_mut().map(pick_i);
+    }
+    runs_end_to_end("a gap", &c, |_| {});
+}
+
+/// Operating points of one rig with different ramps (0 s and 5 s) in one
+/// campaign: each run's ramp is read from its own metadata.
+#[test]
+fn operating_points_with_different_ramps_run_end_to_end() {
+    let mut c = campaign_of(&Protocol { ramp_s: 0.0, ..small_lab(500.0) }, 2621);
+    let other = campaign_of(&Protocol { ramp_s: 5.0, ..small_lab(500.0) }, 2621);
+    c.runs.retain(|r| r.kind.name() != "operating_point" || r.id.ends_with(['1', '3', '5', '7']));
+    for mut r in
+        other.runs.into_iter().filter(|r| r.kind.name() == "operating_point" && r.id.ends_with(['2', '4', '6', '8']))
+    {
+        r.id.push_str("-ramp5");
+        r.file = PathBuf::from(format!("runs/{}.csv", r.id));
+        c.runs.push(r);
+    }
+    runs_end_to_end("mixed ramps", &c, |_| {});
 }

@@ -104,7 +104,8 @@ pub fn op_point(run: &Run, th: &RigParams, rg: &RigParams, s: &SweepSettings, tp
 pub struct RunProtocol {
     /// The campaign's nominal sample rate (campaign.toml), Hz.
     pub sample_rate_hz: f64,
-    /// The longest operating-point record, s (samples / rate).
+    /// The longest operating-point record, s, from its time column (which is
+    /// authoritative): its samples × its mean step.
     pub duration_s: f64,
     /// The median ramp of the operating points, s.
     pub ramp_s: f64,
@@ -115,24 +116,38 @@ impl RunProtocol {
     pub fn of_campaign(c: &Campaign) -> Option<Self> {
         let rate = c.rig.sample_rate_hz;
         let mut ramps = Vec::new();
-        let mut samples = 0usize;
+        let mut duration_s = 0.0f64;
         for r in c.runs_of("operating_point") {
             if let RunKind::OperatingPoint { ramp_s, .. } = r.kind {
                 ramps.push(ramp_s);
-                samples = samples.max(r.data.time_s.len());
+                duration_s = duration_s.max(record_length_s(&r.data.time_s, rate));
             }
         }
         if ramps.is_empty() || rate.is_nan() || rate <= 0.0 {
             return None;
         }
         ramps.sort_by(f64::total_cmp);
-        Some(RunProtocol { sample_rate_hz: rate, duration_s: samples as f64 / rate, ramp_s: ramps[ramps.len() / 2] })
+        Some(RunProtocol { sample_rate_hz: rate, duration_s, ramp_s: ramps[ramps.len() / 2] })
     }
 
     /// Sample times 0, 1/rate, … up to `duration_s` inclusive.
     pub fn times_s(&self) -> Vec<f64> {
         let n = (self.duration_s * self.sample_rate_hz).round() as usize;
         (0..=n).map(|k| k as f64 / self.sample_rate_hz).collect()
+    }
+}
+
+/// A record's length, s: its n samples × its mean step (t_last − t_0)/(n − 1),
+/// so a clock off the nominal rate keeps the record's seconds; one sample
+/// lasts 1/`nominal_rate_hz`.
+fn record_length_s(time_s: &[f64], nominal_rate_hz: f64) -> f64 {
+    match time_s {
+        [] => 0.0,
+        [_] => 1.0 / nominal_rate_hz,
+        [first, .., last] => {
+            let n = time_s.len() as f64;
+            n * (last - first) / (n - 1.0)
+        }
     }
 }
 
@@ -213,4 +228,42 @@ pub fn time_response_runs<'a>(runs: &[&'a Run]) -> Vec<(String, Point, &'a Run)>
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rig_types::{RigInfo, Run, RunData};
+
+    fn campaign(rate_declared_hz: f64, rate_true_hz: f64, samples: usize) -> Campaign {
+        let run = Run {
+            id: "op-1".into(),
+            kind: RunKind::OperatingPoint { motor_rpm_setpoint: 40.0, normal_force_n: 5.0, ramp_s: 2.0 },
+            file: "runs/op-1.csv".into(),
+            data: RunData { time_s: (0..samples).map(|k| k as f64 / rate_true_hz).collect(), ..Default::default() },
+        };
+        Campaign {
+            name: "c".into(),
+            description: String::new(),
+            rig: RigInfo {
+                encoder_ticks_per_rev: 1000,
+                brake_disc_radius_m: 0.062,
+                supply_voltage_v: 24.0,
+                sample_rate_hz: rate_declared_hz,
+            },
+            runs: vec![run],
+        }
+    }
+
+    /// The time column is authoritative: 10 200 samples of a clock at 510 Hz
+    /// declared 500 Hz last 20 s, not 20.4 s.
+    #[test]
+    fn the_record_length_is_read_from_the_time_column() {
+        let p = RunProtocol::of_campaign(&campaign(500.0, 510.0, 10_200)).unwrap();
+        assert!((p.duration_s - 20.0).abs() < 1e-9, "{}", p.duration_s);
+        // At the nominal rate the length is samples / rate, as before.
+        let p = RunProtocol::of_campaign(&campaign(500.0, 500.0, 20_000)).unwrap();
+        assert!((p.duration_s - 40.0).abs() < 1e-9, "{}", p.duration_s);
+        assert_eq!(p.times_s().len(), 20_001);
+    }
 }

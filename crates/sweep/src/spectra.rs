@@ -144,16 +144,29 @@ impl OperatingPoint<'_> {
     }
 }
 
+/// An operating point left out of the study: its record ends before the
+/// steady window (ramp, then `settle_s`) has [`MIN_STEADY_SAMPLES`] samples.
+pub struct ShortRun {
+    pub id: String,
+    /// The record's last time stamp, s.
+    pub duration_s: f64,
+    /// Where its steady window would start, s.
+    pub steady_from_s: f64,
+}
+
 /// Every operating point of the campaign, measured and simulated with `rig`.
 pub struct SpectraStudy<'a> {
     pub points: Vec<OperatingPoint<'a>>,
+    /// Operating points that end before their steady window starts, left out.
+    pub short: Vec<ShortRun>,
     /// The campaign's brake disc radius, m (for captions).
     pub brake_disc_radius_m: f64,
 }
 
 /// Measures every operating point of `campaign` and simulates it with `rig`
 /// at the same set-point (in parallel, collected in campaign order), both cut
-/// to the steady window.
+/// to the steady window; a run with no steady window is left out and listed
+/// (an error when every run is).
 pub fn study<'a>(
     campaign: &'a Campaign,
     cal: &CampaignCalibration,
@@ -173,6 +186,25 @@ pub fn study<'a>(
     if ops.is_empty() {
         return Err(SweepError::Analysis(format!("campaign {}: no operating_point runs", campaign.name)));
     }
+    // A run that ends before its ramp and settling are over has no steady
+    // window: left out, and said (`SpectraStudy::short`); the study needs one.
+    let (ops, short): (Vec<_>, Vec<_>) = ops
+        .into_iter()
+        .partition(|(run, _, _, ramp)| steady_samples(&run.data.time_s, ramp + o.settle_s) > MIN_STEADY_SAMPLES);
+    if ops.is_empty() {
+        return Err(SweepError::Analysis(format!(
+            "campaign {}: needs at least 1 operating_point run with a steady window (more than {MIN_STEADY_SAMPLES} samples after ramp_s + settle_s = ramp_s + {} s); every run ends before",
+            campaign.name, o.settle_s
+        )));
+    }
+    let short: Vec<ShortRun> = short
+        .into_iter()
+        .map(|(run, _, _, ramp)| ShortRun {
+            id: run.id.clone(),
+            duration_s: run.data.time_s.last().copied().unwrap_or(0.0),
+            steady_from_s: ramp + o.settle_s,
+        })
+        .collect();
     let sims: Vec<Result<Trajectory, SweepError>> = ops
         .par_iter()
         .map(|(run, rpm, n, ramp)| {
@@ -186,9 +218,6 @@ pub fn study<'a>(
         let start = ramp + o.settle_s;
         let m = measured(run, &campaign.rig, cal)?.window(start);
         let s = simulated(&sim?).window(start);
-        if m.time_s.len() <= 64 {
-            return Err(SweepError::Analysis(format!("run {}: steady window after {start} s is too short", run.id)));
-        }
         let fs = m.fs_hz();
         points.push(OperatingPoint {
             run,
@@ -201,7 +230,16 @@ pub fn study<'a>(
             simulated: s,
         });
     }
-    Ok(SpectraStudy { points, brake_disc_radius_m: campaign.rig.brake_disc_radius_m })
+    Ok(SpectraStudy { points, short, brake_disc_radius_m: campaign.rig.brake_disc_radius_m })
+}
+
+/// Fewest samples a steady window may have (the line analysis' Welch
+/// segments need more).
+const MIN_STEADY_SAMPLES: usize = 64;
+
+/// Samples of a record at or after `from_s` (its time column, authoritative).
+fn steady_samples(time_s: &[f64], from_s: f64) -> usize {
+    time_s.len() - time_s.partition_point(|t| *t < from_s)
 }
 
 impl SpectraStudy<'_> {

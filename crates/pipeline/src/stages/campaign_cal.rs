@@ -95,14 +95,26 @@ pub fn run(ctx: &mut StageCtx) -> Result<()> {
     }
 
     let k_points: Vec<(f64, f64)> = cal.twist_runs.iter().map(|r| (r.angle_rad, r.torque_nm)).collect();
-    let (k_origin, k_offset) = rig_calibrate::thesis::fits(&k_points, settings.confidence)?;
+    // The calibration's fits (two twist runs are enough for K; the offset fit
+    // needs three, and with fewer the calibration repeats the origin fit).
+    let k_origin = rig_calibrate::stats::fit_through_origin(
+        &cal.twist_runs.iter().map(|r| r.angle_rad).collect::<Vec<_>>(),
+        &cal.twist_runs.iter().map(|r| r.torque_nm).collect::<Vec<_>>(),
+        settings.confidence,
+    )?;
+    let k_offset = cal.stiffness_with_offset.clone();
+    let offset_note = if k_offset.through_origin {
+        format!("; {} runs are too few for a line with an offset", k_points.len())
+    } else {
+        format!(" and with an offset (K = {:.4}, offset {:.5} N·m)", k_offset.slope, k_offset.intercept)
+    };
     ctx.write_figure(&render::fit_figure(
         "fig-4-10-campaign",
         "Fig. 4.10 (campaign): torque vs rotor angle in the static twist runs",
         &format!(
             "Each point: a static_twist run's known torque against its mean rotor angle (ticks × 2π/1000). Lines: least \
-             squares through the origin (K = {:.4} N·m/rad, {:.0} % CI {:.4} to {:.4}) and with an offset (K = {:.4}, offset {:.5} N·m).",
-            k_origin.slope, 100.0 * settings.confidence, k_origin.slope_ci[0], k_origin.slope_ci[1], k_offset.slope, k_offset.intercept
+             squares through the origin (K = {:.4} N·m/rad, {:.0} % CI {:.4} to {:.4}){offset_note}.",
+            k_origin.slope, 100.0 * settings.confidence, k_origin.slope_ci[0], k_origin.slope_ci[1]
         ),
         ("angle [rad]", "torque [N·m]"),
         &k_points,

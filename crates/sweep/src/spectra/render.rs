@@ -71,12 +71,28 @@ pub fn tables(study: &SpectraStudy, o: &SpectraOptions) -> Vec<(&'static str, Ta
         }
     }
     let (t48, t48_summary) = table_4_8(&o.table_4_8_records_s);
-    vec![
+    let mut out = vec![
         ("tables/lines-campaign.csv", meas),
         ("tables/lines-simulation.csv", sim),
         ("tables/lines-table-4-8.csv", t48),
         ("tables/lines-table-4-8-summary.csv", t48_summary),
-    ]
+    ];
+    // Written only when a run was left out (a campaign whose every run has a
+    // steady window, the shipped one, has no such table).
+    if !study.short.is_empty() {
+        let mut t = Table::new(["run", "duration_s", "steady_from_s", "why"]);
+        for r in &study.short {
+            t.push([
+                r.id.clone(),
+                fmt_fixed(r.duration_s, 3),
+                fmt_fixed(r.steady_from_s, 3),
+                "left out: the record ends before its steady window (ramp_s + settle_s) holds enough samples"
+                    .to_string(),
+            ]);
+        }
+        out.push(("tables/lines-short-runs.csv", t));
+    }
+    out
 }
 
 /// Table 4.8's three peaks through the line analysis at several record lengths
