@@ -73,6 +73,37 @@ fn round_trip_recovers_a_coulomb_law() {
     assert!(c < 0.1, "misfit at the recovered law {c}");
 }
 
+/// The report's roughness is the `landscape` scan one step each way: its
+/// centre the mean of each run's `run_misfit` of `predict`, its largest
+/// move the largest |M(±1) − M(0)| over every axis (Coulomb at its fit on
+/// both shipped stiffnesses, rounded: cheap to simulate).
+#[test]
+fn the_roughness_is_the_landscape_one_step_each_way() {
+    use rig_slider::study::{landscape, roughness};
+    let Some((p, runs)) = shipped_runs() else { return };
+    let cal: Vec<&Measured> =
+        runs.iter().filter(|r| p.calibration_stiffnesses_n_m.contains(&r.stiffness_n_m)).collect();
+    assert_eq!(cal.len(), 6);
+    let model = Model::BASELINE;
+    let x = [0.3595, 0.0209];
+    let by_hand = cal.iter().map(|r| run_misfit(&r.features, &predict(model, &x, r, &p))).sum::<f64>() / 6.0;
+    let r = roughness(model, &x, &cal, &p);
+    assert_eq!(r.misfit, by_hand);
+    let mut largest = (0.0, "");
+    for axis in 0..x.len() {
+        let l = landscape(model, &x, axis, p.roughness_rel_step, 1, &cal, &p);
+        assert_eq!((l.len(), l[1].step, l[1].misfit), (3, 0, r.misfit));
+        for k in [0, 2] {
+            let d = (l[k].misfit - l[1].misfit).abs();
+            if d > largest.0 {
+                largest = (d, model.params()[axis].name);
+            }
+        }
+    }
+    assert_eq!((r.max_change, r.axis), largest);
+    assert!(r.max_change > 0.0, "the misfit moves at all: {r:?}");
+}
+
 #[test]
 fn study_on_the_shipped_folder() {
     let Some(dir) = shipped() else { return };
@@ -127,6 +158,20 @@ fn study_on_the_shipped_folder() {
     let r = setup_fits(SetupCandidate::EffectiveMass);
     assert!(r.iter().all(|&r| r < 0.8) && (r[0] / r[1]).ln().abs() < 1.15f64.ln(), "mass ratios {r:?}");
     assert!(setup_fits(SetupCandidate::SeriesCompliance).iter().all(|&k| k > 2e4), "series stiffnesses");
+    // The misfit's roughness is read at the baseline's and every step's
+    // best fit on all calibration runs, its centre the fit's own misfit
+    // (the same simulations), and every step's gain is set against it.
+    for st in &s.steps {
+        for i in [st.from, st.best] {
+            let c = &s.candidates[i];
+            let r = c.roughness.as_ref().unwrap_or_else(|| panic!("{} scanned", c.model.id()));
+            assert_eq!(r.misfit, c.fitted.as_ref().unwrap().calibration_misfit, "{}", c.model.id());
+            assert!(r.max_change >= r.mean_change && r.mean_change >= 0.0, "{r:?}");
+        }
+    }
+    let res = out.diagnosis["misfit_resolution"].as_array().unwrap();
+    assert_eq!(res.len(), s.steps.len());
+    assert!(res.iter().all(|r| r["resolution"].as_f64().is_some()), "{res:?}");
     for st in &s.steps {
         eprintln!(
             "step from {}: best {} {:.3} (gain {:.3}, t {:.2}) kept {}",

@@ -16,10 +16,12 @@
 mod boundary;
 mod fitting;
 mod predict;
+mod roughness;
 mod selection;
 
 pub use boundary::boundary_scan;
 pub use predict::{TRACE_POINTS, measure, predict, predict_trace, through_channel};
+pub use roughness::{Roughness, ScanPoint, landscape, misfit_at, roughness};
 
 use crate::SliderError;
 use crate::features::{FeatureOptions, Features, Regime};
@@ -74,6 +76,10 @@ pub struct StudyParams {
     /// evaluations, then the `fit_race_keep` best run on to `fit_race_evals`.
     pub fit_race_keep: usize,
     pub fit_race_evals: usize,
+    /// The relative step at which the report reads the misfit's roughness
+    /// about the baseline's and each step's best fit ([`roughness`]: every
+    /// parameter scaled by 1 ± this).
+    pub roughness_rel_step: f64,
     /// An extension must pass the workspace's step rule (pipeline.toml's
     /// `[shared.selection]`, `rig_types::select::compare`: the campaign
     /// diagnosis' and the LAVI study's rule too)...
@@ -158,6 +164,9 @@ pub struct CandidateResult {
     /// Per held-out run: (run index, misfit, predicted features) under the fold that held it out.
     pub heldout: Vec<(usize, f64, Features)>,
     pub heldout_mean: f64,
+    /// The calibration misfit's roughness about `fitted` ([`roughness`];
+    /// the baseline and each step's best only).
+    pub roughness: Option<Roughness>,
 }
 
 impl CandidateResult {
@@ -342,6 +351,8 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
         .map(|&i| {
             let mut c = candidates[i].clone();
             complete(&mut c, &runs, &cal, p);
+            let on: Vec<&Measured> = cal.iter().map(|&j| &runs[j]).collect();
+            c.roughness = c.fitted.as_ref().map(|f| roughness(c.model, &f.params, &on, p));
             (i, c)
         })
         .collect();
