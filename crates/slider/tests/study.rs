@@ -169,6 +169,21 @@ fn study_on_the_shipped_folder() {
             assert!(r.max_change >= r.mean_change && r.mean_change >= 0.0, "{r:?}");
         }
     }
+    // Each step's gain among neighbouring fold fits is recomputed from the
+    // same held-out misfits: unmoved, the engine's `compare` gives the step's own gain.
+    for st in &s.steps {
+        let (from, best) = (&s.candidates[st.from], &s.candidates[st.best]);
+        let fold_of: Vec<usize> =
+            from.heldout.iter().map(|h| s.folds.iter().position(|f| f.held_out.contains(&h.0)).unwrap()).collect();
+        let before: Vec<f64> = from.heldout.iter().map(|h| h.1).collect();
+        let after: Vec<f64> = best.heldout.iter().map(|h| h.1).collect();
+        let c = rig_types::select::compare(&before, &after, &fold_of, s.folds.len());
+        assert!((c.gain - st.gain.gain).abs() < 1e-12 && (c.t - st.gain.t).abs() < 1e-9, "{c:?} {:?}", st.gain);
+        let g = st.gain_spread.as_ref().unwrap();
+        let fits = best.fold_fits.len() * best.model.params().len() * 2;
+        assert_eq!(g.neighbours, fits);
+        assert!(g.gain_min <= g.gain_max && g.t_min <= g.t_max && g.admitted <= g.neighbours, "{g:?}");
+    }
     let res = out.diagnosis["misfit_resolution"].as_array().unwrap();
     assert_eq!(res.len(), s.steps.len());
     assert!(res.iter().all(|r| r["resolution"].as_f64().is_some()), "{res:?}");

@@ -46,7 +46,19 @@ pub(super) fn within_resolution(s: &Study, st: &Step) -> Option<bool> {
 
 /// The sentence on a step's gain against its resolution, e.g. for the verdict.
 pub(super) fn resolution_clause(s: &Study, st: &Step) -> String {
-    match (step_resolution(s, st), within_resolution(s, st)) {
+    let spread = st.gain_spread.as_ref().map_or(String::new(), |g| {
+        format!(
+            "; among the {} neighbouring fold fits (one moved {} % along one parameter) the gain runs {:.1}–{:.1} %, t {:.2}–{:.2}, {} admitted",
+            g.neighbours,
+            (1e8 * s.params.roughness_rel_step).round() / 1e6,
+            100.0 * g.gain_min,
+            100.0 * g.gain_max,
+            g.t_min,
+            g.t_max,
+            g.admitted
+        )
+    });
+    let resolution = match (step_resolution(s, st), within_resolution(s, st)) {
         (Some(r), Some(true)) => format!(
             "; the gain is within the misfit's resolution at these fits (the calibration misfit moves by up to {:.1} % between points {} % apart): not resolved by the search",
             100.0 * r,
@@ -58,7 +70,8 @@ pub(super) fn resolution_clause(s: &Study, st: &Step) -> String {
             (1e8 * s.params.roughness_rel_step).round() / 1e6
         ),
         _ => String::new(),
-    }
+    };
+    resolution + &spread
 }
 
 /// The kept steps, in order.
@@ -166,6 +179,15 @@ pub(super) fn diagnosis_json(s: &Study) -> Value {
             "relative_step": s.params.roughness_rel_step,
             "resolution": step_resolution(s, st),
             "gain_within_resolution": within_resolution(s, st),
+            // The gain among the best's neighbouring fold fits (`crate::study::gain_spread`).
+            "neighbour_fits": st.gain_spread.as_ref().map(|g| json!({
+                "count": g.neighbours,
+                "relative_gain_min": g.gain_min,
+                "relative_gain_max": g.gain_max,
+                "paired_t_min": g.t_min,
+                "paired_t_max": g.t_max,
+                "admitted": g.admitted,
+            })),
         })).collect::<Vec<_>>(),
     })
 }

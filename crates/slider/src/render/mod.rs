@@ -54,8 +54,21 @@ fn resolution_note(s: &Study) -> String {
         .iter()
         .filter_map(|st| {
             let r = step_resolution(s, st)?;
+            let spread = st.gain_spread.as_ref().map_or(String::new(), |g| {
+                format!(
+                    "; with one fold's fit of it moved ±{pct} % along one parameter ({} neighbours, the rest kept) the \
+                     held-out gain runs {:.1}–{:.1} % and the paired t {:.2}–{:.2}, {} of {} admitted by the rule",
+                    g.neighbours,
+                    100.0 * g.gain_min,
+                    100.0 * g.gain_max,
+                    g.t_min,
+                    g.t_max,
+                    g.admitted,
+                    g.neighbours
+                )
+            });
             Some(format!(
-                "step {}'s best, {}, gains {:.1} % over {} (t {:.2}), {} the {:.1} % the misfit moves at their fits",
+                "step {}'s best, {}, gains {:.1} % over {} (t {:.2}), {} the {:.1} % the misfit moves at their fits{spread}",
                 st.step,
                 s.candidates[st.best].model.id(),
                 100.0 * st.gain.gain,
@@ -71,7 +84,9 @@ fn resolution_note(s: &Study) -> String {
          (a simulated stretch lengthened or not, a slip near the hysteresis counted or not; docs/findings.md), so it is read \
          again at each fit on all calibration runs shown in full with every parameter scaled by 1 ± {pct} %: {}. A \
          difference below that move is not resolved by the search that found the fits; a step's gain (held out, relative) \
-         is set against the larger relative move of its two models' fits (the folds' fits are not scanned): {}.",
+         is set against the larger relative move of its two models' fits (a fraction against a fraction: the calibration \
+         misfit at the fits on all calibration runs; the held-out gain itself is recomputed about the folds' fits, which \
+         decide it, by the engine's `compare`): {}.",
         fits.join("; "),
         steps.join("; ")
     )

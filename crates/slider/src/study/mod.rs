@@ -21,7 +21,7 @@ mod selection;
 
 pub use boundary::boundary_scan;
 pub use predict::{TRACE_POINTS, measure, predict, predict_trace, through_channel};
-pub use roughness::{Roughness, ScanPoint, landscape, misfit_at, roughness};
+pub use roughness::{GainSpread, Roughness, ScanPoint, gain_spread, landscape, misfit_at, roughness};
 
 use crate::SliderError;
 use crate::features::{FeatureOptions, Features, Regime};
@@ -195,6 +195,8 @@ pub struct Step {
     pub gain: Comparison,
     /// Whether it earned its place (`[shared.selection]`: relative gain and paired t).
     pub kept: bool,
+    /// The best's gain among its neighbouring fold fits ([`gain_spread`]).
+    pub gain_spread: Option<GainSpread>,
 }
 
 /// The study's result.
@@ -327,6 +329,7 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
                 best: idx,
                 gain: t.comparison,
                 kept: false,
+                gain_spread: None,
             });
         }
         let st = steps.last_mut().expect("a step");
@@ -358,6 +361,9 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
         .collect();
     for (i, c) in completed {
         candidates[i] = c;
+    }
+    for st in &mut steps {
+        st.gain_spread = gain_spread(&candidates[st.from], &candidates[st.best], &folds, &runs, p);
     }
     let traces = raw
         .iter()

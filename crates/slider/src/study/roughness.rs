@@ -8,9 +8,10 @@
 //! [`landscape`] scans one search axis; [`roughness`] reads the largest move
 //! at one relative step along every axis, both ways.
 
-use super::{Measured, StudyParams, predict};
+use super::{CandidateResult, Measured, StudyParams, predict};
 use crate::fit::{Model, run_misfit};
 use rayon::prelude::*;
+use rig_types::select::{Comparison, Fold, compare};
 
 /// One point of a scan: the parameter's value, the mean misfit over the
 /// runs (what the fits minimise) and each run's.
@@ -94,4 +95,72 @@ pub fn roughness(model: Model, x: &[f64], runs: &[&Measured], p: &StudyParams) -
     let (axis, max_change) = moves.iter().fold((0, 0.0), |(a, m), &(ax, d)| if d > m { (ax, d) } else { (a, m) });
     let mean_change = moves.iter().map(|m| m.1).sum::<f64>() / moves.len().max(1) as f64;
     Roughness { rel_step: rel, misfit: centre, max_change, axis: specs[axis].name, mean_change }
+}
+
+/// A step's held-out gain among neighbouring fits of its best: each fold's
+/// fit of the best moved one `roughness_rel_step` along one parameter, either
+/// way, the other folds' fits and the model the step starts from kept, and
+/// the gain and paired t recomputed by the engine's own
+/// [`rig_types::select::compare`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct GainSpread {
+    /// Neighbouring fits tried: folds × parameters × 2.
+    pub neighbours: usize,
+    pub gain_min: f64,
+    pub gain_max: f64,
+    pub t_min: f64,
+    pub t_max: f64,
+    /// How many of them the step rule (`[shared.selection]`) admits.
+    pub admitted: usize,
+}
+
+/// [`GainSpread`] of `best` over `from` (two records of one selection,
+/// their held-out misfits per run under the folds `folds`); None when a
+/// fold has no fit of `best`.
+pub fn gain_spread(
+    from: &CandidateResult,
+    best: &CandidateResult,
+    folds: &[Fold],
+    runs: &[Measured],
+    p: &StudyParams,
+) -> Option<GainSpread> {
+    let units: Vec<usize> = from.heldout.iter().map(|h| h.0).collect();
+    if best.heldout.iter().map(|h| h.0).ne(units.iter().copied()) {
+        return None;
+    }
+    let fold_of: Vec<usize> =
+        units.iter().map(|r| folds.iter().position(|f| f.held_out.contains(r))).collect::<Option<_>>()?;
+    let before: Vec<f64> = from.heldout.iter().map(|h| h.1).collect();
+    let after: Vec<f64> = best.heldout.iter().map(|h| h.1).collect();
+    let mut moves: Vec<(usize, usize, f64)> = Vec::new();
+    for (k, fold) in folds.iter().enumerate() {
+        let fit = best.fold_fits.iter().find(|f| f.train == fold.train)?;
+        for axis in 0..fit.params.len() {
+            for sign in [-1.0, 1.0] {
+                moves.push((k, axis, sign));
+            }
+        }
+    }
+    let compared: Vec<Comparison> = moves
+        .par_iter()
+        .map(|&(k, axis, sign)| {
+            let fit = best.fold_fits.iter().find(|f| f.train == folds[k].train).expect("checked above");
+            let mut y = fit.params.clone();
+            y[axis] *= 1.0 + sign * p.roughness_rel_step;
+            let mut a = after.clone();
+            for (i, &r) in units.iter().enumerate().filter(|(i, _)| fold_of[*i] == k) {
+                a[i] = run_misfit(&runs[r].features, &predict(best.model, &y, &runs[r], p));
+            }
+            compare(&before, &a, &fold_of, folds.len())
+        })
+        .collect();
+    let fold = |f: fn(f64, f64) -> f64, init: f64, g: fn(&Comparison) -> f64| compared.iter().map(g).fold(init, f);
+    Some(GainSpread {
+        neighbours: compared.len(),
+        gain_min: fold(f64::min, f64::INFINITY, |c| c.gain),
+        gain_max: fold(f64::max, f64::NEG_INFINITY, |c| c.gain),
+        t_min: fold(f64::min, f64::INFINITY, |c| c.t),
+        t_max: fold(f64::max, f64::NEG_INFINITY, |c| c.t),
+        admitted: compared.iter().filter(|c| p.selection.admits(c)).count(),
+    })
 }
