@@ -3,17 +3,18 @@
 //! convergence criterion asks for?): the vector's parameter AXIS scaled by
 //! 1 + i·REL for i = −STEPS..=STEPS, each point's mean misfit over the
 //! runs at the stiffnesses K1,K2,... (default: pipeline.toml's
-//! `calibration_stiffnesses_n_m`) and each run's, through the study's own
-//! `predict` and `run_misfit` (the mean the fits minimise).
+//! `calibration_stiffnesses_n_m`) and each run's, through the library's
+//! `rig_slider::study::landscape` (the study's own `predict` and
+//! `run_misfit`: the mean the fits minimise; the report's roughness reads
+//! the same function one step each way).
 //! `cargo run -p rig-slider --example landscape -- DIR MODEL AXIS REL STEPS X1,X2,... [K1,K2,...]`
 //! from the workspace root (pipeline.toml's `[slider]` settings), e.g. the
 //! 8 × 400 reference's track law: `../shared/data/ens-lyon-slider-2019
 //! track_threshold 2 0.002 10 0.36123411571726216,0.008030806638286463,0.011686546673694533,5.143858137785933e-6`.
 
-use rayon::prelude::*;
 use rig_slider::StudyParams;
-use rig_slider::fit::{CANDIDATES, Model, SetupCandidate, run_misfit};
-use rig_slider::study::{measure, predict};
+use rig_slider::fit::{CANDIDATES, Model, SetupCandidate};
+use rig_slider::study::{Measured, landscape, measure};
 
 fn main() {
     let a: Vec<String> = std::env::args().collect();
@@ -48,12 +49,9 @@ fn main() {
         let names: Vec<&str> = runs.iter().map(|r| r.name.as_str()).collect();
         names.join(" ")
     });
-    for i in -steps..=steps {
-        let mut x = x0.clone();
-        x[axis] *= 1.0 + rel * f64::from(i);
-        let per: Vec<f64> = runs.par_iter().map(|r| run_misfit(&r.features, &predict(model, &x, r, &p))).collect();
-        let mean = per.iter().sum::<f64>() / per.len() as f64;
-        let per: Vec<String> = per.iter().map(|v| format!("{v:.4}")).collect();
-        println!("{i:>4} {:.6e} misfit {mean:.4} runs {}", x[axis], per.join(" "));
+    let on: Vec<&Measured> = runs.iter().collect();
+    for pt in landscape(model, &x0, axis, rel, steps, &on, &p) {
+        let per: Vec<String> = pt.per_run.iter().map(|v| format!("{v:.4}")).collect();
+        println!("{:>4} {:.6e} misfit {:.4} runs {}", pt.step, pt.value, pt.misfit, per.join(" "));
     }
 }

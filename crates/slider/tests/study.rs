@@ -73,6 +73,37 @@ fn round_trip_recovers_a_coulomb_law() {
     assert!(c < 0.1, "misfit at the recovered law {c}");
 }
 
+/// The report's roughness is the `landscape` scan one step each way: its
+/// centre the mean of each run's `run_misfit` of `predict`, its largest
+/// move the largest |M(±1) − M(0)| over every axis (Coulomb at its fit on
+/// both shipped stiffnesses, rounded: cheap to simulate).
+#[test]
+fn the_roughness_is_the_landscape_one_step_each_way() {
+    use rig_slider::study::{landscape, roughness};
+    let Some((p, runs)) = shipped_runs() else { return };
+    let cal: Vec<&Measured> =
+        runs.iter().filter(|r| p.calibration_stiffnesses_n_m.contains(&r.stiffness_n_m)).collect();
+    assert_eq!(cal.len(), 6);
+    let model = Model::BASELINE;
+    let x = [0.3595, 0.0209];
+    let by_hand = cal.iter().map(|r| run_misfit(&r.features, &predict(model, &x, r, &p))).sum::<f64>() / 6.0;
+    let r = roughness(model, &x, &cal, &p);
+    assert_eq!(r.misfit, by_hand);
+    let mut largest = (0.0, "");
+    for axis in 0..x.len() {
+        let l = landscape(model, &x, axis, p.roughness_rel_step, 1, &cal, &p);
+        assert_eq!((l.len(), l[1].step, l[1].misfit), (3, 0, r.misfit));
+        for k in [0, 2] {
+            let d = (l[k].misfit - l[1].misfit).abs();
+            if d > largest.0 {
+                largest = (d, model.params()[axis].name);
+            }
+        }
+    }
+    assert_eq!((r.max_change, r.axis), largest);
+    assert!(r.max_change > 0.0, "the misfit moves at all: {r:?}");
+}
+
 #[test]
 fn study_on_the_shipped_folder() {
     let Some(dir) = shipped() else { return };
@@ -127,6 +158,35 @@ fn study_on_the_shipped_folder() {
     let r = setup_fits(SetupCandidate::EffectiveMass);
     assert!(r.iter().all(|&r| r < 0.8) && (r[0] / r[1]).ln().abs() < 1.15f64.ln(), "mass ratios {r:?}");
     assert!(setup_fits(SetupCandidate::SeriesCompliance).iter().all(|&k| k > 2e4), "series stiffnesses");
+    // The misfit's roughness is read at the baseline's and every step's
+    // best fit on all calibration runs, its centre the fit's own misfit
+    // (the same simulations), and every step's gain is set against it.
+    for st in &s.steps {
+        for i in [st.from, st.best] {
+            let c = &s.candidates[i];
+            let r = c.roughness.as_ref().unwrap_or_else(|| panic!("{} scanned", c.model.id()));
+            assert_eq!(r.misfit, c.fitted.as_ref().unwrap().calibration_misfit, "{}", c.model.id());
+            assert!(r.max_change >= r.mean_change && r.mean_change >= 0.0, "{r:?}");
+        }
+    }
+    // Each step's gain among neighbouring fold fits is recomputed from the
+    // same held-out misfits: unmoved, the engine's `compare` gives the step's own gain.
+    for st in &s.steps {
+        let (from, best) = (&s.candidates[st.from], &s.candidates[st.best]);
+        let fold_of: Vec<usize> =
+            from.heldout.iter().map(|h| s.folds.iter().position(|f| f.held_out.contains(&h.0)).unwrap()).collect();
+        let before: Vec<f64> = from.heldout.iter().map(|h| h.1).collect();
+        let after: Vec<f64> = best.heldout.iter().map(|h| h.1).collect();
+        let c = rig_types::select::compare(&before, &after, &fold_of, s.folds.len());
+        assert!((c.gain - st.gain.gain).abs() < 1e-12 && (c.t - st.gain.t).abs() < 1e-9, "{c:?} {:?}", st.gain);
+        let g = st.gain_spread.as_ref().unwrap();
+        let fits = best.fold_fits.len() * best.model.params().len() * 2;
+        assert_eq!(g.neighbours, fits);
+        assert!(g.gain_min <= g.gain_max && g.t_min <= g.t_max && g.admitted <= g.neighbours, "{g:?}");
+    }
+    let res = out.diagnosis["misfit_resolution"].as_array().unwrap();
+    assert_eq!(res.len(), s.steps.len());
+    assert!(res.iter().all(|r| r["resolution"].as_f64().is_some()), "{res:?}");
     for st in &s.steps {
         eprintln!(
             "step from {}: best {} {:.3} (gain {:.3}, t {:.2}) kept {}",

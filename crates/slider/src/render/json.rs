@@ -30,6 +30,50 @@ pub(super) fn added_params(from: Model, c: &CandidateResult, values: Option<&[f6
     )
 }
 
+/// A step's resolution: the larger relative roughness of the calibration
+/// misfit at the fits of the model it starts from and of its best
+/// ([`crate::study::roughness`]); None when either was not scanned.
+pub(super) fn step_resolution(s: &Study, st: &Step) -> Option<f64> {
+    let r = |i: usize| s.candidates[i].roughness.as_ref().map(crate::study::Roughness::relative);
+    Some(r(st.from)?.max(r(st.best)?))
+}
+
+/// Whether a step's gain is within its resolution ([`step_resolution`]):
+/// a difference the search that found the fits does not resolve.
+pub(super) fn within_resolution(s: &Study, st: &Step) -> Option<bool> {
+    step_resolution(s, st).map(|r| st.gain.gain.abs() <= r)
+}
+
+/// The sentence on a step's gain against its resolution, e.g. for the verdict.
+pub(super) fn resolution_clause(s: &Study, st: &Step) -> String {
+    let spread = st.gain_spread.as_ref().map_or(String::new(), |g| {
+        format!(
+            "; among the {} neighbouring fold fits (one moved {} % along one parameter) the gain runs {:.1}–{:.1} %, t {:.2}–{:.2}, {} admitted",
+            g.neighbours,
+            (1e8 * s.params.roughness_rel_step).round() / 1e6,
+            100.0 * g.gain_min,
+            100.0 * g.gain_max,
+            g.t_min,
+            g.t_max,
+            g.admitted
+        )
+    });
+    let resolution = match (step_resolution(s, st), within_resolution(s, st)) {
+        (Some(r), Some(true)) => format!(
+            "; the gain is within the misfit's resolution at these fits (the calibration misfit moves by up to {:.1} % between points {} % apart): not resolved by the search",
+            100.0 * r,
+            (1e8 * s.params.roughness_rel_step).round() / 1e6
+        ),
+        (Some(r), _) => format!(
+            "; the gain is beyond the misfit's resolution at these fits (up to {:.1} % between points {} % apart)",
+            100.0 * r,
+            (1e8 * s.params.roughness_rel_step).round() / 1e6
+        ),
+        _ => String::new(),
+    };
+    resolution + &spread
+}
+
 /// The kept steps, in order.
 pub(super) fn kept_steps(s: &Study) -> impl Iterator<Item = &Step> {
     s.steps.iter().filter(|st| st.kept)
@@ -118,19 +162,40 @@ pub(super) fn diagnosis_json(s: &Study) -> Value {
                 || c.fold_fits.iter().map(|f| f.calibration_misfit).sum::<f64>() / c.fold_fits.len().max(1) as f64,
                 |f| f.calibration_misfit,
             ),
+            // How far the criterion moves one `roughness_rel_step` from the fit (null: not scanned).
+            "criterion_roughness": c.roughness.as_ref().map(|r| r.max_change),
         })).collect::<Vec<_>>(),
         "structure": {
             "notes": "one mass on one spring with an imposed drive speed; a model is a friction law on a set-up (the README's m and k, or an effective mass, a compliance in series, a scaled spring)",
             "final_model": final_c.model.id(),
         },
         "parameters_at_bounds": at_bounds,
+        // Per step: its best's gain against the misfit's roughness at the fits (`crate::study::roughness`).
+        "misfit_resolution": s.steps.iter().map(|st| json!({
+            "step": st.step,
+            "from": s.candidates[st.from].model.id(),
+            "best": s.candidates[st.best].model.id(),
+            "relative_gain": st.gain.gain,
+            "relative_step": s.params.roughness_rel_step,
+            "resolution": step_resolution(s, st),
+            "gain_within_resolution": within_resolution(s, st),
+            // The gain among the best's neighbouring fold fits (`crate::study::gain_spread`).
+            "neighbour_fits": st.gain_spread.as_ref().map(|g| json!({
+                "count": g.neighbours,
+                "relative_gain_min": g.gain_min,
+                "relative_gain_max": g.gain_max,
+                "paired_t_min": g.t_min,
+                "paired_t_max": g.t_max,
+                "admitted": g.admitted,
+            })),
+        })).collect::<Vec<_>>(),
     })
 }
 
 pub(super) fn evidence(s: &Study, st: &Step) -> String {
     let (from, to) = (&s.candidates[st.from], &s.candidates[st.best]);
     format!(
-        "held out ({}), {} lowers the RMS misfit of {} from {:.2} to {:.2} (gain {:.1} %, paired t {:.2} over {} runs) and gets {}/{} regimes right against {}/{} (tables/slider-heldout.csv)",
+        "held out ({}), {} lowers the RMS misfit of {} from {:.2} to {:.2} (gain {:.1} %, paired t {:.2} over {} runs) and gets {}/{} regimes right against {}/{} (tables/slider-heldout.csv){}",
         if s.leave_one_out { "leave one stiffness out" } else { "runs at stiffnesses outside the calibration list" },
         added(from.model, to.model),
         from.model.id(),
@@ -143,5 +208,6 @@ pub(super) fn evidence(s: &Study, st: &Step) -> String {
         to.heldout.len(),
         regimes_heldout(s, from),
         from.heldout.len(),
+        resolution_clause(s, st),
     )
 }

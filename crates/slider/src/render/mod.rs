@@ -26,6 +26,72 @@ pub use checks::{Bounds, Margin, bounds, margins};
 /// Everything the stage writes, in a fixed order (`slider.md`, `slider-diagnosis.json`).
 pub type StudyOutput = rig_types::StudyOutput<Value>;
 
+/// What the misfit resolves: its roughness at the fits shown in full and
+/// each step's gain against it ([`crate::study::roughness`]).
+fn resolution_note(s: &Study) -> String {
+    let pct = (1e8 * s.params.roughness_rel_step).round() / 1e6;
+    let fits: Vec<String> = s
+        .candidates
+        .iter()
+        .filter_map(|c| {
+            let r = c.roughness.as_ref()?;
+            Some(format!(
+                "{} {:.3} moves by up to {:.4} ({:.2} % of it, along {}; mean move {:.4})",
+                c.model.id(),
+                r.misfit,
+                r.max_change,
+                100.0 * r.relative(),
+                r.axis,
+                r.mean_change
+            ))
+        })
+        .collect();
+    if fits.is_empty() {
+        return String::new();
+    }
+    let steps: Vec<String> = s
+        .steps
+        .iter()
+        .filter_map(|st| {
+            let r = step_resolution(s, st)?;
+            let spread = st.gain_spread.as_ref().map_or(String::new(), |g| {
+                format!(
+                    "; with one fold's fit of it moved ±{pct} % along one parameter ({} neighbours, the rest kept) the \
+                     held-out gain runs {:.1}–{:.1} % and the paired t {:.2}–{:.2}, {} of {} admitted by the rule",
+                    g.neighbours,
+                    100.0 * g.gain_min,
+                    100.0 * g.gain_max,
+                    g.t_min,
+                    g.t_max,
+                    g.admitted,
+                    g.neighbours
+                )
+            });
+            Some(format!(
+                "step {}'s best, {}, gains {:.1} % over {} (t {:.2}), {} the {:.1} % the misfit moves at their fits{spread}",
+                st.step,
+                s.candidates[st.best].model.id(),
+                100.0 * st.gain.gain,
+                s.candidates[st.from].model.id(),
+                st.gain.t,
+                if st.gain.gain.abs() <= r { "within" } else { "beyond" },
+                100.0 * r
+            ))
+        })
+        .collect();
+    format!(
+        "What the misfit resolves (`rig_slider::study::roughness`): the calibration misfit is piecewise smooth with jumps \
+         (a simulated stretch lengthened or not, a slip near the hysteresis counted or not; docs/findings.md), so it is read \
+         again at each fit on all calibration runs shown in full with every parameter scaled by 1 ± {pct} %: {}. A \
+         difference below that move is not resolved by the search that found the fits; a step's gain (held out, relative) \
+         is set against the larger relative move of its two models' fits (a fraction against a fraction: the calibration \
+         misfit at the fits on all calibration runs; the held-out gain itself is recomputed about the folds' fits, which \
+         decide it, by the engine's `compare`): {}.",
+        fits.join("; "),
+        steps.join("; ")
+    )
+}
+
 /// Renders the study.
 pub fn render(s: &Study) -> StudyOutput {
     let mut out = StudyOutput::default();
@@ -311,6 +377,7 @@ fn markdown(s: &Study) -> String {
             );
         }
     }
+    let _ = writeln!(md, "\n{}", resolution_note(s));
     let _ = writeln!(
         md,
         "\n## Models (fitted on all calibration runs where shown, else per fold; held-out misfit from the held-out fits)\n"
@@ -395,7 +462,7 @@ fn markdown(s: &Study) -> String {
         let (from, best) = (&s.candidates[st.from], &s.candidates[st.best]);
         let _ = writeln!(
             md,
-            "- No extension of {} passes the selection rule (RMS held-out misfit {:.3}; gain ≥ {} % and paired t ≥ {}); the best is {} at {:.3} (gain {:.1} %, t {:.2}).",
+            "- No extension of {} passes the selection rule (RMS held-out misfit {:.3}; gain ≥ {} % and paired t ≥ {}); the best is {} at {:.3} (gain {:.1} %, t {:.2}){}.",
             from.model.id(),
             st.gain.before,
             100.0 * p.selection.min_relative_gain,
@@ -403,7 +470,8 @@ fn markdown(s: &Study) -> String {
             best.model.id(),
             st.gain.after,
             100.0 * st.gain.gain,
-            st.gain.t
+            st.gain.t,
+            resolution_clause(s, st)
         );
     }
     let _ = writeln!(md, "{}", unreached(s));

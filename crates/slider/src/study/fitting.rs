@@ -1,12 +1,9 @@
 //! A model's fit on some runs ([`fit_on`]): Nelder–Mead from its
 //! best-scored starts, the nested model's among them.
 
-use super::{Fitted, Measured, StudyParams, predict};
+use super::{Fitted, Measured, StudyParams, misfit_at};
 use crate::features::{Regime, Spread};
-use crate::fit::{
-    FitResult, FitTolerance, Model, SetupCandidate, StartHints, critical_stiffness_guess_n_m, fit, run_misfit,
-};
-use rayon::prelude::*;
+use crate::fit::{FitResult, FitTolerance, Model, SetupCandidate, StartHints, critical_stiffness_guess_n_m, fit};
 
 /// Fits `model` on the runs `train` (indices into `runs`): Nelder–Mead from
 /// the best-scored of its physical starts and of the starts `nested` (the
@@ -55,8 +52,7 @@ pub(super) fn fit_on(
         if let Some(&(_, c)) = costed.borrow().iter().find(|(k, _)| *k == key) {
             return c;
         }
-        let m: Vec<f64> = on.par_iter().map(|r| run_misfit(&r.features, &predict(model, x, r, p))).collect();
-        let c = m.iter().sum::<f64>() / m.len() as f64;
+        let c = misfit_at(model, x, &on, p).0;
         costed.borrow_mut().push((key, c));
         c
     };

@@ -16,10 +16,12 @@
 mod boundary;
 mod fitting;
 mod predict;
+mod roughness;
 mod selection;
 
 pub use boundary::boundary_scan;
 pub use predict::{TRACE_POINTS, measure, predict, predict_trace, through_channel};
+pub use roughness::{GainSpread, Roughness, ScanPoint, gain_spread, landscape, misfit_at, roughness};
 
 use crate::SliderError;
 use crate::features::{FeatureOptions, Features, Regime};
@@ -74,6 +76,10 @@ pub struct StudyParams {
     /// evaluations, then the `fit_race_keep` best run on to `fit_race_evals`.
     pub fit_race_keep: usize,
     pub fit_race_evals: usize,
+    /// The relative step at which the report reads the misfit's roughness
+    /// about the baseline's and each step's best fit ([`roughness`]: every
+    /// parameter scaled by 1 ± this).
+    pub roughness_rel_step: f64,
     /// An extension must pass the workspace's step rule (pipeline.toml's
     /// `[shared.selection]`, `rig_types::select::compare`: the campaign
     /// diagnosis' and the LAVI study's rule too)...
@@ -158,6 +164,9 @@ pub struct CandidateResult {
     /// Per held-out run: (run index, misfit, predicted features) under the fold that held it out.
     pub heldout: Vec<(usize, f64, Features)>,
     pub heldout_mean: f64,
+    /// The calibration misfit's roughness about `fitted` ([`roughness`];
+    /// the baseline and each step's best only).
+    pub roughness: Option<Roughness>,
 }
 
 impl CandidateResult {
@@ -186,6 +195,8 @@ pub struct Step {
     pub gain: Comparison,
     /// Whether it earned its place (`[shared.selection]`: relative gain and paired t).
     pub kept: bool,
+    /// The best's gain among its neighbouring fold fits ([`gain_spread`]).
+    pub gain_spread: Option<GainSpread>,
 }
 
 /// The study's result.
@@ -318,6 +329,7 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
                 best: idx,
                 gain: t.comparison,
                 kept: false,
+                gain_spread: None,
             });
         }
         let st = steps.last_mut().expect("a step");
@@ -342,11 +354,16 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
         .map(|&i| {
             let mut c = candidates[i].clone();
             complete(&mut c, &runs, &cal, p);
+            let on: Vec<&Measured> = cal.iter().map(|&j| &runs[j]).collect();
+            c.roughness = c.fitted.as_ref().map(|f| roughness(c.model, &f.params, &on, p));
             (i, c)
         })
         .collect();
     for (i, c) in completed {
         candidates[i] = c;
+    }
+    for st in &mut steps {
+        st.gain_spread = gain_spread(&candidates[st.from], &candidates[st.best], &folds, &runs, p);
     }
     let traces = raw
         .iter()

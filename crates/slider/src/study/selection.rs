@@ -89,8 +89,15 @@ pub(super) fn record(
         .collect();
     heldout.sort_by_key(|h| h.0);
     let heldout_mean = heldout.iter().map(|h| h.1).sum::<f64>() / heldout.len().max(1) as f64;
-    let mut c =
-        CandidateResult { model, fitted: None, predicted: Vec::new(), fold_fits: fits.to_vec(), heldout, heldout_mean };
+    let mut c = CandidateResult {
+        model,
+        fitted: None,
+        predicted: Vec::new(),
+        fold_fits: fits.to_vec(),
+        heldout,
+        heldout_mean,
+        roughness: None,
+    };
     if let Some(f) = c.fold_fits.iter().find(|f| f.train == cal) {
         c.fitted = Some(f.clone());
         c.predicted = runs.par_iter().map(|r| predict(model, &f.params, r, p)).collect();

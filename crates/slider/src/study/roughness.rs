@@ -1,0 +1,166 @@
+//! The misfit's local roughness about a fit (issue 26: what a difference of
+//! misfits can resolve). The calibration misfit is piecewise smooth with
+//! jumps at every scale — a simulated stretch lengthened or not
+//! ([`predict`]'s integer count of periods), a slip near the hysteresis
+//! counted or not (docs/findings.md, twentieth session, h/slider9) — so two
+//! fits whose misfits differ by less than the misfit moves between
+//! neighbouring points are not told apart by the search that found them.
+//! [`landscape`] scans one search axis; [`roughness`] reads the largest move
+//! at one relative step along every axis, both ways.
+
+use super::{CandidateResult, Measured, StudyParams, predict};
+use crate::fit::{Model, run_misfit};
+use rayon::prelude::*;
+use rig_types::select::{Comparison, Fold, compare};
+
+/// One point of a scan: the parameter's value, the mean misfit over the
+/// runs (what the fits minimise) and each run's.
+#[derive(Debug, Clone)]
+pub struct ScanPoint {
+    /// The step i: the parameter is x0 · (1 + i · rel).
+    pub step: i32,
+    pub value: f64,
+    pub misfit: f64,
+    pub per_run: Vec<f64>,
+}
+
+/// `model`'s mean misfit over `runs` (the fits' cost: [`run_misfit`] of
+/// [`predict`], averaged over the runs in their order) at `x`, and each run's.
+pub fn misfit_at(model: Model, x: &[f64], runs: &[&Measured], p: &StudyParams) -> (f64, Vec<f64>) {
+    let per: Vec<f64> = runs.par_iter().map(|r| run_misfit(&r.features, &predict(model, x, r, p))).collect();
+    (per.iter().sum::<f64>() / per.len().max(1) as f64, per)
+}
+
+/// The misfit along parameter `axis` about `x0`: the parameter scaled by
+/// 1 + i · `rel`, i = −`steps`..=`steps` (the `landscape` example's scan).
+pub fn landscape(
+    model: Model,
+    x0: &[f64],
+    axis: usize,
+    rel: f64,
+    steps: i32,
+    runs: &[&Measured],
+    p: &StudyParams,
+) -> Vec<ScanPoint> {
+    (-steps..=steps)
+        .map(|i| {
+            let mut x = x0.to_vec();
+            x[axis] *= 1.0 + rel * f64::from(i);
+            let (misfit, per_run) = misfit_at(model, &x, runs, p);
+            ScanPoint { step: i, value: x[axis], misfit, per_run }
+        })
+        .collect()
+}
+
+/// How far the misfit moves one relative step away from a fitted point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Roughness {
+    /// The relative step (`roughness_rel_step`, pipeline.toml).
+    pub rel_step: f64,
+    /// The misfit at the point itself.
+    pub misfit: f64,
+    /// The largest |M(neighbour) − M(point)| over every axis, both ways...
+    pub max_change: f64,
+    /// ...along this parameter...
+    pub axis: &'static str,
+    /// ...and the mean |change| over the 2 × (parameters) neighbours.
+    pub mean_change: f64,
+}
+
+impl Roughness {
+    /// The largest move as a fraction of the point's misfit: what a
+    /// relative gain is compared with.
+    pub fn relative(&self) -> f64 {
+        self.max_change / self.misfit
+    }
+}
+
+/// The misfit's roughness at `x` (a fit of `model` on `runs`): the mean
+/// misfit at x and at x with each parameter scaled by 1 ± `p.roughness_rel_step`
+/// (1 + 2 × parameters evaluations). Deterministic: every point is
+/// simulated on its own and averaged in the runs' order.
+pub fn roughness(model: Model, x: &[f64], runs: &[&Measured], p: &StudyParams) -> Roughness {
+    let specs = model.params();
+    let rel = p.roughness_rel_step;
+    let centre = misfit_at(model, x, runs, p).0;
+    let moves: Vec<(usize, f64)> = (0..2 * x.len())
+        .into_par_iter()
+        .map(|k| {
+            let (axis, sign) = (k / 2, if k % 2 == 0 { -1.0 } else { 1.0 });
+            let mut y = x.to_vec();
+            y[axis] *= 1.0 + sign * rel;
+            (axis, (misfit_at(model, &y, runs, p).0 - centre).abs())
+        })
+        .collect();
+    let (axis, max_change) = moves.iter().fold((0, 0.0), |(a, m), &(ax, d)| if d > m { (ax, d) } else { (a, m) });
+    let mean_change = moves.iter().map(|m| m.1).sum::<f64>() / moves.len().max(1) as f64;
+    Roughness { rel_step: rel, misfit: centre, max_change, axis: specs[axis].name, mean_change }
+}
+
+/// A step's held-out gain among neighbouring fits of its best: each fold's
+/// fit of the best moved one `roughness_rel_step` along one parameter, either
+/// way, the other folds' fits and the model the step starts from kept, and
+/// the gain and paired t recomputed by the engine's own
+/// [`rig_types::select::compare`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct GainSpread {
+    /// Neighbouring fits tried: folds × parameters × 2.
+    pub neighbours: usize,
+    pub gain_min: f64,
+    pub gain_max: f64,
+    pub t_min: f64,
+    pub t_max: f64,
+    /// How many of them the step rule (`[shared.selection]`) admits.
+    pub admitted: usize,
+}
+
+/// [`GainSpread`] of `best` over `from` (two records of one selection,
+/// their held-out misfits per run under the folds `folds`); None when a
+/// fold has no fit of `best`.
+pub fn gain_spread(
+    from: &CandidateResult,
+    best: &CandidateResult,
+    folds: &[Fold],
+    runs: &[Measured],
+    p: &StudyParams,
+) -> Option<GainSpread> {
+    let units: Vec<usize> = from.heldout.iter().map(|h| h.0).collect();
+    if best.heldout.iter().map(|h| h.0).ne(units.iter().copied()) {
+        return None;
+    }
+    let fold_of: Vec<usize> =
+        units.iter().map(|r| folds.iter().position(|f| f.held_out.contains(r))).collect::<Option<_>>()?;
+    let before: Vec<f64> = from.heldout.iter().map(|h| h.1).collect();
+    let after: Vec<f64> = best.heldout.iter().map(|h| h.1).collect();
+    let mut moves: Vec<(usize, usize, f64)> = Vec::new();
+    for (k, fold) in folds.iter().enumerate() {
+        let fit = best.fold_fits.iter().find(|f| f.train == fold.train)?;
+        for axis in 0..fit.params.len() {
+            for sign in [-1.0, 1.0] {
+                moves.push((k, axis, sign));
+            }
+        }
+    }
+    let compared: Vec<Comparison> = moves
+        .par_iter()
+        .map(|&(k, axis, sign)| {
+            let fit = best.fold_fits.iter().find(|f| f.train == folds[k].train).expect("checked above");
+            let mut y = fit.params.clone();
+            y[axis] *= 1.0 + sign * p.roughness_rel_step;
+            let mut a = after.clone();
+            for (i, &r) in units.iter().enumerate().filter(|(i, _)| fold_of[*i] == k) {
+                a[i] = run_misfit(&runs[r].features, &predict(best.model, &y, &runs[r], p));
+            }
+            compare(&before, &a, &fold_of, folds.len())
+        })
+        .collect();
+    let fold = |f: fn(f64, f64) -> f64, init: f64, g: fn(&Comparison) -> f64| compared.iter().map(g).fold(init, f);
+    Some(GainSpread {
+        neighbours: compared.len(),
+        gain_min: fold(f64::min, f64::INFINITY, |c| c.gain),
+        gain_max: fold(f64::max, f64::NEG_INFINITY, |c| c.gain),
+        t_min: fold(f64::min, f64::INFINITY, |c| c.t),
+        t_max: fold(f64::max, f64::NEG_INFINITY, |c| c.t),
+        admitted: compared.iter().filter(|c| p.selection.admits(c)).count(),
+    })
+}
