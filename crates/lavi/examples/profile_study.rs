@@ -26,7 +26,7 @@
 
 use rig_lavi::score::{Evaluator, feature_errors};
 use rig_lavi::sim::{FrictionLaw, Model};
-use rig_lavi::{FEATURES, FeatureOptions, StudyParams};
+use rig_lavi::{FEATURES, StudyParams};
 use std::path::{Path, PathBuf};
 
 /// CPU time (user + system) of this process so far, s (`rig_types::cpu`).
@@ -92,14 +92,7 @@ fn profile(path: &Path, p: &StudyParams) {
 
 fn dump(path: &Path, p: &StudyParams, dir: &Path) {
     let (s, d, _) = rig_lavi::study::analyse(path, p).expect("the study runs");
-    let fopts = FeatureOptions {
-        fs_hz: d.fs_hz,
-        cutoff_hz: p.cutoff_hz,
-        transition_hz: p.transition_hz,
-        stick_speed_rpm: p.stick_speed_rpm,
-    };
-    let ev = Evaluator::new(&d, s.windows.clone(), fopts, p.substeps, p.slip_speed_rpm, p.drive_ref_window_s)
-        .expect("evaluator");
+    let ev = Evaluator::of_study(&d, s.windows.clone(), p).expect("evaluator");
     std::fs::create_dir_all(dir).expect("dump dir");
     for (wi, w) in s.windows.iter().enumerate() {
         let run = ev.simulate(&s.selection.final_model, wi).expect("the final model runs");
@@ -118,14 +111,7 @@ fn dump(path: &Path, p: &StudyParams, dir: &Path) {
 
 fn torque_level(path: &Path, p: &StudyParams) {
     let (s, d, _) = rig_lavi::study::analyse(path, p).expect("the study runs");
-    let fopts = FeatureOptions {
-        fs_hz: d.fs_hz,
-        cutoff_hz: p.cutoff_hz,
-        transition_hz: p.transition_hz,
-        stick_speed_rpm: p.stick_speed_rpm,
-    };
-    let ev = Evaluator::new(&d, s.windows.clone(), fopts, p.substeps, p.slip_speed_rpm, p.drive_ref_window_s)
-        .expect("evaluator");
+    let ev = Evaluator::of_study(&d, s.windows.clone(), p).expect("evaluator");
     let cal = &ev.measured[0];
     println!(
         "calibration window measured: break-away {:.3} N m, slip {:.3} N m",
@@ -179,9 +165,8 @@ fn torque_level(path: &Path, p: &StudyParams) {
 /// `-- top`: the `top_delay` scan on the baseline (τ_top, the torque delay, the equation of motion, the
 /// least-squares law and its free run's calibration misfit), with the CPU time it takes.
 fn top_scan(path: &Path, p: &StudyParams) {
-    let (d, wins, fopts) = prepared(path, p);
-    let ev =
-        Evaluator::new(&d, wins.clone(), fopts, p.substeps, p.slip_speed_rpm, p.drive_ref_window_s).expect("evaluator");
+    let (d, wins) = prepared(path, p);
+    let ev = Evaluator::of_study(&d, wins.clone(), p).expect("evaluator");
     let (base, _) =
         rig_lavi::fit::derive(&d, &wins[0], p.slip_speed_rpm, rig_lavi::fit::Structure::BASELINE).expect("baseline");
     let c = cpu_s();
@@ -206,15 +191,7 @@ fn top_scan(path: &Path, p: &StudyParams) {
 /// held-out misfit and targets (what the grid would do held out; the fit looks at the calibration only).
 fn static_grid(path: &Path, p: &StudyParams) {
     let (s, d, _) = rig_lavi::study::analyse(path, p).expect("the study runs");
-    let ev = Evaluator::new(
-        &d,
-        s.windows.clone(),
-        feature_options(&d, p),
-        p.substeps,
-        p.slip_speed_rpm,
-        p.drive_ref_window_s,
-    )
-    .expect("evaluator");
+    let ev = Evaluator::of_study(&d, s.windows.clone(), p).expect("evaluator");
     let fin = s.selection.final_model;
     for f in rig_lavi::static_friction::fractions() {
         let m = rig_lavi::static_friction::with_fraction(&fin, f);
@@ -238,28 +215,9 @@ fn static_grid(path: &Path, p: &StudyParams) {
     }
 }
 
-/// The features' options of the study.
-fn feature_options(d: &rig_lavi::data::Prepared, p: &StudyParams) -> FeatureOptions {
-    FeatureOptions {
-        fs_hz: d.fs_hz,
-        cutoff_hz: p.cutoff_hz,
-        transition_hz: p.transition_hz,
-        stick_speed_rpm: p.stick_speed_rpm,
-    }
-}
-
 /// The record prepared and its windows, as the study cuts them.
-fn prepared(
-    path: &Path,
-    p: &StudyParams,
-) -> (rig_lavi::data::Prepared, Vec<rig_lavi::data::WindowSpec>, FeatureOptions) {
+fn prepared(path: &Path, p: &StudyParams) -> (rig_lavi::data::Prepared, Vec<rig_lavi::data::WindowSpec>) {
     let (_, d) = rig_lavi::data::prepare(path, p).expect("run 175 reads");
     let wins = rig_lavi::data::windows(&d, p).expect("windows");
-    let fopts = FeatureOptions {
-        fs_hz: d.fs_hz,
-        cutoff_hz: p.cutoff_hz,
-        transition_hz: p.transition_hz,
-        stick_speed_rpm: p.stick_speed_rpm,
-    };
-    (d, wins, fopts)
+    (d, wins)
 }

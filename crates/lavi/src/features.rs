@@ -23,6 +23,13 @@ pub struct FeatureOptions {
     pub stick_speed_rpm: f64,
 }
 
+impl FeatureOptions {
+    /// The study's options at a record's sample rate.
+    pub fn of_study(fs_hz: f64, p: &crate::StudyParams) -> Self {
+        Self { fs_hz, cutoff_hz: p.cutoff_hz, transition_hz: p.transition_hz, stick_speed_rpm: p.stick_speed_rpm }
+    }
+}
+
 /// Features of one window. `fundamental_hz` is NaN when the line analysis finds no line.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Features {

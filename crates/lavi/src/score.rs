@@ -142,6 +142,20 @@ pub struct Evaluator<'a> {
 }
 
 impl<'a> Evaluator<'a> {
+    /// The study's evaluator: the record's windows judged with `p`'s
+    /// feature options, substeps, slip speed and drive reference (the one
+    /// place the study, its figures and its probes build it).
+    pub fn of_study(data: &'a Prepared, windows: Vec<WindowSpec>, p: &crate::StudyParams) -> Result<Self, LaviError> {
+        Self::new(
+            data,
+            windows,
+            FeatureOptions::of_study(data.fs_hz, p),
+            p.substeps,
+            p.slip_speed_rpm,
+            p.drive_ref_window_s,
+        )
+    }
+
     /// `drive_ref_window_s`: the centred moving mean of the measured top speed
     /// that the compliant drive's controller follows.
     pub fn new(

@@ -100,13 +100,7 @@ impl Study {
 pub fn analyse(path: &Path, p: &StudyParams) -> Result<(Study, Prepared, LaviRecording), LaviError> {
     let (rec, d) = prepare(path, p)?;
     let wins = windows(&d, p)?;
-    let fopts = FeatureOptions {
-        fs_hz: d.fs_hz,
-        cutoff_hz: p.cutoff_hz,
-        transition_hz: p.transition_hz,
-        stick_speed_rpm: p.stick_speed_rpm,
-    };
-    let ev = Evaluator::new(&d, wins.clone(), fopts, p.substeps, p.slip_speed_rpm, p.drive_ref_window_s)?;
+    let ev = Evaluator::of_study(&d, wins.clone(), p)?;
     let (baseline, derivation) = derive(&d, &wins[0], p.slip_speed_rpm, Structure::BASELINE)?;
     let sim_features = |m: &Model| -> Vec<Features> { ev.all_features(m) };
     let baseline_features = sim_features(&baseline);

@@ -3,19 +3,7 @@
 use super::*;
 
 pub(super) fn figures(s: &Study, d: &Prepared, out: &mut StudyOutput) -> Result<(), LaviError> {
-    let ev = crate::score::Evaluator::new(
-        d,
-        s.windows.clone(),
-        crate::FeatureOptions {
-            fs_hz: d.fs_hz,
-            cutoff_hz: s.params.cutoff_hz,
-            transition_hz: s.params.transition_hz,
-            stick_speed_rpm: s.params.stick_speed_rpm,
-        },
-        s.params.substeps,
-        s.params.slip_speed_rpm,
-        s.params.drive_ref_window_s,
-    )?;
+    let ev = crate::score::Evaluator::of_study(d, s.windows.clone(), &s.params)?;
     let wi = s
         .windows
         .iter()
