@@ -306,18 +306,42 @@ fn set_points_outside_the_thesis_range_run_end_to_end() {
 }
 
 /// Two operating points with the brake open (`normal_force_n = 0`, which
-/// the spec allows). Every stage up to the diagnosis runs; the diagnosis
-/// stops: "the baseline fit is singular: the joint fit of the retained
-/// friction effects" (`rig_diagnose::select`'s fit on every run; the runs
-/// give no slip samples, μ = F/N having no N). Left for the diagnosis'
-/// owner (twentieth session, docs/issue-26-audit.md row 2a).
+/// the spec allows). They give no slip samples (μ = F/N has no N), so a
+/// per-run friction parameter (a modulation's phase) had nothing to fit and
+/// the diagnosis stopped on a singular joint fit (twentieth session). The
+/// diagnosis leaves them out of the friction selection and names them; its
+/// verdict and findings are those of the same campaign without them.
 #[test]
-#[ignore = "known gap: the diagnosis' joint fit is singular with open-brake operating points"]
 fn an_open_brake_runs_end_to_end() {
     let mut p = small_lab(500.0);
     p.op_points.push((30.0, 0.0));
     p.op_points.push((90.0, 0.0));
-    runs_end_to_end("open brake", &campaign_of(&p, 2612), |_| {});
+    let c = campaign_of(&p, 2612);
+    let open: Vec<String> = c
+        .runs
+        .iter()
+        .filter(
+            |r| matches!(r.kind, rig_types::RunKind::OperatingPoint { normal_force_n, .. } if normal_force_n == 0.0),
+        )
+        .map(|r| r.id.clone())
+        .collect();
+    assert_eq!(open.len(), 2);
+    let out = runs_end_to_end("open brake", &c, |_| {});
+    let json = |o: &Out| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(o.join("diagnosis.json")).unwrap()).unwrap()
+    };
+    let d = json(&out);
+    assert_eq!(d["brake_open_runs"], serde_json::json!(open), "{d:#}");
+    // The same rig and seed without the open-brake runs: the same verdict and
+    // the same effects found (the open runs inform no friction fit).
+    let mut without = c.clone();
+    without.runs.retain(|r| !open.contains(&r.id));
+    let base = json(&runs_end_to_end("brake applied", &without, |_| {}));
+    let effects = |v: &serde_json::Value| -> Vec<serde_json::Value> {
+        v["findings"].as_array().unwrap().iter().map(|f| f["effect"].clone()).collect()
+    };
+    assert_eq!(d["verdict"], base["verdict"]);
+    assert_eq!(effects(&d), effects(&base));
 }
 
 #[test]
