@@ -414,16 +414,14 @@ fn three_operating_points_at_one_force_run_end_to_end() {
 }
 
 /// Every operating point at one set-point (the folds cannot stratify by it).
-/// The estimation stops: "PI gains from operating_point runs: only 0 usable
-/// samples": `rig_estimate::pi::voltage_plateau_v`'s two-run rule reads the
-/// runs' shared steady voltage (one set-point, similar loads) as a drive
-/// limit's plateau, so every sample counts as saturated. Its premise, "a run
-/// holding a steady voltage has its own level, which other runs seldom
-/// share", fails when set-points repeat. A fix moves the blind chain's
-/// drive-limit evidence, so it needs the battery's answers checked: left
-/// (twentieth session, docs/issue-26-audit.md row 2a).
+/// The runs share a steady voltage (one set-point, similar loads), which
+/// `rig_estimate::pi::voltage_plateau_v`'s two-run rule read as a drive
+/// limit's plateau, so every sample counted as saturated and the estimation
+/// stopped: "PI gains from operating_point runs: only 0 usable samples"
+/// (twentieth session). A run now counts towards the rule only when its
+/// motor falls behind the reference on the plateau, which a clipped drive
+/// does and these runs do not.
 #[test]
-#[ignore = "known gap: runs at one set-point share a steady voltage the PI estimation reads as a drive-limit plateau"]
 fn operating_points_at_one_set_point_run_end_to_end() {
     let p = Protocol {
         op_points: vec![(40.0, 2.0), (40.0, 4.0), (40.0, 6.0), (40.0, 9.0), (40.0, 12.0)],
