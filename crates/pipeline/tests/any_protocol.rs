@@ -13,9 +13,8 @@
 //! different ramps in one campaign, a negative voltage step, and campaigns
 //! with few runs of a kind. What a stage cannot work with is refused with
 //! the file and the rule (one operating point; no run with a steady window;
-//! encoders running against the drive). Two the format allows still fail,
-//! ignored tests naming the cause: an open brake (`normal_force_n = 0`) and
-//! every operating point at one set-point.
+//! encoders running against the drive). Two that failed run now: an open
+//! brake (`normal_force_n = 0`) and every operating point at one set-point.
 //!
 //! The sweeps stage's maps and diagrams are simulations on a grid that does
 //! not depend on the campaign's protocol; their grids are coarsened here
