@@ -190,7 +190,7 @@ fn pi_gains_recovered_when_one_run_clips() {
 /// recovered as in the unsaturated round trip.
 #[test]
 fn runs_at_one_set_point_are_not_a_plateau() {
-    let mut truth = common::truth();
+    let truth = common::truth();
     let conditions = [(45.0, 8.0), (45.0, 9.0), (45.0, 10.0)];
     let c = common::campaign(&truth, &[], 10.0, &conditions, 15.0, 7);
     let pi = estimate_pi(&c, 24.0, &PiOptions::default()).unwrap();
