@@ -540,6 +540,7 @@ pub fn diagnose(
         break;
     }
     d.detail.channel_checks = checks;
+    d.brake_open_runs = c.runs_of("operating_point").filter(|r| prepare::brake_open(r)).map(|r| r.id.clone()).collect();
     Ok(d)
 }
 

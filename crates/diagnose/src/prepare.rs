@@ -112,8 +112,21 @@ impl SensorLaw {
     }
 }
 
+/// Whether `run` is an operating point with the brake open
+/// (`normal_force_n = 0`, which `rig-campaign/1` allows): its force channel
+/// gives no friction coefficient (Eq. 4-10: μ = F/N has no N), so it has no
+/// slip samples and no per-run friction parameter (a modulation's phase) can
+/// be fitted on it.
+pub fn brake_open(run: &Run) -> bool {
+    matches!(run.kind, RunKind::OperatingPoint { normal_force_n, .. } if normal_force_n <= 0.0)
+}
+
+/// The signals of `c`'s operating points with the brake applied, in campaign
+/// order, with their folds: the friction selection's units. Runs with the
+/// brake open ([`brake_open`]) are left out of it (the diagnosis names them);
+/// the free-run checks read them from the campaign.
 pub fn prepare_runs(c: &Campaign, cal: SensorLaw, opts: &DiagnoseOptions) -> Result<Vec<RunSignals>, DiagnoseError> {
-    let ops: Vec<&Run> = c.runs_of("operating_point").collect();
+    let ops: Vec<&Run> = c.runs_of("operating_point").filter(|r| !brake_open(r)).collect();
     let conditions: Vec<(f64, f64)> = ops
         .iter()
         .map(|r| match r.kind {

@@ -35,6 +35,14 @@ pub struct Diagnosis {
     /// Parameters a fit pinned at a physical bound, with their unconstrained
     /// values (a symptom, never a silent fix).
     pub parameters_at_bounds: Vec<ParamAtBound>,
+    /// Operating points recorded with the brake open (`normal_force_n = 0`):
+    /// no friction coefficient can be read on them (μ = F/N has no N), so
+    /// the selection, its cross-validation and the joint friction fits leave
+    /// them out ([`crate::prepare::brake_open`]); the free-run checks still
+    /// simulate them (the drive and the shaft with the rotor free). Absent
+    /// when every operating point has the brake applied.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub brake_open_runs: Vec<String>,
     /// Detail for the report; not part of the JSON contract.
     #[serde(skip)]
     pub detail: Detail,

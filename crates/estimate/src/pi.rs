@@ -100,8 +100,18 @@ fn trapz(t: &[f64], y: &[f64], a: usize, b: usize) -> f64 {
 /// drive that clips piles samples up at one level, seen in either of two
 /// ways:
 /// - in at least two runs, each with 0.5 % of its samples within
-///   [`PLATEAU_BAND_V`] of `L` (a run merely holding a steady voltage has
-///   its own level, which other runs seldom share), or
+///   [`PLATEAU_BAND_V`] of `L` and its motor falling behind its reference
+///   from its first sample on the band to the run's end, the PI error's
+///   integral growing by at least [`CLIP_LAG_TICKS`] encoder ticks
+///   ([`lags_from_level`]). Runs that merely share an operating point
+///   share a steady voltage too (five operating points at 40 rpm under
+///   2–12 N held 2.49–2.59 V; every sample within the band of their 2.63 V
+///   level, so none was left to fit the gains: twentieth session), but
+///   their motor reaches the set-point: their integral moved by 1–8 ticks
+///   from the band's first sample on (the same in the two 110 rpm runs of
+///   `any_protocol.rs`' small protocol), where every run the two-run rule
+///   counts in the full battery's drive-limit cases lags by 488 ticks or
+///   more (a clipped drive cannot hold the speed: the error persists), or
 /// - in one run that holds the level ([`holds_clipped`]): at least half its
 ///   samples after the ramp within the band while the motor falls behind
 ///   its reference, the PI error's integral growing by at least
@@ -136,7 +146,7 @@ pub fn voltage_plateau_v(c: &Campaign) -> Option<f64> {
         .iter()
         .filter(|r| {
             let v = volts(r);
-            !v.is_empty() && near(v) as f64 >= 0.005 * v.len() as f64
+            !v.is_empty() && near(v) as f64 >= 0.005 * v.len() as f64 && lags_from_level(c, r, level)
         })
         .count();
     (level > 0.0 && (shared >= 2 || runs.iter().any(|r| holds_clipped(c, r, level)))).then_some(level)
@@ -159,7 +169,7 @@ pub const CLIP_LAG_TICKS: f64 = 20.0;
 /// ∫(Ω_ref − Ω2) dt growing by at least [`CLIP_LAG_TICKS`] ticks from the
 /// ramp's end to the run's.
 fn holds_clipped(c: &Campaign, r: &Run, level: f64) -> bool {
-    let RunKind::OperatingPoint { motor_rpm_setpoint, ramp_s, .. } = r.kind else { return false };
+    let RunKind::OperatingPoint { ramp_s, .. } = r.kind else { return false };
     let (Some(v), Some(ticks)) = (r.data.motor_voltage_v.as_ref(), r.data.motor_ticks.as_ref()) else { return false };
     let t = &r.data.time_s;
     let from = t.partition_point(|&x| x < ramp_s);
@@ -168,10 +178,34 @@ fn holds_clipped(c: &Campaign, r: &Run, level: f64) -> bool {
         return false;
     }
     let on = v[from..n].iter().filter(|x| x.abs() >= level - PLATEAU_BAND_V).count();
+    2 * on >= n - from && lags_from(c, r, from)
+}
+
+/// Whether the motor of `r` falls behind its reference from its first
+/// sample within [`PLATEAU_BAND_V`] of `level` to the run's end
+/// ([`voltage_plateau_v`]'s two-run rule; [`lags_from`]).
+fn lags_from_level(c: &Campaign, r: &Run, level: f64) -> bool {
+    let v = r.data.motor_voltage_v.as_deref().unwrap_or(&[]);
+    v.iter().position(|x| x.abs() >= level - PLATEAU_BAND_V).is_some_and(|k| lags_from(c, r, k))
+}
+
+/// Whether ∫(Ω_ref − Ω2) dt of operating point `r` (the PI error's
+/// integral, Ω_ref the ramped set-point of [`reference_angle_rad`]) grows
+/// by at least [`CLIP_LAG_TICKS`] encoder ticks from sample `from` to the
+/// run's last: a PI with integral action holds it bounded unless its
+/// output is clipped.
+fn lags_from(c: &Campaign, r: &Run, from: usize) -> bool {
+    let RunKind::OperatingPoint { motor_rpm_setpoint, ramp_s, .. } = r.kind else { return false };
+    let (Some(v), Some(ticks)) = (r.data.motor_voltage_v.as_ref(), r.data.motor_ticks.as_ref()) else { return false };
+    let t = &r.data.time_s;
+    let n = t.len().min(v.len()).min(ticks.len());
+    if from >= n {
+        return false;
+    }
     let sp = rig_types::units::rpm_to_rad_s(motor_rpm_setpoint);
     let tick = rig_types::sensor::tick_rad(c.rig.encoder_ticks_per_rev);
     let integral = |k: usize| reference_angle_rad(t[k], sp, ramp_s) - ticks[k] as f64 * tick;
-    2 * on >= n - from && integral(n - 1) - integral(from) >= CLIP_LAG_TICKS * tick
+    integral(n - 1) - integral(from) >= CLIP_LAG_TICKS * tick
 }
 
 /// Estimates kp, ki from every operating-point run of `c`, drive limit `limit_v`

@@ -183,6 +183,22 @@ fn pi_gains_recovered_when_one_run_clips() {
     assert!(rel(pi.ki_v_rad, truth.drive.ki_v_rad) < 0.05, "ki {} ± {}", pi.ki_v_rad, pi.ki_stderr);
 }
 
+/// Runs that share one set-point share a steady voltage (one speed, similar
+/// loads) without clipping: the motor reaches its set-point, so the
+/// two-run plateau rule must not read their common level as a drive limit
+/// (it did, and left no sample to fit: twentieth session); the gains are
+/// recovered as in the unsaturated round trip.
+#[test]
+fn runs_at_one_set_point_are_not_a_plateau() {
+    let truth = common::truth();
+    let conditions = [(45.0, 8.0), (45.0, 9.0), (45.0, 10.0)];
+    let c = common::campaign(&truth, &[], 10.0, &conditions, 15.0, 7);
+    let pi = estimate_pi(&c, 24.0, &PiOptions::default()).unwrap();
+    assert_eq!(pi.voltage_plateau_v, None);
+    assert!(rel(pi.kp_v_s_rad, truth.drive.kp_v_s_rad) < 0.05, "kp {} ± {}", pi.kp_v_s_rad, pi.kp_stderr);
+    assert!(rel(pi.ki_v_rad, truth.drive.ki_v_rad) < 0.05, "ki {} ± {}", pi.ki_v_rad, pi.ki_stderr);
+}
+
 /// Without the quantisation correction (plain least squares) kp comes out
 /// attenuated by more than 10 %: the correction is doing real work.
 #[test]

@@ -13,9 +13,8 @@
 //! different ramps in one campaign, a negative voltage step, and campaigns
 //! with few runs of a kind. What a stage cannot work with is refused with
 //! the file and the rule (one operating point; no run with a steady window;
-//! encoders running against the drive). Two the format allows still fail,
-//! ignored tests naming the cause: an open brake (`normal_force_n = 0`) and
-//! every operating point at one set-point.
+//! encoders running against the drive). Two that failed run now: an open
+//! brake (`normal_force_n = 0`) and every operating point at one set-point.
 //!
 //! The sweeps stage's maps and diagrams are simulations on a grid that does
 //! not depend on the campaign's protocol; their grids are coarsened here
@@ -306,18 +305,42 @@ fn set_points_outside_the_thesis_range_run_end_to_end() {
 }
 
 /// Two operating points with the brake open (`normal_force_n = 0`, which
-/// the spec allows). Every stage up to the diagnosis runs; the diagnosis
-/// stops: "the baseline fit is singular: the joint fit of the retained
-/// friction effects" (`rig_diagnose::select`'s fit on every run; the runs
-/// give no slip samples, μ = F/N having no N). Left for the diagnosis'
-/// owner (twentieth session, docs/issue-26-audit.md row 2a).
+/// the spec allows). They give no slip samples (μ = F/N has no N), so a
+/// per-run friction parameter (a modulation's phase) had nothing to fit and
+/// the diagnosis stopped on a singular joint fit (twentieth session). The
+/// diagnosis leaves them out of the friction selection and names them; its
+/// verdict and findings are those of the same campaign without them.
 #[test]
-#[ignore = "known gap: the diagnosis' joint fit is singular with open-brake operating points"]
 fn an_open_brake_runs_end_to_end() {
     let mut p = small_lab(500.0);
     p.op_points.push((30.0, 0.0));
     p.op_points.push((90.0, 0.0));
-    runs_end_to_end("open brake", &campaign_of(&p, 2612), |_| {});
+    let c = campaign_of(&p, 2612);
+    let open: Vec<String> = c
+        .runs
+        .iter()
+        .filter(
+            |r| matches!(r.kind, rig_types::RunKind::OperatingPoint { normal_force_n, .. } if normal_force_n == 0.0),
+        )
+        .map(|r| r.id.clone())
+        .collect();
+    assert_eq!(open.len(), 2);
+    let out = runs_end_to_end("open brake", &c, |_| {});
+    let json = |o: &Out| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(o.join("diagnosis.json")).unwrap()).unwrap()
+    };
+    let d = json(&out);
+    assert_eq!(d["brake_open_runs"], serde_json::json!(open), "{d:#}");
+    // The same rig and seed without the open-brake runs: the same verdict and
+    // the same effects found (the open runs inform no friction fit).
+    let mut without = c.clone();
+    without.runs.retain(|r| !open.contains(&r.id));
+    let base = json(&runs_end_to_end("brake applied", &without, |_| {}));
+    let effects = |v: &serde_json::Value| -> Vec<serde_json::Value> {
+        v["findings"].as_array().unwrap().iter().map(|f| f["effect"].clone()).collect()
+    };
+    assert_eq!(d["verdict"], base["verdict"]);
+    assert_eq!(effects(&d), effects(&base));
 }
 
 #[test]
@@ -390,16 +413,14 @@ fn three_operating_points_at_one_force_run_end_to_end() {
 }
 
 /// Every operating point at one set-point (the folds cannot stratify by it).
-/// The estimation stops: "PI gains from operating_point runs: only 0 usable
-/// samples": `rig_estimate::pi::voltage_plateau_v`'s two-run rule reads the
-/// runs' shared steady voltage (one set-point, similar loads) as a drive
-/// limit's plateau, so every sample counts as saturated. Its premise, "a run
-/// holding a steady voltage has its own level, which other runs seldom
-/// share", fails when set-points repeat. A fix moves the blind chain's
-/// drive-limit evidence, so it needs the battery's answers checked: left
-/// (twentieth session, docs/issue-26-audit.md row 2a).
+/// The runs share a steady voltage (one set-point, similar loads), which
+/// `rig_estimate::pi::voltage_plateau_v`'s two-run rule read as a drive
+/// limit's plateau, so every sample counted as saturated and the estimation
+/// stopped: "PI gains from operating_point runs: only 0 usable samples"
+/// (twentieth session). A run now counts towards the rule only when its
+/// motor falls behind the reference on the plateau, which a clipped drive
+/// does and these runs do not.
 #[test]
-#[ignore = "known gap: runs at one set-point share a steady voltage the PI estimation reads as a drive-limit plateau"]
 fn operating_points_at_one_set_point_run_end_to_end() {
     let p = Protocol {
         op_points: vec![(40.0, 2.0), (40.0, 4.0), (40.0, 6.0), (40.0, 9.0), (40.0, 12.0)],

@@ -157,6 +157,15 @@ pub fn markdown(d: &Diagnosis) -> String {
             );
         }
     }
+    if !d.brake_open_runs.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n## Operating points with the brake open\n\n{} (normal_force_n = 0): no friction coefficient \
+             can be read on them (μ = F/N has no N), so the selection and the friction fits leave them out; the \
+             free-run checks simulate them.",
+            d.brake_open_runs.join(", ")
+        );
+    }
     if !d.parameters_at_bounds.is_empty() {
         let _ = writeln!(
             s,

@@ -425,6 +425,7 @@ impl Selection<'_> {
             adequacy,
             structure: Default::default(),
             parameters_at_bounds: Vec::new(),
+            brake_open_runs: Vec::new(),
             detail,
         }
     }
