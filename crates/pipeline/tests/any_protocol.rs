@@ -22,7 +22,7 @@
 
 use rig_pipeline::Runner;
 use rig_pipeline::testing::workspace_root;
-use rig_types::Campaign;
+use rig_types::{Campaign, RunData};
 use rig_virtual_rig::{Protocol, draw_rig, generate, write_campaign};
 use std::path::{Path, PathBuf};
 
@@ -171,13 +171,7 @@ fn jittered_sampling_runs_end_to_end() {
             .filter(|&i| i < n)
             .collect();
         let d = &mut r.data;
-        let pick_f = |v: &mut Vec<f64>| *v = keep.iter().map(|&i| v[i]).collect();
-        let pick_i = |v: &mut Vec<i64>| *v = keep.iter().map(|&i| v[i]).collect();
-        pick_f(&mut d.time_s);
-        d.motor_voltage_v.as_mut().map(pick_f);
-        d.brake_force_mv.as_mut().map(pick_f);
-        d.motor_ticks.as_mut().map(pick_i);
-        d.rotor_ticks.as_mut().map(pick_i);
+        keep_samples(d, &keep);
     }
     runs_end_to_end("jittered", &c, |_| {});
 }
@@ -437,13 +431,7 @@ fn a_gap_in_the_time_column_runs_end_to_end() {
     for r in c.runs.iter_mut().filter(|r| r.kind.name() == "operating_point") {
         let d = &mut r.data;
         let keep: Vec<usize> = (0..d.time_s.len()).filter(|&i| !(5.0..5.5).contains(&d.time_s[i])).collect();
-        let pick_f = |v: &mut Vec<f64>| *v = keep.iter().map(|&i| v[i]).collect();
-        let pick_i = |v: &mut Vec<i64>| *v = keep.iter().map(|&i| v[i]).collect();
-        pick_f(&mut d.time_s);
-        d.motor_voltage_v.as_mut().map(pick_f);
-        d.brake_force_mv.as_mut().map(pick_f);
-        d.motor_ticks.as_mut().map(pick_i);
-        d.rotor_ticks.as_mut().map(pick_i);
+        keep_samples(d, &keep);
     }
     runs_end_to_end("a gap", &c, |_| {});
 }
@@ -463,4 +451,15 @@ fn operating_points_with_different_ramps_run_end_to_end() {
         c.runs.push(r);
     }
     runs_end_to_end("mixed ramps", &c, |_| {});
+}
+
+/// Keeps the samples `keep` (indices, increasing) of every column of a run.
+fn keep_samples(d: &mut RunData, keep: &[usize]) {
+    let pick_f = |v: &mut Vec<f64>| *v = keep.iter().map(|&i| v[i]).collect();
+    let pick_i = |v: &mut Vec<i64>| *v = keep.iter().map(|&i| v[i]).collect();
+    pick_f(&mut d.time_s);
+    d.motor_voltage_v.as_mut().map(pick_f);
+    d.brake_force_mv.as_mut().map(pick_f);
+    d.motor_ticks.as_mut().map(pick_i);
+    d.rotor_ticks.as_mut().map(pick_i);
 }
