@@ -205,8 +205,10 @@ thread_local! {
     static LAST_NODES: std::cell::Cell<Option<(i64, f64, f64)>> = const { std::cell::Cell::new(None) };
 }
 
-/// A standard normal value for node `i` (Box–Muller on two splitmix64 draws).
-fn node(i: i64) -> f64 {
+/// A standard normal value for node `i` (Box–Muller on two splitmix64
+/// draws): the track's nodes, and the fixed moves of
+/// [`crate::study::local_misfit`] (at negative indices the travel never reaches).
+pub(crate) fn node(i: i64) -> f64 {
     let mix = |mut z: u64| {
         z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
         z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);

@@ -584,6 +584,33 @@ fn the_channel_adds_little_spread_to_a_cycle_that_repeats() {
 }
 
 #[test]
+fn the_local_misfit_tells_a_smooth_law_from_a_chaotic_one() {
+    // At the shipped search's fits on all six calibration runs (2 × 60, the
+    // `converge` example's `cal` lines): Coulomb's slips repeat one cycle and
+    // its misfit is smooth — 20 moves of 0.05 % move it by little (sd
+    // 0.00014) —; the track law's slips land on a threshold that varies over
+    // 5 µm, far below a slip (≈ 70 µm at 168 N/m): its sample path is chaotic
+    // and its misfit a noisy draw (sd 0.0134 over the same 20 moves), and the
+    // search's point, the lowest draw it found, lies below the local mean
+    // (0.6567 against 0.6707, 4.7 standard errors; h/slider11). The bounds:
+    // Coulomb's sd and offset at a tenth of the track law's sd, the track
+    // law's sd and deficit at less than half of what they are.
+    let Some((p, runs)) = shipped_runs() else { return };
+    let on: Vec<&Measured> = runs.iter().collect();
+    let coulomb = [3.5947884344838477e-1, 2.090888696084687e-2];
+    let c = rig_slider::study::local_misfit(Model::BASELINE, &coulomb, &on, &p, 20, 5e-4);
+    assert!(c.sd < 0.002 && (c.mean - c.at).abs() < 0.002, "Coulomb: {c:?}");
+    let track = Model { friction: Candidate::Track, setup: SetupCandidate::Stated };
+    let x = [3.6091027852585056e-1, 8.251429357502418e-3, 1.1494797238514745e-2, 5.144258552095865e-6];
+    let t = rig_slider::study::local_misfit(track, &x, &on, &p, 20, 5e-4);
+    eprintln!("Coulomb {c:?}\nthe track law {t:?}");
+    assert!(t.sd > 0.005 && t.mean - t.at > 0.006, "the track law: {t:?}");
+    // The same moves at every call: the same bits.
+    let again = rig_slider::study::local_misfit(track, &x, &on, &p, 20, 5e-4);
+    assert_eq!((t.mean.to_bits(), t.sd.to_bits()), (again.mean.to_bits(), again.sd.to_bits()));
+}
+
+#[test]
 fn runs_at_a_stiffness_not_seen_are_held_out_and_checked() {
     // Issue 26's Done-when: runs at other stiffnesses will be added to the
     // folder and predicted. A test-only fixture in the shipped layout: the six

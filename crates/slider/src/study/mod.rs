@@ -21,7 +21,9 @@ mod selection;
 
 pub use boundary::boundary_scan;
 pub use predict::{TRACE_POINTS, measure, predict, predict_trace, through_channel};
-pub use roughness::{GainSpread, Roughness, ScanPoint, gain_spread, landscape, misfit_at, roughness};
+pub use roughness::{
+    GainSpread, LocalMisfit, Roughness, ScanPoint, gain_spread, landscape, local_misfit, misfit_at, roughness,
+};
 
 use crate::SliderError;
 use crate::features::{FeatureOptions, Features, Regime};

@@ -97,6 +97,67 @@ pub fn roughness(model: Model, x: &[f64], runs: &[&Measured], p: &StudyParams) -
     Roughness { rel_step: rel, misfit: centre, max_change, axis: specs[axis].name, mean_change }
 }
 
+/// The calibration misfit about a fit read as a local mean
+/// ([`local_misfit`]): the misfit at the point, and its mean and sample sd
+/// over `moves` fixed random moves of relative size `rel`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LocalMisfit {
+    pub at: f64,
+    pub mean: f64,
+    pub sd: f64,
+    pub moves: usize,
+    pub rel: f64,
+}
+
+/// The first index of [`local_misfit`]'s moves in the track's generator:
+/// a travel of 2⁴⁰ correlation lengths backwards, which no run reaches.
+const MOVES_FROM: i64 = -(1 << 40);
+
+/// `model`'s mean misfit over `runs` at `x` and over `moves` points
+/// x_i (1 + `rel` z_ij), z_ij fixed standard normal values (the track's
+/// generator, [`crate::track`], from [`MOVES_FROM`], where no travel reaches: the
+/// same moves at every call). Why (docs/findings.md, twenty-first session,
+/// h/slider11): a law whose slips land on a threshold that varies over
+/// lengths far below a slip (`track_threshold`) gives a chaotic sample path,
+/// whose events decorrelate within relative moves of 10⁻⁶–10⁻⁵ of σ or ℓ;
+/// its misfit is then a sample statistic of a few tens of events, noisy at
+/// any scale a search resolves, and a fit's point misfit is one draw of that
+/// noise (a search's best is its lowest draw). The local mean is the misfit
+/// smoothed by a Gaussian kernel in the parameters (Nesterov & Spokoiny
+/// 2017's Gaussian smoothing; the smoothing of a simulated criterion that
+/// jumps, Bruins, Duffy, Keane & Smith 2018, J. Econometrics 205), what two
+/// fits of such a law can be compared on, and the sd the noise one draw
+/// carries. Deterministic: the moves are evaluated in parallel, collected in order.
+pub fn local_misfit(
+    model: Model,
+    x: &[f64],
+    runs: &[&Measured],
+    p: &StudyParams,
+    moves: usize,
+    rel: f64,
+) -> LocalMisfit {
+    let at = misfit_at(model, x, runs, p).0;
+    let n = x.len() as i64;
+    let vals: Vec<f64> = (0..moves as i64)
+        .into_par_iter()
+        .map(|j| {
+            let y: Vec<f64> = x
+                .iter()
+                .enumerate()
+                .map(|(i, v)| v * (1.0 + rel * crate::track::node(MOVES_FROM - j * n - i as i64)))
+                .collect();
+            misfit_at(model, &y, runs, p).0
+        })
+        .collect();
+    let mean = vals.iter().sum::<f64>() / moves.max(1) as f64;
+    let sd = if moves > 1 {
+        (vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (moves - 1) as f64).sqrt()
+    } else {
+        f64::NAN
+    };
+    LocalMisfit { at, mean, sd, moves, rel }
+}
+
 /// A step's held-out gain among neighbouring fits of its best: each fold's
 /// fit of the best moved one `roughness_rel_step` along one parameter, either
 /// way, the other folds' fits and the model the step starts from kept, and
