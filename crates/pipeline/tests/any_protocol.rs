@@ -601,7 +601,8 @@ fn a_drive_limit_only_the_open_brake_runs_reach_is_found() {
     let fitted = found["params"]["limit_v"].as_f64().expect("limit_v");
     assert!((fitted / limit_v - 1.0).abs() <= 0.05, "limit {fitted} V against the truth's {limit_v} V");
     let rows = drive_channel_of(&d, &c, &open);
-    eprintln!("truth {limit_v} V, fitted {fitted} V; drive channel: {rows:?}");
+    let step1 = d["candidates"].as_array().unwrap().iter().find(|x| x["effect"] == ids::DRIVE_VOLTAGE_LIMIT).cloned();
+    eprintln!("truth {limit_v} V, fitted {fitted} V; first step {step1:?}; drive channel: {rows:?}");
     let mut without = c.clone();
     without.runs.retain(|r| !open.contains(&r.id));
     let base = diagnosis_json(&runs_end_to_end("the same, brake applied only", &without, |_| {}));
