@@ -11,6 +11,10 @@
 //!    Runs are assigned to `folds` cross-validation folds, stratified by
 //!    set-point then normal force ([`prepare::stratified_folds`]), so a rare
 //!    condition (the highest set speed) is in training and test alike.
+//!    Runs with the brake open (`normal_force_n = 0`) carry no friction
+//!    coefficient: the friction channel and the selection's units leave them
+//!    out, the drive channel's fits read them
+//!    ([`prepare::PreparedRuns`]: `friction_units`, `drive_units`).
 //! 2. **Channels** the vocabulary acts on, predicted *teacher-forced* (driven by
 //!    the measured Ω1, φ1, Ω2 and t, so a right model with a small period error
 //!    is not punished): the friction coefficient in slip, μ_obs = F/N0
@@ -135,8 +139,8 @@ pub use channels::{ChannelCheck, ChannelOptions, extended_params};
 pub use effects::EffectId;
 pub use prepare::{ForceCal, RunSignals};
 pub use result::{
-    Adequacy, CandidateScore, ChannelFeatures, Diagnosis, Extension, ExtensionTerm, Finding, ParamAtBound, RunRow,
-    SignatureEntry, StepRow, Structure, StructureScore, round_sig,
+    Adequacy, CandidateScore, ChannelFeatures, Diagnosis, DriveChannel, DriveRunError, Extension, ExtensionTerm,
+    Finding, ParamAtBound, RunRow, SignatureEntry, StepRow, Structure, StructureScore, round_sig,
 };
 use rig_types::pipeline_toml::stage_params;
 pub use select::diagnose_signals;
@@ -340,7 +344,13 @@ pub fn diagnose(
         }
         None => prepare::SensorLaw::Line(fc),
     };
-    let runs = prepare::prepare_runs(c, law, opts)?;
+    // Every operating point, split by channel (prepare::PreparedRuns, the one
+    // home of the rule): the friction selection, its folds, the slip-force,
+    // break-away and ageing checks, the second look and the extension read
+    // the runs with the brake applied; the drive channel's fits (inside the
+    // selection) the runs with the brake open too.
+    let prepared = prepare::prepare_units(c, law, opts)?;
+    let runs = prepared.friction_units();
     let mut checks: Vec<ChannelCheck> = Vec::new();
     let recorded = baseline.map(|_| channels::Recorded::of(c, cal, opts, o));
     let balance = recorded.as_ref().map(channels::Recorded::balance);
@@ -359,7 +369,7 @@ pub fn diagnose(
     // a modulated normal force moves the first break-away too.
     if baseline.is_none() {
         checks.push(extension::dwell::breakaway_dwell_check(
-            &runs,
+            runs,
             opts.slip_speed_rad_s,
             opts.rotor_speed_half_window_s,
             o.breakaway_dwell_ratio,
@@ -367,7 +377,7 @@ pub fn diagnose(
     }
     // A fading pad shows as a slow trend of the slip force within a run, which
     // no vocabulary model has (extension::drift).
-    checks.push(extension::drift::slip_drift_check(&runs, opts.settle_s, o.slip_drift_ratio));
+    checks.push(extension::drift::slip_drift_check(runs, opts.settle_s, o.slip_drift_ratio));
     let flagged_of = |v: &[ChannelCheck]| v.iter().filter(|k| k.flagged).map(ChannelCheck::as_pair).collect::<Vec<_>>();
     // The findings do not depend on the flagged checks (only the adequacy
     // test does): one forward selection, concluded once per set of flags.
@@ -392,7 +402,7 @@ pub fn diagnose(
     let mut flagged1 = flagged0.clone();
     flagged1.extend(flagged_of(&steps));
     let (sel, base_pairs) = rayon::join(
-        || select::select_effects(&c.name, &runs, c.rig.supply_voltage_v, opts),
+        || select::select_effects(&c.name, &prepared, c.rig.supply_voltage_v, opts),
         || {
             // The records' side of every free run, read once and shared by the
             // baseline's, the extended and the final model's runs.
@@ -461,7 +471,7 @@ pub fn diagnose(
             // within runs (extension::dwell, "Every stick").
             let final_model = if moved { &sel.model } else { &ext };
             let ageing = extension::dwell::breakaway_ageing_check(
-                &runs,
+                runs,
                 &|id: &str| phased(final_model, id),
                 &opts.stick_episodes,
                 o.breakaway_dwell_ratio,
@@ -482,16 +492,8 @@ pub fn diagnose(
                 looked = true;
                 let near = found.near_misses(opts);
                 if !near.is_empty() {
-                    let x = second_look::Inputs {
-                        c,
-                        runs: &runs,
-                        law: &law,
-                        baseline: p,
-                        before: &final_pairs,
-                        s: &s,
-                        o,
-                        opts,
-                    };
+                    let x =
+                        second_look::Inputs { c, runs, law: &law, baseline: p, before: &final_pairs, s: &s, o, opts };
                     let (rows, admitted) = second_look::second_look(&x, &near);
                     second_look_rows = rows;
                     if let Some(k) = admitted {
@@ -521,16 +523,8 @@ pub fn diagnose(
             d.detail.motor_speed_tick_rad_s = base_pairs.first().map_or(0.0, |q| q.motor_tick_rad_s);
             // An `unexplained` answer carries the best data-driven extension (issue 25, item 6).
             let model = if moved { &sel.model } else { &ext };
-            let inputs = extension::Inputs {
-                c,
-                runs: &runs,
-                model,
-                before: &final_pairs,
-                phases: &phases,
-                s: &s,
-                measured,
-                opts,
-            };
+            let inputs =
+                extension::Inputs { c, runs, model, before: &final_pairs, phases: &phases, s: &s, measured, opts };
             extension::attach(&mut d, &inputs);
             structure::attach(&mut d, sel);
             d.parameters_at_bounds.extend(extension::vocabulary_bounds(p, &d.findings));
@@ -540,7 +534,6 @@ pub fn diagnose(
         break;
     }
     d.detail.channel_checks = checks;
-    d.brake_open_runs = c.runs_of("operating_point").filter(|r| prepare::brake_open(r)).map(|r| r.id.clone()).collect();
     Ok(d)
 }
 

@@ -46,6 +46,12 @@ pub struct RunSignals {
 }
 
 impl RunSignals {
+    /// Whether the run was recorded with the brake open (`normal_force_n =
+    /// 0`): [`brake_open`]'s rule on the prepared run.
+    pub fn brake_open(&self) -> bool {
+        self.normal_force_n <= 0.0
+    }
+
     /// PI reference: linear ramp 0 → set-point over `ramp_s` (recording-format.md protocol).
     pub fn reference_rad_s(&self, t_s: f64) -> f64 {
         if self.ramp_s <= 0.0 { self.setpoint_rad_s } else { self.setpoint_rad_s * (t_s / self.ramp_s).min(1.0) }
@@ -122,11 +128,77 @@ pub fn brake_open(run: &Run) -> bool {
 }
 
 /// The signals of `c`'s operating points with the brake applied, in campaign
-/// order, with their folds: the friction selection's units. Runs with the
-/// brake open ([`brake_open`]) are left out of it (the diagnosis names them);
-/// the free-run checks read them from the campaign.
+/// order, with their folds: the friction selection's units
+/// ([`PreparedRuns::friction_units`] of [`prepare_units`], which also keeps
+/// the runs with the brake open for the drive channel).
 pub fn prepare_runs(c: &Campaign, cal: SensorLaw, opts: &DiagnoseOptions) -> Result<Vec<RunSignals>, DiagnoseError> {
-    let ops: Vec<&Run> = c.runs_of("operating_point").filter(|r| !brake_open(r)).collect();
+    prepare_of(c, cal, opts, |r| !brake_open(r), None)
+}
+
+/// Every operating point of a campaign as the diagnosis' channels read it,
+/// split by what each channel can learn from a run (the one home of that
+/// rule). The runs with the brake applied come first, in campaign order,
+/// with the folds [`prepare_runs`] gives them; the runs with the brake open
+/// ([`brake_open`]) follow, in campaign order, dealt over the same number
+/// of folds by the same stratification among themselves (so a fold's
+/// held-out drive runs include open ones when there are enough).
+///
+/// - **Friction** ([`PreparedRuns::friction_units`]): the braked runs. A run
+///   with the brake open has no friction coefficient (Eq. 4-10: μ = F/N has
+///   no N), so no slip sample, no per-run phase, no break-away; the friction
+///   fits, the selection's units and folds, the slip-force and break-away
+///   checks and the extension read only these.
+/// - **Drive** ([`PreparedRuns::drive_units`]): every operating point. The
+///   teacher-forced PI loop (`drive`: V = clamp(kp·e + ki·∫e, ±Vmax), e =
+///   Ω_ref − Ω2, rig-model's drive; the thesis names the loop in §4.1) reads
+///   only the reference, the measured motor speed and the voltage, none of
+///   which needs the brake: a run with the brake open is the motor under its
+///   loop turning an unloaded rotor, the cleanest look the campaign has at
+///   the drive.
+#[derive(Debug, Clone)]
+pub struct PreparedRuns {
+    runs: Vec<RunSignals>,
+    braked: usize,
+}
+
+impl PreparedRuns {
+    /// The friction channel's runs (the brake applied, campaign order): the
+    /// forward selection's units.
+    pub fn friction_units(&self) -> &[RunSignals] {
+        &self.runs[..self.braked]
+    }
+
+    /// The drive channel's runs: [`PreparedRuns::friction_units`] first,
+    /// then the runs with the brake open.
+    pub fn drive_units(&self) -> &[RunSignals] {
+        &self.runs
+    }
+
+    /// The runs with the brake open alone (campaign order).
+    pub fn brake_open_units(&self) -> &[RunSignals] {
+        &self.runs[self.braked..]
+    }
+}
+
+/// Every operating point of `c` prepared ([`PreparedRuns`]).
+pub fn prepare_units(c: &Campaign, cal: SensorLaw, opts: &DiagnoseOptions) -> Result<PreparedRuns, DiagnoseError> {
+    let mut runs = prepare_runs(c, cal, opts)?;
+    let braked = runs.len();
+    runs.extend(prepare_of(c, cal, opts, brake_open, Some(opts.folds.min(braked)))?);
+    Ok(PreparedRuns { runs, braked })
+}
+
+/// The signals of `c`'s operating points that `keep`, in campaign order,
+/// dealt over `folds` (default: `opts.folds`, at most one per run) by
+/// [`stratified_folds`].
+fn prepare_of(
+    c: &Campaign,
+    cal: SensorLaw,
+    opts: &DiagnoseOptions,
+    keep: impl Fn(&Run) -> bool,
+    folds: Option<usize>,
+) -> Result<Vec<RunSignals>, DiagnoseError> {
+    let ops: Vec<&Run> = c.runs_of("operating_point").filter(|r| keep(r)).collect();
     let conditions: Vec<(f64, f64)> = ops
         .iter()
         .map(|r| match r.kind {
@@ -134,7 +206,7 @@ pub fn prepare_runs(c: &Campaign, cal: SensorLaw, opts: &DiagnoseOptions) -> Res
             _ => (0.0, 0.0),
         })
         .collect();
-    let folds = stratified_folds(&conditions, opts.folds.min(ops.len()));
+    let folds = stratified_folds(&conditions, folds.unwrap_or(opts.folds).min(ops.len()));
     let mut out = Vec::with_capacity(ops.len());
     for (i, run) in ops.iter().enumerate() {
         out.push(prepare_run(c, run, cal, folds[i], opts)?);

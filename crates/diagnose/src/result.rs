@@ -43,9 +43,43 @@ pub struct Diagnosis {
     /// when every operating point has the brake applied.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub brake_open_runs: Vec<String>,
+    /// The drive channel's runs when some operating points have the brake
+    /// open (absent otherwise): the teacher-forced PI loop reads the
+    /// reference, the motor speed and the voltage, none of which needs the
+    /// brake, so its fits read those runs too
+    /// ([`crate::prepare::PreparedRuns::drive_units`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub drive_channel: Option<DriveChannel>,
     /// Detail for the report; not part of the JSON contract.
     #[serde(skip)]
     pub detail: Detail,
+}
+
+/// What the drive channel read ([`Diagnosis::drive_channel`]).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct DriveChannel {
+    /// Operating points every drive fit read (each fold's PI gains and
+    /// drive limit on its training runs, the baseline's gains and the
+    /// reported limit on all): the brake applied and open.
+    pub runs: usize,
+    /// Of them, with the brake open. The selection's units, whose misfits
+    /// the step rule compares, are the braked runs alone (the friction
+    /// channel's: a run's misfit M_r joins both channels).
+    pub brake_open: usize,
+    /// Each run with the brake open, held out of its fold's drive fit: its
+    /// relative RMS voltage error e_V (crate docs, the misfit) under the
+    /// baseline drive and under the final model's, beside its noise floor
+    /// σ_V / V_supply.
+    pub brake_open_heldout: Vec<DriveRunError>,
+}
+
+/// One run's held-out drive error ([`DriveChannel::brake_open_heldout`]).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct DriveRunError {
+    pub run: String,
+    pub relative_voltage_error_baseline: f64,
+    pub relative_voltage_error_final: f64,
+    pub noise_floor: f64,
 }
 
 #[derive(Debug, Clone, Serialize, PartialEq, Default)]

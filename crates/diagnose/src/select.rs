@@ -8,7 +8,11 @@
 //! runs of fold f and trains on the others, each [`VocabularyEffect`] of the
 //! registry is a candidate (`Effect`: its id, its fit, its `inadmissible`
 //! rule) and the model is one `FoldModel` per fold: its effects and each
-//! channel's fit on the fold's training runs. What keeps it fast lives in the
+//! channel's fit on the fold's training runs. The units are the friction
+//! channel's runs (the brake applied); the drive channel's fits also read
+//! the runs with the brake open, held out in folds of their own
+//! ([`PreparedRuns`]: they inform the PI gains and the drive limit, and
+//! are not scored by the step rule). What keeps it fast lives in the
 //! study (`Vocabulary`): a channel's fit is shared by every model with the
 //! same friction set or the same drive limit, and each friction fit is
 //! warm-started from the current model's fit of the same fold. The engine
@@ -30,7 +34,7 @@ use crate::composite::{self, Composite, CompositeFit, FrictionSet, Phases};
 use crate::drive::{self, Pi};
 use crate::effects::{EffectId, REGISTRY, Term, VocabularyEffect};
 use crate::friction::SlipData;
-use crate::prepare::RunSignals;
+use crate::prepare::{PreparedRuns, RunSignals};
 use crate::result::{Diagnosis, StepRow};
 use crate::{DiagnoseError, DiagnoseOptions};
 use rayon::prelude::*;
@@ -73,7 +77,13 @@ struct DriveCv {
 }
 
 struct Cv<'a> {
+    /// The selection's units: the friction channel's runs
+    /// ([`crate::prepare::PreparedRuns::friction_units`]).
     runs: &'a [RunSignals],
+    /// The drive channel's runs ([`crate::prepare::PreparedRuns::drive_units`]):
+    /// `runs` first, then the operating points with the brake open, which
+    /// the drive's fits read and the selection does not score.
+    drive_runs: &'a [RunSignals],
     folds: usize,
     supply_v: f64,
     freqs: Vec<f64>,
@@ -209,8 +219,15 @@ impl engine::Candidate<Vocabulary<'_, '_>, FoldModel> for Effect {
 }
 
 impl Cv<'_> {
-    fn train(&self, f: usize) -> Vec<&RunSignals> {
-        self.runs.iter().filter(|r| r.fold != f).collect()
+    /// Fold `f`'s training runs of the drive channel: every drive run held
+    /// out in another fold, the brake open or applied.
+    fn drive_train(&self, f: usize) -> Vec<&RunSignals> {
+        self.drive_runs.iter().filter(|r| r.fold != f).collect()
+    }
+
+    /// The runs with the brake open ([`Cv::drive_runs`] after the units).
+    fn brake_open_runs(&self) -> &[RunSignals] {
+        &self.drive_runs[self.runs.len()..]
     }
 
     /// Fold `f`'s friction fit: the model of `set` fitted on the other folds
@@ -265,10 +282,11 @@ impl Cv<'_> {
     }
 
     /// Fold `f`'s drive fit: the PI (with its own limit when `limit`, else
-    /// saturating at the supply) fitted on the other folds, and each held-out
-    /// run's relative voltage error under it (∞ without a fit).
+    /// saturating at the supply) fitted on the other folds' drive runs (the
+    /// brake open or applied), and each held-out unit's relative voltage
+    /// error under it (∞ without a fit).
     fn fold_drive(&self, limit: bool, f: usize) -> FoldDrive {
-        let train = self.train(f);
+        let train = self.drive_train(f);
         let pi =
             if limit { drive::fit_limit_gains(&train, self.supply_v) } else { drive::fit_gains(&train, self.supply_v) };
         let held = self
@@ -347,7 +365,8 @@ pub(crate) fn compare_folds(before: &[f64], after: &[f64], fold_of: &[usize], fo
     rig_types::select::compare(before, after, fold_of, folds)
 }
 
-/// The whole selection on prepared signals. `thesis_mu_dynamic` (Table 4.7)
+/// The whole selection on prepared signals that every channel reads (no
+/// run with the brake open: [`select_effects`] splits a campaign's). `thesis_mu_dynamic` (Table 4.7)
 /// adds the thesis rung to the ladder; `channel_checks` are the significant
 /// mismatches found in the other run kinds (static twist, voltage steps,
 /// free-run operating points), each "run_kind: sentence". The candidates are
@@ -361,7 +380,7 @@ pub fn diagnose_signals(
     channel_checks: &[(String, String)],
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
-    Ok(select_effects(campaign, runs, supply_v, opts)?.conclude(
+    Ok(select_over(REGISTRY, campaign, runs, supply_v, opts)?.conclude(
         campaign,
         disc_radius_m,
         thesis_mu_dynamic,
@@ -375,17 +394,20 @@ pub fn diagnose_signals(
 /// findings do not depend on them: [`Selection::conclude`] turns the same
 /// selection into a diagnosis for each set of flagged checks, so the
 /// diagnosis that learns of a free-run flag after simulating the final
-/// model does not select again).
+/// model does not select again). The units are the friction channel's runs
+/// ([`PreparedRuns::friction_units`]); the drive channel's fits read its own
+/// ([`PreparedRuns::drive_units`], the runs with the brake open too).
 pub fn select_effects<'a>(
     campaign: &str,
-    runs: &'a [RunSignals],
+    runs: &'a PreparedRuns,
     supply_v: f64,
     opts: &DiagnoseOptions,
 ) -> Result<Selection<'a>, DiagnoseError> {
-    select_over(REGISTRY, campaign, runs, supply_v, opts)
+    select_split(REGISTRY, campaign, runs.friction_units(), runs.drive_units(), supply_v, opts)
 }
 
-/// [`diagnose_signals`] with the candidates of `registry` (in its order).
+/// [`diagnose_signals`] with the candidates of `registry` (in its order),
+/// on runs that every channel reads (built by hand: no brake open).
 pub(crate) fn select_over<'a>(
     registry: &'static [&'static dyn VocabularyEffect],
     campaign: &str,
@@ -393,6 +415,23 @@ pub(crate) fn select_over<'a>(
     supply_v: f64,
     opts: &DiagnoseOptions,
 ) -> Result<Selection<'a>, DiagnoseError> {
+    select_split(registry, campaign, runs, runs, supply_v, opts)
+}
+
+/// The selection with `runs` its units and the friction channel's runs,
+/// and `drive_runs` the drive channel's (`runs` first: a prefix of it).
+fn select_split<'a>(
+    registry: &'static [&'static dyn VocabularyEffect],
+    campaign: &str,
+    runs: &'a [RunSignals],
+    drive_runs: &'a [RunSignals],
+    supply_v: f64,
+    opts: &DiagnoseOptions,
+) -> Result<Selection<'a>, DiagnoseError> {
+    assert!(
+        drive_runs.len() >= runs.len() && std::ptr::eq(drive_runs.as_ptr(), runs.as_ptr()),
+        "the drive channel's runs start with the selection's units"
+    );
     let folds = opts.folds.min(runs.len());
     if runs.len() < 3 || folds < 2 {
         return Err(DiagnoseError::TooFewRuns { campaign: campaign.into(), needed: 3, found: runs.len() });
@@ -410,7 +449,7 @@ pub(crate) fn select_over<'a>(
     let fold_data = Cv::fold_data(runs, folds, opts.fold_fit_spacing_s);
     let cold = (0..folds).map(|_| composite::DataMemo::default()).collect();
     let held_memos = fold_data.iter().map(|f| composite::HeldRuns::new(f.1.len())).collect();
-    let cv = Cv { runs, folds, supply_v, freqs, max_order: opts.max_order, fold_data, cold, held_memos };
+    let cv = Cv { runs, drive_runs, folds, supply_v, freqs, max_order: opts.max_order, fold_data, cold, held_memos };
 
     // Forward selection on the one engine: the runs are the units, fold f
     // holds out the runs of fold f and trains on the others; the baseline
@@ -473,8 +512,11 @@ pub(crate) fn select_over<'a>(
         .ok_or(DiagnoseError::Singular("the joint fit of the retained friction effects"))?;
     composite::inflate_errors(&d_all, &mut full);
     drop(study);
-    let limit_fit = if current.limit { drive::fit_limit(&all, supply_v) } else { None };
-    let pi_base = drive::fit_gains(&all, supply_v).ok_or(DiagnoseError::Singular("PI gains of the baseline drive"))?;
+    // The drive's joint fits on every drive run (the brake open or applied).
+    let all_drive: Vec<&RunSignals> = drive_runs.iter().collect();
+    let limit_fit = if current.limit { drive::fit_limit(&all_drive, supply_v) } else { None };
+    let pi_base =
+        drive::fit_gains(&all_drive, supply_v).ok_or(DiagnoseError::Singular("PI gains of the baseline drive"))?;
     let coulomb = composite::fit_composite(&d_all, FrictionSet::default(), &[], opts.max_order)
         .ok_or(DiagnoseError::Singular("the Coulomb baseline"))?;
     Ok(Selection {
@@ -616,8 +658,8 @@ impl Selection<'_> {
         };
         self.cur_ms = fr.e_mu.iter().zip(&dr.e_v).map(|(a, b)| combine(*a, *b)).collect();
         if set.limit && !self.current.limit {
-            let all: Vec<&RunSignals> = self.runs.iter().collect();
-            self.limit_fit = drive::fit_limit(&all, self.supply_v);
+            let all_drive: Vec<&RunSignals> = self.cv.drive_runs.iter().collect();
+            self.limit_fit = drive::fit_limit(&all_drive, self.supply_v);
         }
         self.current = set;
         self.full = full;

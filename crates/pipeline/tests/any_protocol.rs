@@ -23,7 +23,7 @@
 use rig_pipeline::Runner;
 use rig_pipeline::testing::workspace_root;
 use rig_types::{Campaign, RunData};
-use rig_virtual_rig::{Protocol, draw_rig, generate, write_campaign};
+use rig_virtual_rig::{Hidden, Protocol, Truth, draw_rig, draw_truth, generate, ids, write_campaign};
 use std::path::{Path, PathBuf};
 
 /// The campaign stages (their upstream, thesis-tables, runs first).
@@ -64,8 +64,12 @@ fn rename(id: &str) -> String {
 
 /// The virtual rig's campaign under `protocol`, every run renamed.
 fn campaign_of(protocol: &Protocol, seed: u64) -> Campaign {
-    let truth = draw_rig(seed);
-    let mut c = generate("other-lab", &truth, protocol, seed).expect("generate");
+    campaign_of_truth(&draw_rig(seed), protocol, seed)
+}
+
+/// [`campaign_of`] of the rig `truth`.
+fn campaign_of_truth(truth: &Truth, protocol: &Protocol, seed: u64) -> Campaign {
+    let mut c = generate("other-lab", truth, protocol, seed).expect("generate");
     for r in &mut c.runs {
         r.id = rename(&r.id);
         r.file = PathBuf::from(format!("runs/{}.csv", r.id));
@@ -298,43 +302,131 @@ fn set_points_outside_the_thesis_range_run_end_to_end() {
     runs_end_to_end("set-points outside", &campaign_of(&p, 2611), |_| {});
 }
 
+/// The ids of `c`'s operating points with the brake open.
+fn brake_open_ids(c: &Campaign) -> Vec<String> {
+    c.runs
+        .iter()
+        .filter(
+            |r| matches!(r.kind, rig_types::RunKind::OperatingPoint { normal_force_n, .. } if normal_force_n == 0.0),
+        )
+        .map(|r| r.id.clone())
+        .collect()
+}
+
+/// `diagnosis.json` of a run's out dir.
+fn diagnosis_json(o: &Out) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(o.join("diagnosis.json")).unwrap()).unwrap()
+}
+
+/// The drive channel's record of the open-brake runs (`drive_channel` of
+/// `diagnosis.json`): every operating point counted, the open ones named
+/// in campaign order, each with its held-out voltage errors (run, baseline,
+/// final, floor).
+fn drive_channel_of(d: &serde_json::Value, c: &Campaign, open: &[String]) -> Vec<(String, f64, f64, f64)> {
+    let dc = &d["drive_channel"];
+    assert_eq!(dc["runs"], serde_json::json!(c.runs_of("operating_point").count()), "{dc:#}");
+    assert_eq!(dc["brake_open"], serde_json::json!(open.len()), "{dc:#}");
+    let rows: Vec<(String, f64, f64, f64)> = dc["brake_open_heldout"]
+        .as_array()
+        .expect("brake_open_heldout")
+        .iter()
+        .map(|r| {
+            let f = |k: &str| r[k].as_f64().unwrap_or(f64::NAN);
+            (
+                r["run"].as_str().expect("run").to_string(),
+                f("relative_voltage_error_baseline"),
+                f("relative_voltage_error_final"),
+                f("noise_floor"),
+            )
+        })
+        .collect();
+    assert_eq!(rows.iter().map(|r| r.0.clone()).collect::<Vec<_>>(), open, "{dc:#}");
+    rows
+}
+
 /// Two operating points with the brake open (`normal_force_n = 0`, which
 /// the spec allows). They give no slip samples (μ = F/N has no N), so a
 /// per-run friction parameter (a modulation's phase) had nothing to fit and
 /// the diagnosis stopped on a singular joint fit (twentieth session). The
 /// diagnosis leaves them out of the friction selection and names them; its
 /// verdict and findings are those of the same campaign without them.
+/// Twenty-first session: the drive channel reads them (the PI loop needs no
+/// brake): its fits count every operating point, and each open run, held
+/// out of its fold's drive fit, is predicted by the PI law fitted on the
+/// other runs.
 #[test]
 fn an_open_brake_runs_end_to_end() {
     let mut p = small_lab(500.0);
     p.op_points.push((30.0, 0.0));
     p.op_points.push((90.0, 0.0));
     let c = campaign_of(&p, 2612);
-    let open: Vec<String> = c
-        .runs
-        .iter()
-        .filter(
-            |r| matches!(r.kind, rig_types::RunKind::OperatingPoint { normal_force_n, .. } if normal_force_n == 0.0),
-        )
-        .map(|r| r.id.clone())
-        .collect();
+    let open = brake_open_ids(&c);
     assert_eq!(open.len(), 2);
     let out = runs_end_to_end("open brake", &c, |_| {});
-    let json = |o: &Out| -> serde_json::Value {
-        serde_json::from_str(&std::fs::read_to_string(o.join("diagnosis.json")).unwrap()).unwrap()
-    };
+    let json = diagnosis_json;
     let d = json(&out);
     assert_eq!(d["brake_open_runs"], serde_json::json!(open), "{d:#}");
+    // Held out, the PI law fitted on the other runs predicts each open run's
+    // voltage within the diagnosis' adequacy ratio of its noise floor (the
+    // drive law needs no brake).
+    let text = std::fs::read_to_string(workspace_root().join("pipeline.toml")).expect("pipeline.toml");
+    let ratio = rig_diagnose::DiagnoseOptions::from_pipeline_toml(&text).expect("diagnosis params").adequacy_ratio;
+    for (id, baseline, final_, floor) in drive_channel_of(&d, &c, &open) {
+        assert!(baseline == final_ && baseline <= ratio * floor, "{id}: held-out e_V {baseline}, floor {floor}");
+    }
     // The same rig and seed without the open-brake runs: the same verdict and
     // the same effects found (the open runs inform no friction fit).
     let mut without = c.clone();
     without.runs.retain(|r| !open.contains(&r.id));
     let base = json(&runs_end_to_end("brake applied", &without, |_| {}));
+    assert!(base.get("drive_channel").is_none() && base.get("brake_open_runs").is_none(), "{base:#}");
     let effects = |v: &serde_json::Value| -> Vec<serde_json::Value> {
         v["findings"].as_array().unwrap().iter().map(|f| f["effect"].clone()).collect()
     };
     assert_eq!(d["verdict"], base["verdict"]);
     assert_eq!(effects(&d), effects(&base));
+}
+
+/// A drive limit that clips the fast runs, two of them with the brake open
+/// (75 and 110 rpm, beside the braked 15–110 rpm): the limit is found
+/// (within the confusion stage's 5 % of the truth), and the open runs the
+/// limit clips carry it, held out of their fold's fits: the final model's
+/// drive (with its limit) predicts their voltage better than the baseline's
+/// (saturating at the supply). A run clips when its recorded voltage stays
+/// within 2 % of the limit for a second.
+#[test]
+fn a_drive_limit_the_open_brake_runs_carry_is_found() {
+    let mut p = small_lab(500.0);
+    p.op_points.push((75.0, 0.0));
+    p.op_points.push((110.0, 0.0));
+    let seed = 2613;
+    let truth = draw_truth(ids::DRIVE_VOLTAGE_LIMIT, 110.0, seed);
+    let Hidden::DriveVoltageLimit { limit_v } = truth.hidden else { panic!("{:?}", truth.hidden) };
+    let c = campaign_of_truth(&truth, &p, seed);
+    let open = brake_open_ids(&c);
+    assert_eq!(open.len(), 2);
+    let clipping: Vec<String> = c
+        .runs
+        .iter()
+        .filter(|r| open.contains(&r.id))
+        .filter(|r| {
+            let v = r.data.motor_voltage_v.as_ref().expect("voltage");
+            let near = v.iter().filter(|x| x.abs() >= 0.98 * limit_v).count() as f64;
+            near >= c.rig.sample_rate_hz
+        })
+        .map(|r| r.id.clone())
+        .collect();
+    assert!(!clipping.is_empty(), "no open run clips at {limit_v} V");
+    let d = diagnosis_json(&runs_end_to_end("open brake, drive limit", &c, |_| {}));
+    let found = d["findings"].as_array().unwrap().iter().find(|f| f["effect"] == ids::DRIVE_VOLTAGE_LIMIT);
+    let found = found.unwrap_or_else(|| panic!("the drive limit is not found: {d:#}"));
+    let fitted = found["params"]["limit_v"].as_f64().expect("limit_v");
+    assert!((fitted / limit_v - 1.0).abs() <= 0.05, "limit {fitted} V against the truth's {limit_v} V");
+    let rows = drive_channel_of(&d, &c, &open);
+    eprintln!("truth {limit_v} V, fitted {fitted} V; clipping {clipping:?}; drive channel: {rows:?}");
+    for (id, baseline, final_, _) in rows.iter().filter(|r| clipping.contains(&r.0)) {
+        assert!(final_ < baseline, "{id}: held-out e_V {final_} with the limit, {baseline} without");
+    }
 }
 
 #[test]
@@ -462,4 +554,58 @@ fn keep_samples(d: &mut RunData, keep: &[usize]) {
     d.brake_force_mv.as_mut().map(pick_f);
     d.motor_ticks.as_mut().map(pick_i);
     d.rotor_ticks.as_mut().map(pick_i);
+}
+
+/// A drive limit only the open-brake runs reach: braked operating points at
+/// 15–75 rpm, open ones at 110, 120 and 130 rpm, and the limit halfway
+/// between the highest voltage a braked run records without it (99th
+/// percentile of |V|) and the highest an open run records. The braked runs'
+/// voltage never comes within 2 % of the limit, so the runs the selection
+/// scores do not show the clip: the limit is found because the open runs
+/// enter the drive's fits (the PI gains fitted without a limit on records
+/// that clip predict the held-out runs worse than with it). The same
+/// campaign without its open runs (the drive channel before the
+/// twenty-first session saw only those) does not find it.
+#[test]
+fn a_drive_limit_only_the_open_brake_runs_reach_is_found() {
+    let mut p = small_lab(500.0);
+    p.op_points.retain(|&(rpm, _)| rpm <= 75.0);
+    p.op_points.extend([(110.0, 0.0), (120.0, 0.0), (130.0, 0.0)]);
+    let seed = 2614;
+    let plain = campaign_of(&p, seed);
+    let open = brake_open_ids(&plain);
+    assert_eq!(open.len(), 3);
+    let v_max = |c: &Campaign, of_open: bool| -> f64 {
+        c.runs_of("operating_point")
+            .filter(|r| open.contains(&r.id) == of_open)
+            .map(|r| {
+                let mut v: Vec<f64> =
+                    r.data.motor_voltage_v.as_ref().expect("voltage").iter().map(|x| x.abs()).collect();
+                v.sort_by(f64::total_cmp);
+                v[v.len() * 99 / 100]
+            })
+            .fold(0.0, f64::max)
+    };
+    let limit_v = 0.5 * (v_max(&plain, false) + v_max(&plain, true));
+    let truth = draw_rig(seed).with_hidden(vec![Hidden::DriveVoltageLimit { limit_v }]);
+    let c = campaign_of_truth(&truth, &p, seed);
+    for r in c.runs_of("operating_point").filter(|r| !open.contains(&r.id)) {
+        let v = r.data.motor_voltage_v.as_ref().expect("voltage");
+        assert!(v.iter().all(|x| x.abs() < 0.98 * limit_v), "{} reaches the limit {limit_v} V", r.id);
+    }
+    let limit_found = |d: &serde_json::Value| {
+        d["findings"].as_array().unwrap().iter().find(|f| f["effect"] == ids::DRIVE_VOLTAGE_LIMIT).cloned()
+    };
+    let d = diagnosis_json(&runs_end_to_end("open brake, a limit only they reach", &c, |_| {}));
+    let found = limit_found(&d).unwrap_or_else(|| panic!("the drive limit is not found: {d:#}"));
+    let fitted = found["params"]["limit_v"].as_f64().expect("limit_v");
+    assert!((fitted / limit_v - 1.0).abs() <= 0.05, "limit {fitted} V against the truth's {limit_v} V");
+    let rows = drive_channel_of(&d, &c, &open);
+    let step1 = d["candidates"].as_array().unwrap().iter().find(|x| x["effect"] == ids::DRIVE_VOLTAGE_LIMIT).cloned();
+    eprintln!("truth {limit_v} V, fitted {fitted} V; first step {step1:?}; drive channel: {rows:?}");
+    let mut without = c.clone();
+    without.runs.retain(|r| !open.contains(&r.id));
+    let base = diagnosis_json(&runs_end_to_end("the same, brake applied only", &without, |_| {}));
+    eprintln!("without the open runs: {}", base["verdict"]);
+    assert!(limit_found(&base).is_none(), "found without the open runs: {base:#}");
 }

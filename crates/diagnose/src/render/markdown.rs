@@ -161,10 +161,27 @@ pub fn markdown(d: &Diagnosis) -> String {
         let _ = writeln!(
             s,
             "\n## Operating points with the brake open\n\n{} (normal_force_n = 0): no friction coefficient \
-             can be read on them (μ = F/N has no N), so the selection and the friction fits leave them out; the \
-             free-run checks simulate them.",
+             can be read on them (μ = F/N has no N), so the selection's units and the friction fits leave them \
+             out; the drive channel's fits read them (the PI loop needs no brake) and the free-run checks \
+             simulate them.",
             d.brake_open_runs.join(", ")
         );
+    }
+    if let Some(dc) = &d.drive_channel {
+        let _ = writeln!(
+            s,
+            "\nThe drive channel's fits read {} operating points, {} with the brake open. Held out of their \
+             fold's drive fit, the relative voltage error e_V of each:\n\n| run | baseline drive | final model | \
+             noise floor |\n|---|---|---|---|",
+            dc.runs, dc.brake_open
+        );
+        for r in &dc.brake_open_heldout {
+            let _ = writeln!(
+                s,
+                "| {} | {:.4} | {:.4} | {:.4} |",
+                r.run, r.relative_voltage_error_baseline, r.relative_voltage_error_final, r.noise_floor
+            );
+        }
     }
     if !d.parameters_at_bounds.is_empty() {
         let _ = writeln!(

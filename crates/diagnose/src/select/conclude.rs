@@ -425,10 +425,36 @@ impl Selection<'_> {
             adequacy,
             structure: Default::default(),
             parameters_at_bounds: Vec::new(),
-            brake_open_runs: Vec::new(),
+            brake_open_runs: cv.brake_open_runs().iter().map(|s| s.id.clone()).collect(),
+            drive_channel: drive_channel(cv, dr_cache, current.limit),
             detail,
         }
     }
+}
+
+/// The drive channel's runs and each brake-open run's held-out voltage
+/// error under the baseline drive and the final model's (`limit`: with its
+/// own limit), each from the fold fit that did not read it; `None` when
+/// every operating point has the brake applied.
+fn drive_channel(cv: &Cv, dr_cache: &BTreeMap<bool, DriveCv>, limit: bool) -> Option<crate::result::DriveChannel> {
+    let open = cv.brake_open_runs();
+    if open.is_empty() {
+        return None;
+    }
+    let e_v = |limit: bool, s: &RunSignals| {
+        let pi = dr_cache.get(&limit).and_then(|d| d.pis.get(s.fold).copied().flatten());
+        pi.map_or(f64::INFINITY, |pi| drive::relative_voltage_error(&pi, s, cv.supply_v))
+    };
+    let brake_open_heldout = open
+        .iter()
+        .map(|s| crate::result::DriveRunError {
+            run: s.id.clone(),
+            relative_voltage_error_baseline: round_sig(e_v(false, s), 4),
+            relative_voltage_error_final: round_sig(e_v(limit, s), 4),
+            noise_floor: round_sig(s.voltage_noise_v / cv.supply_v, 4),
+        })
+        .collect();
+    Some(crate::result::DriveChannel { runs: cv.drive_runs.len(), brake_open: open.len(), brake_open_heldout })
 }
 
 /// The evidence sentence: what the effect does in numbers (its own clause,
