@@ -46,12 +46,6 @@ pub struct RunSignals {
 }
 
 impl RunSignals {
-    /// Whether the run was recorded with the brake open (`normal_force_n =
-    /// 0`): [`brake_open`]'s rule on the prepared run.
-    pub fn brake_open(&self) -> bool {
-        self.normal_force_n <= 0.0
-    }
-
     /// PI reference: linear ramp 0 → set-point over `ramp_s` (recording-format.md protocol).
     pub fn reference_rad_s(&self, t_s: f64) -> f64 {
         if self.ramp_s <= 0.0 { self.setpoint_rad_s } else { self.setpoint_rad_s * (t_s / self.ramp_s).min(1.0) }
