@@ -1,7 +1,7 @@
 //! A model's fit on some runs ([`fit_on`]): Nelder–Mead from its
 //! best-scored starts, the nested model's among them.
 
-use super::{Fitted, Measured, StudyParams, misfit_at};
+use super::{Fitted, Measured, StudyParams, local_misfit, misfit_at};
 use crate::features::{Regime, Spread};
 use crate::fit::{FitResult, FitTolerance, Model, SetupCandidate, StartHints, critical_stiffness_guess_n_m, fit};
 
@@ -103,7 +103,13 @@ pub(super) fn fit_on(
         })
         .map(|(s, _)| s.name)
         .collect();
-    Fitted { model, train: train.to_vec(), params, calibration_misfit, at_bounds, evals, converged }
+    // Which fits are noisy, on the training runs alone (the lead's decision,
+    // issue 26): the calibration misfit over the study's fixed moves
+    // (`local_misfit`), its sd against `noisy_sd`. After the search: the
+    // search is unchanged, the judgement reads the fit's neighbourhood.
+    let local = (p.local_moves > 1).then(|| local_misfit(model, &params, &on, p, p.local_moves, p.local_rel_step));
+    let noisy = local.as_ref().is_some_and(|l| l.sd > p.noisy_sd);
+    Fitted { model, train: train.to_vec(), params, calibration_misfit, at_bounds, evals, converged, local, noisy }
 }
 
 /// Starts from a nested fit: its law with each of `model`'s set-up starts
