@@ -94,10 +94,16 @@ fn noise_note(s: &Study) -> String {
          read again over {} fixed random moves x (1 + {pct} % z) about it (`rig_slider::study::local_misfit`; the same moves \
          for every law, fit and run); a fit whose sd over them exceeds {} (a tenth of the search criterion's 0.01) is noisy, \
          and the held-out misfit of each run it predicts — what the gain and the paired t read — is that run's mean over the \
-         same moves (`read_misfit`); a smooth fit's is its point misfit. The search is unchanged. Calibration misfits, at \
-         the point and over the moves: {}. Held-out misfits of the noisy fits (mean ± sd over the moves): {}.",
+         same moves (`read_misfit`); a smooth fit's is its point misfit. The search is unchanged. Only the fits the \
+         selection reads are read so{}. Calibration misfits, at the point and over the moves: {}. Held-out misfits of the \
+         noisy fits (mean ± sd over the moves): {}.",
         p.local_moves,
         p.noisy_sd,
+        if s.leave_one_out {
+            " (the folds' fits: the models table's calibration misfits on all calibration runs are at the point)"
+        } else {
+            ""
+        },
         fits.join("; "),
         if heldout.is_empty() { "none".to_string() } else { heldout.join("; ") }
     )

@@ -103,13 +103,34 @@ pub(super) fn fit_on(
         })
         .map(|(s, _)| s.name)
         .collect();
-    // Which fits are noisy, on the training runs alone (the lead's decision,
-    // issue 26): the calibration misfit over the study's fixed moves
-    // (`local_misfit`), its sd against `noisy_sd`. After the search: the
-    // search is unchanged, the judgement reads the fit's neighbourhood.
-    let local = (p.local_moves > 1).then(|| local_misfit(model, &params, &on, p, p.local_moves, p.local_rel_step));
-    let noisy = local.as_ref().is_some_and(|l| l.sd > p.noisy_sd);
-    Fitted { model, train: train.to_vec(), params, calibration_misfit, at_bounds, evals, converged, local, noisy }
+    Fitted {
+        model,
+        train: train.to_vec(),
+        params,
+        calibration_misfit,
+        at_bounds,
+        evals,
+        converged,
+        local: None,
+        noisy: false,
+    }
+}
+
+/// A fit the selection reads, read for noise on its training runs alone
+/// (the lead's decision, issue 26): its calibration misfit over the study's
+/// fixed moves ([`local_misfit`]), noisy when their sd exceeds `noisy_sd`.
+/// After the search (the search is unchanged, the judgement reads the fit's
+/// neighbourhood), and only at the fits the selection reads: the engine's
+/// trials and baselines, not the report's fits on every calibration run
+/// under leave one stiffness out.
+pub(super) fn read_noise(mut f: Fitted, runs: &[Measured], p: &StudyParams) -> Fitted {
+    if p.local_moves > 1 {
+        let on: Vec<&Measured> = f.train.iter().map(|&i| &runs[i]).collect();
+        let l = local_misfit(f.model, &f.params, &on, p, p.local_moves, p.local_rel_step);
+        f.noisy = l.sd > p.noisy_sd;
+        f.local = Some(l);
+    }
+    f
 }
 
 /// Starts from a nested fit: its law with each of `model`'s set-up starts

@@ -29,7 +29,7 @@ pub use roughness::{
 use crate::SliderError;
 use crate::features::{FeatureOptions, Features, Regime};
 use crate::fit::Model;
-use fitting::fit_on;
+use fitting::{fit_on, read_noise};
 use predict::window_s;
 use rayon::prelude::*;
 use rig_ingest::slider::read_slider_folder;
@@ -164,7 +164,9 @@ pub struct Fitted {
     /// Whether every start's search met the convergence criterion.
     pub converged: bool,
     /// The calibration misfit read over the fixed moves ([`local_misfit`]
-    /// on `train`; None when `local_moves` < 2)...
+    /// on `train`; None when `local_moves` < 2 or the selection does not
+    /// read the fit: the report's fit on every calibration run under leave
+    /// one stiffness out)...
     pub local: Option<LocalMisfit>,
     /// ...and whether its sd exceeds `noisy_sd`: the selection then reads
     /// this fit's misfits as local means ([`read_misfit`]).
@@ -333,7 +335,8 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
     // a set-up may each fail alone and gain together: the set-up moves the
     // inertial periods, the law the regimes).
     let sets = engine::train_sets(&folds);
-    let baselines: Vec<Fitted> = sets.par_iter().map(|t| fit_on(Model::BASELINE, &runs, t, None, p)).collect();
+    let baselines: Vec<Fitted> =
+        sets.par_iter().map(|t| read_noise(fit_on(Model::BASELINE, &runs, t, None, p), &runs, p)).collect();
     let extensions = Extension::all();
     let cands: Vec<&dyn engine::Candidate<OnRuns, Fitted>> =
         extensions.iter().map(|e| e as &dyn engine::Candidate<OnRuns, Fitted>).collect();

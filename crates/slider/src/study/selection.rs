@@ -1,7 +1,7 @@
 //! The study's runs and extensions as the workspace's one selection engine
 //! sees them ([`OnRuns`], [`Extension`]), and a trial's record for the report.
 
-use super::{CandidateResult, Fitted, LocalMisfit, Measured, StudyParams, fit_on, predict, read_misfit};
+use super::{CandidateResult, Fitted, LocalMisfit, Measured, StudyParams, fit_on, predict, read_misfit, read_noise};
 use crate::features::Features;
 use crate::fit::{CANDIDATES, Candidate, Model, SETUPS, SetupCandidate};
 use rayon::prelude::*;
@@ -78,7 +78,7 @@ impl engine::Candidate<OnRuns<'_>, Fitted> for Extension {
             Extension::Law(friction) => Model { friction, ..current.model },
             Extension::Setup(setup) => Model { setup, ..current.model },
         };
-        Ok(fit_on(model, s.runs, train, Some(current), s.p))
+        Ok(read_noise(fit_on(model, s.runs, train, Some(current), s.p), s.runs, s.p))
     }
 }
 
