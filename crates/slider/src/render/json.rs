@@ -44,13 +44,29 @@ pub(super) fn within_resolution(s: &Study, st: &Step) -> Option<bool> {
     step_resolution(s, st).map(|r| st.gain.gain.abs() <= r)
 }
 
+/// What a step's neighbouring readings of the gain are ([`crate::study::GainSpread`]).
+pub(super) fn neighbours_text(s: &Study, g: &crate::study::GainSpread) -> String {
+    if g.over_moves {
+        format!(
+            "at each of the {} fixed moves of {} % (its fits noisy: the one draws its local means average)",
+            g.neighbours,
+            (1e8 * s.params.local_rel_step).round() / 1e6
+        )
+    } else {
+        format!(
+            "among the {} neighbouring fold fits (one moved {} % along one parameter)",
+            g.neighbours,
+            (1e8 * s.params.roughness_rel_step).round() / 1e6
+        )
+    }
+}
+
 /// The sentence on a step's gain against its resolution, e.g. for the verdict.
 pub(super) fn resolution_clause(s: &Study, st: &Step) -> String {
     let spread = st.gain_spread.as_ref().map_or(String::new(), |g| {
         format!(
-            "; among the {} neighbouring fold fits (one moved {} % along one parameter) the gain runs {:.1}–{:.1} %, t {:.2}–{:.2}, {} admitted",
-            g.neighbours,
-            (1e8 * s.params.roughness_rel_step).round() / 1e6,
+            "; {} the gain runs {:.1}–{:.1} %, t {:.2}–{:.2}, {} admitted",
+            neighbours_text(s, g),
             100.0 * g.gain_min,
             100.0 * g.gain_max,
             g.t_min,
@@ -164,6 +180,19 @@ pub(super) fn diagnosis_json(s: &Study) -> Value {
             ),
             // How far the criterion moves one `roughness_rel_step` from the fit (null: not scanned).
             "criterion_roughness": c.roughness.as_ref().map(|r| r.max_change),
+            // How the selection read its held-out misfits: "local_mean" when a fold's fit is noisy
+            // (`crate::study::read_misfit`: the mean over `local_moves` fixed moves of `local_rel_step`),
+            // with each run's sd over them (null: that run's fit is smooth, its point misfit).
+            "misfits_read": if c.fold_fits.iter().any(|f| f.noisy) { "local_mean" } else { "point" },
+            "heldout_misfit_sd": c.heldout_local.iter().map(|l| l.as_ref().map(|l| l.sd)).collect::<Vec<_>>(),
+            // Each fit's calibration misfit over the moves (the noise classification, `noisy_sd`).
+            "calibration_local": c.fits().map(|f| json!({
+                "fitted_on_stiffnesses_n_m": distinct(f.train.iter().map(|&i| s.runs[i].stiffness_n_m)),
+                "at": f.calibration_misfit,
+                "local_mean": f.local.as_ref().map(|l| l.mean),
+                "local_sd": f.local.as_ref().map(|l| l.sd),
+                "noisy": f.noisy,
+            })).collect::<Vec<_>>(),
         })).collect::<Vec<_>>(),
         "structure": {
             "notes": "one mass on one spring with an imposed drive speed; a model is a friction law on a set-up (the README's m and k, or an effective mass, a compliance in series, a scaled spring)",
@@ -182,6 +211,8 @@ pub(super) fn diagnosis_json(s: &Study) -> Value {
             // The gain among the best's neighbouring fold fits (`crate::study::gain_spread`).
             "neighbour_fits": st.gain_spread.as_ref().map(|g| json!({
                 "count": g.neighbours,
+                // true: the best's fits are noisy, the neighbours are the fixed moves (`local_rel_step`).
+                "over_moves": g.over_moves,
                 "relative_gain_min": g.gain_min,
                 "relative_gain_max": g.gain_max,
                 "paired_t_min": g.t_min,

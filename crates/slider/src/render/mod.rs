@@ -26,6 +26,89 @@ pub use checks::{Bounds, Margin, bounds, margins};
 /// Everything the stage writes, in a fixed order (`slider.md`, `slider-diagnosis.json`).
 pub type StudyOutput = rig_types::StudyOutput<Value>;
 
+/// Beside a gain: whether its models' noisy fits were read on local means,
+/// over how many moves of what size, and the held-out runs' sd over them.
+fn local_note(s: &Study, models: &[&CandidateResult]) -> String {
+    let sds: Vec<f64> = models.iter().flat_map(|c| c.heldout_local.iter().flatten().map(|l| l.sd)).collect();
+    if sds.is_empty() {
+        return String::new();
+    }
+    format!(
+        " (noisy fits on local means of {} moves of {} %, run sd {:.4}–{:.4})",
+        s.params.local_moves,
+        (1e8 * s.params.local_rel_step).round() / 1e6,
+        sds.iter().copied().fold(f64::INFINITY, f64::min),
+        sds.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+    )
+}
+
+/// Which fits are noisy and how the selection read them (pipeline.toml's
+/// `local_moves`, `local_rel_step`, `noisy_sd`; [`crate::study::read_misfit`]).
+fn noise_note(s: &Study) -> String {
+    let p = &s.params;
+    let pct = (1e8 * p.local_rel_step).round() / 1e6;
+    if p.local_moves < 2 {
+        return "Every misfit is read at its fit's point (`local_moves` < 2: no fit is read for noise).".into();
+    }
+    let fits: Vec<String> = s
+        .candidates
+        .iter()
+        .flat_map(|c| c.fits().map(move |f| (c, f)))
+        .filter_map(|(c, f)| {
+            let l = f.local.as_ref()?;
+            let ks: Vec<f64> = {
+                let mut k: Vec<f64> = f.train.iter().map(|&i| s.runs[i].stiffness_n_m).collect();
+                k.dedup();
+                k
+            };
+            Some(format!(
+                "{} on k = {ks:?} N/m {:.3}, local mean {:.3}, sd {:.4}{}",
+                c.model.id(),
+                f.calibration_misfit,
+                l.mean,
+                l.sd,
+                if f.noisy { " (noisy)" } else { "" }
+            ))
+        })
+        .collect();
+    let heldout: Vec<String> = s
+        .candidates
+        .iter()
+        .filter(|c| c.heldout_local.iter().any(Option::is_some))
+        .map(|c| {
+            let runs: Vec<String> = c
+                .heldout
+                .iter()
+                .zip(&c.heldout_local)
+                .map(|(h, l)| match l {
+                    Some(l) => format!("{} {:.3} ± {:.3} (point {:.3})", s.runs[h.0].name, l.mean, l.sd, l.at),
+                    None => format!("{} {:.3} (point)", s.runs[h.0].name, h.1),
+                })
+                .collect();
+            format!("{}: {}", c.model.id(), runs.join(", "))
+        })
+        .collect();
+    format!(
+        "Noisy fits are read on their local means (issue 26, the lead's decision of the twenty-first session: a law whose \
+         misfit is a noisy statistic is judged on its expected misfit, not on one draw). Every fit's calibration misfit is \
+         read again over {} fixed random moves x (1 + {pct} % z) about it (`rig_slider::study::local_misfit`; the same moves \
+         for every law, fit and run); a fit whose sd over them exceeds {} (a tenth of the search criterion's 0.01) is noisy, \
+         and the held-out misfit of each run it predicts — what the gain and the paired t read — is that run's mean over the \
+         same moves (`read_misfit`); a smooth fit's is its point misfit. The search is unchanged. Only the fits the \
+         selection reads are read so{}. Calibration misfits, at the point and over the moves: {}. Held-out misfits of the \
+         noisy fits (mean ± sd over the moves): {}.",
+        p.local_moves,
+        p.noisy_sd,
+        if s.leave_one_out {
+            " (the folds' fits: the models table's calibration misfits on all calibration runs are at the point)"
+        } else {
+            ""
+        },
+        fits.join("; "),
+        if heldout.is_empty() { "none".to_string() } else { heldout.join("; ") }
+    )
+}
+
 /// What the misfit resolves: its roughness at the fits shown in full and
 /// each step's gain against it ([`crate::study::roughness`]).
 fn resolution_note(s: &Study) -> String {
@@ -56,9 +139,8 @@ fn resolution_note(s: &Study) -> String {
             let r = step_resolution(s, st)?;
             let spread = st.gain_spread.as_ref().map_or(String::new(), |g| {
                 format!(
-                    "; with one fold's fit of it moved ±{pct} % along one parameter ({} neighbours, the rest kept) the \
-                     held-out gain runs {:.1}–{:.1} % and the paired t {:.2}–{:.2}, {} of {} admitted by the rule",
-                    g.neighbours,
+                    "; {} the held-out gain runs {:.1}–{:.1} % and the paired t {:.2}–{:.2}, {} of {} admitted by the rule",
+                    json::neighbours_text(s, g),
                     100.0 * g.gain_min,
                     100.0 * g.gain_max,
                     g.t_min,
@@ -363,7 +445,7 @@ fn markdown(s: &Study) -> String {
             let c = &s.candidates[t];
             let _ = writeln!(
                 md,
-                "| {} | {} ({:.3}) | {} | {:.3} | {:.3} → {:.3} | {:.1} % | {:.2} | {} |",
+                "| {} | {} ({:.3}) | {} | {:.3} | {:.3} → {:.3} | {:.1} %{} | {:.2} | {} |",
                 st.step,
                 from.model.id(),
                 from.heldout_mean,
@@ -372,11 +454,13 @@ fn markdown(s: &Study) -> String {
                 g.before,
                 g.after,
                 100.0 * g.gain,
+                local_note(s, &[from, c]),
                 g.t,
                 if t == st.best && st.kept { "yes" } else { "no" }
             );
         }
     }
+    let _ = writeln!(md, "\n{}", noise_note(s));
     let _ = writeln!(md, "\n{}", resolution_note(s));
     let _ = writeln!(
         md,
@@ -393,7 +477,11 @@ fn markdown(s: &Study) -> String {
             "| {} | {} | {} | {:.3} | {} | {}/{} | {} |",
             c.model.id(),
             params_text(s, c),
-            c.fitted.as_ref().map_or("—".into(), |f| format!("{:.3}", f.calibration_misfit)),
+            c.fitted.as_ref().map_or("—".into(), |f| match (&f.local, f.noisy) {
+                (Some(l), true) =>
+                    format!("{:.3} (noisy: local mean {:.3}, sd {:.4})", f.calibration_misfit, l.mean, l.sd),
+                _ => format!("{:.3}", f.calibration_misfit),
+            }),
             c.heldout_mean,
             regimes_fitted(s, c),
             regimes_heldout(s, c),

@@ -1,7 +1,7 @@
 //! A model's fit on some runs ([`fit_on`]): Nelder–Mead from its
 //! best-scored starts, the nested model's among them.
 
-use super::{Fitted, Measured, StudyParams, misfit_at};
+use super::{Fitted, Measured, StudyParams, local_misfit, misfit_at};
 use crate::features::{Regime, Spread};
 use crate::fit::{FitResult, FitTolerance, Model, SetupCandidate, StartHints, critical_stiffness_guess_n_m, fit};
 
@@ -103,7 +103,34 @@ pub(super) fn fit_on(
         })
         .map(|(s, _)| s.name)
         .collect();
-    Fitted { model, train: train.to_vec(), params, calibration_misfit, at_bounds, evals, converged }
+    Fitted {
+        model,
+        train: train.to_vec(),
+        params,
+        calibration_misfit,
+        at_bounds,
+        evals,
+        converged,
+        local: None,
+        noisy: false,
+    }
+}
+
+/// A fit the selection reads, read for noise on its training runs alone
+/// (the lead's decision, issue 26): its calibration misfit over the study's
+/// fixed moves ([`local_misfit`]), noisy when their sd exceeds `noisy_sd`.
+/// After the search (the search is unchanged, the judgement reads the fit's
+/// neighbourhood), and only at the fits the selection reads: the engine's
+/// trials and baselines, not the report's fits on every calibration run
+/// under leave one stiffness out.
+pub(super) fn read_noise(mut f: Fitted, runs: &[Measured], p: &StudyParams) -> Fitted {
+    if p.local_moves > 1 {
+        let on: Vec<&Measured> = f.train.iter().map(|&i| &runs[i]).collect();
+        let l = local_misfit(f.model, &f.params, &on, p, p.local_moves, p.local_rel_step);
+        f.noisy = l.sd > p.noisy_sd;
+        f.local = Some(l);
+    }
+    f
 }
 
 /// Starts from a nested fit: its law with each of `model`'s set-up starts

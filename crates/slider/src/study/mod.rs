@@ -22,13 +22,14 @@ mod selection;
 pub use boundary::boundary_scan;
 pub use predict::{TRACE_POINTS, measure, predict, predict_trace, through_channel};
 pub use roughness::{
-    GainSpread, LocalMisfit, Roughness, ScanPoint, gain_spread, landscape, local_misfit, misfit_at, roughness,
+    GainSpread, LocalMisfit, Roughness, ScanPoint, gain_spread, landscape, local_misfit, misfit_at, read_misfit,
+    roughness,
 };
 
 use crate::SliderError;
 use crate::features::{FeatureOptions, Features, Regime};
 use crate::fit::Model;
-use fitting::fit_on;
+use fitting::{fit_on, read_noise};
 use predict::window_s;
 use rayon::prelude::*;
 use rig_ingest::slider::read_slider_folder;
@@ -82,6 +83,19 @@ pub struct StudyParams {
     /// about the baseline's and each step's best fit ([`roughness`]: every
     /// parameter scaled by 1 ± this).
     pub roughness_rel_step: f64,
+    /// Which fits are noisy, and how a noisy fit's misfits are read (issue
+    /// 26, the lead's decision of the twenty-first session: a law whose
+    /// misfit is a noisy statistic is judged on its expected misfit, not on
+    /// one draw). Every fit's calibration misfit is read over
+    /// `local_moves` fixed random moves of relative size `local_rel_step`
+    /// ([`local_misfit`]); a fit whose sd over them exceeds `noisy_sd` is
+    /// noisy, and every misfit the selection reads of it — its held-out
+    /// per-run misfits, hence the step's gain and paired t — is the local
+    /// mean over the same moves ([`read_misfit`]); a smooth fit's is its
+    /// point misfit. The search is unchanged. `local_moves` 0: every fit smooth.
+    pub local_moves: usize,
+    pub local_rel_step: f64,
+    pub noisy_sd: f64,
     /// An extension must pass the workspace's step rule (pipeline.toml's
     /// `[shared.selection]`, `rig_types::select::compare`: the campaign
     /// diagnosis' and the LAVI study's rule too)...
@@ -149,6 +163,14 @@ pub struct Fitted {
     pub evals: usize,
     /// Whether every start's search met the convergence criterion.
     pub converged: bool,
+    /// The calibration misfit read over the fixed moves ([`local_misfit`]
+    /// on `train`; None when `local_moves` < 2 or the selection does not
+    /// read the fit: the report's fit on every calibration run under leave
+    /// one stiffness out)...
+    pub local: Option<LocalMisfit>,
+    /// ...and whether its sd exceeds `noisy_sd`: the selection then reads
+    /// this fit's misfits as local means ([`read_misfit`]).
+    pub noisy: bool,
 }
 
 /// A model's record.
@@ -166,6 +188,11 @@ pub struct CandidateResult {
     /// Per held-out run: (run index, misfit, predicted features) under the fold that held it out.
     pub heldout: Vec<(usize, f64, Features)>,
     pub heldout_mean: f64,
+    /// Per held-out run (the order of `heldout`), its misfit over
+    /// the moves when its fold's fit is noisy (its misfit is then their
+    /// local mean, [`read_misfit`], with its sd and values); None when the
+    /// fit is smooth (its point misfit).
+    pub heldout_local: Vec<Option<LocalMisfit>>,
     /// The calibration misfit's roughness about `fitted` ([`roughness`];
     /// the baseline and each step's best only).
     pub roughness: Option<Roughness>,
@@ -308,19 +335,20 @@ pub fn run_study(dir: &Path, p: &StudyParams) -> Result<Study, SliderError> {
     // a set-up may each fail alone and gain together: the set-up moves the
     // inertial periods, the law the regimes).
     let sets = engine::train_sets(&folds);
-    let baselines: Vec<Fitted> = sets.par_iter().map(|t| fit_on(Model::BASELINE, &runs, t, None, p)).collect();
+    let baselines: Vec<Fitted> =
+        sets.par_iter().map(|t| read_noise(fit_on(Model::BASELINE, &runs, t, None, p), &runs, p)).collect();
     let extensions = Extension::all();
     let cands: Vec<&dyn engine::Candidate<OnRuns, Fitted>> =
         extensions.iter().map(|e| e as &dyn engine::Candidate<OnRuns, Fitted>).collect();
-    let on = OnRuns { runs: &runs, p };
+    let on = OnRuns { runs: &runs, p, read: Default::default() };
     let search = engine::Search { pair_step: true, ..engine::Search::default() };
     let sel = engine::forward_select_from(&on, &cands, &baselines, &folds, &p.selection, &search)
         .map_err(|e| SliderError::Selection(e.0))?;
-    let mut candidates = vec![record(&baselines, &sel.baseline_misfits, &sel, &folds, &runs, &cal, p)];
+    let mut candidates = vec![record(&baselines, &sel.baseline_misfits, &sel, &folds, &on, &cal)];
     let mut steps: Vec<Step> = Vec::new();
     let mut current = 0;
     for (k, t) in sel.trials.iter().enumerate() {
-        candidates.push(record(&t.fitted, &t.misfits, &sel, &folds, &runs, &cal, p));
+        candidates.push(record(&t.fitted, &t.misfits, &sel, &folds, &on, &cal));
         let idx = candidates.len() - 1;
         if steps.last().is_none_or(|st| st.step != t.step) {
             steps.push(Step {

@@ -8,7 +8,7 @@
 //! [`landscape`] scans one search axis; [`roughness`] reads the largest move
 //! at one relative step along every axis, both ways.
 
-use super::{CandidateResult, Measured, StudyParams, predict};
+use super::{CandidateResult, Fitted, Measured, StudyParams, predict};
 use crate::fit::{Model, run_misfit};
 use rayon::prelude::*;
 use rig_types::select::{Comparison, Fold, compare};
@@ -107,11 +107,20 @@ pub struct LocalMisfit {
     pub sd: f64,
     pub moves: usize,
     pub rel: f64,
+    /// The misfit at each move, in the moves' order (the same moves at
+    /// every call: common random numbers across fits, laws and runs).
+    pub values: Vec<f64>,
 }
 
 /// The first index of [`local_misfit`]'s moves in the track's generator:
 /// a travel of 2⁴⁰ correlation lengths backwards, which no run reaches.
 const MOVES_FROM: i64 = -(1 << 40);
+
+/// The generator's indices one move takes: move j's value for parameter i
+/// is node(MOVES_FROM − j · MOVE_STRIDE − i) whatever the model's parameter
+/// count (at most this many), so every law's move j is drawn from the same
+/// values (common random numbers across laws, not only across runs).
+const MOVE_STRIDE: i64 = 16;
 
 /// `model`'s mean misfit over `runs` at `x` and over `moves` points
 /// x_i (1 + `rel` z_ij), z_ij fixed standard normal values (the track's
@@ -137,14 +146,14 @@ pub fn local_misfit(
     rel: f64,
 ) -> LocalMisfit {
     let at = misfit_at(model, x, runs, p).0;
-    let n = x.len() as i64;
+    assert!(x.len() as i64 <= MOVE_STRIDE, "local_misfit: {} parameters, at most {MOVE_STRIDE}", x.len());
     let vals: Vec<f64> = (0..moves as i64)
         .into_par_iter()
         .map(|j| {
             let y: Vec<f64> = x
                 .iter()
                 .enumerate()
-                .map(|(i, v)| v * (1.0 + rel * crate::track::node(MOVES_FROM - j * n - i as i64)))
+                .map(|(i, v)| v * (1.0 + rel * crate::track::node(MOVES_FROM - j * MOVE_STRIDE - i as i64)))
                 .collect();
             misfit_at(model, &y, runs, p).0
         })
@@ -155,7 +164,22 @@ pub fn local_misfit(
     } else {
         f64::NAN
     };
-    LocalMisfit { at, mean, sd, moves, rel }
+    LocalMisfit { at, mean, sd, moves, rel, values: vals }
+}
+
+/// The misfit the selection reads of `fit` at run `r` (the lead's decision,
+/// issue 26, twenty-first session: a law whose misfit is a noisy statistic
+/// is judged on its expected misfit, not on one draw): a noisy fit's
+/// ([`Fitted::noisy`]) is its local mean over the study's fixed moves
+/// ([`local_misfit`] on the one run, returned beside it with its sd), a
+/// smooth fit's its point misfit.
+pub fn read_misfit(fit: &Fitted, r: &Measured, p: &StudyParams) -> (f64, Option<LocalMisfit>) {
+    if fit.noisy {
+        let l = local_misfit(fit.model, &fit.params, &[r], p, p.local_moves, p.local_rel_step);
+        (l.mean, Some(l))
+    } else {
+        (run_misfit(&r.features, &predict(fit.model, &fit.params, r, p)), None)
+    }
 }
 
 /// A step's held-out gain among neighbouring fits of its best: each fold's
@@ -173,6 +197,11 @@ pub struct GainSpread {
     pub t_max: f64,
     /// How many of them the step rule (`[shared.selection]`) admits.
     pub admitted: usize,
+    /// True when the best's fits are noisy: the neighbours are then the
+    /// study's fixed moves (move j of every fold's fit at once, the held-out
+    /// misfit of each run at that move: one draw of the gain its local means
+    /// average), not the ± `roughness_rel_step` moves along one axis.
+    pub over_moves: bool,
 }
 
 /// [`GainSpread`] of `best` over `from` (two records of one selection,
@@ -193,6 +222,9 @@ pub fn gain_spread(
         units.iter().map(|r| folds.iter().position(|f| f.held_out.contains(r))).collect::<Option<_>>()?;
     let before: Vec<f64> = from.heldout.iter().map(|h| h.1).collect();
     let after: Vec<f64> = best.heldout.iter().map(|h| h.1).collect();
+    if best.fold_fits.iter().any(|f| f.noisy) {
+        return Some(spread_over_moves(from, best, &before, &after, &fold_of, folds.len(), p));
+    }
     let mut moves: Vec<(usize, usize, f64)> = Vec::new();
     for (k, fold) in folds.iter().enumerate() {
         let fit = best.fold_fits.iter().find(|f| f.train == fold.train)?;
@@ -223,5 +255,41 @@ pub fn gain_spread(
         t_min: fold(f64::min, f64::INFINITY, |c| c.t),
         t_max: fold(f64::max, f64::NEG_INFINITY, |c| c.t),
         admitted: compared.iter().filter(|c| p.selection.admits(c)).count(),
+        over_moves: false,
     })
+}
+
+/// [`GainSpread`] of a noisy best over the study's fixed moves: at move j
+/// each held-out run's misfit is its value at move j of its fold's fit
+/// (the local mean's j-th term, [`LocalMisfit::values`]) where that fit is
+/// noisy, its point misfit where smooth; the gain and t by the engine's
+/// [`compare`]. No simulation: the values are the local means' own.
+fn spread_over_moves(
+    from: &CandidateResult,
+    best: &CandidateResult,
+    before: &[f64],
+    after: &[f64],
+    fold_of: &[usize],
+    folds: usize,
+    p: &StudyParams,
+) -> GainSpread {
+    let at = |c: &CandidateResult, point: &[f64], j: usize| -> Vec<f64> {
+        point
+            .iter()
+            .enumerate()
+            .map(|(i, &m)| c.heldout_local.get(i).and_then(Option::as_ref).map_or(m, |l| l.values[j]))
+            .collect()
+    };
+    let compared: Vec<Comparison> =
+        (0..p.local_moves).map(|j| compare(&at(from, before, j), &at(best, after, j), fold_of, folds)).collect();
+    let fold = |f: fn(f64, f64) -> f64, init: f64, g: fn(&Comparison) -> f64| compared.iter().map(g).fold(init, f);
+    GainSpread {
+        neighbours: compared.len(),
+        gain_min: fold(f64::min, f64::INFINITY, |c| c.gain),
+        gain_max: fold(f64::max, f64::NEG_INFINITY, |c| c.gain),
+        t_min: fold(f64::min, f64::INFINITY, |c| c.t),
+        t_max: fold(f64::max, f64::NEG_INFINITY, |c| c.t),
+        admitted: compared.iter().filter(|c| p.selection.admits(c)).count(),
+        over_moves: true,
+    }
 }

@@ -1,23 +1,43 @@
 //! The study's runs and extensions as the workspace's one selection engine
 //! sees them ([`OnRuns`], [`Extension`]), and a trial's record for the report.
 
-use super::{CandidateResult, Fitted, Measured, StudyParams, fit_on, predict};
+use super::{CandidateResult, Fitted, LocalMisfit, Measured, StudyParams, fit_on, predict, read_misfit, read_noise};
 use crate::features::Features;
-use crate::fit::{CANDIDATES, Candidate, Model, SETUPS, SetupCandidate, run_misfit};
+use crate::fit::{CANDIDATES, Candidate, Model, SETUPS, SetupCandidate};
 use rayon::prelude::*;
 use rig_types::select::{self as engine, Fold};
+use std::collections::HashMap;
+use std::sync::Mutex;
+
+/// A noisy fit's reading at one run, kept for the report: (model id, the
+/// parameters' bits, run) → the local misfit.
+type Readings = HashMap<(String, Vec<u64>, usize), LocalMisfit>;
 
 /// The study's runs as the engine sees them ([`engine::Study`]): a unit is a
-/// run, its misfit [`run_misfit`] of the model's simulated features.
+/// run, its misfit [`read_misfit`] of the fit there (a noisy fit's local
+/// mean over the fixed moves, a smooth fit's [`crate::fit::run_misfit`] of its simulated
+/// features), the noisy fits' readings kept for the report (a value of the
+/// parameters and the run alone, so the same whatever the order the
+/// engine's threads fill it in).
 pub(super) struct OnRuns<'a> {
     pub(super) runs: &'a [Measured],
     pub(super) p: &'a StudyParams,
+    pub(super) read: Mutex<Readings>,
+}
+
+impl OnRuns<'_> {
+    fn key(m: &Fitted, run: usize) -> (String, Vec<u64>, usize) {
+        (m.model.id(), m.params.iter().map(|v| v.to_bits()).collect(), run)
+    }
 }
 
 impl engine::Study<Fitted> for OnRuns<'_> {
     fn score(&self, m: &Fitted, run: usize) -> f64 {
-        let r = &self.runs[run];
-        run_misfit(&r.features, &predict(m.model, &m.params, r, self.p))
+        let (misfit, local) = read_misfit(m, &self.runs[run], self.p);
+        if let Some(l) = local {
+            self.read.lock().expect("no thread panicked holding it").insert(Self::key(m, run), l);
+        }
+        misfit
     }
 }
 
@@ -58,7 +78,7 @@ impl engine::Candidate<OnRuns<'_>, Fitted> for Extension {
             Extension::Law(friction) => Model { friction, ..current.model },
             Extension::Setup(setup) => Model { setup, ..current.model },
         };
-        Ok(fit_on(model, s.runs, train, Some(current), s.p))
+        Ok(read_noise(fit_on(model, s.runs, train, Some(current), s.p), s.runs, s.p))
     }
 }
 
@@ -71,10 +91,10 @@ pub(super) fn record(
     misfits: &[f64],
     sel: &engine::Selection<Fitted>,
     folds: &[Fold],
-    runs: &[Measured],
+    on: &OnRuns<'_>,
     cal: &[usize],
-    p: &StudyParams,
 ) -> CandidateResult {
+    let (runs, p) = (on.runs, on.p);
     let model = fits[0].model;
     let fit_of = |i: usize| {
         let set = &folds[sel.fold_of[i]].train;
@@ -88,6 +108,15 @@ pub(super) fn record(
         })
         .collect();
     heldout.sort_by_key(|h| h.0);
+    let read = on.read.lock().expect("no thread panicked holding it");
+    let heldout_local: Vec<Option<LocalMisfit>> = heldout
+        .iter()
+        .map(|h| {
+            let f = fit_of(sel.units.iter().position(|&u| u == h.0).expect("a held-out unit"));
+            f.noisy.then(|| read.get(&OnRuns::key(f, h.0)).cloned().expect("the engine read every noisy fit"))
+        })
+        .collect();
+    drop(read);
     let heldout_mean = heldout.iter().map(|h| h.1).sum::<f64>() / heldout.len().max(1) as f64;
     let mut c = CandidateResult {
         model,
@@ -96,6 +125,7 @@ pub(super) fn record(
         fold_fits: fits.to_vec(),
         heldout,
         heldout_mean,
+        heldout_local,
         roughness: None,
     };
     if let Some(f) = c.fold_fits.iter().find(|f| f.train == cal) {
