@@ -72,6 +72,72 @@ pub fn nominal_window_samples(window_s: f64, sample_rate_hz: f64) -> usize {
     ((window_s * sample_rate_hz).round() as usize).max(1)
 }
 
+/// How far, relative, a record's measured sample step may sit from the
+/// declared one (`sample_rate_hz`) and still be read as the declared rate.
+///
+/// Why 10⁻³: a data-acquisition card's sample clock is a quartz crystal a
+/// lab states to ±50–100 ppm (10⁻⁴); the time column written at 0.1 ms adds
+/// below 10⁻⁵ over a record of 10 s or more ([`clock_rate_hz`] reads the
+/// mean step). A tenth of a percent is ten times the crystal's statement:
+/// within it the time column says the declared rate, and a derivative over
+/// the declared step is off by less than 0.1 %, far below one encoder
+/// tick's noise. Beyond it the declaration is wrong (a clock 2 % off, a rate
+/// written for another recorder) and the time column is read.
+pub const CLOCK_TOLERANCE: f64 = 1e-3;
+
+/// The sample rate a derivative should divide by, Hz: the records' own clock.
+///
+/// The time column is the measurement of the time that elapsed;
+/// `declared_rate_hz` (campaign.toml's `sample_rate_hz`) is a declaration.
+/// The measured step is the mean of the records' steps within [½, 3/2]× the
+/// declared step (gaps, dropped samples and repeated stamps left out; jitter
+/// up to half a step and the time column's rounding average out), pooled over `records` (one recorder, one
+/// clock). Within [`CLOCK_TOLERANCE`] of the declared step the declared rate
+/// is returned, bit for bit (the shipped campaign's outputs stay what they
+/// were); otherwise 1 / the measured step. When fewer than half the steps
+/// fall within [½, 3/2]× the declared step (a declaration off by a factor of
+/// two or more), the band is taken about the median step instead. No step
+/// at all (records of fewer than two samples): the declared rate.
+pub fn clock_rate_hz(records: &[&[f64]], declared_rate_hz: f64) -> f64 {
+    let declared_step_s = declared_rate_hz.recip();
+    let in_band = |reference: f64| {
+        let (lo, hi) = (0.5 * reference, 1.5 * reference);
+        let (mut sum, mut n, mut all) = (0.0, 0usize, 0usize);
+        for t in records {
+            for w in t.windows(2) {
+                let d = w[1] - w[0];
+                all += 1;
+                if d >= lo && d <= hi {
+                    sum += d;
+                    n += 1;
+                }
+            }
+        }
+        (sum, n, all)
+    };
+    let (sum, n, all) = in_band(declared_step_s);
+    if all == 0 {
+        return declared_rate_hz;
+    }
+    let step_s = if 2 * n >= all {
+        sum / n as f64
+    } else {
+        let mut d: Vec<f64> = records.iter().flat_map(|t| t.windows(2).map(|w| w[1] - w[0])).collect();
+        let mid = d.len() / 2;
+        let (_, &mut med, _) = d.select_nth_unstable_by(mid, f64::total_cmp);
+        if med <= 0.0 {
+            return declared_rate_hz;
+        }
+        let (sum, n, _) = in_band(med);
+        sum / n as f64
+    };
+    if ((step_s - declared_step_s) / declared_step_s).abs() <= CLOCK_TOLERANCE {
+        declared_rate_hz
+    } else {
+        step_s.recip()
+    }
+}
+
 /// Centred moving average over ±`half` samples; the window shrinks
 /// symmetrically near the ends so the filter stays zero-phase everywhere.
 pub fn centred_moving_average(x: &[f64], half: usize) -> Vec<f64> {
@@ -236,6 +302,47 @@ mod tests {
         assert_eq!(window_samples(&t, 0.04), (0.04 / med).round() as usize);
         assert_eq!(window_samples(&[0.0, 0.002, 0.004], 0.04), 20);
         assert_eq!(window_samples(&[0.0], 0.04), 0);
+    }
+
+    /// The clock a derivative divides by: the declared rate, bit for bit,
+    /// on its grid (the time column written at 0.1 ms; jittered, with a
+    /// gap); the time column's rate when the clock runs 2 % fast of the
+    /// declaration, even written at 0.1 ms (where the median step, 2.0 ms,
+    /// would say the declared rate), and when the declaration is off by 2×.
+    #[test]
+    fn clock_rate_reads_the_time_column_beyond_the_clock_tolerance() {
+        let round4 = |x: f64| (x * 1e4).round() / 1e4;
+        let grid = |rate: f64, n: usize| (0..n).map(|k| round4(k as f64 / rate)).collect::<Vec<f64>>();
+        let on_grid = grid(500.0, 10_000);
+        assert_eq!(clock_rate_hz(&[&on_grid[..]], 500.0).to_bits(), 500f64.to_bits());
+        // Jitter ±0.4 ms about the 2 ms grid and a 0.5 s gap: still the declared rate.
+        let mut jittered: Vec<f64> =
+            (0..10_000).map(|k| k as f64 * 0.002 + 4e-4 * ((k * 7 % 3) as f64 - 1.0)).collect();
+        for t in &mut jittered[6_000..] {
+            *t += 0.5;
+        }
+        assert_eq!(clock_rate_hz(&[&jittered[..]], 500.0), 500.0);
+        // A clock 2 % fast: 510 samples a second, declared 500.
+        let fast = grid(510.0, 10_000);
+        let mut d: Vec<f64> = fast.windows(2).map(|w| w[1] - w[0]).collect();
+        d.sort_by(f64::total_cmp);
+        assert!((d[d.len() / 2] - 0.002).abs() < 1e-12, "the rounded column's median step is the declared one");
+        let r = clock_rate_hz(&[&fast[..]], 500.0);
+        assert!((r / 510.0 - 1.0).abs() < 1e-5, "{r} Hz");
+        // Pooled over records, one with a gap; a record of one sample adds nothing.
+        let mut gapped = grid(510.0, 4_000);
+        for t in &mut gapped[2_000..] {
+            *t += 0.5;
+        }
+        let r = clock_rate_hz(&[&fast[..], &gapped[..], &[0.0][..]], 500.0);
+        assert!((r / 510.0 - 1.0).abs() < 1e-5, "{r} Hz");
+        // Declared 500 Hz, recorded at 1.2 kHz: the band about the median step.
+        let r = clock_rate_hz(&[&grid(1200.0, 10_000)[..]], 500.0);
+        assert!((r / 1200.0 - 1.0).abs() < 1e-4, "{r} Hz");
+        // Within the tolerance (0.05 % off): the declaration stands.
+        assert_eq!(clock_rate_hz(&[&grid(500.25, 10_000)[..]], 500.0), 500.0);
+        assert_eq!(clock_rate_hz(&[&[0.0][..]], 500.0), 500.0);
+        assert_eq!(clock_rate_hz(&[], 500.0), 500.0);
     }
 
     #[test]
