@@ -312,9 +312,14 @@ pub fn estimate_pi(c: &Campaign, limit_v: f64, opts: &PiOptions) -> Result<PiEst
         PiMethod::CorrectedLs => {
             // Var of ē: 2·(Δ²/12)/Δt²; of Ī (trapezoid mean of w + 1 samples): ≈ (Δ²/12)/(w + 1).
             let q = rig_types::sensor::tick_rad(c.rig.encoder_ticks_per_rev).powi(2) / 12.0;
-            // The window at the campaign's nominal rate (the per-run counts agree with it).
-            let w = nominal_window_samples(opts.window_s, c.rig.sample_rate_hz);
-            let dt = w as f64 / c.rig.sample_rate_hz;
+            // The window at the operating points' clock (their time columns,
+            // `Campaign::clock_rate_hz`): ē divides by the time its w samples
+            // took. The per-run counts (`window_samples`, the median step)
+            // agree with it but on a column rounded coarser than the clock's
+            // offset (docs/findings.md, twenty-first session).
+            let rate_hz = c.clock_rate_hz("operating_point");
+            let w = nominal_window_samples(opts.window_s, rate_hz);
+            let dt = w as f64 / rate_hz;
             let mut noise_var = vec![0.0; p];
             noise_var[0] = 2.0 * q / (dt * dt);
             noise_var[1] = q / (w + 1) as f64;

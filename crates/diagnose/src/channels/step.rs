@@ -43,7 +43,10 @@ pub fn voltage_step_checks(
 ) -> Vec<ChannelCheck> {
     let mut out = Vec::new();
     let tick_rad = rig_types::sensor::tick_rad(c.rig.encoder_ticks_per_rev);
-    let dt = 1.0 / c.rig.sample_rate_hz;
+    // The steps' sample rate as their time columns measure it: the timing
+    // resolution and the window's duration are the elapsed time's.
+    let rate_hz = c.clock_rate_hz("voltage_step");
+    let dt = 1.0 / rate_hz;
     let ids: Vec<String> = cal.steps.iter().map(|s| s.id.clone()).collect();
     let mut freq = Vec::new();
     let mut dec = Vec::new();
@@ -91,7 +94,7 @@ pub fn voltage_step_checks(
         ));
     }
 
-    let w = nominal_window_samples(window_s, c.rig.sample_rate_hz);
+    let w = nominal_window_samples(window_s, rate_hz);
     let Ok(data) = step_data(c, window_s) else {
         out.push(ChannelCheck::not_testable("voltage_step.residual", ids, "no usable voltage_step run".into()));
         return out;
