@@ -318,11 +318,7 @@ pub fn estimate_pi(c: &Campaign, limit_v: f64, opts: &PiOptions) -> Result<PiEst
             // The windows the rows were made of: the runs' count (their
             // median; one recorder, one count) over the operating points'
             // clock (their time columns, `Campaign::clock_rate_hz`): ē
-            // divides by the time its w samples took. The count is the rows'
-            // own, not the window at the clock, which a time column rounded
-            // coarser than the clock's offset can make differ (a 2 %-fast
-            // clock written at 0.1 ms: 250 samples against 255;
-            // docs/findings.md, twenty-first session).
+            // divides by the time its w samples took.
             let rate_hz = c.clock_rate_hz("operating_point");
             counts.sort_unstable();
             let w =

@@ -96,9 +96,8 @@ pub fn voltage_step_checks(
 
     // The windows `step_data` made: each step's count from its time column
     // (`window_samples`; their median, one recorder, one count), their
-    // duration at the steps' clock. Not the window at the clock, which a time
-    // column rounded coarser than the clock's offset can make differ (a
-    // 2 %-fast clock written at 0.1 ms: 25 samples against 26).
+    // duration at the steps' clock (a window at the clock can round the
+    // other way: 0.05 s at 510 Hz is 25.5 samples).
     let mut counts: Vec<usize> =
         c.runs_of("voltage_step").map(|r| window_samples(&r.data.time_s, window_s).max(1)).collect();
     counts.sort_unstable();
