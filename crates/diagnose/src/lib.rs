@@ -446,7 +446,7 @@ pub fn diagnose(
             let ext_pairs =
                 channels::free_run_pairs_reusing(c, &s, measured, |id| Some(phased(&ext, id)), p, base_pairs);
             let sdata = sdata.get_or_init(|| {
-                structure::StructureData::of(c, recorded.as_ref().expect("with the balance"), o, data.clone())
+                structure::StructureData::of(recorded.as_ref().expect("with the balance"), o, data.clone())
             });
             let rec = recorded.as_ref().expect("with the balance");
             let sel = structure::select_structure(c, sdata, &ext, &ext_pairs, &d.detail.runs, &s, opts, rec, measured);

@@ -167,8 +167,12 @@ pub fn estimate_friction(
     force_factor_mv_per_n: f64,
     opts: &FrictionOptions,
 ) -> Result<FrictionEstimate, EstimateError> {
-    let dt = c.rig.sample_rate_hz.recip();
-    let h = nominal_window_samples(opts.speed_half_window_s, c.rig.sample_rate_hz);
+    // The difference window's resolution at the operating points' clock
+    // (their time columns, `Campaign::clock_rate_hz`), as `analyse_trace`
+    // differences over the time that elapsed.
+    let rate_hz = c.clock_rate_hz("operating_point");
+    let dt = rate_hz.recip();
+    let h = nominal_window_samples(opts.speed_half_window_s, rate_hz);
     let resolution = speed_resolution_rad_s(c.rig.encoder_ticks_per_rev, 2 * h, dt);
     if opts.slip_threshold_rad_s < 2.0 * resolution {
         return Err(EstimateError::InvalidOption {

@@ -218,6 +218,8 @@ pub fn estimate_pi(c: &Campaign, limit_v: f64, opts: &PiOptions) -> Result<PiEst
     let mut rows: Vec<(f64, f64, Option<usize>, f64, f64)> = Vec::new();
     let mut n_offsets = 0usize;
     let (mut total, mut saturated) = (0usize, 0usize);
+    // Each run's window count, as its rows are made (the noise correction's window).
+    let mut counts: Vec<usize> = Vec::new();
     for run in c.runs_of("operating_point") {
         let RunKind::OperatingPoint { motor_rpm_setpoint, ramp_s, .. } = run.kind else { continue };
         let d = &run.data;
@@ -226,6 +228,7 @@ pub fn estimate_pi(c: &Campaign, limit_v: f64, opts: &PiOptions) -> Result<PiEst
         let ticks = d.motor_ticks.as_ref().ok_or_else(|| missing("motor_ticks"))?;
         let t = &d.time_s;
         let w = window_samples(t, opts.window_s).max(1);
+        counts.push(w);
         let phi2 = ticks_to_rad(ticks, c.rig.encoder_ticks_per_rev);
         let sp = rig_types::units::rpm_to_rad_s(motor_rpm_setpoint);
         let integral: Vec<f64> = t.iter().zip(&phi2).map(|(&ti, &p)| reference_angle_rad(ti, sp, ramp_s) - p).collect();
@@ -312,9 +315,15 @@ pub fn estimate_pi(c: &Campaign, limit_v: f64, opts: &PiOptions) -> Result<PiEst
         PiMethod::CorrectedLs => {
             // Var of ē: 2·(Δ²/12)/Δt²; of Ī (trapezoid mean of w + 1 samples): ≈ (Δ²/12)/(w + 1).
             let q = rig_types::sensor::tick_rad(c.rig.encoder_ticks_per_rev).powi(2) / 12.0;
-            // The window at the campaign's nominal rate (the per-run counts agree with it).
-            let w = nominal_window_samples(opts.window_s, c.rig.sample_rate_hz);
-            let dt = w as f64 / c.rig.sample_rate_hz;
+            // The windows the rows were made of: the runs' count (their
+            // median; one recorder, one count) over the operating points'
+            // clock (their time columns, `Campaign::clock_rate_hz`): ē
+            // divides by the time its w samples took.
+            let rate_hz = c.clock_rate_hz("operating_point");
+            counts.sort_unstable();
+            let w =
+                counts.get(counts.len() / 2).copied().unwrap_or_else(|| nominal_window_samples(opts.window_s, rate_hz));
+            let dt = w as f64 / rate_hz;
             let mut noise_var = vec![0.0; p];
             noise_var[0] = 2.0 * q / (dt * dt);
             noise_var[1] = q / (w + 1) as f64;

@@ -71,4 +71,14 @@ impl Campaign {
     pub fn runs_of<'a>(&'a self, kind_name: &'a str) -> impl Iterator<Item = &'a Run> + 'a {
         self.runs.iter().filter(move |r| r.kind.name() == kind_name)
     }
+
+    /// The sample rate of the runs of one kind as their time columns
+    /// measure it, Hz ([`crate::sensor::clock_rate_hz`]: `sample_rate_hz`
+    /// itself unless the columns disagree with it beyond
+    /// [`crate::sensor::CLOCK_TOLERANCE`]). What a derivative over samples,
+    /// or a window counted in samples for the whole campaign, divides by.
+    pub fn clock_rate_hz(&self, kind_name: &str) -> f64 {
+        let records: Vec<&[f64]> = self.runs_of(kind_name).map(|r| r.data.time_s.as_slice()).collect();
+        crate::sensor::clock_rate_hz(&records, self.rig.sample_rate_hz)
+    }
 }

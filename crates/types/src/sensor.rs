@@ -42,34 +42,130 @@ pub fn speed_resolution_rad_s(ticks_per_rev: u32, w: usize, dt_s: f64) -> f64 {
     tick_rad(ticks_per_rev) / (w as f64 * dt_s)
 }
 
-/// Samples in a half window of `half_s` seconds, from the median sample step
-/// (the time column is authoritative; the nominal rate is not trusted).
+/// Samples in a half window of `half_s` seconds, from the record's measured
+/// step ([`window_samples`]; the time column is authoritative, the nominal
+/// rate is not trusted).
 pub fn half_window_samples(time_s: &[f64], half_s: f64) -> usize {
     window_samples(time_s, half_s)
 }
 
-/// Samples in a window of `window_s` seconds (at least 1), from the median
-/// sample step; 0 when the record has fewer than two samples or no positive
-/// step. Every window of the analysis is declared in seconds and counted in
-/// samples here, so a campaign at another sample rate keeps its windows' length.
+/// Samples in a window of `window_s` seconds (at least 1), from the
+/// record's measured step ([`measured_step_s`] about its mean step); 0 when
+/// the record has fewer than two samples or no positive step. Every window
+/// of the analysis is declared in seconds and counted in samples here, so a
+/// campaign at another sample rate keeps its windows' length. The step is the
+/// one [`clock_rate_hz`] reads, so a window counted here and one counted at
+/// the records' clock agree: the median step would not (1/510 s written at
+/// 0.1 ms gives steps of 1.9 and 2.0 ms, whose median is 2.0 ms).
 pub fn window_samples(time_s: &[f64], window_s: f64) -> usize {
-    if time_s.len() < 2 {
+    let n = time_s.len();
+    if n < 2 {
         return 0;
     }
-    let mut dt: Vec<f64> = time_s.windows(2).map(|w| w[1] - w[0]).collect();
-    // The element a sort by `total_cmp` puts at the middle, found in linear
-    // time (a total order: the same value, bit for bit; the sort was 8 % of a
-    // battery campaign's diagnosis, which counts windows of every free run).
-    let mid = dt.len() / 2;
-    let (_, &mut med, _) = dt.select_nth_unstable_by(mid, f64::total_cmp);
-    if med <= 0.0 { 0 } else { ((window_s / med).round() as usize).max(1) }
+    let mean_step_s = (time_s[n - 1] - time_s[0]) / (n - 1) as f64;
+    match measured_step_s(&[time_s], mean_step_s) {
+        Some(step_s) => ((window_s / step_s).round() as usize).max(1),
+        None => 0,
+    }
 }
 
-/// Samples in a window of `window_s` seconds at a campaign's nominal
-/// `sample_rate_hz` (at least 1): for a statistic of the whole campaign (a
-/// noise floor, a resolution) where no one run's time column speaks for all.
+/// Σ and count of the steps of `records` within [½, 3/2]× `reference_s`,
+/// and the count of every step. Four partial sums, step k into sum k mod 4
+/// (a fixed order: the same bits on every call), so the additions do not
+/// wait on each other: the pass runs once per window count of every free
+/// run and each time a floor asks for a campaign's clock.
+fn steps_in_band(records: &[&[f64]], reference_s: f64) -> (f64, usize, usize) {
+    let (lo, hi) = (0.5 * reference_s, 1.5 * reference_s);
+    let (mut sum, mut n, mut all) = ([0.0f64; 4], 0usize, 0usize);
+    for t in records {
+        let steps = t.len().saturating_sub(1);
+        all += steps;
+        let mut step = |lane: usize, k: usize| {
+            let d = t[k + 1] - t[k];
+            let inside = d >= lo && d <= hi;
+            sum[lane] += if inside { d } else { 0.0 };
+            n += usize::from(inside);
+        };
+        let quads = steps / 4 * 4;
+        for k in (0..quads).step_by(4) {
+            for lane in 0..4 {
+                step(lane, k + lane);
+            }
+        }
+        for k in quads..steps {
+            step(k - quads, k);
+        }
+    }
+    ((sum[0] + sum[1]) + (sum[2] + sum[3]), n, all)
+}
+
+/// The sample step of `records` (one recorder's time columns), s, measured:
+/// the mean of their steps within [½, 3/2]× `reference_s` (gaps, dropped
+/// samples and repeated stamps left out; jitter up to half a step and the
+/// column's rounding average out). When fewer than half the steps fall in
+/// that band (a reference off by 2× or more, gaps over half the record), the
+/// band is taken about the median step. `None`: no step, or no positive
+/// median step. One linear pass without allocation when the reference holds
+/// (the record's mean step for [`window_samples`], the declared step for
+/// [`clock_rate_hz`]).
+pub fn measured_step_s(records: &[&[f64]], reference_s: f64) -> Option<f64> {
+    let (sum, n, all) = steps_in_band(records, reference_s);
+    if all == 0 {
+        return None;
+    }
+    if 2 * n >= all && reference_s > 0.0 {
+        return Some(sum / n as f64);
+    }
+    let mut d: Vec<f64> = records.iter().flat_map(|t| t.windows(2).map(|w| w[1] - w[0])).collect();
+    let mid = d.len() / 2;
+    let (_, &mut med, _) = d.select_nth_unstable_by(mid, f64::total_cmp);
+    if med <= 0.0 {
+        return None;
+    }
+    let (sum, n, _) = steps_in_band(records, med);
+    Some(sum / n as f64)
+}
+
+/// Samples in a window of `window_s` seconds at `sample_rate_hz` (at least
+/// 1): for a statistic of the whole campaign (a noise floor, a resolution)
+/// where no one run's time column speaks for all. The analysis passes the
+/// records' clock (`Campaign::clock_rate_hz`), not the declared rate.
 pub fn nominal_window_samples(window_s: f64, sample_rate_hz: f64) -> usize {
     ((window_s * sample_rate_hz).round() as usize).max(1)
+}
+
+/// How far, relative, a record's measured sample step may sit from the
+/// declared one (`sample_rate_hz`) and still be read as the declared rate.
+///
+/// Why 10⁻³: a data-acquisition card's sample clock is a quartz crystal a
+/// lab states to ±50–100 ppm (10⁻⁴); the time column written at 0.1 ms adds
+/// below 10⁻⁵ over a record of 10 s or more ([`clock_rate_hz`] reads the
+/// mean step). A tenth of a percent is ten times the crystal's statement:
+/// within it the time column says the declared rate, and a derivative over
+/// the declared step is off by less than 0.1 %, far below one encoder
+/// tick's noise. Beyond it the declaration is wrong (a clock 2 % off, a rate
+/// written for another recorder) and the time column is read.
+pub const CLOCK_TOLERANCE: f64 = 1e-3;
+
+/// The sample rate a derivative should divide by, Hz: the records' own clock.
+///
+/// The time column is the measurement of the time that elapsed;
+/// `declared_rate_hz` (campaign.toml's `sample_rate_hz`) is a declaration.
+/// The measured step is [`measured_step_s`] about the declared step: the
+/// mean of the records' steps within [½, 3/2]× it (gaps, dropped samples and
+/// repeated stamps left out; jitter up to half a step and the time column's
+/// rounding average out), pooled over `records` (one recorder, one clock). Within [`CLOCK_TOLERANCE`] of the declared step the declared rate
+/// is returned, bit for bit (the shipped campaign's outputs stay what they
+/// were); otherwise 1 / the measured step. When fewer than half the steps
+/// fall within [½, 3/2]× the declared step (a declaration off by a factor of
+/// two or more), the band is taken about the median step instead. No step
+/// at all (records of fewer than two samples): the declared rate.
+pub fn clock_rate_hz(records: &[&[f64]], declared_rate_hz: f64) -> f64 {
+    let declared_step_s = declared_rate_hz.recip();
+    match measured_step_s(records, declared_step_s) {
+        Some(step_s) if ((step_s - declared_step_s) / declared_step_s).abs() > CLOCK_TOLERANCE => step_s.recip(),
+        _ => declared_rate_hz,
+    }
 }
 
 /// Centred moving average over ±`half` samples; the window shrinks
@@ -217,10 +313,13 @@ mod tests {
         assert!((back[4] - 2.0 * PI).abs() < 1e-12);
     }
 
-    /// The window counts a median step: on an irregular grid (jitter, a
-    /// gap, a doubled step) the median a full sort finds, bit for bit.
+    /// The window counts the grid's step: on an irregular grid (jitter, a
+    /// gap, dropped samples) the mean of the steps about the grid's, the
+    /// gap and the doubled steps left out (the median, 2 ms, would count 500
+    /// samples in 1 s); on a 510 Hz column written at 0.1 ms, 510 Hz (the
+    /// median, 2.0 ms, would count 50 in 0.1 s).
     #[test]
-    fn window_samples_counts_the_median_step() {
+    fn window_samples_counts_the_grids_step() {
         let mut t = vec![0.0];
         for k in 1..4001 {
             let dt = match k % 7 {
@@ -230,12 +329,56 @@ mod tests {
             };
             t.push(t[k - 1] + if k == 2000 { 1.5 } else { dt });
         }
-        let mut dt: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
-        dt.sort_by(f64::total_cmp);
-        let med = dt[dt.len() / 2];
-        assert_eq!(window_samples(&t, 0.04), (0.04 / med).round() as usize);
+        let on_grid: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).filter(|d| (d - 0.00195).abs() < 1e-4).collect();
+        let mean = on_grid.iter().sum::<f64>() / on_grid.len() as f64;
+        assert_eq!(window_samples(&t, 1.0), (1.0 / mean).round() as usize);
+        assert_eq!(window_samples(&t, 1.0), 504);
+        let rounded: Vec<f64> = (0..10_000).map(|k| (k as f64 / 510.0 * 1e4).round() / 1e4).collect();
+        assert_eq!(window_samples(&rounded, 0.1), 51);
         assert_eq!(window_samples(&[0.0, 0.002, 0.004], 0.04), 20);
         assert_eq!(window_samples(&[0.0], 0.04), 0);
+        assert_eq!(window_samples(&[0.0, 0.0, 0.0], 0.04), 0);
+    }
+
+    /// The clock a derivative divides by: the declared rate, bit for bit,
+    /// on its grid (the time column written at 0.1 ms; jittered, with a
+    /// gap); the time column's rate when the clock runs 2 % fast of the
+    /// declaration, even written at 0.1 ms (where the median step, 2.0 ms,
+    /// would say the declared rate), and when the declaration is off by 2×.
+    #[test]
+    fn clock_rate_reads_the_time_column_beyond_the_clock_tolerance() {
+        let round4 = |x: f64| (x * 1e4).round() / 1e4;
+        let grid = |rate: f64, n: usize| (0..n).map(|k| round4(k as f64 / rate)).collect::<Vec<f64>>();
+        let on_grid = grid(500.0, 10_000);
+        assert_eq!(clock_rate_hz(&[&on_grid[..]], 500.0).to_bits(), 500f64.to_bits());
+        // Jitter ±0.4 ms about the 2 ms grid and a 0.5 s gap: still the declared rate.
+        let mut jittered: Vec<f64> =
+            (0..10_000).map(|k| k as f64 * 0.002 + 4e-4 * ((k * 7 % 3) as f64 - 1.0)).collect();
+        for t in &mut jittered[6_000..] {
+            *t += 0.5;
+        }
+        assert_eq!(clock_rate_hz(&[&jittered[..]], 500.0), 500.0);
+        // A clock 2 % fast: 510 samples a second, declared 500.
+        let fast = grid(510.0, 10_000);
+        let mut d: Vec<f64> = fast.windows(2).map(|w| w[1] - w[0]).collect();
+        d.sort_by(f64::total_cmp);
+        assert!((d[d.len() / 2] - 0.002).abs() < 1e-12, "the rounded column's median step is the declared one");
+        let r = clock_rate_hz(&[&fast[..]], 500.0);
+        assert!((r / 510.0 - 1.0).abs() < 1e-5, "{r} Hz");
+        // Pooled over records, one with a gap; a record of one sample adds nothing.
+        let mut gapped = grid(510.0, 4_000);
+        for t in &mut gapped[2_000..] {
+            *t += 0.5;
+        }
+        let r = clock_rate_hz(&[&fast[..], &gapped[..], &[0.0][..]], 500.0);
+        assert!((r / 510.0 - 1.0).abs() < 1e-5, "{r} Hz");
+        // Declared 500 Hz, recorded at 1.2 kHz: the band about the median step.
+        let r = clock_rate_hz(&[&grid(1200.0, 10_000)[..]], 500.0);
+        assert!((r / 1200.0 - 1.0).abs() < 1e-4, "{r} Hz");
+        // Within the tolerance (0.05 % off): the declaration stands.
+        assert_eq!(clock_rate_hz(&[&grid(500.25, 10_000)[..]], 500.0), 500.0);
+        assert_eq!(clock_rate_hz(&[&[0.0][..]], 500.0), 500.0);
+        assert_eq!(clock_rate_hz(&[], 500.0), 500.0);
     }
 
     #[test]

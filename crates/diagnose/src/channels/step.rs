@@ -5,7 +5,7 @@ use super::{ChannelCheck, ChannelOptions, rms};
 use rig_calibrate::CampaignCalibration;
 use rig_estimate::steps::{simulate_step, step_data};
 use rig_model::SimOptions;
-use rig_types::sensor::{nominal_window_samples, speed_resolution_rad_s};
+use rig_types::sensor::{nominal_window_samples, speed_resolution_rad_s, window_samples};
 use rig_types::{Campaign, RigParams};
 
 /// Spread of per-step values around their mean, and the RMS of their
@@ -43,7 +43,10 @@ pub fn voltage_step_checks(
 ) -> Vec<ChannelCheck> {
     let mut out = Vec::new();
     let tick_rad = rig_types::sensor::tick_rad(c.rig.encoder_ticks_per_rev);
-    let dt = 1.0 / c.rig.sample_rate_hz;
+    // The steps' sample rate as their time columns measure it: the timing
+    // resolution and the window's duration are the elapsed time's.
+    let rate_hz = c.clock_rate_hz("voltage_step");
+    let dt = 1.0 / rate_hz;
     let ids: Vec<String> = cal.steps.iter().map(|s| s.id.clone()).collect();
     let mut freq = Vec::new();
     let mut dec = Vec::new();
@@ -91,7 +94,14 @@ pub fn voltage_step_checks(
         ));
     }
 
-    let w = nominal_window_samples(window_s, c.rig.sample_rate_hz);
+    // The windows `step_data` made: each step's count from its time column
+    // (`window_samples`; their median, one recorder, one count), their
+    // duration at the steps' clock (a window at the clock can round the
+    // other way: 0.05 s at 510 Hz is 25.5 samples).
+    let mut counts: Vec<usize> =
+        c.runs_of("voltage_step").map(|r| window_samples(&r.data.time_s, window_s).max(1)).collect();
+    counts.sort_unstable();
+    let w = counts.get(counts.len() / 2).copied().unwrap_or_else(|| nominal_window_samples(window_s, rate_hz));
     let Ok(data) = step_data(c, window_s) else {
         out.push(ChannelCheck::not_testable("voltage_step.residual", ids, "no usable voltage_step run".into()));
         return out;

@@ -253,9 +253,9 @@ impl StructureData {
     /// realignment of the delay grid ([`channel_delay`]'s docs) and every
     /// sensor model ([`sensor_dynamics`]), all built from the channels read
     /// once (`rec`).
-    pub fn of(c: &Campaign, rec: &crate::channels::Recorded, o: &crate::ChannelOptions, balance: BalanceData) -> Self {
+    pub fn of(rec: &crate::channels::Recorded, o: &crate::ChannelOptions, balance: BalanceData) -> Self {
         let tick_loss = crate::channels::tick_loss_check_of(&balance, o).flagged;
-        let rate = c.rig.sample_rate_hz;
+        let rate = rec.rate_hz();
         let (aligned, sensors) = rayon::join(|| channel_delay::grid(rec, rate), || sensor_dynamics::grid(rec, rate));
         let ring = sensor_dynamics::ring(rec, rate, &sensors);
         StructureData { balance, aligned, tick_loss, sensors, ring }

@@ -154,7 +154,7 @@ pub fn select_structure(
             // Admitted on the transitions alone: it must beat its placebo there
             // by the same criterion (module docs, "A placebo at the transitions").
             let placebo = on_events
-                .then(|| placebo_comparison(REGISTRY[k], t, &sel, &folds, &study, rec, c.rig.sample_rate_hz))
+                .then(|| placebo_comparison(REGISTRY[k], t, &sel, &folds, &study, rec, rec.rate_hz()))
                 .flatten();
             if let Some(p) = placebo.filter(|p| !opts.selection.admits(p)) {
                 let row = scores.len() - 1;

@@ -5,7 +5,7 @@ use super::super::{ChannelCheck, ChannelOptions, rms};
 use super::{BalanceData, balance_data, residuals};
 use crate::DiagnoseOptions;
 use rig_calibrate::CampaignCalibration;
-use rig_types::sensor::{nominal_window_samples, tick_rad};
+use rig_types::sensor::tick_rad;
 use rig_types::{Campaign, RigParams};
 
 /// Rotor-1 torque balance over the steady state of every operating point.
@@ -41,8 +41,6 @@ pub fn torque_balance_check_of(
     o: &ChannelOptions,
 ) -> ChannelCheck {
     let name = "operating_point.torque_balance";
-    let w = nominal_window_samples(o.balance_window_s, c.rig.sample_rate_hz).max(2);
-    let dt = 1.0 / c.rig.sample_rate_hz;
     let rad = tick_rad(c.rig.encoder_ticks_per_rev);
     let r_m = c.rig.brake_disc_radius_m;
     let per_run = &data.runs;
@@ -65,7 +63,7 @@ pub fn torque_balance_check_of(
             rms(&e)
         })
         .collect();
-    let big_t = w as f64 * dt;
+    let big_t = data.window_s;
     // Quantisation: uniform error tick²/12 per angle sample. Ω̇1 = second
     // difference of three boundary angles / T² (variance 6·tick²/12 / T⁴);
     // the twist (two encoders) under the kernel; the rates, difference of

@@ -61,6 +61,9 @@ pub struct BalanceData {
     runs: Vec<RunRows>,
     /// Rotor inertia held at the calibration's (Eqs. 4-4/4-5), kg·m².
     pub j1_kgm2: f64,
+    /// The balance window's duration T, s: its w samples times the step
+    /// the time columns measure (the rows' derivatives divide by it).
+    window_s: f64,
 }
 
 /// A fitted rotor balance r·F = −J1 Ω̇1 + K tw + C tẇ − C_r Ω1 + c0.
@@ -164,7 +167,7 @@ impl BalanceData {
                 }
             })
             .collect();
-        BalanceData { runs, j1_kgm2: self.j1_kgm2 }
+        BalanceData { runs, j1_kgm2: self.j1_kgm2, window_s: self.window_s }
     }
 
     /// Least squares of the balance over the runs `include` accepts, J1

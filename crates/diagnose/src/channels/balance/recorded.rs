@@ -67,8 +67,13 @@ impl RecordedRun {
 #[derive(Debug, Clone)]
 pub struct Recorded {
     pub runs: Vec<RecordedRun>,
-    /// The balance window, samples.
+    /// The operating points' sample rate as their time columns measure it,
+    /// Hz ([`Campaign::clock_rate_hz`]): the balance's derivatives divide by
+    /// the time that elapsed, not by the declared rate's.
+    pub(super) rate_hz: f64,
+    /// The balance window, samples (`balance_window_s` at `rate_hz`).
     pub(super) w: usize,
+    /// The sample step, s: 1 / `rate_hz`.
     pub(super) dt: f64,
     pub(super) r_m: f64,
     /// Σk²/(Σk)² of the triangle kernel: the variance gain of white noise.
@@ -83,7 +88,8 @@ pub type Channels<'a> = (Cow<'a, [f64]>, Cow<'a, [f64]>, Cow<'a, [f64]>);
 impl Recorded {
     /// The operating points of `c` with their three channels.
     pub fn of(c: &Campaign, cal: &CampaignCalibration, opts: &DiagnoseOptions, o: &ChannelOptions) -> Self {
-        let w = nominal_window_samples(o.balance_window_s, c.rig.sample_rate_hz).max(2);
+        let rate_hz = c.clock_rate_hz("operating_point");
+        let w = nominal_window_samples(o.balance_window_s, rate_hz).max(2);
         let kernel_gain = {
             let ks: Vec<f64> = (0..=2 * w).map(|k| (w - k.abs_diff(w)) as f64).collect();
             ks.iter().map(|k| k * k).sum::<f64>() / ks.iter().sum::<f64>().powi(2)
@@ -109,12 +115,19 @@ impl Recorded {
         }
         Recorded {
             runs,
+            rate_hz,
             w,
-            dt: 1.0 / c.rig.sample_rate_hz,
+            dt: 1.0 / rate_hz,
             r_m: c.rig.brake_disc_radius_m,
             kernel_gain,
             j1_kgm2: cal.rotor_inertia_kgm2,
         }
+    }
+
+    /// The operating points' sample rate as their time columns measure it,
+    /// Hz: what the structural grids count their delays and filters in.
+    pub fn rate_hz(&self) -> f64 {
+        self.rate_hz
     }
 
     /// The brake disc's radius, m (the force's lever arm, Eq. 4-10's r).
@@ -161,7 +174,7 @@ impl Recorded {
                 lane.push(self.run_rows(run, channels, grid));
             }
         }
-        lanes.map(|runs| BalanceData { runs, j1_kgm2: self.j1_kgm2 })
+        lanes.map(|runs| BalanceData { runs, j1_kgm2: self.j1_kgm2, window_s: self.w as f64 * self.dt })
     }
 
     /// One run's [`RunRows`] from its channels `(phi1, phi2, f)` and their
@@ -226,6 +239,6 @@ impl Recorded {
                 transitions: Vec::new(),
             })
             .collect();
-        Recorded { runs, w, dt: 1.0 / rate_hz, r_m, kernel_gain: 1.0, j1_kgm2 }
+        Recorded { runs, rate_hz, w, dt: 1.0 / rate_hz, r_m, kernel_gain: 1.0, j1_kgm2 }
     }
 }

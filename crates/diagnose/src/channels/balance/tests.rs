@@ -102,7 +102,7 @@ fn a_force_combination_is_the_combined_force_balance() {
             force_noise_n: 0.01,
         }
     };
-    let rec = Recorded { runs: vec![run(0), run(1)], w, dt, r_m, kernel_gain: 0.5, j1_kgm2: 0.02 };
+    let rec = Recorded { runs: vec![run(0), run(1)], rate_hz: 1.0 / dt, w, dt, r_m, kernel_gain: 0.5, j1_kgm2: 0.02 };
     let diff = |f: &[f64], second: bool| -> Vec<f64> {
         (0..f.len())
             .map(|k| match (k.checked_sub(1), f.get(k + 1)) {

@@ -266,9 +266,11 @@ pub fn free_run_pairs_by(
 /// The speed resolution of the centred difference, tick/(2h·dt)/√6, rad/s:
 /// the noise floor of a rotor-speed extremum.
 pub fn speed_floor_rad_s(c: &Campaign, s: &FreeRunSettings) -> f64 {
+    // h and dt at the operating points' clock (their time columns), as the
+    // measured differentiator's ±h samples span t[i+h] − t[i−h].
+    let rate_hz = c.clock_rate_hz("operating_point");
     tick_rad(c.rig.encoder_ticks_per_rev)
-        / (2.0 * nominal_window_samples(s.rotor_speed_half_window_s, c.rig.sample_rate_hz) as f64
-            / c.rig.sample_rate_hz)
+        / (2.0 * nominal_window_samples(s.rotor_speed_half_window_s, rate_hz) as f64 / rate_hz)
         / 6f64.sqrt()
 }
 
