@@ -395,6 +395,26 @@ fn unit_conversions_have_one_home() {
     assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
 
+/// One clock: an analysis reads the records' sample rate through
+/// `Campaign::clock_rate_hz` (the time columns' measured step, the declared
+/// `sample_rate_hz` within `rig_types::sensor::CLOCK_TOLERANCE`), never the
+/// declaration itself: a derivative divided by a declared rate 2 % off the
+/// recorder's clock is 2 % off (docs/findings.md, twenty-first session,
+/// h/clock). The reader checks the declaration, the virtual rig writes it,
+/// and tests build campaigns with it.
+#[test]
+fn the_declared_sample_rate_is_read_in_one_place() {
+    let problems: Vec<String> = written_outside(
+        &["rig.sample_rate_hz"],
+        &["crates/types/src/campaign.rs", "crates/pipeline/tests/tidy.rs"],
+        "the declared sample rate read directly; use Campaign::clock_rate_hz",
+    )
+    .into_iter()
+    .filter(|p| !["crates/ingest/", "crates/virtual-rig/", "/tests/"].iter().any(|d| p.contains(d)))
+    .collect();
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
 /// One Stribeck law: μk + (μs − μk)·exp(−(Ω/vs)²) is
 /// `rig_model::friction::stribeck_mu` / `stribeck_decay`. The virtual rig
 /// keeps its own physics (the generator's truth is written independently of

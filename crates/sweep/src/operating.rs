@@ -102,7 +102,9 @@ pub fn op_point(run: &Run, th: &RigParams, rg: &RigParams, s: &SweepSettings, tp
 /// what a simulation "like a campaign run" must imitate.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RunProtocol {
-    /// The campaign's nominal sample rate (campaign.toml), Hz.
+    /// The operating points' sample rate as their time columns measure it
+    /// (`Campaign::clock_rate_hz`: campaign.toml's `sample_rate_hz` unless
+    /// the columns disagree with it beyond `rig_types::sensor::CLOCK_TOLERANCE`), Hz.
     pub sample_rate_hz: f64,
     /// The longest operating-point record, s, from its time column (which is
     /// authoritative): its samples × its mean step.
@@ -114,7 +116,7 @@ pub struct RunProtocol {
 impl RunProtocol {
     /// The protocol of `c`'s operating points; `None` without any.
     pub fn of_campaign(c: &Campaign) -> Option<Self> {
-        let rate = c.rig.sample_rate_hz;
+        let rate = c.clock_rate_hz("operating_point");
         let mut ramps = Vec::new();
         let mut duration_s = 0.0f64;
         for r in c.runs_of("operating_point") {
@@ -256,14 +258,17 @@ mod tests {
     }
 
     /// The time column is authoritative: 10 200 samples of a clock at 510 Hz
-    /// declared 500 Hz last 20 s, not 20.4 s.
+    /// declared 500 Hz last 20 s, not 20.4 s, sampled at 510 Hz.
     #[test]
     fn the_record_length_is_read_from_the_time_column() {
         let p = RunProtocol::of_campaign(&campaign(500.0, 510.0, 10_200)).unwrap();
         assert!((p.duration_s - 20.0).abs() < 1e-9, "{}", p.duration_s);
+        // and the simulated grid is the records' clock, not the declaration.
+        assert!((p.sample_rate_hz - 510.0).abs() < 1e-6, "{}", p.sample_rate_hz);
         // At the nominal rate the length is samples / rate, as before.
         let p = RunProtocol::of_campaign(&campaign(500.0, 500.0, 20_000)).unwrap();
         assert!((p.duration_s - 40.0).abs() < 1e-9, "{}", p.duration_s);
+        assert_eq!(p.sample_rate_hz, 500.0);
         assert_eq!(p.times_s().len(), 20_001);
     }
 }
