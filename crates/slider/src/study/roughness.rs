@@ -247,16 +247,24 @@ pub fn gain_spread(
             compare(&before, &a, &fold_of, folds.len())
         })
         .collect();
-    let fold = |f: fn(f64, f64) -> f64, init: f64, g: fn(&Comparison) -> f64| compared.iter().map(g).fold(init, f);
-    Some(GainSpread {
-        neighbours: compared.len(),
-        gain_min: fold(f64::min, f64::INFINITY, |c| c.gain),
-        gain_max: fold(f64::max, f64::NEG_INFINITY, |c| c.gain),
-        t_min: fold(f64::min, f64::INFINITY, |c| c.t),
-        t_max: fold(f64::max, f64::NEG_INFINITY, |c| c.t),
-        admitted: compared.iter().filter(|c| p.selection.admits(c)).count(),
-        over_moves: false,
-    })
+    Some(GainSpread::of(&compared, p, false))
+}
+
+impl GainSpread {
+    /// The range of gain and t over `compared`, and how many of them the
+    /// step rule admits.
+    fn of(compared: &[Comparison], p: &StudyParams, over_moves: bool) -> GainSpread {
+        let fold = |f: fn(f64, f64) -> f64, init: f64, g: fn(&Comparison) -> f64| compared.iter().map(g).fold(init, f);
+        GainSpread {
+            neighbours: compared.len(),
+            gain_min: fold(f64::min, f64::INFINITY, |c| c.gain),
+            gain_max: fold(f64::max, f64::NEG_INFINITY, |c| c.gain),
+            t_min: fold(f64::min, f64::INFINITY, |c| c.t),
+            t_max: fold(f64::max, f64::NEG_INFINITY, |c| c.t),
+            admitted: compared.iter().filter(|c| p.selection.admits(c)).count(),
+            over_moves,
+        }
+    }
 }
 
 /// [`GainSpread`] of a noisy best over the study's fixed moves: at move j
@@ -282,14 +290,5 @@ fn spread_over_moves(
     };
     let compared: Vec<Comparison> =
         (0..p.local_moves).map(|j| compare(&at(from, before, j), &at(best, after, j), fold_of, folds)).collect();
-    let fold = |f: fn(f64, f64) -> f64, init: f64, g: fn(&Comparison) -> f64| compared.iter().map(g).fold(init, f);
-    GainSpread {
-        neighbours: compared.len(),
-        gain_min: fold(f64::min, f64::INFINITY, |c| c.gain),
-        gain_max: fold(f64::max, f64::NEG_INFINITY, |c| c.gain),
-        t_min: fold(f64::min, f64::INFINITY, |c| c.t),
-        t_max: fold(f64::max, f64::NEG_INFINITY, |c| c.t),
-        admitted: compared.iter().filter(|c| p.selection.admits(c)).count(),
-        over_moves: true,
-    }
+    GainSpread::of(&compared, p, true)
 }
