@@ -15,7 +15,7 @@
 //! the variation of ∫e within a segment.
 
 use crate::{EstimateError, linear};
-use rig_types::sensor::{nominal_window_samples, ticks_to_rad, window_samples};
+use rig_types::sensor::{median_window_samples, ticks_to_rad, window_samples};
 use rig_types::{Campaign, Run, RunKind};
 use serde::{Deserialize, Serialize};
 
@@ -320,9 +320,7 @@ pub fn estimate_pi(c: &Campaign, limit_v: f64, opts: &PiOptions) -> Result<PiEst
             // clock (their time columns, `Campaign::clock_rate_hz`): ē
             // divides by the time its w samples took.
             let rate_hz = c.clock_rate_hz("operating_point");
-            counts.sort_unstable();
-            let w =
-                counts.get(counts.len() / 2).copied().unwrap_or_else(|| nominal_window_samples(opts.window_s, rate_hz));
+            let w = median_window_samples(std::mem::take(&mut counts), opts.window_s, rate_hz);
             let dt = w as f64 / rate_hz;
             let mut noise_var = vec![0.0; p];
             noise_var[0] = 2.0 * q / (dt * dt);

@@ -134,6 +134,17 @@ pub fn nominal_window_samples(window_s: f64, sample_rate_hz: f64) -> usize {
     ((window_s * sample_rate_hz).round() as usize).max(1)
 }
 
+/// The window count of records one recorder made with one window of
+/// `window_s` seconds: the median of their per-record counts (`counts`,
+/// each [`window_samples`] of a record), or, with no record, the window at
+/// `rate_hz` ([`nominal_window_samples`]). For a statistic whose rows were
+/// made with those windows (a noise correction, a timing floor): its window
+/// is the count the rows were made of.
+pub fn median_window_samples(mut counts: Vec<usize>, window_s: f64, rate_hz: f64) -> usize {
+    counts.sort_unstable();
+    counts.get(counts.len() / 2).copied().unwrap_or_else(|| nominal_window_samples(window_s, rate_hz))
+}
+
 /// How far, relative, a record's measured sample step may sit from the
 /// declared one (`sample_rate_hz`) and still be read as the declared rate.
 ///

@@ -5,7 +5,7 @@ use super::{ChannelCheck, ChannelOptions, rms};
 use rig_calibrate::CampaignCalibration;
 use rig_estimate::steps::{simulate_step, step_data};
 use rig_model::SimOptions;
-use rig_types::sensor::{nominal_window_samples, speed_resolution_rad_s, window_samples};
+use rig_types::sensor::{median_window_samples, speed_resolution_rad_s, window_samples};
 use rig_types::{Campaign, RigParams};
 
 /// Spread of per-step values around their mean, and the RMS of their
@@ -98,10 +98,8 @@ pub fn voltage_step_checks(
     // (`window_samples`; their median, one recorder, one count), their
     // duration at the steps' clock (a window at the clock can round the
     // other way: 0.05 s at 510 Hz is 25.5 samples).
-    let mut counts: Vec<usize> =
-        c.runs_of("voltage_step").map(|r| window_samples(&r.data.time_s, window_s).max(1)).collect();
-    counts.sort_unstable();
-    let w = counts.get(counts.len() / 2).copied().unwrap_or_else(|| nominal_window_samples(window_s, rate_hz));
+    let counts = c.runs_of("voltage_step").map(|r| window_samples(&r.data.time_s, window_s).max(1)).collect();
+    let w = median_window_samples(counts, window_s, rate_hz);
     let Ok(data) = step_data(c, window_s) else {
         out.push(ChannelCheck::not_testable("voltage_step.residual", ids, "no usable voltage_step run".into()));
         return out;
